@@ -1,0 +1,56 @@
+"""social_touch: an ament_python package that pip can install too.
+
+`colcon build` installs the node executables under lib/social_touch/ (see setup.cfg);
+`pip install .` puts the same console scripts on PATH.
+"""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = 'social_touch'
+
+# One executable per node, name -> (module, node class). `ros2 run social_touch <name>` runs the
+# module's main(); `social-touch launch` finds the class through the social_touch.nodes group.
+NODES: dict[str, tuple[str, str]] = {
+}
+
+setup(
+    name=PACKAGE,
+    version='0.1.0',
+    description='Touch perception for a social robot: drivers and gesture recognisers as a ROS 2 node graph',
+    license='Apache-2.0',
+    python_requires='>=3.10',
+    packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
+                                    'touch_gestures', 'touch_gestures.*']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
+        (f'share/{PACKAGE}', ['package.xml']),
+        (f'share/{PACKAGE}/launch', glob('launch/*.yaml')),
+        (f'share/{PACKAGE}/config', glob('config/*.yaml') + glob('config/*.npz')),
+        (f'share/{PACKAGE}/msg', glob('msg/*.msg')),
+    ],
+    install_requires=[
+        'numpy>=1.24',
+        'scikit-learn>=1.3',
+        'pyserial>=3.5',
+        'pyyaml>=6.0',
+        # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
+        # writer's chunk flush, so the minor version is pinned.
+        'rosbags>=0.10,<0.12',
+    ],
+    extras_require={
+        'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
+                 'colcon-python-setup-py'],
+    },
+    tests_require=['pytest'],
+    zip_safe=True,
+    entry_points={
+        'console_scripts': [
+            'social-touch = touch_graph.cli.main:main',
+            *(f'{name} = {module}:main' for name, (module, _) in NODES.items()),
+        ],
+        # exec name -> node class, for in-process launch.
+        'social_touch.nodes': [f'{name} = {module}:{cls}' for name, (module, cls) in NODES.items()],
+    },
+)

@@ -1,0 +1,52 @@
+"""The one exception hierarchy of social_touch.
+
+Every error the project raises on purpose derives from :class:`SocialTouchError`, so a
+caller can catch the project's errors without catching programming errors. Bad
+arguments to a function raise :class:`ValueError` (or a subclass that is also one), as
+the standard library and scikit-learn do. Messages say what was expected, what arrived
+and how to fix it.
+"""
+
+from __future__ import annotations
+
+
+class SocialTouchError(Exception):
+    """Base class of every error social_touch raises on purpose."""
+
+
+class ConfigError(SocialTouchError, ValueError):
+    """A configuration file (YAML launch, parameters, body map, ...) is invalid.
+
+    Attributes:
+        path: the file, when the error comes from one.
+        line: 1-based line number in that file, when known.
+    """
+
+    def __init__(self, message: str, path: str | None = None, line: int | None = None) -> None:
+        self.path = path
+        self.line = line
+        where = ''
+        if path is not None:
+            where = f'{path}:{line}: ' if line is not None else f'{path}: '
+        self.bare_message = message
+        super().__init__(where + message)
+
+
+class MessageError(SocialTouchError, TypeError):
+    """A message has a missing, unknown or mistyped field, or bytes that do not decode."""
+
+
+class ParameterError(SocialTouchError, ValueError):
+    """A node parameter is undeclared, of the wrong type, or rejected by the node."""
+
+
+class GraphError(SocialTouchError):
+    """Misuse of the node graph: a destroyed node, two types on one topic, no context."""
+
+
+class LaunchError(ConfigError):
+    """A launch file names an unknown package, executable or argument, or is malformed."""
+
+
+class BagError(SocialTouchError):
+    """A rosbag2 cannot be written or read."""

@@ -1,0 +1,467 @@
+"""Message classes generated at import from the package's rosidl ``.msg`` files.
+
+The ``.msg`` files in ``msg/`` are the one definition of every message. The rosbags
+type system parses them (and knows the standard ROS 2 types such as
+``std_msgs/msg/Header``); this module turns each type into a Python class with rclpy's
+manners: keyword construction with ROS defaults for every field, checked field types,
+constants as class attributes, ``get_fields_and_field_types()``. rosbags then gives CDR
+(de)serialisation, the bytes ROS 2 puts on the wire and in bags.
+
+Type names are those of the interface package ``social_touch-export-interfaces`` writes
+(``social_touch_msgs/msg/SkinFrame``), so bags recorded here open on a ROS 2 machine.
+
+Numeric arrays are numpy arrays of the field's dtype. An array passed with the right
+dtype is kept, not copied: in process, publishers and subscribers share it, as with
+intra-process communication in ROS 2, so do not modify a message after publishing it.
+
+>>> Header = get_message('std_msgs/msg/Header')
+>>> h = Header(frame_id='bear')
+>>> deserialize(serialize(h), 'std_msgs/msg/Header') == h
+True
+>>> Header(frame_idd='bear')
+Traceback (most recent call last):
+...
+touch_graph.errors.MessageError: std_msgs/msg/Header has no field 'frame_idd' (did you mean 'frame_id'?); its fields are: stamp, frame_id
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+from rosbags.interfaces import Nodetype
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from rosbags.typesys.base import TypesysError
+
+from .errors import MessageError
+from .paths import INTERFACE_PACKAGE, share_file
+from .yamlconf import did_you_mean
+
+__all__ = [
+    'Message', 'deserialize', 'from_dict', 'get_message', 'interface_names', 'message_definition',
+    'msg_files', 'normalize_type_name', 'serialize', 'to_dict', 'typestore',
+]
+
+_INT_RANGES = {
+    'int8': (-2**7, 2**7 - 1), 'uint8': (0, 2**8 - 1), 'byte': (0, 255), 'char': (0, 255),
+    'int16': (-2**15, 2**15 - 1), 'uint16': (0, 2**16 - 1),
+    'int32': (-2**31, 2**31 - 1), 'uint32': (0, 2**32 - 1),
+    'int64': (-2**63, 2**63 - 1), 'uint64': (0, 2**64 - 1),
+}
+_FLOATS = {'float32': np.float32, 'float64': np.float64}
+_DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
+           'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8), 'bool': np.dtype(np.bool_),
+           **{k: np.dtype(v) for k, v in _FLOATS.items()}}
+
+_lock = threading.RLock()
+_classes: dict[str, type[Message]] = {}
+
+
+def msg_files() -> list[Path]:
+    """The package's ``.msg`` files, sorted by name."""
+    return sorted(share_file('msg').glob('*.msg'))
+
+
+def _build_typestore():
+    store = get_typestore(Stores.LATEST)
+    types: dict = {}
+    for path in msg_files():
+        name = f'{INTERFACE_PACKAGE}/msg/{path.stem}'
+        try:
+            types.update(get_types_from_msg(path.read_text(encoding='utf-8'), name))
+        except (TypesysError, Exception) as err:  # the parser raises several kinds
+            raise MessageError(f'{path}: cannot parse message definition: {err}') from err
+    store.register(types)
+    return store
+
+
+#: The rosbags type store holding the standard ROS 2 types and this package's messages.
+typestore = _build_typestore()
+
+
+def interface_names() -> list[str]:
+    """Full names of this package's message types, e.g. ``social_touch_msgs/msg/SkinFrame``."""
+    return [f'{INTERFACE_PACKAGE}/msg/{p.stem}' for p in msg_files()]
+
+
+def normalize_type_name(name: str) -> str:
+    """``pkg/msg/T``, ``pkg/T`` or a bare ``T`` of this package -> ``pkg/msg/T``.
+
+    Raises:
+        MessageError: when no such type is known.
+    """
+    parts = name.strip().split('/')
+    if len(parts) == 2:
+        parts = [parts[0], 'msg', parts[1]]
+    elif len(parts) == 1:
+        parts = [INTERFACE_PACKAGE, 'msg', parts[0]]
+    full = '/'.join(parts)
+    if full not in typestore.fielddefs:
+        known = list(typestore.fielddefs)
+        raise MessageError(f"unknown message type '{name}'{did_you_mean(full, known)}; this package's "
+                           f'types are: {", ".join(interface_names())}')
+    return full
+
+
+class Message:
+    """Base class of generated message classes (rclpy-like).
+
+    Subclasses have ``__slots__`` for their fields, ``__msgtype__`` (the full type name),
+    ``_fields`` (field names in definition order) and constants as class attributes.
+    """
+
+    __slots__ = ()
+    __msgtype__: ClassVar[str]
+    _fields: ClassVar[tuple[str, ...]]
+    _field_types: ClassVar[dict[str, str]]
+
+    @classmethod
+    def get_fields_and_field_types(cls) -> dict[str, str]:
+        """Field name -> ROS type string, as on rclpy's generated classes."""
+        return dict(cls._field_types)
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(_values_equal(getattr(self, f), getattr(other, f)) for f in self._fields)
+
+    __hash__ = None  # mutable, like rclpy messages
+
+    def __repr__(self) -> str:
+        pkg, _, name = self.__msgtype__.split('/')
+        body = ', '.join(f'{f}={getattr(self, f)!r}' for f in self._fields)
+        return f'{pkg}.msg.{name}({body})'
+
+
+def _values_equal(a: Any, b: Any) -> bool:
+    # NaN equals NaN here: a round trip through CDR must compare equal.
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        if a.shape != b.shape:
+            return False
+        if a.dtype.kind == 'f' and b.dtype.kind == 'f':
+            return bool(np.array_equal(a, b, equal_nan=True))
+        return bool(np.array_equal(a, b))
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_values_equal(x, y) for x, y in zip(a, b))
+    return a == b
+
+
+# --------------------------------------------------------------------------- field converters
+# Each field gets a converter: value -> checked value, raising MessageError with the field name.
+
+def _fail(owner: str, field: str, expected: str, value: Any, hint: str = '') -> MessageError:
+    shown = f'array of dtype {value.dtype} and shape {value.shape}' if isinstance(value, np.ndarray) \
+        else f'{type(value).__name__} {value!r}'[:120]
+    return MessageError(f"field '{field}' of {owner} expects {expected}; got {shown}{hint}")
+
+
+def _scalar_converter(owner: str, field: str, base: str, bound: int) -> tuple[Callable, Any]:
+    if base in _INT_RANGES:
+        lo, hi = _INT_RANGES[base]
+
+        def conv_int(v: Any) -> int:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                raise _fail(owner, field, f'an int ({base})', v)
+            v = int(v)
+            if not lo <= v <= hi:
+                raise _fail(owner, field, f'an int in [{lo}, {hi}] ({base})', v)
+            return v
+        return conv_int, 0
+    if base in _FLOATS:
+        def conv_float(v: Any) -> float:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise _fail(owner, field, f'a float ({base})', v)
+            return float(v)
+        return conv_float, 0.0
+    if base == 'bool':
+        def conv_bool(v: Any) -> bool:
+            if not isinstance(v, (bool, np.bool_)):
+                raise _fail(owner, field, 'a bool', v)
+            return bool(v)
+        return conv_bool, False
+    if base == 'string':
+        def conv_str(v: Any) -> str:
+            if not isinstance(v, str):
+                raise _fail(owner, field, 'a str', v)
+            if bound and len(v) > bound:
+                raise _fail(owner, field, f'a str of at most {bound} characters', v)
+            return v
+        return conv_str, ''
+    raise MessageError(f"field '{field}' of {owner} has unsupported type {base}")
+
+
+def _numeric_array_converter(owner: str, field: str, base: str, length: int | None,
+                             bound: int) -> tuple[Callable, Callable]:
+    dtype = _DTYPES[base]
+    kinds = {'b': 'b', 'i': 'iub', 'u': 'iub', 'f': 'iuf'}[dtype.kind]
+    if dtype.kind in 'iu':
+        kinds = 'iu'
+    expected = f'{length} {base} values ({base}[{length}])' if length else f'a 1-D array of {base} ({base}[])'
+
+    def conv_array(v: Any) -> np.ndarray:
+        if isinstance(v, np.ndarray) and v.dtype == dtype:
+            arr = v
+        else:
+            try:
+                arr = np.asarray(v)
+            except (ValueError, TypeError) as err:
+                raise _fail(owner, field, expected, v) from err
+            if arr.size == 0:
+                arr = arr.astype(dtype)
+            elif arr.dtype.kind not in kinds:
+                raise _fail(owner, field, expected, v)
+            else:
+                if dtype.kind in 'iu':
+                    lo, hi = _INT_RANGES[base]
+                    if int(arr.min()) < lo or int(arr.max()) > hi:
+                        raise _fail(owner, field, f'{expected} in [{lo}, {hi}]', v)
+                arr = arr.astype(dtype)
+        if arr.ndim != 1:
+            raise _fail(owner, field, expected, arr, '; flatten it (e.g. .ravel(), row-major)')
+        if length is not None and arr.shape[0] != length:
+            raise _fail(owner, field, expected, arr)
+        if bound and arr.shape[0] > bound:
+            raise _fail(owner, field, f'at most {bound} values', arr)
+        return arr
+
+    def default() -> np.ndarray:
+        return np.zeros(length or 0, dtype=dtype)
+    return conv_array, default
+
+
+def _list_converter(owner: str, field: str, item_conv: Callable, item_default: Callable,
+                    length: int | None, bound: int, what: str) -> tuple[Callable, Callable]:
+    def conv_list(v: Any) -> list:
+        if isinstance(v, (str, bytes, dict)) or not hasattr(v, '__iter__'):
+            raise _fail(owner, field, f'a list of {what}', v)
+        out = [item_conv(x) for x in v]
+        if length is not None and len(out) != length:
+            raise _fail(owner, field, f'a list of exactly {length} {what}', v)
+        if bound and len(out) > bound:
+            raise _fail(owner, field, f'a list of at most {bound} {what}', v)
+        return out
+
+    def default() -> list:
+        return [item_default() for _ in range(length or 0)]
+    return conv_list, default
+
+
+def _field_converter(owner: str, field: str, desc: tuple) -> tuple[Callable, Callable, str]:
+    """(converter, default factory, ROS type string) for one field descriptor."""
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        base, bound = detail
+        conv, value = _scalar_converter(owner, field, base, bound)
+        type_str = f'{base}<={bound}' if bound else base
+        return conv, (lambda: value), type_str
+    if kind == Nodetype.NAME:
+        cls = get_message(detail)
+
+        def conv_nested(v: Any) -> Message:
+            if type(v) is not cls:
+                raise _fail(owner, field, f'a {detail} message', v)
+            return v
+        return conv_nested, cls, detail.replace('/msg/', '/')
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        (sub_kind, sub_detail), size = detail
+        length = size if kind == Nodetype.ARRAY else None
+        bound = size if kind == Nodetype.SEQUENCE else 0
+        suffix = f'[{length}]' if length is not None else (f'[<={bound}]' if bound else '[]')
+        if sub_kind == Nodetype.BASE and sub_detail[0] != 'string':
+            conv, default = _numeric_array_converter(owner, field, sub_detail[0], length, bound)
+            return conv, default, sub_detail[0] + suffix
+        item_conv, item_default, item_type = _field_converter(owner, field, (sub_kind, sub_detail))
+        what = 'str' if sub_kind == Nodetype.BASE else f'{sub_detail} messages'
+        conv, default = _list_converter(owner, field, item_conv, item_default, length, bound, what)
+        return conv, default, item_type + suffix
+    raise MessageError(f"field '{field}' of {owner}: unsupported descriptor {desc!r}")
+
+
+def _make_class(typename: str) -> type[Message]:
+    consts, fields = typestore.fielddefs[typename]
+    names = tuple(name for name, _ in fields)
+    convs, defaults, type_strs = {}, {}, {}
+    for name, desc in fields:
+        convs[name], defaults[name], type_strs[name] = _field_converter(typename, name, desc)
+
+    # A generated __init__ (as dataclasses do) keeps construction cheap on the hot path.
+    params = ', '.join(f'{n}=None' for n in names)
+    body = '\n'.join(
+        f'    self.{n} = _d_{n}() if {n} is None else _c_{n}({n})' for n in names) or '    pass'
+    src = f'def __init__(self, {params}{", " if params else ""}**_unknown):\n' \
+          f'    if _unknown:\n        _reject(_unknown)\n{body}\n'
+    env: dict[str, Any] = {f'_c_{n}': convs[n] for n in names}
+    env.update({f'_d_{n}': defaults[n] for n in names})
+
+    def _reject(unknown: dict) -> None:
+        bad = next(iter(unknown))
+        raise MessageError(f"{typename} has no field '{bad}'{did_you_mean(bad, names)}; "
+                           f'its fields are: {", ".join(names)}')
+    env['_reject'] = _reject
+    exec(src, env)  # noqa: S102 - source built from parsed field names only
+
+    pkg, _, short = typename.split('/')
+    attrs: dict[str, Any] = {
+        '__slots__': names, '__msgtype__': typename, '_fields': names, '_field_types': type_strs,
+        '__init__': env['__init__'], '__module__': f'{pkg}.msg', '__qualname__': short,
+    }
+    for cname, _ctype, cvalue in consts:
+        attrs[cname] = cvalue
+    return type(short, (Message,), attrs)
+
+
+def get_message(typename: str) -> type[Message]:
+    """The class of message type ``typename`` (``pkg/msg/T``, ``pkg/T`` or a bare type of this package).
+
+    Raises:
+        MessageError: when the type is unknown.
+    """
+    with _lock:
+        cls = _classes.get(typename)
+        if cls is not None:
+            return cls
+        full = normalize_type_name(typename)
+        cls = _classes.get(full)
+        if cls is None:
+            if full in typestore.cache:
+                raise MessageError(f'{full} was serialised before its class was made')  # pragma: no cover
+            cls = _make_class(full)
+            # rosbags builds deserialised messages as cls(*values): give it our class.
+            typestore.types[full] = cls
+            _classes[full] = cls
+        _classes[typename] = cls
+        return cls
+
+
+def serialize(message: Message, typename: str | None = None) -> bytes:
+    """CDR bytes (little endian, with the 4-byte encapsulation header) of ``message``."""
+    typename = typename or getattr(message, '__msgtype__', None)
+    if typename is None:
+        raise MessageError(f'cannot serialise {type(message).__name__}: not a message')
+    get_message(typename)
+    try:
+        return bytes(typestore.serialize_cdr(message, typename, little_endian=True))
+    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError) as err:
+        raise MessageError(f'cannot serialise {typename}: {err}') from err
+
+
+def deserialize(data: bytes | memoryview, typename: str) -> Message:
+    """The message of type ``typename`` in CDR bytes ``data``.
+
+    Raises:
+        MessageError: on truncated or malformed bytes.
+    """
+    full = get_message(typename).__msgtype__
+    try:
+        return typestore.deserialize_cdr(data, full)
+    except (SerdeError, IndexError, ValueError, TypeError) as err:
+        raise MessageError(f'cannot deserialise {len(data)} bytes as {full}: {err}') from err
+
+
+def to_dict(message: Message) -> dict[str, Any]:
+    """Plain Python (dict, list, int, float, str, bool) form of a message, for echo and YAML."""
+    out = {}
+    for name in message._fields:
+        out[name] = _plain(getattr(message, name))
+    return out
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Message):
+        return to_dict(value)
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    return value
+
+
+def from_dict(typename: str, data: dict[str, Any], *, strict: bool = False) -> Message:
+    """Build a message from its :func:`to_dict` form.
+
+    Args:
+        strict: when true, a missing field is an error (a field left out of a YAML message
+            is more often a typo than a wish for the default).
+
+    Raises:
+        MessageError: naming the first unknown, missing or mistyped field with its path.
+    """
+    cls = get_message(typename)
+    if not isinstance(data, dict):
+        raise MessageError(f'{cls.__msgtype__} must be given as a mapping of fields; got {data!r}')
+    kwargs = {}
+    fields = typestore.fielddefs[cls.__msgtype__][1]
+    for name, desc in fields:
+        if name not in data:
+            if strict:
+                raise MessageError(f"{cls.__msgtype__}: missing field '{name}'")
+            continue
+        kwargs[name] = _from_plain(desc, data[name], strict, f'{cls.__msgtype__}.{name}')
+    unknown = set(data) - {n for n, _ in fields}
+    if unknown:
+        bad = sorted(unknown)[0]
+        raise MessageError(f"{cls.__msgtype__} has no field '{bad}'{did_you_mean(bad, cls._fields)}; "
+                           f'its fields are: {", ".join(cls._fields)}')
+    return cls(**kwargs)
+
+
+def _from_plain(desc: tuple, value: Any, strict: bool, where: str) -> Any:
+    kind, detail = desc
+    if kind == Nodetype.NAME:
+        if not isinstance(value, dict):
+            raise MessageError(f'{where} must be a mapping of fields; got {value!r}')
+        return from_dict(detail, value, strict=strict)
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) and detail[0][0] == Nodetype.NAME:
+        if not isinstance(value, list):
+            raise MessageError(f'{where} must be a list; got {value!r}')
+        return [from_dict(detail[0][1], v, strict=strict) for v in value]
+    return value
+
+
+def message_definition(typename: str) -> str:
+    """The ``.msg`` text of a type, nested types indented below it, as ``ros2 interface show`` prints."""
+    full = get_message(typename).__msgtype__
+    return _definition_text(full, indent='')
+
+
+def _definition_text(full: str, indent: str) -> str:
+    pkg, _, short = full.split('/')
+    if pkg == INTERFACE_PACKAGE:
+        text = share_file('msg', f'{short}.msg').read_text(encoding='utf-8')
+    else:
+        text = typestore.generate_msgdef(full)[0].split('\n' + '=' * 80)[0]
+    lines = []
+    nested = {name: desc for name, desc in typestore.fielddefs[full][1]}
+    for line in text.splitlines():
+        lines.append(indent + line)
+        stripped = line.split('#')[0].split()
+        if len(stripped) >= 2 and stripped[1] in nested:
+            sub = _nested_type(nested[stripped[1]])
+            if sub:
+                lines.append(_definition_text(sub, indent + '\t').rstrip('\n'))
+    return '\n'.join(lines) + '\n'
+
+
+def _nested_type(desc: tuple) -> str | None:
+    kind, detail = desc
+    if kind == Nodetype.NAME:
+        return detail
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) and detail[0][0] == Nodetype.NAME:
+        return detail[0][1]
+    return None
+
+
+def _register_all() -> None:
+    for name in interface_names():
+        get_message(name)
+
+
+_register_all()
