@@ -1,0 +1,7 @@
+"""Serial drivers for the three touch sensors, their calibration and virtual devices."""
+
+import serial
+
+# Make bearsim://, patchsim:// and skinsim:// URLs resolvable by serial.serial_for_url.
+if 'touch_driver.urlhandlers' not in serial.protocol_handler_packages:
+    serial.protocol_handler_packages.append('touch_driver.urlhandlers')

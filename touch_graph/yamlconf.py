@@ -105,7 +105,7 @@ def _make_loader(source: str) -> type[yaml.SafeLoader]:
 def loads_yaml(text: str, source: str = '<string>') -> Any:
     """Parse YAML text; syntax errors become :class:`ConfigError` with the line."""
     try:
-        return yaml.load(text, Loader=_make_loader(source))  # noqa: S506 - SafeLoader subclass
+        return yaml.load(text, Loader=_make_loader(source))  # a SafeLoader subclass
     except yaml.MarkedYAMLError as err:
         mark = err.problem_mark or err.context_mark
         line = mark.line + 1 if mark is not None else None
