@@ -177,10 +177,13 @@ def _scalar_converter(owner: str, field: str, base: str, bound: int) -> tuple[Ca
             return v
         return conv_int, 0
     if base in _FLOATS:
+        # float32 fields hold the float32-rounded value, so a CDR round trip gives the same message.
+        narrow = _FLOATS[base] if base == 'float32' else float
+
         def conv_float(v: Any) -> float:
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise _fail(owner, field, f'a float ({base})', v)
-            return float(v)
+            return float(narrow(v))
         return conv_float, 0.0
     if base == 'bool':
         def conv_bool(v: Any) -> bool:

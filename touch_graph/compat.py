@@ -1,0 +1,67 @@
+"""The one place node code imports ROS names from: real rclpy when it is there, the shim otherwise.
+
+::
+
+    from touch_graph.compat import Node, QoSProfile, get_message, rclpy
+
+On a ROS 2 machine (``import rclpy`` works and ``SOCIAL_TOUCH_SHIM`` is not ``1``) these are
+rclpy's own, and ``get_message('social_touch_msgs/msg/SkinFrame')`` returns the class
+generated from the interface package ``social-touch export-interfaces`` writes. Everywhere
+else they come from :mod:`touch_graph.runtime` and :mod:`touch_graph.messages`, built
+from the same ``.msg`` files.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+__all__ = [
+    'USING_ROS', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile', 'SetParametersResult',
+    'Time', 'get_message', 'qos_profile_sensor_data', 'rclpy', 'stamp_now',
+]
+
+
+def _want_ros() -> bool:
+    if os.environ.get('SOCIAL_TOUCH_SHIM') == '1':
+        return False
+    try:
+        import rclpy  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+USING_ROS = _want_ros()
+
+if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
+    import rclpy
+    from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+    from rclpy.duration import Duration
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+    from rclpy.qos import QoSProfile, qos_profile_sensor_data
+    from rclpy.time import Time
+    from rosidl_runtime_py.utilities import get_message as _ros_get_message
+
+    def get_message(typename: str) -> type:
+        """The generated class of ``pkg/msg/Type``."""
+        return _ros_get_message(typename if typename.count('/') == 2 else typename.replace('/', '/msg/'))
+else:
+    from . import runtime as rclpy
+    from .messages import get_message
+    from .runtime import (
+        Duration,
+        Node,
+        Parameter,
+        ParameterDescriptor,
+        QoSProfile,
+        SetParametersResult,
+        Time,
+        qos_profile_sensor_data,
+    )
+
+
+def stamp_now(node: Any) -> Any:
+    """A ``builtin_interfaces/Time`` of the node's clock, for a header stamp."""
+    return node.get_clock().now().to_msg()

@@ -1,0 +1,203 @@
+"""Publishers, subscriptions and timers of the in-process graph.
+
+Delivery is a direct queue append: ``publish`` walks the topic's subscriptions and puts
+the message on each one's bounded queue (the oldest dropped and counted when full),
+then tells the subscription's executor it has work. A message published from another
+thread is handed to the executor's thread-safe inbox instead, so queues are only ever
+touched by the thread that spins them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+from collections import deque
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from .. import messages
+from ..errors import GraphError
+from .qos import DurabilityPolicy, QoSProfile
+
+if TYPE_CHECKING:
+    from .context import Topic
+    from .executors import Executor
+    from .node import Node
+
+__all__ = ['Publisher', 'Subscription', 'Timer']
+
+_get_ident = threading.get_ident
+# Timers due at the same instant run in the order they were created (deterministic scenes).
+_timer_order = itertools.count()
+
+
+class Publisher:
+    """``node.create_publisher(MsgType, 'topic', qos)``; ``publish(msg)`` or ``publish(cdr_bytes)``."""
+
+    def __init__(self, node: Node, topic: Topic, qos: QoSProfile) -> None:
+        self.node = node
+        self.msg_type = topic.msg_type
+        self.qos_profile = qos
+        self._topic = topic
+        self.published = 0
+        self._latched: deque | None = deque(maxlen=qos.queue_bound) \
+            if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
+        self._destroyed = False
+
+    @property
+    def topic_name(self) -> str:
+        return self._topic.name
+
+    @property
+    def topic(self) -> str:
+        return self._topic.name
+
+    def publish(self, msg: Any) -> None:
+        """Queue ``msg`` on every subscription of the topic.
+
+        Raises:
+            TypeError: ``msg`` is neither this publisher's message type nor CDR bytes.
+        """
+        raw = None
+        if type(msg) is not self.msg_type:
+            if isinstance(msg, (bytes, bytearray, memoryview)):
+                raw = bytes(msg)
+                msg = messages.deserialize(raw, self._topic.type_name)
+            else:
+                raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {self._topic.type_name} on '
+                                f"'{self._topic.name}', not {type(msg).__name__}")
+        if self._destroyed:
+            raise GraphError(f"publisher on '{self._topic.name}' was destroyed")
+        self.published += 1
+        if self._latched is not None:
+            self._latched.append(msg)
+        topic = self._topic
+        if topic.raw_subscriptions and raw is None:
+            raw = messages.serialize(msg, topic.type_name)
+        for sub in topic.subscriptions:
+            sub._enqueue(raw if sub.raw else msg)
+
+    def get_subscription_count(self) -> int:
+        return len(self._topic.subscriptions)
+
+    def destroy(self) -> bool:
+        return self.node.destroy_publisher(self)
+
+
+class Subscription:
+    """``node.create_subscription(MsgType, 'topic', callback, qos)``.
+
+    Attributes:
+        received: messages queued for this subscription since it was made.
+        dropped: messages dropped because the queue was full (KEEP_LAST depth reached).
+    """
+
+    def __init__(self, node: Node, topic: Topic, callback: Callable[[Any], None], qos: QoSProfile,
+                 raw: bool = False) -> None:
+        self.node = node
+        self.msg_type = topic.msg_type
+        self.callback = callback
+        self.qos_profile = qos
+        self.raw = raw
+        self._topic = topic
+        self._queue: deque = deque(maxlen=qos.queue_bound)
+        self._ready = False
+        self.received = 0
+        self.dropped = 0
+        self._executor: Executor | None = None
+
+    @property
+    def topic_name(self) -> str:
+        return self._topic.name
+
+    @property
+    def topic(self) -> str:
+        return self._topic.name
+
+    def _enqueue(self, item: Any) -> None:
+        executor = self._executor
+        if executor is not None and executor._thread_id not in (None, _get_ident()):
+            executor.call_soon_threadsafe(self._enqueue_local, item)
+            return
+        self._enqueue_local(item)
+
+    def _enqueue_local(self, item: Any) -> None:
+        queue = self._queue
+        if len(queue) == queue.maxlen:
+            self.dropped += 1
+        queue.append(item)
+        self.received += 1
+        if not self._ready:
+            executor = self._executor
+            if executor is not None:
+                self._ready = True
+                executor._ready.append(self)
+
+    def _take(self) -> Any:
+        """Pop the oldest message; keep the executor's ready list in step."""
+        item = self._queue.popleft()
+        if self._queue:
+            self._executor._ready.append(self)
+        else:
+            self._ready = False
+        return item
+
+    def destroy(self) -> bool:
+        return self.node.destroy_subscription(self)
+
+
+class Timer:
+    """``node.create_timer(period_s, callback)``: calls ``callback()`` every period of ROS time.
+
+    Deadlines advance by whole periods from the first one, so a timer does not drift;
+    periods missed while the executor was busy are skipped (counted in ``missed``).
+    """
+
+    def __init__(self, node: Node, period_ns: int, callback: Callable[[], None], autostart: bool = True) -> None:
+        if period_ns <= 0:
+            raise ValueError(f'timer period must be > 0, got {period_ns} ns')
+        self.node = node
+        self.callback = callback
+        self.timer_period_ns = period_ns
+        self.missed = 0
+        self.calls = 0
+        self._canceled = not autostart
+        self._deadline_ns = node.context.now_ns() + period_ns
+        self._executor: Executor | None = None
+        self._generation = 0  # bumps on reset/cancel so stale heap entries are ignored
+        self._order = next(_timer_order)
+
+    @property
+    def is_ready(self) -> bool:
+        return not self._canceled and self.node.context.now_ns() >= self._deadline_ns
+
+    def is_canceled(self) -> bool:
+        return self._canceled
+
+    def cancel(self) -> None:
+        self._canceled = True
+        self._generation += 1
+
+    def reset(self) -> None:
+        """Restart the period from now (and un-cancel)."""
+        self._canceled = False
+        self._generation += 1
+        self._deadline_ns = self.node.context.now_ns() + self.timer_period_ns
+        if self._executor is not None:
+            self._executor._schedule(self)
+
+    def time_until_next_call(self) -> int | None:
+        if self._canceled:
+            return None
+        return max(0, self._deadline_ns - self.node.context.now_ns())
+
+    def _advance(self, now_ns: int) -> None:
+        deadline = self._deadline_ns + self.timer_period_ns
+        if deadline <= now_ns:
+            skipped = (now_ns - deadline) // self.timer_period_ns + 1
+            self.missed += skipped
+            deadline += skipped * self.timer_period_ns
+        self._deadline_ns = deadline
+
+    def destroy(self) -> bool:
+        return self.node.destroy_timer(self)

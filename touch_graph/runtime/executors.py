@@ -1,0 +1,218 @@
+"""Executors: run the callbacks of subscriptions and timers, one at a time, in one thread.
+
+Each ``spin_once`` runs the inbox (work handed over by other threads), then one due
+timer, or else one ready subscription (round robin), or else waits on the context's
+time source until the next timer or until another thread brings work. A callback that
+raises is logged (with its traceback the first time) and counted on its node and on
+the context; the other callbacks go on. With a fast simulated clock, time only moves
+while there is nothing to do, so a scene gives the same result on every run.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import threading
+import traceback
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from ..errors import GraphError
+from .clock import SimTimeSource
+from .context import Context, ExternalShutdownException, get_default_context
+from .endpoints import Subscription, Timer
+from .node import Node
+
+__all__ = ['Executor', 'MultiThreadedExecutor', 'SingleThreadedExecutor']
+
+
+class Executor:
+    """Runs the callbacks of the nodes added to it (rclpy.executors.Executor)."""
+
+    def __init__(self, *, context: Context | None = None) -> None:
+        self.context = context or get_default_context()
+        self._nodes: list[Node] = []
+        self._ready: deque[Subscription] = deque()
+        self._timers: list[tuple[int, int, int, Timer]] = []
+        self._inbox: deque[tuple[Callable[..., Any], tuple]] = deque()
+        self._wake = threading.Event()
+        self._thread_id: int | None = None
+        self._shutdown = False
+        self.callbacks_run = 0
+
+    # ------------------------------------------------------------------ nodes
+    def add_node(self, node: Node) -> bool:
+        if node in self._nodes:
+            return False
+        if node.executor is not None and node.executor is not self:
+            node.executor.remove_node(node)
+        if node.context is not self.context:
+            raise GraphError(f'node {node.get_fully_qualified_name()} belongs to another context')
+        self._nodes.append(node)
+        node.executor = self
+        for sub in node.subscriptions:
+            sub._executor = self
+            if sub._queue and not sub._ready:
+                sub._ready = True
+                self._ready.append(sub)
+        for timer in node.timers:
+            timer._executor = self
+            self._schedule(timer)
+        self.wake()
+        return True
+
+    def remove_node(self, node: Node) -> None:
+        if node not in self._nodes:
+            return
+        self._nodes.remove(node)
+        node.executor = None
+        for sub in node.subscriptions:
+            sub._executor = None
+            sub._ready = False
+        self._ready = deque(s for s in self._ready if s.node is not node)
+        for timer in node.timers:
+            timer._executor = None
+            timer._generation += 1
+
+    def get_nodes(self) -> list[Node]:
+        return list(self._nodes)
+
+    # ------------------------------------------------------------------ threads
+    def call_soon_threadsafe(self, fn: Callable[..., Any], *args: Any) -> None:
+        """Run ``fn(*args)`` in the spinning thread (safe from any thread)."""
+        self._inbox.append((fn, args))
+        self._wake.set()
+
+    def wake(self) -> None:
+        self._wake.set()
+
+    def _schedule(self, timer: Timer) -> None:
+        if not timer.is_canceled():
+            heapq.heappush(self._timers, (timer._deadline_ns, timer._order, timer._generation, timer))
+
+    # ------------------------------------------------------------------ spinning
+    def spin_once(self, timeout_sec: float | None = None) -> None:
+        """Run at most one callback, waiting up to ``timeout_sec`` for one (None: forever)."""
+        self._run_one(None if timeout_sec is None else max(0.0, timeout_sec), until_ns=None)
+
+    def spin(self) -> None:
+        """Run callbacks until the context shuts down (or :meth:`shutdown`)."""
+        while self.context.ok() and not self._shutdown:
+            self._run_one(0.5, until_ns=None)
+
+    def spin_for(self, seconds: float) -> None:
+        """Run callbacks for ``seconds`` of ROS time (simulated or real), then return."""
+        end = self.context.now_ns() + int(seconds * 1e9)
+        self.spin_until_time(end)
+
+    def spin_until_time(self, end_ns: int) -> None:
+        while self.context.ok() and not self._shutdown and self.context.now_ns() < end_ns:
+            self._run_one(None, until_ns=end_ns)
+        # Work due exactly at the end still runs, so a scene of N periods sees N frames.
+        while self.context.ok() and not self._shutdown and self._run_ready_work():
+            pass
+
+    def spin_until(self, predicate: Callable[[], bool], timeout_sec: float | None = None) -> bool:
+        """Spin until ``predicate()`` is true (returns True) or ``timeout_sec`` of ROS time pass."""
+        end = None if timeout_sec is None else self.context.now_ns() + int(timeout_sec * 1e9)
+        while self.context.ok() and not self._shutdown:
+            if predicate():
+                return True
+            if end is not None and self.context.now_ns() >= end:
+                return predicate()
+            self._run_one(None if end is not None else 0.5, until_ns=end)
+        return predicate()
+
+    def shutdown(self, timeout_sec: float | None = None) -> bool:
+        self._shutdown = True
+        self.wake()
+        for node in list(self._nodes):
+            self.remove_node(node)
+        return True
+
+    def _run_ready_work(self) -> bool:
+        """Run one piece of work that is due now; False when there is none."""
+        self._thread_id = threading.get_ident()
+        inbox = self._inbox
+        while inbox:
+            fn, args = inbox.popleft()
+            self._guarded(fn, args, None, 'cross-thread call')
+        timers = self._timers
+        if timers:
+            now = self.context.now_ns()
+            while timers and timers[0][0] <= now:
+                _, _, generation, timer = heapq.heappop(timers)
+                if generation != timer._generation or timer.is_canceled() or timer._executor is not self:
+                    continue
+                timer._advance(now)
+                self._schedule(timer)
+                timer.calls += 1
+                self._guarded(timer.callback, (), timer.node, 'timer')
+                return True
+        if self._ready:
+            sub = self._ready.popleft()
+            if not sub._queue or sub._executor is not self:
+                sub._ready = False
+                return True
+            self._guarded(sub.callback, (sub._take(),), sub.node, f"subscription to '{sub.topic_name}'")
+            return True
+        return False
+
+    def _run_one(self, timeout_sec: float | None, until_ns: int | None) -> None:
+        if not self.context.ok():
+            raise ExternalShutdownException('the context was shut down')
+        self._wake.clear()
+        if self._run_ready_work():
+            return
+        deadline = None
+        while self._timers:
+            head_deadline, _, generation, timer = self._timers[0]
+            if generation == timer._generation and not timer.is_canceled() and timer._executor is self:
+                deadline = head_deadline
+                break
+            heapq.heappop(self._timers)  # stale entry
+        if until_ns is not None:
+            deadline = until_ns if deadline is None else min(deadline, until_ns)
+        source = self.context.time_source
+        if timeout_sec == 0:
+            return
+        if isinstance(source, SimTimeSource) and math.isinf(source.rate) and deadline is None:
+            # Nothing scheduled in a fast simulation: only another thread can bring work.
+            self._wake.wait(timeout_sec if timeout_sec is not None else 0.5)
+            return
+        source.wait_until(deadline, self._wake, timeout_sec)
+
+    def _guarded(self, fn: Callable[..., Any], args: tuple, node: Node | None, what: str) -> None:
+        self.callbacks_run += 1
+        try:
+            fn(*args)
+        except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
+            raise
+        except Exception as err:  # a failing callback must not stop the graph
+            self.context.callback_errors += 1
+            logger = node.get_logger() if node is not None else None
+            if node is not None:
+                node.callback_errors += 1
+                first = node.callback_errors == 1
+            else:
+                first = self.context.callback_errors == 1
+            detail = ''.join(traceback.format_exception(err)) if first else f'{type(err).__name__}: {err}'
+            text = f'{what} callback raised ({node.callback_errors if node else self.context.callback_errors} ' \
+                   f'so far); the graph goes on: {detail}'
+            if logger is not None:
+                logger.error(text.rstrip(), throttle_duration_sec=None if first else 1.0)
+            else:
+                import sys
+                sys.stderr.write(text + '\n')
+
+
+class SingleThreadedExecutor(Executor):
+    """All callbacks in the thread that spins (the default)."""
+
+
+class MultiThreadedExecutor(Executor):
+    """Accepted for compatibility; runs callbacks in one thread so simulated runs stay deterministic."""
+
+    def __init__(self, num_threads: int | None = None, *, context: Context | None = None) -> None:
+        super().__init__(context=context)

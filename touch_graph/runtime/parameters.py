@@ -1,0 +1,321 @@
+"""Node parameters with rclpy's names, ROS 2 parameter YAML files and ``--ros-args``.
+
+A parameter file is what ``ros2 run ... --ros-args --params-file F`` reads::
+
+    /bear/subtype:            # a fully qualified node name; /** and * are wildcards
+      ros__parameters:
+        alpha: 0.4
+        cutoffs:              # nested mappings flatten to dotted names: cutoffs.tickle
+          tickle: 3.0
+
+A key without a leading ``/`` matches a node of that name in any namespace. Values keep
+their file and line, so a wrong type is reported as ``config/x.yaml:4: parameter 'alpha'
+of /bear/subtype ...``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError, ParameterError
+from ..yamlconf import YamlDict, YamlList, load_yaml, loads_yaml
+
+__all__ = [
+    'FloatingPointRange', 'IntegerRange', 'Parameter', 'ParameterDescriptor', 'ParameterNotDeclaredException',
+    'ParameterSource', 'ParameterType', 'RosArgs', 'SetParametersResult', 'load_parameter_file',
+    'parse_ros_args',
+]
+
+
+class ParameterType(IntEnum):
+    NOT_SET = 0
+    BOOL = 1
+    INTEGER = 2
+    DOUBLE = 3
+    STRING = 4
+    BYTE_ARRAY = 5
+    BOOL_ARRAY = 6
+    INTEGER_ARRAY = 7
+    DOUBLE_ARRAY = 8
+    STRING_ARRAY = 9
+
+
+_TYPE_NAMES = {
+    ParameterType.NOT_SET: 'not set', ParameterType.BOOL: 'bool', ParameterType.INTEGER: 'integer',
+    ParameterType.DOUBLE: 'double', ParameterType.STRING: 'string', ParameterType.BYTE_ARRAY: 'byte array',
+    ParameterType.BOOL_ARRAY: 'bool array', ParameterType.INTEGER_ARRAY: 'integer array',
+    ParameterType.DOUBLE_ARRAY: 'double array', ParameterType.STRING_ARRAY: 'string array',
+}
+
+
+def _infer_type(value: Any) -> ParameterType:
+    if value is None:
+        return ParameterType.NOT_SET
+    if isinstance(value, bool):
+        return ParameterType.BOOL
+    if isinstance(value, int):
+        return ParameterType.INTEGER
+    if isinstance(value, float):
+        return ParameterType.DOUBLE
+    if isinstance(value, str):
+        return ParameterType.STRING
+    if isinstance(value, (bytes, bytearray)):
+        return ParameterType.BYTE_ARRAY
+    if isinstance(value, (list, tuple)):
+        if all(isinstance(v, bool) for v in value) and value:
+            return ParameterType.BOOL_ARRAY
+        if all(isinstance(v, int) and not isinstance(v, bool) for v in value) and value:
+            return ParameterType.INTEGER_ARRAY
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) and value:
+            return ParameterType.DOUBLE_ARRAY
+        if all(isinstance(v, str) for v in value) and value:
+            return ParameterType.STRING_ARRAY
+        if not value:
+            raise ParameterError('an empty list has no parameter type; declare the parameter with a '
+                                 'non-empty default or an explicit descriptor type')
+        raise ParameterError(f'a parameter array must hold one type (bools, ints, doubles or strings); got {value!r}')
+    raise ParameterError(f'unsupported parameter value {value!r} of type {type(value).__name__}')
+
+
+class Parameter:
+    """``Parameter(name, value=...)`` or ``Parameter(name, Parameter.Type.DOUBLE, 1.0)``, as in rclpy."""
+
+    Type = ParameterType
+
+    def __init__(self, name: str, type_: ParameterType | None = None, value: Any = None) -> None:
+        if not isinstance(name, str) or not name:
+            raise ParameterError(f'parameter name must be a non-empty string, got {name!r}')
+        if type_ is None:
+            type_ = _infer_type(value)
+        if type_ == ParameterType.DOUBLE_ARRAY and value is not None:
+            value = [float(v) for v in value]
+        elif isinstance(value, tuple):
+            value = list(value)
+        self.name = name
+        self.type_ = ParameterType(type_)
+        self.value = value
+
+    def __repr__(self) -> str:
+        return f'Parameter({self.name!r}, {self.type_.name}, {self.value!r})'
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Parameter) and (self.name, self.type_, self.value) == (
+            other.name, other.type_, other.value)
+
+    __hash__ = None
+
+
+@dataclass
+class FloatingPointRange:
+    from_value: float = -math.inf
+    to_value: float = math.inf
+    step: float = 0.0
+
+
+@dataclass
+class IntegerRange:
+    from_value: int = -(2**63)
+    to_value: int = 2**63 - 1
+    step: int = 0
+
+
+@dataclass
+class ParameterDescriptor:
+    """rcl_interfaces/ParameterDescriptor's useful fields."""
+
+    name: str = ''
+    type: int = 0
+    description: str = ''
+    additional_constraints: str = ''
+    read_only: bool = False
+    dynamic_typing: bool = False
+    floating_point_range: list[FloatingPointRange] = field(default_factory=list)
+    integer_range: list[IntegerRange] = field(default_factory=list)
+
+
+@dataclass
+class SetParametersResult:
+    successful: bool = True
+    reason: str = ''
+
+
+class ParameterNotDeclaredException(ParameterError):
+    """``get_parameter`` of a name the node never declared."""
+
+
+@dataclass(frozen=True)
+class ParameterSource:
+    """Where an override came from, for error messages (``config/x.yaml:4`` or ``launch``)."""
+
+    where: str
+    line: int | None = None
+
+    def __str__(self) -> str:
+        return f'{self.where}:{self.line}' if self.line is not None else self.where
+
+
+def type_name(type_: ParameterType) -> str:
+    return _TYPE_NAMES[ParameterType(type_)]
+
+
+def coerce_to_type(name: str, value: Any, expected: ParameterType, node: str, source: Any) -> Any:
+    """``value`` as a parameter of type ``expected``, or ParameterError naming the source.
+
+    An integer is accepted for a double (and becomes a float): YAML writes ``1`` for 1.0
+    and the strict ROS 2 rule trips up users for no gain.
+    """
+    got = _infer_type(value)
+    if got == expected or expected == ParameterType.NOT_SET:
+        return value
+    if expected == ParameterType.DOUBLE and got == ParameterType.INTEGER:
+        return float(value)
+    if expected == ParameterType.DOUBLE_ARRAY and got == ParameterType.INTEGER_ARRAY:
+        return [float(v) for v in value]
+    where = f'{source}: ' if source else ''
+    raise ParameterError(f"{where}parameter '{name}' of {node} must be a {type_name(expected)}; "
+                         f'got {type_name(got)} {value!r}')
+
+
+def check_ranges(name: str, value: Any, descriptor: ParameterDescriptor, node: str) -> str | None:
+    """Why ``value`` is outside the descriptor's ranges, or None."""
+    for rng in descriptor.floating_point_range:
+        if isinstance(value, (int, float)) and not rng.from_value <= value <= rng.to_value:
+            return f"parameter '{name}' of {node} must be in [{rng.from_value}, {rng.to_value}]; got {value!r}"
+        if isinstance(value, float) and math.isnan(value):
+            return f"parameter '{name}' of {node} must be a number, got NaN"
+    for rng in descriptor.integer_range:
+        if isinstance(value, int) and not rng.from_value <= value <= rng.to_value:
+            return f"parameter '{name}' of {node} must be in [{rng.from_value}, {rng.to_value}]; got {value!r}"
+    return None
+
+
+# --------------------------------------------------------------------------- parameter files
+
+@dataclass(frozen=True)
+class FileOverride:
+    """One parameter value from a file, with the node pattern it applies to."""
+
+    pattern: str
+    name: str
+    value: Any
+    source: ParameterSource
+
+
+def _flatten(prefix: str, mapping: YamlDict, out: list[tuple[str, Any, int | None]]) -> None:
+    for key, value in mapping.items():
+        name = f'{prefix}.{key}' if prefix else str(key)
+        if isinstance(value, dict):
+            _flatten(name, value, out)
+        else:
+            if isinstance(value, YamlList):
+                value = list(value)
+            out.append((name, value, mapping.line_of(key) if isinstance(mapping, YamlDict) else None))
+
+
+def load_parameter_file(path: str | Path, text: str | None = None) -> list[FileOverride]:
+    """Read a ROS 2 parameter YAML file into overrides; errors name file and line."""
+    doc = loads_yaml(text, str(path)) if text is not None else load_yaml(path)
+    if doc is None:
+        return []
+    if not isinstance(doc, dict):
+        raise ConfigError('a parameter file is a mapping of node names to {ros__parameters: ...}', str(path), 1)
+    out = []
+    for pattern, body in doc.items():
+        if not isinstance(body, dict) or 'ros__parameters' not in body:
+            raise doc.error(f"node entry '{pattern}' must hold a 'ros__parameters' mapping "
+                            f'(node_name: {{ros__parameters: {{param: value}}}})', pattern)
+        extra = [k for k in body if k != 'ros__parameters']
+        if extra:
+            raise body.error(f"unexpected key '{extra[0]}' beside ros__parameters under '{pattern}'", extra[0])
+        params = body['ros__parameters']
+        if params is None:
+            continue
+        if not isinstance(params, dict):
+            raise body.error(f"ros__parameters of '{pattern}' must be a mapping of names to values",
+                             'ros__parameters')
+        flat: list[tuple[str, Any, int | None]] = []
+        _flatten('', params, flat)
+        for name, value, line in flat:
+            try:
+                _infer_type(value)
+            except ParameterError as err:
+                raise ConfigError(f"parameter '{name}': {err}", str(path), line) from err
+            out.append(FileOverride(str(pattern), name, value, ParameterSource(str(path), line)))
+    return out
+
+
+def node_matches(pattern: str, node_name: str, fqn: str) -> bool:
+    """Does a parameter-file key match a node (rcl rules, plus bare names for any namespace)?
+
+    >>> node_matches('/**', 'a', '/x/a'), node_matches('/x/*', 'a', '/x/a'), node_matches('a', 'a', '/x/a')
+    (True, True, True)
+    >>> node_matches('/y/a', 'a', '/x/a'), node_matches('/**/a', 'a', '/x/y/a')
+    (False, True)
+    """
+    if not pattern.startswith('/'):
+        return pattern == node_name
+    return _match_tokens(pattern.strip('/').split('/'), fqn.strip('/').split('/'))
+
+
+def _match_tokens(pattern: list[str], tokens: list[str]) -> bool:
+    # '**' matches any number of tokens (none included), '*' exactly one.
+    if not pattern:
+        return not tokens
+    head, rest = pattern[0], pattern[1:]
+    if head == '**':
+        return any(_match_tokens(rest, tokens[i:]) for i in range(len(tokens) + 1))
+    return bool(tokens) and head in ('*', tokens[0]) and _match_tokens(rest, tokens[1:])
+
+
+# --------------------------------------------------------------------------- --ros-args
+
+@dataclass
+class RosArgs:
+    """What ``--ros-args`` gave: remap rules, parameter values, parameter files, log level."""
+
+    remaps: list[str] = field(default_factory=list)
+    params: list[tuple[str, Any]] = field(default_factory=list)
+    params_files: list[str] = field(default_factory=list)
+    log_level: str | None = None
+    unparsed: list[str] = field(default_factory=list)
+
+
+def parse_ros_args(args: list[str] | None) -> RosArgs:
+    """Parse ``[... --ros-args -r a:=b -p x:=1 --params-file F --log-level debug -- ...]``."""
+    out = RosArgs()
+    if not args:
+        return out
+    i, inside = 0, False
+    while i < len(args):
+        arg = args[i]
+        if arg == '--ros-args':
+            inside = True
+        elif arg == '--' and inside:
+            inside = False
+        elif not inside:
+            out.unparsed.append(arg)
+        elif arg in ('-r', '--remap', '-p', '--param', '--params-file', '--log-level', '-e', '--enclave'):
+            if i + 1 >= len(args):
+                raise ParameterError(f'--ros-args: {arg} needs a value')
+            value = args[i + 1]
+            i += 1
+            if arg in ('-r', '--remap'):
+                out.remaps.append(value)
+            elif arg in ('-p', '--param'):
+                if ':=' not in value:
+                    raise ParameterError(f'--ros-args -p expects name:=value, got {value!r}')
+                name, text = value.split(':=', 1)
+                out.params.append((name, loads_yaml(text, f'-p {name}') if text else ''))
+            elif arg == '--params-file':
+                out.params_files.append(value)
+            elif arg == '--log-level':
+                out.log_level = value
+        else:
+            raise ParameterError(f'--ros-args: unknown argument {arg!r}; supported: -r/--remap from:=to, '
+                                 '-p/--param name:=value, --params-file FILE, --log-level LEVEL')
+        i += 1
+    return out

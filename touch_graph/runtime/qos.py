@@ -1,0 +1,77 @@
+"""Quality of service, with rclpy.qos's names.
+
+In process, ``depth`` bounds each subscription's queue (KEEP_LAST: the oldest message
+is dropped and counted when it is full) and TRANSIENT_LOCAL makes a publisher hand
+its last ``depth`` messages to subscriptions that join later. Reliability is recorded
+for bags and for a real ROS 2 graph; in process every delivery is reliable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+__all__ = [
+    'DurabilityPolicy', 'HistoryPolicy', 'QoSDurabilityPolicy', 'QoSHistoryPolicy', 'QoSProfile',
+    'QoSReliabilityPolicy', 'ReliabilityPolicy', 'qos_profile_from', 'qos_profile_sensor_data',
+    'qos_profile_system_default',
+]
+
+
+class HistoryPolicy(IntEnum):
+    SYSTEM_DEFAULT = 0
+    KEEP_LAST = 1
+    KEEP_ALL = 2
+
+
+class ReliabilityPolicy(IntEnum):
+    SYSTEM_DEFAULT = 0
+    RELIABLE = 1
+    BEST_EFFORT = 2
+
+
+class DurabilityPolicy(IntEnum):
+    SYSTEM_DEFAULT = 0
+    TRANSIENT_LOCAL = 1
+    VOLATILE = 2
+
+
+QoSHistoryPolicy = HistoryPolicy
+QoSReliabilityPolicy = ReliabilityPolicy
+QoSDurabilityPolicy = DurabilityPolicy
+
+#: Queue bound used for KEEP_ALL, so that memory stays bounded on long runs.
+KEEP_ALL_LIMIT = 10_000
+
+
+@dataclass
+class QoSProfile:
+    """A QoS profile; ``QoSProfile(depth=10)`` as in rclpy."""
+
+    depth: int = 10
+    history: HistoryPolicy = HistoryPolicy.KEEP_LAST
+    reliability: ReliabilityPolicy = ReliabilityPolicy.RELIABLE
+    durability: DurabilityPolicy = DurabilityPolicy.VOLATILE
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.depth, int) or isinstance(self.depth, bool) or self.depth < 0:
+            raise ValueError(f'QoS depth must be an int >= 0, got {self.depth!r}')
+        if self.history == HistoryPolicy.KEEP_LAST and self.depth == 0:
+            raise ValueError('QoS depth 0 with KEEP_LAST keeps nothing; use depth >= 1 or KEEP_ALL')
+
+    @property
+    def queue_bound(self) -> int:
+        return KEEP_ALL_LIMIT if self.history == HistoryPolicy.KEEP_ALL else self.depth
+
+
+qos_profile_sensor_data = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
+qos_profile_system_default = QoSProfile(depth=10)
+
+
+def qos_profile_from(qos: QoSProfile | int) -> QoSProfile:
+    """Accept a depth or a profile, as ``create_publisher`` does."""
+    if isinstance(qos, QoSProfile):
+        return qos
+    if isinstance(qos, int) and not isinstance(qos, bool):
+        return QoSProfile(depth=qos)
+    raise TypeError(f'qos_profile must be a QoSProfile or an int depth, got {qos!r}')
