@@ -196,3 +196,16 @@ def test_timer_skips_missed_periods_without_drift(ctx):
     assert len(calls) == 1 and timer.missed == 2
     executor.spin_for(0.1)
     assert (calls[1] - calls[0]) % 100_000_000 == 50_000_000  # back on the original grid (0.4 s)
+
+
+def test_ignore_local_publications_skips_the_nodes_own_messages(ctx):
+    bridge, other = Node('bridge', context=ctx), Node('other', context=ctx)
+    own = bridge.create_publisher(Frame, 'x', 10)
+    foreign = other.create_publisher(Frame, 'x', 10)
+    got = []
+    bridge.create_subscription(Frame, 'x', lambda m: got.append(m.sequence), 10, ignore_local_publications=True)
+    executor = make_graph(ctx, bridge, other)
+    own.publish(Frame(sequence=1))
+    foreign.publish(Frame(sequence=2))
+    executor.spin_for(0.0)
+    assert got == [2]

@@ -441,7 +441,7 @@ def _definition_text(full: str, indent: str) -> str:
     if pkg == INTERFACE_PACKAGE:
         text = share_file('msg', f'{short}.msg').read_text(encoding='utf-8')
     else:
-        text = typestore.generate_msgdef(full)[0].split('\n' + '=' * 80)[0]
+        text = typestore.generate_msgdef(full, ros_version=2)[0].split('\n' + '=' * 80)[0]
     lines = []
     nested = {name: desc for name, desc in typestore.fielddefs[full][1]}
     for line in text.splitlines():

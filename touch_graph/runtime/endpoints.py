@@ -74,7 +74,10 @@ class Publisher:
         topic = self._topic
         if topic.raw_subscriptions and raw is None:
             raw = messages.serialize(msg, topic.type_name)
+        node = self.node
         for sub in topic.subscriptions:
+            if sub.ignore_local_publications and sub.node is node:
+                continue
             sub._enqueue(raw if sub.raw else msg)
 
     def get_subscription_count(self) -> int:
@@ -93,8 +96,10 @@ class Subscription:
     """
 
     def __init__(self, node: Node, topic: Topic, callback: Callable[[Any], None], qos: QoSProfile,
-                 raw: bool = False) -> None:
+                 raw: bool = False, ignore_local_publications: bool = False) -> None:
         self.node = node
+        # rclcpp's option: skip messages published by this subscription's own node (bridges use it).
+        self.ignore_local_publications = ignore_local_publications
         self.msg_type = topic.msg_type
         self.callback = callback
         self.qos_profile = qos

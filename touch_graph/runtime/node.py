@@ -155,8 +155,10 @@ class Node:
         return pub
 
     def create_subscription(self, msg_type: type, topic: str, callback: Callable[[Any], None],
-                            qos_profile: QoSProfile | int, *, raw: bool = False, **_ignored: Any) -> Subscription:
-        """A subscription; ``callback(msg)`` runs in the executor (``raw=True``: CDR bytes)."""
+                            qos_profile: QoSProfile | int, *, raw: bool = False,
+                            ignore_local_publications: bool = False, **_ignored: Any) -> Subscription:
+        """A subscription; ``callback(msg)`` runs in the executor (``raw=True``: CDR bytes;
+        ``ignore_local_publications``: skip what this node itself publishes)."""
         self._check_alive()
         if not callable(callback):
             raise TypeError(f'subscription callback must be callable, got {callback!r}')
@@ -164,7 +166,8 @@ class Node:
         name = self.resolve_topic_name(topic)
         with self.context._lock:
             topic_obj = self.context._topic_for(name, msg_type, f'subscription of {self._fqn}')
-            sub = Subscription(self, topic_obj, callback, qos, raw=raw)
+            sub = Subscription(self, topic_obj, callback, qos, raw=raw,
+                               ignore_local_publications=ignore_local_publications)
             topic_obj.subscriptions = (*topic_obj.subscriptions, sub)
             topic_obj.raw_subscriptions += int(raw)
             self.subscriptions.append(sub)

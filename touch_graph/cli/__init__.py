@@ -1,0 +1,1 @@
+"""The ``social-touch`` command (see :mod:`touch_graph.cli.main`)."""
