@@ -60,6 +60,9 @@ class DeviceState:
     next_index: int = 0
     rng: random.Random = field(default_factory=random.Random)
     overrun_frames: int = 0
+    #: the device's time zero, in the units of the clock it runs on (set by the first port)
+    epoch: float | None = None
+    epoch_clock: object = None
 
     def unplug(self) -> None:
         """Pull the cable: reads fail and opens fail until :meth:`replug`."""
@@ -126,6 +129,8 @@ class VirtualSerial(SerialBase):
         self._clock: Callable[[], float] | None = None
         self._t0 = 0.0
         self._out = bytearray()
+        self._fresh = True
+        self._start_index = 0
         super().__init__(*args, **kwargs)
 
     # ---------------------------------------------------------------- sensor-specific
@@ -153,7 +158,8 @@ class VirtualSerial(SerialBase):
                 state.rng.seed(int(faults.get('seed', 0)))
                 _registry[name] = state
         self._state = state
-        self._t0 = time.monotonic() if self._clock is None else self._t0
+        self._fresh = True
+        self._use_epoch(self._clock)
         if not state.is_plugged(self._device_time()):
             raise SerialException(f'could not open port {self.port}: [Errno 2] No such file or directory')
         self._out.clear()
@@ -167,9 +173,21 @@ class VirtualSerial(SerialBase):
         """Baud rate and framing mean nothing to a virtual device."""
 
     def attach_clock(self, clock: Callable[[], float]) -> None:
-        """Run the device on ``clock`` (seconds); device time 0 is the clock's value now."""
+        """Run the device on ``clock`` (seconds). Device time 0 is the clock's value when the
+        device was first opened on it: a port reopened after an unplug finds the device's time
+        running on, not restarted."""
         self._clock = clock
-        self._t0 = clock()
+        if self._state is not None:
+            self._use_epoch(clock)
+
+    def _use_epoch(self, clock: Callable[[], float] | None) -> None:
+        state = self._state
+        key = getattr(clock, '__self__', clock)  # bound methods of one object count as one clock
+        if state.epoch is None or state.epoch_clock is not key:
+            state.epoch = clock() if clock is not None else time.monotonic()
+            state.epoch_clock = key
+        self._t0 = state.epoch
+        self._start_index = int(max(0.0, self._device_time()) / state.model.frame_period)
 
     def _device_time(self) -> float:
         now = self._clock() if self._clock is not None else time.monotonic()
@@ -187,6 +205,10 @@ class VirtualSerial(SerialBase):
         model = state.model
         period = model.frame_period
         due = int(t / period) + 1  # frames 0..due-1 are due
+        if self._fresh:
+            # Nothing was sent to a closed or unplugged port: start from the frame due at opening.
+            self._fresh = False
+            state.next_index = max(state.next_index, self._start_index)
         backlog = int(state.options.get('buffer_s', 2.0) / period) + 1
         if due - state.next_index > backlog:
             state.overrun_frames += due - backlog - state.next_index

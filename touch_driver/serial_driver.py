@@ -1,0 +1,173 @@
+"""A serial sensor driver in the manner of python-can's ``BusABC``.
+
+:class:`SerialDriver` opens a port URL with ``serial.serial_for_url`` (real hardware such
+as ``/dev/ttyACM0``, pyserial's ``loop://``, or one of our virtual devices such as
+``skinsim://demo``), splits the byte stream into checked frames with
+:class:`~touch_driver.framing.FrameDecoder`, and decodes each payload with the sensor's
+protocol function. It has no graph code: the driver nodes wrap it.
+
+::
+
+    with SerialDriver('skinsim://demo', payload_sizes={0x53: 288}, decode=decode_skin) as driver:
+        frame = driver.read_frame(timeout=1.0)
+
+Bad bytes never raise: they are counted in :attr:`stats`. A port that fails (unplugged,
+removed) raises :class:`PortDisconnected` from ``read_frame``/``poll``; ``open()`` again
+reconnects, and ``close()`` is safe to call twice.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import serial
+
+from touch_graph.errors import SocialTouchError
+
+from .framing import DecoderStats, Frame, FrameDecoder
+
+__all__ = ['DecodedFrame', 'DriverError', 'PortDisconnected', 'SerialDriver']
+
+
+class DriverError(SocialTouchError):
+    """A port cannot be opened or read."""
+
+
+class PortDisconnected(DriverError):
+    """The port went away while open (cable pulled, device reset)."""
+
+
+@dataclass(frozen=True, slots=True)
+class DecodedFrame:
+    """A frame with its decoded payload and the time it was read (``clock()`` seconds)."""
+
+    sensor_id: int
+    seq: int
+    data: Any
+    received_s: float
+
+
+class SerialDriver:
+    """Read framed sensor data from a serial port URL.
+
+    Args:
+        port: a pyserial URL or device path.
+        payload_sizes: sensor id -> payload length, for the frame decoder.
+        decode: ``decode(frame) -> data``; may raise ``ValueError`` for a payload that passed the
+            checksum but makes no sense (counted in ``stats_decode_errors``, skipped).
+        baudrate: ignored by USB CDC devices and virtual ports, used by real UARTs.
+        clock: seconds; virtual devices run on it (a graph's simulated clock), and read times use it.
+        max_pending: decoded frames kept for ``read_frame``; older ones are dropped and counted.
+    """
+
+    def __init__(self, port: str, *, payload_sizes: dict[int, int], decode: Callable[[Frame], Any],
+                 baudrate: int = 115200, clock: Callable[[], float] | None = None, max_pending: int = 1024) -> None:
+        if not isinstance(port, str) or not port:
+            raise ValueError(f'port must be a device path or URL, got {port!r}')
+        self.port = port
+        self.baudrate = baudrate
+        self._decode = decode
+        self._clock = clock or time.monotonic
+        self._clock_given = clock is not None
+        self._decoder = FrameDecoder(payload_sizes)
+        self._serial: Any = None
+        # Bounded: a reader that falls behind loses the oldest frames (counted), not memory.
+        self._pending: deque[DecodedFrame] = deque(maxlen=max_pending)
+        self.decode_errors = 0
+        self.overflow_frames = 0
+        self.opens = 0
+
+    # ------------------------------------------------------------------ lifecycle
+    @property
+    def is_open(self) -> bool:
+        return self._serial is not None and self._serial.is_open
+
+    @property
+    def stats(self) -> DecoderStats:
+        return self._decoder.stats
+
+    def open(self) -> None:
+        """Open (or reopen) the port; raises :class:`DriverError` naming the port and the cause."""
+        self.close()
+        try:
+            port = serial.serial_for_url(self.port, baudrate=self.baudrate, timeout=0, do_not_open=True)
+            if hasattr(port, 'attach_clock') and self._clock_given:
+                port.attach_clock(self._clock)  # a virtual device runs on our clock from its first byte
+            port.open()
+        except (serial.SerialException, OSError, ValueError) as err:
+            raise DriverError(f'cannot open {self.port}: {err}. Is the sensor plugged in, and is the '
+                              'URL right (e.g. /dev/ttyACM0, loop://, bearsim://, patchsim://, skinsim://)?') from err
+        self._serial = port
+        self._decoder.reset()  # bytes from before a reconnect belong to no frame
+        self._pending.clear()
+        self.opens += 1
+
+    def close(self) -> None:
+        port, self._serial = self._serial, None
+        if port is not None:
+            with contextlib.suppress(serial.SerialException, OSError):  # a port that vanished
+                port.close()
+
+    def __enter__(self) -> SerialDriver:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ reading
+    def _read_available(self, timeout: float) -> bytes:
+        port = self._serial
+        if port is None:
+            raise DriverError(f'{self.port} is not open; call open() first')
+        try:
+            if timeout > 0:
+                port.timeout = timeout
+                first = port.read(1)
+                port.timeout = 0
+                if not first:
+                    return b''
+                waiting = port.in_waiting
+                return first + (port.read(waiting) if waiting else b'')
+            waiting = port.in_waiting
+            return port.read(waiting) if waiting else b''
+        except (serial.SerialException, OSError) as err:
+            self.close()
+            raise PortDisconnected(f'{self.port} stopped answering: {err}') from err
+
+    def poll(self) -> list[DecodedFrame]:
+        """Every frame that has arrived, without waiting."""
+        self._feed(self._read_available(0))
+        out = list(self._pending)
+        self._pending.clear()
+        return out
+
+    def read_frame(self, timeout: float | None = None) -> DecodedFrame | None:
+        """The next frame, waiting up to ``timeout`` seconds (None: until one comes); None on timeout."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self._pending:
+            wait = 0.1 if deadline is None else deadline - time.monotonic()
+            if wait <= 0:
+                self._feed(self._read_available(0))
+                break
+            self._feed(self._read_available(min(wait, 0.1)))
+        return self._pending.popleft() if self._pending else None
+
+    def _feed(self, data: bytes) -> None:
+        if not data:
+            return
+        now = self._clock()
+        for frame in self._decoder.feed(data):
+            try:
+                decoded = self._decode(frame)
+            except ValueError:
+                self.decode_errors += 1
+                continue
+            if len(self._pending) == self._pending.maxlen:
+                self.overflow_frames += 1
+            self._pending.append(DecodedFrame(frame.sensor_id, frame.seq, decoded, now))
