@@ -1,0 +1,21 @@
+"""Run the doctests of the bear and patch driver modules, the scenes and their URL handlers."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+
+import pytest
+
+from touch_driver.virtual_port import forget_devices
+
+MODULES = ['touch_driver.bear.body_map', 'touch_driver.bear.protocol', 'touch_driver.patch.protocol',
+           'touch_driver.patch.panels', 'touch_driver.scenes', 'touch_driver.urlhandlers.protocol_bearsim',
+           'touch_driver.urlhandlers.protocol_patchsim']
+
+
+@pytest.mark.parametrize('name', MODULES)
+def test_doctests(name: str) -> None:
+    forget_devices()
+    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0 and result.attempted > 0
