@@ -13,6 +13,9 @@ PACKAGE = 'social_touch'
 # One executable per node, name -> (module, node class). `ros2 run social_touch <name>` runs the
 # module's main(); `social-touch launch` finds the class through the social_touch.nodes group.
 NODES: dict[str, tuple[str, str]] = {
+    'bear_driver': ('touch_driver.bear.node', 'BearDriverNode'),
+    'patch_driver': ('touch_driver.patch.node', 'PatchDriverNode'),
+    'skin_driver': ('touch_driver.skin.node', 'SkinDriverNode'),
 }
 
 setup(

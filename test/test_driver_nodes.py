@@ -1,0 +1,97 @@
+"""The three driver nodes on their virtual devices, in simulated time (synthetic data)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from touch_driver.bear.node import BearDriverNode
+from touch_driver.patch.node import PatchDriverNode
+from touch_driver.scenes import BearScript, BearTouch, PanelTouch, PatchScript, PatchTouch, register_stimulus
+from touch_driver.skin.device import register_stimulus as register_skin_stimulus
+from touch_driver.skin.node import SkinDriverNode
+from touch_driver.skin.stimuli import StaticPress
+from touch_driver.virtual_port import forget_devices
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+
+
+@pytest.fixture(autouse=True)
+def fresh_devices():
+    forget_devices()
+    yield
+    forget_devices()
+
+
+def spin_driver(node_class, seconds, topics, **params):
+    ctx = Context('sim')
+    ctx.init()
+    node = node_class(context=ctx, namespace=node_class.sensor,
+                      parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
+    listener = Node('listener', context=ctx)
+    got = {topic: [] for topic in topics}
+    for topic, type_name in topics.items():
+        listener.create_subscription(get_message(type_name), topic, got[topic].append, 1000)
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(node)
+    executor.add_node(listener)
+    executor.spin_for(seconds)
+    node.destroy_node()
+    ctx.shutdown()
+    return node, got
+
+
+def test_bear_driver_publishes_calibrated_frames_at_the_scan_rate():
+    touch = BearTouch(channels=(1,), start=5.0, duration=4.0, level=1.0)
+    register_stimulus('bear-node-test', BearScript([touch]))
+    node, got = spin_driver(BearDriverNode, 10.0, {'/bear/frame': 'BearFrame', '/bear/bear_driver/status': 'DriverStatus'},
+                            port='bearsim://t?scene=bear-node-test&seed=1')
+    frames = got['/bear/frame']
+    assert 32 <= len(frames) <= 36  # 3.4 Hz for 10 s
+    assert frames[0].header.frame_id == 'bear_link'
+    assert int(frames[0].fitted.sum()) == 56
+    touched = [f for f in frames if f.active[1]]
+    assert touched and all(f.level[1] > 0.9 for f in touched)
+    assert not any(f.active[0] for f in frames)
+    status = got['/bear/bear_driver/status'][-1]
+    assert status.connected and status.checksum_errors == 0 and status.rate_hz == pytest.approx(3.4, abs=1.1)
+
+
+def test_bear_driver_flags_a_dead_sensor():
+    node, got = spin_driver(BearDriverNode, 70.0, {'/bear/frame': 'BearFrame'},
+                            port='bearsim://dead?dead=head2&seed=2', fault_after_s=30.0)
+    channel = node.body_map.by_name('head2').channel
+    last = got['/bear/frame'][-1]
+    assert last.faults[channel] & 1 and not last.active[channel]
+    assert not last.faults[node.body_map.by_name('head1').channel]
+
+
+def test_skin_driver_keeps_a_sustained_press_and_reports_the_contact_point():
+    register_skin_stimulus('skin-node-test', StaticPress(x_mm=20.0, y_mm=30.0, force_n=2.0, at_s=1.0, for_s=20.0))
+    node, got = spin_driver(SkinDriverNode, 22.0, {'/skin/frame': 'SkinFrame'}, port='skinsim://t?scene=skin-node-test')
+    frames = got['/skin/frame']
+    assert len(frames) == pytest.approx(22 * 150, abs=3)
+    pressed = [f for f in frames[200:3000] if f.contact]
+    assert len(pressed) > 0.95 * 2800
+    assert abs(pressed[-1].total_force - pressed[0].total_force) < 0.1 * pressed[0].total_force
+    assert pressed[-1].contact_x == pytest.approx(20.0, abs=2.0) and pressed[-1].contact_y == pytest.approx(30.0, abs=2.0)
+    assert math.isnan(frames[50].contact_x) and not frames[50].contact
+
+
+def test_patch_driver_publishes_20hz_frames_and_fast_panel_contact():
+    script = PatchScript([PatchTouch(at=(8.0, 8.0), radius=2.0, pressure=3.0, start=2.0, duration=2.0)],
+                         [PanelTouch(panels=(3,), start=5.0, duration=1.0, level=1.0)])
+    register_stimulus('patch-node-test', script)
+    node, got = spin_driver(PatchDriverNode, 8.0, {'/patch/frame': 'PatchFrame', '/patch/panels': 'PanelContact'},
+                            port='patchsim://t?scene=patch-node-test&seed=3')
+    frames = got['/patch/frame']
+    assert len(frames) == pytest.approx(160, abs=2)
+    peak = max(frames, key=lambda f: float(f.activation.max()))
+    assert peak.activation.max() > 0.5 and np.all(peak.activation[~peak.in_outline] == 0)
+    quiet = frames[10]
+    assert np.all(quiet.activation[quiet.in_outline] == pytest.approx(0.08))
+    panels = got['/patch/panels']
+    onsets = [p for p in panels if p.contact[3]]
+    assert onsets and onsets[0].any_contact
+    onset_s = onsets[0].header.stamp.sec + onsets[0].header.stamp.nanosec * 1e-9 - 1_700_000_000
+    assert 5.0 <= onset_s < 5.15  # within a few 10 ms scans of the touch

@@ -1,0 +1,58 @@
+"""``bear_driver``: the Sensate Bear's serial driver node.
+
+Reads scans from ``port`` (``/dev/ttyACM0`` on the robot, ``bearsim://...`` for the virtual
+bear), calibrates them (:class:`~touch_driver.bear.calibration.BearCalibrator`: baseline and
+gain to 0..1, activation at 30 %, fault flags) and publishes a ``BearFrame`` per scan on
+``frame`` (``/bear/frame`` in the ``bear`` namespace), plus status and diagnostics.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from touch_graph.compat import get_message
+
+from ..driver_node import SerialDriverNode
+from ..serial_driver import SerialDriver
+from .body_map import BodyMap
+from .calibration import BearCalibrator
+from .protocol import BEAR_ID, PAYLOAD_SIZE, decode_payload
+
+__all__ = ['BearDriverNode', 'main']
+
+BearFrame = get_message('social_touch_msgs/msg/BearFrame')
+
+
+class BearDriverNode(SerialDriverNode):
+    sensor = 'bear'
+    default_port = 'bearsim://bear'
+    frame_rate_hz = 3.4  # 58 channels x 5 ms (knight2009 VI.B)
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('bear_driver', **kwargs)
+        body_map_path = self.declare_parameter('body_map', '').value
+        self.body_map = BodyMap.load(body_map_path) if body_map_path else BodyMap.default()
+        self.calibrator = BearCalibrator(
+            self.body_map,
+            threshold=self.declare_parameter('threshold', 0.3).value,
+            baseline_frames=self.declare_parameter('baseline_frames', 10).value,
+            rate_hz=self.expected_rate_hz,
+            drift_tau_s=self.declare_parameter('drift_tau_s', 120.0).value,
+            fault_after_s=self.declare_parameter('fault_after_s', 60.0).value,
+            saturated_after_s=self.declare_parameter('saturated_after_s', 300.0).value)
+        self.frame_pub = self.create_publisher(BearFrame, 'frame', 10)
+
+    def make_driver(self, port: str, clock: Any) -> SerialDriver:
+        return SerialDriver(port, payload_sizes={BEAR_ID: PAYLOAD_SIZE},
+                            decode=lambda frame: decode_payload(frame.payload), baudrate=self.baudrate, clock=clock)
+
+    def handle_frame(self, frame: Any) -> None:
+        levels = self.calibrator.update(frame.data)
+        self.frame_pub.publish(BearFrame(
+            header=self.header(), sequence=frame.seq, raw=levels.raw, level=levels.level, active=levels.active,
+            fitted=levels.fitted, faults=levels.faults))
+
+
+def main(args: list[str] | None = None) -> int:
+    from touch_graph.node_main import run_node
+    return run_node(BearDriverNode, args)

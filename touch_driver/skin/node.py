@@ -1,0 +1,53 @@
+"""``skin_driver``: the optoelectronic skin's serial driver node.
+
+Reads 150 Hz frames from ``port`` (``skinsim://...`` for the virtual skin), calibrates them
+(:class:`~touch_driver.skin.calibration.SkinCalibrator`: tare, drift tracking that keeps a
+sustained press, contact point, module forces) and publishes a ``SkinFrame`` per frame on
+``frame`` (``/skin/frame`` in the ``skin`` namespace), plus status and diagnostics.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from touch_graph.compat import get_message
+
+from ..driver_node import SerialDriverNode
+from ..serial_driver import SerialDriver
+from .calibration import SkinCalibrator
+from .calibration_config import load_skin_calibration
+from .protocol import FRAME_RATE_HZ, PAYLOAD_SIZE, SENSOR_ID, decode_payload
+
+__all__ = ['SkinDriverNode', 'main']
+
+SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
+
+
+class SkinDriverNode(SerialDriverNode):
+    sensor = 'skin'
+    default_port = 'skinsim://skin'
+    frame_rate_hz = FRAME_RATE_HZ
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('skin_driver', **kwargs)
+        config_path = self.declare_parameter('calibration', '').value
+        self.calibrator = SkinCalibrator(load_skin_calibration(config_path or None))
+        self.frame_pub = self.create_publisher(SkinFrame, 'frame', 10)
+
+    def make_driver(self, port: str, clock: Any) -> SerialDriver:
+        return SerialDriver(port, payload_sizes={SENSOR_ID: PAYLOAD_SIZE},
+                            decode=lambda frame: decode_payload(frame.payload), baudrate=self.baudrate, clock=clock)
+
+    def handle_frame(self, frame: Any) -> None:
+        state = self.calibrator.update(frame.data)
+        x, y = (float(v) for v in state.contact_xy_mm) if state.contact else (math.nan, math.nan)
+        self.frame_pub.publish(SkinFrame(
+            header=self.header(), sequence=frame.seq, raw=frame.data, pressure=state.pressure.ravel(),
+            contact=bool(state.contact), contact_x=x, contact_y=y, force=state.force.ravel(),
+            total_force=float(state.total_force)))
+
+
+def main(args: list[str] | None = None) -> int:
+    from touch_graph.node_main import run_node
+    return run_node(SkinDriverNode, args)
