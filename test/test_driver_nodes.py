@@ -44,8 +44,8 @@ def spin_driver(node_class, seconds, topics, **params):
 def test_bear_driver_publishes_calibrated_frames_at_the_scan_rate():
     touch = BearTouch(channels=(1,), start=5.0, duration=4.0, level=1.0)
     register_stimulus('bear-node-test', BearScript([touch]))
-    node, got = spin_driver(BearDriverNode, 10.0, {'/bear/frame': 'BearFrame', '/bear/bear_driver/status': 'DriverStatus'},
-                            port='bearsim://t?scene=bear-node-test&seed=1')
+    topics = {'/bear/frame': 'BearFrame', '/bear/bear_driver/status': 'DriverStatus'}
+    _node, got = spin_driver(BearDriverNode, 10.0, topics, port='bearsim://t?scene=bear-node-test&seed=1')
     frames = got['/bear/frame']
     assert 32 <= len(frames) <= 36  # 3.4 Hz for 10 s
     assert frames[0].header.frame_id == 'bear_link'
@@ -68,13 +68,14 @@ def test_bear_driver_flags_a_dead_sensor():
 
 def test_skin_driver_keeps_a_sustained_press_and_reports_the_contact_point():
     register_skin_stimulus('skin-node-test', StaticPress(x_mm=20.0, y_mm=30.0, force_n=2.0, at_s=1.0, for_s=20.0))
-    node, got = spin_driver(SkinDriverNode, 22.0, {'/skin/frame': 'SkinFrame'}, port='skinsim://t?scene=skin-node-test')
+    _node, got = spin_driver(SkinDriverNode, 22.0, {'/skin/frame': 'SkinFrame'}, port='skinsim://t?scene=skin-node-test')
     frames = got['/skin/frame']
     assert len(frames) == pytest.approx(22 * 150, abs=3)
     pressed = [f for f in frames[200:3000] if f.contact]
     assert len(pressed) > 0.95 * 2800
     assert abs(pressed[-1].total_force - pressed[0].total_force) < 0.1 * pressed[0].total_force
-    assert pressed[-1].contact_x == pytest.approx(20.0, abs=2.0) and pressed[-1].contact_y == pytest.approx(30.0, abs=2.0)
+    assert pressed[-1].contact_x == pytest.approx(20.0, abs=2.0)
+    assert pressed[-1].contact_y == pytest.approx(30.0, abs=2.0)
     assert math.isnan(frames[50].contact_x) and not frames[50].contact
 
 
@@ -82,7 +83,7 @@ def test_patch_driver_publishes_20hz_frames_and_fast_panel_contact():
     script = PatchScript([PatchTouch(at=(8.0, 8.0), radius=2.0, pressure=3.0, start=2.0, duration=2.0)],
                          [PanelTouch(panels=(3,), start=5.0, duration=1.0, level=1.0)])
     register_stimulus('patch-node-test', script)
-    node, got = spin_driver(PatchDriverNode, 8.0, {'/patch/frame': 'PatchFrame', '/patch/panels': 'PanelContact'},
+    _node, got = spin_driver(PatchDriverNode, 8.0, {'/patch/frame': 'PatchFrame', '/patch/panels': 'PanelContact'},
                             port='patchsim://t?scene=patch-node-test&seed=3')
     frames = got['/patch/frame']
     assert len(frames) == pytest.approx(160, abs=2)
