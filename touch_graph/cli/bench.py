@@ -1,7 +1,8 @@
 """``social-touch bench TARGET [--json]``: medians of repeated runs on this machine, one core.
 
-Targets: ``runtime`` (pub/sub throughput, latency, CDR). Each prints a table, or with
-``--json`` one JSON object, so figures in the docs can be regenerated and compared.
+Targets: ``runtime`` (pub/sub throughput, latency, CDR), ``drivers`` (decode + calibrate per
+frame). Each prints a table, or with ``--json`` one JSON object, so figures in the docs can
+be regenerated and compared.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import platform
 # target -> (module, function); each function takes repeats= and returns a dict.
 TARGETS = {
     'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
+    'drivers': ('touch_driver.bench', 'bench_drivers'),
 }
 
 
