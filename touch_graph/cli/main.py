@@ -15,6 +15,7 @@ from ..errors import SocialTouchError
 
 # name -> (module, one-line help). The module defines add_arguments(parser) and run(args).
 COMMANDS: dict[str, tuple[str, str]] = {
+    'launch': ('touch_graph.launch.cli', 'start a scene: a ROS 2 YAML launch file, in this process'),
     'interface': ('touch_graph.cli.interface', 'list message types or show one (like ros2 interface)'),
     'export-interfaces': ('touch_graph.cli.export_interfaces',
                           'write the social_touch_msgs ament_cmake package for a ROS 2 workspace'),

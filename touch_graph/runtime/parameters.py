@@ -176,7 +176,8 @@ def coerce_to_type(name: str, value: Any, expected: ParameterType, node: str, so
     if expected == ParameterType.DOUBLE_ARRAY and got == ParameterType.INTEGER_ARRAY:
         return [float(v) for v in value]
     where = f'{source}: ' if source else ''
-    raise ParameterError(f"{where}parameter '{name}' of {node} must be a {type_name(expected)}; "
+    article = 'an' if type_name(expected)[0] in 'aeiou' else 'a'
+    raise ParameterError(f"{where}parameter '{name}' of {node} must be {article} {type_name(expected)}; "
                          f'got {type_name(got)} {value!r}')
 
 

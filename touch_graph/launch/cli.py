@@ -1,0 +1,155 @@
+"""``social-touch launch FILE [name:=value ...]``: start a scene's nodes in this process.
+
+Like ``ros2 launch``, FILE may be a path or ``PKG FILE`` (looked up in the package's share
+directory, under ``launch/`` first). Launch arguments are ``name:=value``; a name the file
+does not declare is an error listing the declared ones.
+
+Examples::
+
+    social-touch launch launch/demo.launch.yaml rate:=30.0
+    social-touch launch social_touch demo.launch.yaml --show-args
+    social-touch launch social_touch demo.launch.yaml --print-description
+    social-touch launch launch/demo.launch.yaml --sim-time --rate 10 --duration 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from ..errors import ConfigError, LaunchError
+from ..paths import package_share
+from ..yamlconf import did_you_mean
+from .entities import collect_arguments, evaluate_launch
+from .runner import LaunchRunner
+from .specs import DeclaredArgument
+
+__all__ = ['add_arguments', 'find_launch_file', 'parse_launch_arguments', 'run']
+
+
+def _non_negative(text: str) -> float:
+    value = float(text)
+    if not value >= 0 or math.isinf(value):
+        raise argparse.ArgumentTypeError(f'expected a finite number of seconds >= 0, got {text!r}')
+    return value
+
+
+def _positive_rate(text: str) -> float:
+    value = float(text)  # 'inf' is allowed: as fast as possible
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f'expected a rate > 0 (or inf), got {text!r}')
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``social-touch launch``."""
+    parser.add_argument('words', nargs='+', metavar='FILE | PKG FILE',
+                        help='a YAML launch file, or a package and a launch file in its share directory, '
+                             "followed by launch arguments 'name:=value'")
+    parser.add_argument('-s', '--show-args', action='store_true',
+                        help='list the launch arguments (description, default, choices) and exit')
+    parser.add_argument('-p', '--print-description', action='store_true',
+                        help='print the resolved nodes (names, namespaces, parameters, remaps) without starting them')
+    parser.add_argument('--duration', type=_non_negative, metavar='SECONDS',
+                        help='stop after this many seconds of ROS time (default: until Ctrl-C / SIGTERM)')
+    parser.add_argument('--sim-time', action='store_true', help='run the graph on a simulated clock')
+    parser.add_argument('--rate', type=_positive_rate, metavar='R',
+                        help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
+                             'as possible)')
+
+
+def find_launch_file(words: list[str]) -> tuple[Path, list[str]]:
+    """``FILE rest...`` or ``PKG FILE rest...`` -> (launch file, rest).
+
+    Raises:
+        LaunchError: when neither form names an existing launch file.
+    """
+    first = words[0]
+    if ':=' in first:
+        raise LaunchError(f"expected a launch file (or PKG FILE) before the launch arguments; got {first!r}")
+    if Path(first).is_file():
+        return Path(first), words[1:]
+    if len(words) < 2 or ':=' in words[1]:
+        raise LaunchError(f"launch file not found: {first} (give a path to a .launch.yaml file, or 'PKG FILE')")
+    package, name = words[0], words[1]
+    try:
+        share = package_share(package)
+    except ConfigError as err:
+        raise LaunchError(f'{first} is neither a file nor a package: {err.bare_message}') from err
+    direct = share / 'launch' / name
+    if direct.is_file():
+        return direct, words[2:]
+    found = sorted(p for p in share.rglob(Path(name).name) if p.is_file() and str(p).endswith(name))
+    if len(found) == 1:
+        return found[0], words[2:]
+    if len(found) > 1:
+        raise LaunchError(f"several files named {name!r} in package '{package}': "
+                          f'{", ".join(str(p) for p in found)}; give the path instead')
+    available = sorted(p.name for p in (share / 'launch').glob('*.yaml')) if (share / 'launch').is_dir() else []
+    raise LaunchError(f"package '{package}' has no launch file {name!r}{did_you_mean(name, available)}; "
+                      f'its launch files: {", ".join(available) or "none"} (in {share / "launch"})')
+
+
+def parse_launch_arguments(words: list[str]) -> dict[str, str]:
+    """``['a:=1', 'b:=x y']`` -> ``{'a': '1', 'b': 'x y'}``.
+
+    >>> parse_launch_arguments(['rate:=30', 'robot:=teddy'])
+    {'rate': '30', 'robot': 'teddy'}
+    """
+    out: dict[str, str] = {}
+    for word in words:
+        name, sep, value = word.partition(':=')
+        if not sep or not name:
+            raise LaunchError(f"unexpected argument {word!r}: launch arguments are name:=value (options such as "
+                              '--duration go before the launch file or after all name:=value arguments)')
+        if name in out:
+            raise LaunchError(f"launch argument '{name}' is given twice ({out[name]!r} and {value!r}); keep one")
+        out[name] = value
+    return out
+
+
+def format_arguments(arguments: list[DeclaredArgument]) -> str:
+    """The ``--show-args`` listing, in ``ros2 launch -s`` style."""
+    if not arguments:
+        return 'No arguments.'
+    lines = ["Arguments (pass arguments as '<name>:=<value>'):"]
+    for arg in arguments:
+        description = arg.description or 'no description given'
+        if arg.choices is not None:
+            description += f'{"" if description.endswith(".") else "."} Valid choices are: {list(arg.choices)}'
+        lines += ['', f"    '{arg.name}':", f'        {description}']
+        lines.append(f"        (default: '{arg.default}')" if arg.default is not None else '        (required)')
+    return '\n'.join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``social-touch launch``; errors are raised as :class:`LaunchError` (``main`` prints them)."""
+    path, rest = find_launch_file(list(args.words))
+    arguments = parse_launch_arguments(rest)
+    if args.rate is not None and not args.sim_time:
+        raise LaunchError('--rate needs --sim-time (it sets how fast simulated time runs)')
+    if args.show_args:
+        declared, unresolved = collect_arguments(path, arguments)
+        print(format_arguments(declared))
+        for where in unresolved:
+            print(f'\n(arguments of the include at {where} are not listed: its file is known only at launch)')
+        return 0
+    plan = evaluate_launch(path, arguments)
+    if args.print_description:
+        print(plan.describe())
+        return 0
+    if not plan.nodes:
+        print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
+        return 0
+    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate)
+    try:
+        runner.start()
+        names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)
+        print(f'[launch] {len(runner.nodes)} node(s) running: {names}', file=sys.stderr)
+        runner.spin(args.duration)
+    finally:
+        runner.shutdown()
+    print('[launch] all nodes stopped', file=sys.stderr)
+    return 0

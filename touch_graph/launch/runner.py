@@ -1,0 +1,267 @@
+"""Start the nodes of a launch plan in this process and spin them until shutdown.
+
+Each :class:`~touch_graph.launch.specs.NodeSpec` names a package and an executable; the
+class comes from the ``social_touch.nodes`` entry-point group (entry point name = exec,
+its distribution = pkg), or from an explicit registry (tests). Nodes are constructed the way
+rclpy component containers do it::
+
+    cls(context=ctx, cli_args=['--ros-args', '-r', '__node:=driver', '-r', '__ns:=/bear',
+                               '-r', 'frame:=/touch/bear_frame', '--params-file', F],
+        parameter_overrides=[Parameter('rate', value=25.0)])
+
+so the node parses its own parameter files and raises its own parameter errors; those come
+back as a :class:`~touch_graph.errors.LaunchError` naming the launch file and the node's
+line. Every class is resolved before any node starts, and a node that fails to start stops
+the ones already started. The first SIGINT/SIGTERM asks for a clean stop (the executor
+finishes its current callback, nodes are destroyed in reverse order, the context shuts
+down); a second one raises :class:`KeyboardInterrupt`.
+
+Note: in-process, ``param`` values go as ``parameter_overrides`` and therefore win over
+``from:`` files whatever their order in the node (rclpy's precedence); ros2 launch applies
+them in file order.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib.metadata
+import math
+import signal
+import threading
+import types
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from ..errors import LaunchError, SocialTouchError
+from ..yamlconf import did_you_mean
+from .specs import NodeSpec
+
+__all__ = ['ENTRY_POINT_GROUP', 'SLICE_S', 'LaunchRunner', 'entry_point_registry', 'resolve_node_class',
+           'source_tree_nodes']
+
+#: Entry-point group mapping executable names to node classes (``module:Class``).
+ENTRY_POINT_GROUP = 'social_touch.nodes'
+#: ROS-time slice between checks for a stop request while spinning, in seconds.
+SLICE_S = 0.1
+
+#: ``(pkg, exec) -> node class`` or something with ``load() -> class`` (an EntryPoint).
+Registry = Mapping[tuple[str, str], Any]
+
+
+def _normalize(name: str) -> str:
+    return name.replace('-', '_').lower()
+
+
+def source_tree_nodes(setup_py: Path | None = None, package: str = 'social_touch',
+                      group: str = ENTRY_POINT_GROUP) -> dict[tuple[str, str], importlib.metadata.EntryPoint]:
+    """The ``NODES`` table of a source checkout's ``setup.py`` (read with :mod:`ast`, never run).
+
+    So ``python -m touch_graph.cli.main launch ...`` works in a checkout that is not pip-installed.
+    Returns an empty mapping when there is no such file or table.
+    """
+    setup_py = setup_py or Path(__file__).resolve().parents[2] / 'setup.py'
+    try:
+        tree = ast.parse(setup_py.read_text(encoding='utf-8'))
+    except (OSError, SyntaxError, ValueError):
+        return {}
+    for statement in tree.body:
+        target = getattr(statement, 'target', None) or (getattr(statement, 'targets', None) or [None])[0]
+        if isinstance(target, ast.Name) and target.id == 'NODES' and getattr(statement, 'value', None) is not None:
+            try:
+                table = ast.literal_eval(statement.value)
+            except ValueError:
+                return {}
+            if not isinstance(table, dict):
+                return {}
+            return {(_normalize(package), name): importlib.metadata.EntryPoint(name, f'{item[0]}:{item[1]}', group)
+                    for name, item in table.items()
+                    if isinstance(name, str) and isinstance(item, tuple) and len(item) == 2}
+    return {}
+
+
+def entry_point_registry(group: str = ENTRY_POINT_GROUP, *, include_source_tree: bool = True,
+                         ) -> dict[tuple[str, str], importlib.metadata.EntryPoint]:
+    """``(package, executable) -> EntryPoint`` for every node executable (classes are not imported yet).
+
+    Installed entry points win; with ``include_source_tree``, executables of this source
+    checkout's ``setup.py`` that are not installed fill the gaps (see :func:`source_tree_nodes`).
+    """
+    out = source_tree_nodes(group=group) if include_source_tree else {}
+    for entry_point in importlib.metadata.entry_points(group=group):
+        dist = getattr(entry_point, 'dist', None)
+        package = dist.name if dist is not None else entry_point.module.split('.')[0]
+        out[(_normalize(package), entry_point.name)] = entry_point
+    return out
+
+
+def resolve_node_class(spec: NodeSpec, registry: Registry, node_base: type | None = None) -> type:
+    """The node class of ``spec`` (``node_base``: the class it must derive from, if given).
+
+    Raises:
+        LaunchError: at the node's line for an unknown package or executable (with the
+            available ones and a did-you-mean), an import failure, or a class that is not a node.
+    """
+    where = spec.where
+    key = (_normalize(spec.pkg), spec.exec)
+    if key not in registry:
+        packages = sorted({pkg for pkg, _ in registry})
+        if not registry:
+            raise where.error(f"cannot start {spec.pkg}/{spec.exec}: no node executables are registered (entry-point "
+                              f"group '{ENTRY_POINT_GROUP}' is empty); install the package: pip install -e . "
+                              '(or colcon build and source install/setup.bash)')
+        if key[0] not in packages:
+            raise where.error(f"unknown package '{spec.pkg}'{did_you_mean(key[0], packages)}; packages with node "
+                              f'executables: {", ".join(packages)}')
+        executables = sorted(name for pkg, name in registry if pkg == key[0])
+        raise where.error(f"package '{spec.pkg}' has no executable '{spec.exec}'{did_you_mean(spec.exec, executables)}"
+                          f'; available: {", ".join(executables)}')
+    target = registry[key]
+    if not isinstance(target, type):
+        try:
+            target = target.load()
+        except Exception as err:  # an import error inside the node's module: say which node and where
+            raise where.error(f'cannot load {spec.pkg}/{spec.exec} ({getattr(registry[key], "value", target)}): '
+                              f'{type(err).__name__}: {err}') from err
+    if not isinstance(target, type) or (node_base is not None and not issubclass(target, node_base)):
+        raise where.error(f'{spec.pkg}/{spec.exec} is {target!r}, not a Node subclass; the entry point must name '
+                          "a class whose __init__(**kwargs) calls Node.__init__(self, 'name', **kwargs)")
+    return target
+
+
+class LaunchRunner:
+    """Owns the context, the executor and the nodes of one launch.
+
+    Args:
+        specs: the nodes to start, in order.
+        registry: ``(pkg, exec) -> class``; default: :func:`entry_point_registry`.
+        runtime: the module with ``Context``, ``SingleThreadedExecutor``, ``Parameter`` and ``Node``;
+            default :mod:`touch_graph.runtime` (tests may pass a stand-in).
+        sim_time: run on a simulated clock (``Context(clock_mode='sim', rate=rate)``).
+        rate: simulated seconds per wall second (``math.inf``: as fast as possible); only with ``sim_time``.
+
+    Use as a context manager, or call :meth:`start`, :meth:`spin` and :meth:`shutdown`.
+    """
+
+    def __init__(self, specs: Iterable[NodeSpec], *, registry: Registry | None = None,
+                 runtime: types.ModuleType | Any = None, sim_time: bool = False, rate: float | None = None) -> None:
+        if rate is not None and not sim_time:
+            raise ValueError('rate applies to simulated time only; pass sim_time=True as well')
+        if rate is not None and not (rate > 0):  # also rejects NaN
+            raise ValueError(f'rate must be > 0 (math.inf: as fast as possible), got {rate!r}')
+        self.specs = list(specs)
+        self.registry = registry
+        self.runtime = runtime
+        self.sim_time = sim_time
+        self.rate = math.inf if rate is None else rate
+        self.context: Any = None
+        self.executor: Any = None
+        self.nodes: list[Any] = []
+        self._stop = threading.Event()
+        self._signals = 0
+
+    # ------------------------------------------------------------------ lifecycle
+    def start(self) -> list[Any]:
+        """Resolve every class, then create the context, the nodes and the executor."""
+        if self.runtime is None:
+            from .. import runtime  # deferred: the parser and --print-description do not need the graph
+            self.runtime = runtime
+        registry = entry_point_registry() if self.registry is None else self.registry
+        classes = [resolve_node_class(spec, registry, getattr(self.runtime, 'Node', None)) for spec in self.specs]
+        if self.sim_time:
+            self.context = self.runtime.Context(clock_mode='sim', rate=self.rate)
+        else:
+            self.context = self.runtime.Context()
+        self.context.init()
+        try:
+            for spec, cls in zip(self.specs, classes, strict=True):
+                self.nodes.append(self._create(spec, cls))
+            self.executor = self.runtime.SingleThreadedExecutor(context=self.context)
+            for node in self.nodes:
+                self.executor.add_node(node)
+        except BaseException as err:
+            try:
+                self.shutdown()
+            except LaunchError as cleanup:  # keep the first error; mention the second
+                err.add_note(str(cleanup))
+            raise
+        return self.nodes
+
+    def _create(self, spec: NodeSpec, cls: type) -> Any:
+        try:
+            overrides = [self.runtime.Parameter(p.name, value=p.value) for p in spec.parameter_values()]
+            return cls(context=self.context, cli_args=spec.cli_args(), parameter_overrides=overrides)
+        except SocialTouchError as err:
+            who = spec.full_name or f'{spec.pkg}/{spec.exec}'
+            raise spec.where.error(f'node {who} ({spec.pkg}/{spec.exec}) failed to start: {err}') from err
+        except Exception as err:  # a bug in the node: keep the exception, say which launch entry it was
+            err.add_note(f'while starting {spec.pkg}/{spec.exec} from {spec.where}')
+            raise
+
+    def request_stop(self) -> None:
+        """Ask :meth:`spin` to return after the current callback (safe from a signal handler or thread)."""
+        self._stop.set()
+
+    def spin(self, duration: float | None = None, *, handle_signals: bool = True) -> None:
+        """Run the graph until a stop request, the context's shutdown or ``duration`` seconds of ROS time.
+
+        With ``handle_signals`` (and in the main thread), SIGINT/SIGTERM request a stop while
+        spinning; the previous handlers come back afterwards.
+        """
+        if self.executor is None:
+            raise LaunchError('spin() before start(): call start() first (or use the runner as a context manager)')
+        if duration is not None and not (duration >= 0):
+            raise ValueError(f'duration must be >= 0 seconds, got {duration!r}')
+        external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())
+        previous = self._install_signal_handlers() if handle_signals else {}
+        try:
+            end = None if duration is None else self.context.now_ns() + round(duration * 1e9)
+            while not self._stop.is_set() and self.context.ok():
+                now = self.context.now_ns()
+                if end is not None and now >= end:
+                    break
+                # Spin in short slices of ROS time so a stop request is seen between callbacks.
+                slice_end = now + round(SLICE_S * 1e9)
+                self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+        except external_shutdown:  # another thread shut the context down: a normal end
+            pass
+        finally:
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
+
+    def _install_signal_handlers(self) -> dict[int, Any]:
+        if threading.current_thread() is not threading.main_thread():
+            return {}
+
+        def on_signal(signum: int, frame: Any) -> None:
+            self._signals += 1
+            if self._signals > 1:
+                raise KeyboardInterrupt  # a second Ctrl-C: stop now, even inside a callback
+            self.request_stop()
+
+        return {signum: signal.signal(signum, on_signal) for signum in (signal.SIGINT, signal.SIGTERM)}
+
+    def shutdown(self) -> None:
+        """Destroy the nodes (last started first), stop the executor, shut the context down; safe twice."""
+        errors = []
+        for node in reversed(self.nodes):
+            try:
+                node.destroy_node()
+            except Exception as err:  # keep destroying the others; report at the end
+                name = node.get_fully_qualified_name() if hasattr(node, 'get_fully_qualified_name') else repr(node)
+                errors.append(f'{name}: {type(err).__name__}: {err}')
+        self.nodes = []
+        if self.executor is not None:
+            self.executor.shutdown()
+            self.executor = None
+        if self.context is not None:
+            self.context.try_shutdown()
+        if errors:
+            raise LaunchError('errors while destroying nodes: ' + '; '.join(errors))
+
+    def __enter__(self) -> LaunchRunner:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.shutdown()
