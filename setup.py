@@ -16,6 +16,7 @@ NODES: dict[str, tuple[str, str]] = {
     'bear_driver': ('touch_driver.bear.node', 'BearDriverNode'),
     'patch_driver': ('touch_driver.patch.node', 'PatchDriverNode'),
     'skin_driver': ('touch_driver.skin.node', 'SkinDriverNode'),
+    'touch_monitor': ('touch_gestures.monitor_node', 'TouchMonitorNode'),
 }
 
 setup(
