@@ -16,6 +16,8 @@ NODES: dict[str, tuple[str, str]] = {
     'bear_driver': ('touch_driver.bear.node', 'BearDriverNode'),
     'patch_driver': ('touch_driver.patch.node', 'PatchDriverNode'),
     'skin_driver': ('touch_driver.skin.node', 'SkinDriverNode'),
+    'recorder': ('touch_graph.bag.recorder_node', 'RecorderNode'),
+    'player': ('touch_graph.bag.player_node', 'PlayerNode'),
     'touch_monitor': ('touch_gestures.monitor_node', 'TouchMonitorNode'),
 }
 

@@ -16,6 +16,7 @@ import platform
 TARGETS = {
     'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
     'drivers': ('touch_driver.bench', 'bench_drivers'),
+    'bridge': ('touch_graph.bridge.bench', 'bench_bridge'),
 }
 
 

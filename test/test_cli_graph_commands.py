@@ -1,0 +1,185 @@
+"""``social-touch topic`` and ``node`` against a graph running in another process."""
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from touch_graph.bridge.tool import GraphTool
+from touch_graph.cli import main as cli_main
+
+REPO = Path(__file__).resolve().parent.parent
+# The lines these commands take in touch_graph/cli/main.py's COMMANDS table.
+GRAPH_COMMANDS = {
+    'topic': ('touch_graph.cli.topic', 'topics of the running graph: list, echo, hz, info, pub'),
+    'node': ('touch_graph.cli.node', 'nodes of the running graph: list, info'),
+    'record': ('touch_graph.cli.record', 'record topics of the running graph to a rosbag2 (MCAP)'),
+    'play': ('touch_graph.cli.play', 'replay a rosbag2 into the running graph with its recorded timing'),
+    'bag': ('touch_graph.cli.bag', 'bag info, bag reindex (recover a bag whose recorder died)'),
+}
+CLI = f'import sys\nfrom touch_graph.cli import main\nmain.COMMANDS.update({GRAPH_COMMANDS!r})\nsys.exit(main.main())\n'
+
+GRAPH = textwrap.dedent('''
+    import sys
+    import numpy as np
+    from touch_graph.compat import Node, get_message
+    from touch_graph.node_main import run_node
+    String = get_message('std_msgs/msg/String')
+    PatchFrame = get_message('PatchFrame')
+
+    class Demo(Node):
+        """Hello at 50 Hz on /chatter, a patch frame at 5 Hz, and an echo of /cmd on /cmd_echo."""
+
+        def __init__(self, **kwargs):
+            super().__init__('demo_talker', **kwargs)
+            self.pub = self.create_publisher(String, '/chatter', 10)
+            self.patch = self.create_publisher(PatchFrame, '/patch/frame', 10)
+            self.echo = self.create_publisher(String, '/cmd_echo', 10)
+            self.create_subscription(String, '/cmd', lambda m: self.echo.publish(String(data='echo ' + m.data)), 10)
+            self.n = 0
+            self.create_timer(0.02, self.tick)
+            self.create_timer(0.2, lambda: self.patch.publish(PatchFrame(activation=np.full(256, 0.5, np.float32))))
+
+        def tick(self):
+            self.pub.publish(String(data=f'hello {self.n}'))
+            self.n += 1
+
+    sys.exit(run_node(Demo, sys.argv[1:]))
+''')
+
+
+def wait_until(predicate, timeout_s=20.0, what='condition'):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.05)
+    raise AssertionError(f'timed out after {timeout_s} s waiting for {what}')
+
+
+def running_graph():
+    """A node process (run_node) publishing in a private graph directory; yields the directory."""
+    path = Path(tempfile.mkdtemp(prefix='stc', dir='/tmp'))
+    (path / 'graph.py').write_text(GRAPH)
+    (path / 'cli.py').write_text(CLI)
+    patch = pytest.MonkeyPatch()
+    patch.setenv('SOCIAL_TOUCH_GRAPH_DIR', str(path))
+    patch.delenv('ROS_DOMAIN_ID', raising=False)
+    patch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
+    proc = subprocess.Popen([sys.executable, str(path / 'graph.py')], cwd=REPO, stderr=subprocess.DEVNULL,
+                            env={**os.environ, 'PYTHONPATH': str(REPO)})
+    try:
+        def ready():
+            with GraphTool('probe', discovery_timeout_s=1.0) as tool:
+                return '/patch/frame' in tool.graph().topics
+        wait_until(ready, what='the graph process')
+        yield path
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(10)
+        patch.undo()
+        shutil.rmtree(path, ignore_errors=True)
+
+
+@pytest.fixture(scope='module')
+def graph():
+    """The graph process, shared by the tests of a module."""
+    yield from running_graph()
+
+
+def cli(capsys, *argv):
+    code = cli_main.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_no_graph_is_a_clear_error(capsys, monkeypatch):
+    empty = tempfile.mkdtemp(prefix='ste', dir='/tmp')
+    monkeypatch.setenv('SOCIAL_TOUCH_GRAPH_DIR', empty)
+    monkeypatch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
+    for argv in (['topic', 'list'], ['node', 'list'], ['topic', 'echo', '/x'], ['topic', 'hz', '/x']):
+        code, out, err = cli(capsys, *argv)
+        assert code == 1 and out == ''
+        assert 'no social_touch graph is running in domain 0' in err and 'social-touch launch' in err
+    shutil.rmtree(empty)
+
+
+def test_topic_list_and_info(graph, capsys):
+    code, out, _ = cli(capsys, 'topic', 'list')
+    assert code == 0 and out.split() == ['/chatter', '/cmd', '/cmd_echo', '/patch/frame']
+    _, out, _ = cli(capsys, 'topic', 'list', '-t')
+    assert '/patch/frame [social_touch_msgs/msg/PatchFrame]' in out.splitlines()
+    _, out, _ = cli(capsys, 'topic', 'list', '-c')
+    assert out.strip() == '4'
+    _, out, _ = cli(capsys, 'topic', 'info', '/chatter', '-v')
+    assert out.splitlines()[:2] == ['Type: std_msgs/msg/String', 'Publisher count: 1']
+    assert 'Node: /demo_talker' in out and 'KEEP_LAST (10), RELIABLE, VOLATILE' in out
+
+
+def test_node_list_and_info(graph, capsys):
+    _, out, _ = cli(capsys, 'node', 'list')
+    assert out.split() == ['/demo_talker']
+    _, out, _ = cli(capsys, 'node', 'list', '-a')
+    assert '/_bridge_demo_talker' in out.split()
+    _, out, _ = cli(capsys, 'node', 'info', '/demo_talker')
+    assert out.splitlines() == ['/demo_talker', '  Subscribers:', '    /cmd: std_msgs/msg/String', '  Publishers:',
+                                '    /chatter: std_msgs/msg/String', '    /cmd_echo: std_msgs/msg/String',
+                                '    /patch/frame: social_touch_msgs/msg/PatchFrame']
+    code, _, err = cli(capsys, 'node', 'info', '/demo_talkr')
+    assert code == 1 and "did you mean '/demo_talker'" in err
+
+
+def test_topic_echo(graph, capsys):
+    code, out, _ = cli(capsys, 'topic', 'echo', '/chatter', '-n', '3')
+    docs = out.split('---\n')
+    assert code == 0 and len(docs) == 4 and docs[-1] == ''
+    numbers = [int(re.fullmatch(r"data: hello (\d+)\n", d).group(1)) for d in docs[:3]]
+    assert numbers == list(range(numbers[0], numbers[0] + 3))
+    _, out, _ = cli(capsys, 'topic', 'echo', '/patch/frame', '--once', '--no-arr')
+    assert "activation: '<array type: float32[256]>'" in out and 'frame_id:' in out  # as ros2 prints it
+    _, out, _ = cli(capsys, 'topic', 'echo', '/patch/frame', '--once', '--field', 'header.frame_id')
+    assert out.startswith("''")
+    code, _, err = cli(capsys, 'topic', 'echo', '/patch/frame', '--field', 'header.frame')
+    assert code == 1 and "no field 'frame' (did you mean 'frame_id'?)" in err
+    code, _, err = cli(capsys, 'topic', 'echo', '/chater')
+    assert code == 1 and "unknown topic '/chater' (did you mean '/chatter'?)" in err
+
+
+def test_topic_hz(graph, capsys):
+    code, out, _ = cli(capsys, 'topic', 'hz', '/chatter', '--duration', '2.5')
+    rates = [float(r) for r in re.findall(r'average rate: ([\d.]+)', out)]
+    assert code == 0 and rates
+    assert 25 < rates[-1] < 75  # 50 Hz in the talker's ROS time (wide: a loaded machine skips periods)
+    assert re.search(r'min: [\d.]+s max: [\d.]+s std dev: [\d.]+s window: \d+', out)
+
+
+def test_topic_pub_reaches_the_other_process(graph, capsys):
+    echo = subprocess.Popen([sys.executable, str(graph / 'cli.py'), 'topic', 'echo', '/cmd_echo', '--once',
+                             '--timeout', '30'], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, 'PYTHONPATH': str(REPO)})
+    try:
+        # The echo process is in the graph once the talker's /cmd_echo has a subscription.
+        def echo_ready():
+            with GraphTool('probe', discovery_timeout_s=1.0) as tool:
+                topic = tool.graph().topics.get('/cmd_echo')
+                return topic is not None and topic.subscriptions
+        wait_until(echo_ready, what='the echo process to subscribe')
+        code, out, _ = cli(capsys, 'topic', 'pub', '/cmd', 'std_msgs/msg/String', '{data: ping}', '--once')
+        assert code == 0 and "publishing #1: {'data': 'ping'}" in out
+        out, err = echo.communicate(timeout=30)
+        assert echo.returncode == 0, err
+        assert out == 'data: echo ping\n---\n'
+    finally:
+        if echo.poll() is None:
+            echo.kill()
+            echo.communicate()
+    code, _, err = cli(capsys, 'topic', 'pub', '/cmd', 'std_msgs/msg/String', '{dta: x}', '--once')
+    assert code == 1 and "no field 'dta' (did you mean 'data'?)" in err

@@ -1,0 +1,123 @@
+"""The ``recorder`` node: records topics of the process's graph to a rosbag2, e.g. from a launch file.
+
+A node of the in-process graph (it uses raw subscriptions and the graph listener of
+:mod:`touch_graph.runtime`); on a ROS 2 machine use ``ros2 bag record``, which writes the
+same bags. It records ``topics`` (all topics published in the process when empty) to
+``output`` with raw subscriptions. A message is stamped with the context's ROS time when
+its callback runs, which on a fast simulated clock is the publish time exactly (time does
+not move while callbacks are pending) and on a wall clock is the receive time, as ``ros2
+bag record`` does. The bag is flushed once a second and closed when the node is destroyed
+or the context shuts down. To record other processes' topics use ``social-touch record``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ..errors import BagError
+from ..runtime import Node, ParameterDescriptor, ParameterType, QoSProfile
+from .recorder import BagRecorder
+
+__all__ = ['RecorderNode', 'default_bag_name', 'main']
+
+_STRINGS = ParameterDescriptor(type=ParameterType.STRING_ARRAY)
+
+
+def default_bag_name() -> str:
+    """``rosbag2_YYYY_MM_DD-HH_MM_SS``, the name ``ros2 bag record`` picks."""
+    return time.strftime('rosbag2_%Y_%m_%d-%H_%M_%S')
+
+
+class RecorderNode(Node):
+    """Records topics of the process's graph to a rosbag2 (MCAP).
+
+    Parameters: ``output`` (bag directory; default ``rosbag2_<date>``), ``topics`` (string
+    array; empty: every topic a non-hidden node publishes, including ones that appear
+    later), ``flush_period`` (s, default 1.0).
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('recorder', **kwargs)
+        output = self.declare_parameter('output', '').value or default_bag_name()
+        self.wanted: list[str] = list(self.declare_parameter('topics', None, _STRINGS).value or [])
+        flush_period = self.declare_parameter('flush_period', 1.0).value
+        if not flush_period > 0:
+            raise ValueError(f"parameter 'flush_period' of {self.get_fully_qualified_name()} must be > 0 s, "
+                             f'got {flush_period}')
+        self.wanted = [self.resolve_topic_name(t) for t in self.wanted]
+        clock = 'sim' if self.context.time_source.simulated else 'wall'
+        self.bag = BagRecorder(output, flush_period_s=flush_period,
+                               custom_data={'social_touch.clock': clock}).open()
+        self.write_errors = 0
+        self._recording: dict[str, Any] = {}
+        self.context.add_graph_listener(self._on_graph)
+        self.context.on_shutdown(self._close_bag)
+        with self.context._lock:
+            topics = list(self.context.topics.values())
+        for topic in topics:
+            if self._wants(topic.name, topic.publishers):
+                self._subscribe(topic.name)
+        self.get_logger().info(f'recording {", ".join(self.wanted) or "all topics"} to {self.bag.path}')
+
+    def _wants(self, name: str, publishers: list) -> bool:
+        if name in self._recording:
+            return False
+        if self.wanted:
+            return name in self.wanted
+        return any(not p.node.get_name().startswith('_') and p.node is not self for p in publishers)
+
+    def _on_graph(self, event: str, endpoint: Any) -> None:
+        if event != 'publisher_added' or self.bag.closed:
+            return
+        if not self._wants(endpoint.topic_name, [endpoint]):
+            return
+        if self.executor is None:
+            self._subscribe(endpoint.topic_name)
+        else:  # the listener may run in any thread; endpoints are made in the executor's
+            self.executor.call_soon_threadsafe(self._subscribe, endpoint.topic_name)
+
+    def _subscribe(self, name: str) -> None:
+        topic = self.context.topics.get(name)
+        if topic is None or name in self._recording or self.bag.closed:
+            return
+        qos = topic.publishers[0].qos_profile if topic.publishers else None
+        self.bag.add_topic(name, topic.type_name, qos)
+        self._recording[name] = self.create_subscription(
+            topic.msg_type, name, self._writer(name, topic.type_name), QoSProfile(depth=1000), raw=True)
+
+    def _writer(self, name: str, type_name: str) -> Callable[[bytes], None]:
+        now_ns = self.context.now_ns
+        bag = self.bag
+
+        def write(data: bytes) -> None:
+            if bag.closed:
+                return
+            try:
+                bag.write(name, type_name, now_ns(), data)
+            except BagError as err:
+                self.write_errors += 1
+                self.get_logger().error(str(err), throttle_duration_sec=1.0)
+        return write
+
+    def _close_bag(self) -> None:
+        if self.bag.closed:
+            return
+        self.context.remove_graph_listener(self._on_graph)
+        try:
+            self.bag.close()
+        except BagError as err:
+            self.get_logger().error(str(err))
+            return
+        counts = ', '.join(f'{t}: {n}' for t, n in self.bag.counts.items()) or 'nothing'
+        self.get_logger().info(f'closed {self.bag.path} ({counts})')
+
+    def destroy_node(self) -> None:
+        self._close_bag()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    from ..node_main import run_node
+    return run_node(RecorderNode, args)

@@ -1,0 +1,55 @@
+"""``social-touch node list | info NODE``, as ``ros2 node`` prints them, over every graph process."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import GraphError
+from ..yamlconf import did_you_mean
+
+__all__ = ['add_arguments', 'run']
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest='action', required=True, metavar='ACTION')
+    p = sub.add_parser('list', help='nodes of the running graph')
+    p.add_argument('-a', '--all', action='store_true', help='include hidden nodes (names starting with _)')
+    p.add_argument('-c', '--count-nodes', action='store_true', help='print only the number of nodes')
+    p = sub.add_parser('info', help="a node's publishers and subscriptions")
+    p.add_argument('node', help='fully qualified name, e.g. /bear/driver')
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..bridge.tool import GraphTool
+    with GraphTool(f'node_{args.action}') as tool:
+        view = tool.require_graph()
+        return _list(view, args) if args.action == 'list' else _info(view, args)
+
+
+def _list(view: Any, args: argparse.Namespace) -> int:
+    names = sorted({n.name for n in view.visible_nodes(include_hidden=args.all)})
+    if args.count_nodes:
+        print(len(names))
+        return 0
+    for name in names:
+        print(name)
+    return 0
+
+
+def _info(view: Any, args: argparse.Namespace) -> int:
+    found = view.find_nodes(args.node)
+    if not found:
+        known = sorted({n.name for n in view.nodes})
+        raise GraphError(f"unknown node '{args.node}'{did_you_mean(args.node, known)}; nodes: "
+                         f'{", ".join(n for n in known if not n.rsplit("/", 1)[-1].startswith("_")) or "none"}')
+    if len(found) > 1:
+        print(f'There are {len(found)} nodes in the graph with the exact name "{found[0].name}" '
+              f'(processes {", ".join(n.peer for n in found)}); showing all.')
+    for node in found:
+        print(node.name)
+        for title, endpoints in (('Subscribers', node.subscriptions), ('Publishers', node.publishers)):
+            print(f'  {title}:')
+            for ep in sorted(endpoints, key=lambda e: e.topic):
+                print(f'    {ep.topic}: {ep.type_name}')
+    return 0
