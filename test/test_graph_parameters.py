@@ -122,3 +122,11 @@ def test_ros_args_parsing_errors():
         parse_ros_args(['--ros-args', '--bogus'])
     with pytest.raises(ParameterError, match='name:=value'):
         parse_ros_args(['--ros-args', '-p', 'x=1'])
+
+
+def test_an_empty_list_default_takes_the_descriptor_type(ctx):
+    from touch_graph.runtime import ParameterType
+    node = Node('n', context=ctx, parameter_overrides=[Parameter('other', value=['a'])])
+    topics = node.declare_parameter('topics', [], ParameterDescriptor(type=ParameterType.STRING_ARRAY))
+    assert topics.value == [] and topics.type_ == ParameterType.STRING_ARRAY
+    assert node.declare_parameter('other', [], ParameterDescriptor(type=ParameterType.STRING_ARRAY)).value == ['a']

@@ -55,6 +55,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--duration', type=_non_negative, metavar='SECONDS',
                         help='stop after this many seconds of ROS time (default: until Ctrl-C / SIGTERM)')
     parser.add_argument('--sim-time', action='store_true', help='run the graph on a simulated clock')
+    parser.add_argument('--no-bridge', action='store_true',
+                        help='do not make the graph visible to other processes (topic echo, record)')
     parser.add_argument('--rate', type=_positive_rate, metavar='R',
                         help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
                              'as possible)')
@@ -143,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     if not plan.nodes:
         print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
         return 0
-    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate)
+    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, bridge=not args.no_bridge)
     try:
         runner.start()
         names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)

@@ -144,7 +144,8 @@ class LaunchRunner:
     """
 
     def __init__(self, specs: Iterable[NodeSpec], *, registry: Registry | None = None,
-                 runtime: types.ModuleType | Any = None, sim_time: bool = False, rate: float | None = None) -> None:
+                 runtime: types.ModuleType | Any = None, sim_time: bool = False, rate: float | None = None,
+                 bridge: bool = False) -> None:
         if rate is not None and not sim_time:
             raise ValueError('rate applies to simulated time only; pass sim_time=True as well')
         if rate is not None and not (rate > 0):  # also rejects NaN
@@ -157,6 +158,9 @@ class LaunchRunner:
         self.context: Any = None
         self.executor: Any = None
         self.nodes: list[Any] = []
+        # With bridge=True other processes (social-touch topic echo, record) see the graph.
+        self.want_bridge = bridge
+        self.bridge: Any = None
         self._stop = threading.Event()
         self._signals = 0
 
@@ -179,6 +183,9 @@ class LaunchRunner:
             self.executor = self.runtime.SingleThreadedExecutor(context=self.context)
             for node in self.nodes:
                 self.executor.add_node(node)
+            if self.want_bridge:
+                from ..bridge import Bridge
+                self.bridge = Bridge(self.context, self.executor, name='launch').start()
         except BaseException as err:
             try:
                 self.shutdown()
@@ -244,6 +251,9 @@ class LaunchRunner:
     def shutdown(self) -> None:
         """Destroy the nodes (last started first), stop the executor, shut the context down; safe twice."""
         errors = []
+        if self.bridge is not None:
+            self.bridge.stop()
+            self.bridge = None
         for node in reversed(self.nodes):
             try:
                 node.destroy_node()

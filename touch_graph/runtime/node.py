@@ -280,8 +280,12 @@ class Node:
         problem = check_ranges(name, value, descriptor, self._fqn)
         if problem:
             raise ParameterError(f'{source}: {problem}' if source else problem)
-        param = Parameter(name, value=value) if value is not None or declared_type == ParameterType.NOT_SET \
-            else Parameter(name, declared_type, None)
+        if value is None:
+            param = Parameter(name, declared_type, None)
+        elif descriptor.dynamic_typing or declared_type == ParameterType.NOT_SET:
+            param = Parameter(name, value=value)
+        else:
+            param = Parameter(name, declared_type, value)  # an empty list takes the declared type
         if descriptor.dynamic_typing:
             declared_type = ParameterType.NOT_SET
         descriptor.name = name
