@@ -1,0 +1,184 @@
+"""Symbolic gestures (knight2009 V.E, Table I): YAML filters, dwell, priority logic, START/END events."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from touch_driver.bear.body_map import BodyMap, BodySensor
+from touch_gestures.bear.subtype_labels import subtype_index
+from touch_gestures.bear.symbolic import END, START, GestureLibrary, SymbolicRecognizer
+from touch_graph.errors import ConfigError
+from touch_graph.paths import share_file
+
+BODY = BodyMap.default()
+LIB = GestureLibrary.default(BODY)
+
+
+def drive(rec: SymbolicRecognizer, active_at, duration_s: float, rate_hz: float = 10.0, subtype_at=None):
+    """Run ``rec`` with the sensors named by ``active_at(t)`` active; return all events."""
+    events = []
+    for i in range(int(duration_s * rate_hz)):
+        t = i / rate_hz
+        mask = np.zeros(64, dtype=bool)
+        mask[[BODY.by_name(n).channel for n in active_at(t)]] = True
+        codes = None
+        if subtype_at is not None:
+            codes = np.zeros(64, dtype=np.int8)
+            for name, sub in subtype_at(t).items():
+                codes[BODY.by_name(name).channel] = subtype_index(sub)
+        events += rec.update(t, mask, codes)
+    return events
+
+
+def summary(events):
+    return [(e.gesture, e.state_name, round(e.t, 2)) for e in events]
+
+
+def test_default_library_lists_table_i_and_the_papers_four() -> None:
+    assert {g.name for g in LIB.gestures if g.paper} == {'head_pat', 'hug', 'tickle', 'foot_rub'}
+    table_i = ' '.join(g.table_i for g in LIB.gestures).lower()
+    for name in ('tickle', 'footrub', 'handshake', 'head-pat', 'shoulder-tap', 'belly-tickle', 'side-tickle',
+                 'foot-tickle', 'go-to-sleep', 'wakeup', 'feeding', 'rocking', 'dance'):
+        assert name in table_i, name
+    undetectable = {g.name for g in LIB.gestures if not g.detectable}
+    assert undetectable == {'go_to_sleep', 'wake_up', 'rocking', 'dance'}
+    assert all(g.note for g in LIB.gestures if not g.detectable)
+    hug, tickle = LIB['hug'], LIB['tickle']
+    assert (hug.min_active, len(hug.channels), hug.both_sides) == (4, 10, True)       # "four of ten", both sides
+    assert (tickle.min_active, len(tickle.channels)) == (2, 4)                       # "two of four"
+    assert (LIB['head_pat'].min_active, len(LIB['head_pat'].channels)) == (1, 3)     # "one of the three"
+    assert (LIB['foot_rub'].min_active, len(LIB['foot_rub'].channels)) == (1, 2)     # "one of two"
+    assert 'tickle' in hug.supersedes and LIB['hug'].dwell_s == 2.0
+    names = [g.name for g in LIB.detectable]
+    assert names.index('hug') < names.index('tickle')                              # priority order
+
+
+def test_dwell_of_two_seconds_then_start_and_end_with_onset() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    events = drive(rec, lambda t: ['head2'] if 1.0 <= t < 4.0 else [], 8.0)
+    assert summary(events) == [('head_pat', 'START', 3.0), ('head_pat', 'END', 5.5)]   # END after the 1.5 s gap
+    start, end = events
+    assert start.onset == pytest.approx(1.0) and start.sensors == ('head2',) and start.state == START
+    assert end.state == END and end.reason == 'released' and end.duration_s == pytest.approx(4.5)
+
+
+def test_shorter_than_dwell_never_starts() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    assert drive(rec, lambda t: ['head2'] if 1.0 <= t < 2.9 else [], 8.0) == []
+
+
+def test_gaps_shorter_than_gap_s_do_not_restart_the_dwell() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    pats = lambda t: ['head1'] if (t % 1.0) < 0.3 else []      # noqa: E731  (a pat a second, hand lifted)
+    events = drive(rec, lambda t: pats(t) if t < 6 else [], 10.0)
+    assert summary(events)[0] == ('head_pat', 'START', 2.0)
+    assert events[0].onset == 0.0
+
+
+def test_hug_supersedes_tickle() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    sides = ['side_left_upper', 'side_right_upper']
+    hug = [*sides, 'back_upper', 'back_middle', 'chest_left']
+
+    def active(t):
+        if t < 4:
+            return sides                 # a tickle on both sides
+        if t < 9:
+            return hug                   # the arms close around the bear
+        return []
+
+    events = drive(rec, active, 12.0)
+    assert summary(events)[:3] == [('tickle', 'START', 2.0), ('tickle', 'END', 4.0), ('hug', 'START', 6.0)]
+    assert events[1].reason == 'superseded by hug'
+    assert not any(e.gesture == 'tickle' and e.state == START and e.t > 4 for e in events)
+
+
+def test_two_gestures_at_once() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    events = drive(rec, lambda t: ['head3', 'foot_left_sole'] if t < 5 else [], 8.0)
+    assert sorted(summary(events)) == [('foot_rub', 'END', 6.5), ('foot_rub', 'START', 2.0),
+                                       ('head_pat', 'END', 6.5), ('head_pat', 'START', 2.0)]
+    assert rec.active_gestures() == {}
+
+
+def test_hug_needs_both_sides() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    left_only = ['side_left_upper', 'side_left_lower', 'chest_left', 'back_upper', 'back_middle']
+    assert not any(e.gesture == 'hug' for e in drive(rec, lambda t: left_only, 5.0))
+
+
+def test_required_subtype() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    belly = lambda t: ['belly_middle']                               # noqa: E731
+    assert [e.gesture for e in drive(rec, belly, 4.0, subtype_at=lambda t: {'belly_middle': 'pet'})] == []
+    rec.reset()
+    events = drive(rec, belly, 4.0, subtype_at=lambda t: {'belly_middle': 'tickle'})
+    assert summary(events) == [('belly_tickle', 'START', 2.0)]
+    rec.reset()
+    everything = drive(rec, lambda t: [s.name for s in BODY.sensors], 4.0)   # no subtypes known:
+    assert {e.gesture for e in everything}.isdisjoint({'belly_tickle', 'foot_tickle'})   # such gestures never match
+
+
+def test_foot_tickle_supersedes_foot_rub() -> None:
+    rec = SymbolicRecognizer(LIB, BODY)
+    events = drive(rec, lambda t: ['foot_right_sole'], 4.0, subtype_at=lambda t: {'foot_right_sole': 'tickle'})
+    assert summary(events) == [('foot_tickle', 'START', 2.0)]
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / 'gestures.yaml'
+    path.write_text(text)
+    return path
+
+
+def test_a_user_adds_a_gesture_in_yaml(tmp_path) -> None:
+    path = write(tmp_path, 'gestures:\n  ear_rub:\n    sensors: [ear_left, ear_right]\n    min_active: 2\n'
+                           '    dwell_s: 0.5\n')
+    rec = SymbolicRecognizer(GestureLibrary.load(path, BODY), BODY)
+    events = drive(rec, lambda t: ['ear_left', 'ear_right'], 2.0)
+    assert summary(events) == [('ear_rub', 'START', 0.5)]
+
+
+@pytest.mark.parametrize('body, message, line', [
+    ('    sensors: [head1, hed2]\n', "unknown sensor 'hed2' (did you mean 'head2'?)", 3),
+    ('    sensors: [head]\n', "'head' is a region: list it under 'regions'", 3),
+    ('    regions: [left_fot]\n', "unknown region 'left_fot' (did you mean 'left_foot'?)", 3),
+    ('    sensors: [head1]\n    min_active: 2\n', 'min_active must be 1..1', 4),
+    ('    sensors: [head1]\n    minactive: 1\n', "unknown key 'minactive'", 4),
+    ('    sensors: [head1]\n    dwell_s: -1\n', 'seconds >= 0', 4),
+    ('    sensors: [head1, head2]\n    both_sides: true\n', 'both_sides needs filter sensors on the left', 4),
+    ('    sensors: [head1]\n    subtype: tickel\n', "unknown subtype 'tickel' (did you mean 'tickle'?)", 4),
+    ('    sensors: [head1]\n    supersedes: [hugg]\n', "supersedes unknown gesture 'hugg'", 4),
+    ('    sensors: [head1]\n    supersedes: [a]\n', 'cannot supersede itself', 4),
+    ('    detectable: false\n', "add a 'note'", 3),
+    ('    min_active: 1\n', 'needs a locational filter', 3),
+])
+def test_config_errors_name_file_and_line(tmp_path, body: str, message: str, line: int) -> None:
+    path = write(tmp_path, 'gestures:\n  a:\n' + body)
+    with pytest.raises(ConfigError) as info:
+        GestureLibrary.load(path, BODY)
+    assert message in str(info.value)
+    assert info.value.path == str(path) and info.value.line == line
+
+
+def test_supersedes_cycle_is_an_error(tmp_path) -> None:
+    path = write(tmp_path, 'gestures:\n  a:\n    sensors: [head1]\n    supersedes: [b]\n'
+                           '  b:\n    sensors: [head2]\n    supersedes: [a]\n')
+    with pytest.raises(ConfigError, match='cycle'):
+        GestureLibrary.load(path, BODY)
+
+
+def test_body_map_without_a_configured_sensor() -> None:
+    """The shipped gestures on a bear whose body map lacks head1: the error names the file, line and sensor."""
+    smaller = BodyMap([s for s in BODY.sensors if s.name != 'head1'] +
+                      [BodySensor(13, 'head_top', 'top of head', 'head', 'center', 'small')], source='small.yaml')
+    with pytest.raises(ConfigError) as info:
+        GestureLibrary.default(smaller)
+    assert "unknown sensor 'head1'" in str(info.value)
+    assert info.value.path == str(share_file('config', 'bear_gestures.yaml')) and info.value.line is not None
+
+
+def test_with_default_gap_changes_only_default_gaps() -> None:
+    wider = LIB.with_default_gap(3.0)
+    assert wider['head_pat'].gap_s == 3.0 and wider['shoulder_tap'].gap_s == LIB['shoulder_tap'].gap_s

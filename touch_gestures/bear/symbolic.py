@@ -1,0 +1,420 @@
+"""Symbolic gestures over the bear's body (knight2009 V.E, Table I): locational filters + priority logic.
+
+"A minimum number of sensors within the locational filter must be active for at least two seconds
+[...] Next, the algorithm enters its priority logic [...] hug supersedes Tickle" (V.E). Filters and
+priorities live in ``config/bear_gestures.yaml`` (format documented there); :class:`GestureLibrary`
+loads and checks it against the body map, :class:`SymbolicRecognizer` runs it once per cycle and emits
+START / END events (msg/SymbolicGesture.msg) with the onset, the time the filter first matched.
+
+Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) masks):
+
+- a filter sensor *counts* when it is active (level >= threshold) and, if ``g`` requires subtypes,
+  currently carries one of them;
+- ``g`` *matches* when at least ``min_active`` sensors count (and, with ``both_sides``, at least one
+  on the bear's left and one on its right);
+- ``g`` is a *candidate* from the first match (its onset) while every gap between matches is at most
+  ``gap_s``;
+- priority logic: ``g`` is suppressed while a candidate that supersedes it is itself not suppressed
+  (the paper's "Tickle: (not Hug) && ..."); gestures are visited in topological order of "supersedes";
+- START when a candidate, not suppressed, matches now and ``t - onset >= dwell_s``; END when it stops
+  being a candidate or becomes suppressed. Gestures that do not supersede one another can be active
+  at the same time.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from touch_graph.errors import ConfigError
+from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, loads_yaml, typed
+
+from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES
+
+__all__ = ['DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'END', 'START', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent',
+           'SymbolicRecognizer']
+
+#: "active for at least two seconds, an increment informally chosen to parallel human recognition time" (V.E).
+DEFAULT_DWELL_S = 2.0
+#: Not in the paper: tolerated dropout between matches, so pats and tickles do not restart the dwell.
+DEFAULT_GAP_S = 1.5
+#: Event states, as in msg/SymbolicGesture.msg.
+START, END = 1, 2
+FORMAT_VERSION = 1
+
+_NAME = re.compile(r'^[a-z][a-z0-9_]*$')
+_GESTURE_KEYS = ('sensors', 'regions', 'min_active', 'dwell_s', 'gap_s', 'both_sides', 'subtype', 'supersedes',
+                 'detectable', 'table_i', 'paper', 'note')
+
+
+@dataclass(frozen=True)
+class GestureFilter:
+    """One symbolic gesture: its locational filter, timing and priority.
+
+    Attributes:
+        name: identifier, e.g. ``'hug'``.
+        channels: (k,) int wire channels of the filter (sensors plus expanded regions), sorted.
+        sensor_names: the filter's sensor names, channel order.
+        min_active: sensors that must count at once.
+        dwell_s: seconds the filter must hold before START.
+        gap_s: dropouts up to this long do not end the candidate.
+        both_sides: require counting sensors on both the bear's left and right.
+        subtypes: required subtypes (empty: any touch counts).
+        supersedes: gestures suppressed while this one's filter holds.
+        detectable: False for Table I gestures touch alone cannot tell (never reported).
+        table_i: the name in knight2009 Table I.
+        paper: one of the four the paper implemented.
+        note: free text from the config.
+    """
+
+    name: str
+    channels: np.ndarray
+    sensor_names: tuple[str, ...]
+    min_active: int
+    dwell_s: float
+    gap_s: float
+    both_sides: bool
+    subtypes: tuple[str, ...]
+    supersedes: tuple[str, ...]
+    detectable: bool
+    table_i: str
+    paper: bool
+    note: str
+
+
+@dataclass(frozen=True, slots=True)
+class SymbolicEvent:
+    """A gesture started or ended (msg/SymbolicGesture.msg).
+
+    Attributes:
+        gesture: gesture name.
+        state: :data:`START` or :data:`END`.
+        t: cycle time of the event, s.
+        onset: when the filter first matched (dwell start), s.
+        duration_s: ``t - onset``.
+        sensors: names of the filter's sensors counting at the event (at END: at the last match).
+        reason: for END, ``'released'`` or ``'superseded by <name>'``; empty for START.
+    """
+
+    gesture: str
+    state: int
+    t: float
+    onset: float
+    duration_s: float
+    sensors: tuple[str, ...]
+    reason: str = ''
+
+    @property
+    def state_name(self) -> str:
+        return 'START' if self.state == START else 'END'
+
+
+class GestureLibrary:
+    """The gestures of a config file, checked against a body map, in priority (topological) order."""
+
+    def __init__(self, gestures: Iterable[GestureFilter], source: str | None = None,
+                 default_dwell_s: float = DEFAULT_DWELL_S, default_gap_s: float = DEFAULT_GAP_S) -> None:
+        self.gestures: tuple[GestureFilter, ...] = tuple(gestures)
+        self.source = source
+        self.default_dwell_s = default_dwell_s
+        self.default_gap_s = default_gap_s
+        self._by_name = {g.name: g for g in self.gestures}
+
+    def __len__(self) -> int:
+        return len(self.gestures)
+
+    def __getitem__(self, name: str) -> GestureFilter:
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise KeyError(f'no gesture {name!r}{did_you_mean(name, self._by_name)}; the library '
+                           f'({self.source}) has: {", ".join(self._by_name)}') from None
+
+    def with_default_gap(self, gap_s: float) -> GestureLibrary:
+        """A copy in which every gesture that used the default ``gap_s`` uses ``gap_s`` instead."""
+        changed = [replace(g, gap_s=gap_s) if g.gap_s == self.default_gap_s else g for g in self.gestures]
+        return GestureLibrary(changed, self.source, self.default_dwell_s, gap_s)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(self._by_name)
+
+    @property
+    def detectable(self) -> tuple[GestureFilter, ...]:
+        """The gestures the recogniser runs, in priority order (supersessors first)."""
+        return tuple(g for g in self.gestures if g.detectable)
+
+    @classmethod
+    def load(cls, path: str | Path, body_map=None) -> GestureLibrary:
+        """Read a gesture YAML file; ConfigError with file:line (and a did-you-mean) on any problem."""
+        return cls._from_doc(load_yaml(path), body_map, str(path))
+
+    @classmethod
+    def loads(cls, text: str, body_map=None, source: str = '<string>') -> GestureLibrary:
+        """As :meth:`load`, from YAML text."""
+        return cls._from_doc(loads_yaml(text, source), body_map, source)
+
+    @classmethod
+    def default(cls, body_map=None) -> GestureLibrary:
+        """The package's ``config/bear_gestures.yaml``."""
+        from touch_graph.paths import share_file
+        return cls.load(share_file('config', 'bear_gestures.yaml'), body_map)
+
+    @classmethod
+    def _from_doc(cls, doc, body_map, source: str) -> GestureLibrary:
+        if body_map is None:
+            from touch_driver.bear.body_map import BodyMap
+            body_map = BodyMap.default()
+        check_keys(doc, required=('gestures',), optional=('format', 'defaults'), what='bear gesture library')
+        version = typed(doc, 'format', int, 'bear gesture library', default=FORMAT_VERSION)
+        if version != FORMAT_VERSION:
+            raise doc.error(f'gesture library format {version} is not supported; this code reads format '
+                            f'{FORMAT_VERSION}', 'format')
+        defaults = doc.get('defaults', YamlDict())
+        check_keys(defaults, optional=('dwell_s', 'gap_s'), what='defaults')
+        default_dwell = _non_negative(defaults, 'dwell_s', 'defaults', DEFAULT_DWELL_S)
+        default_gap = _non_negative(defaults, 'gap_s', 'defaults', DEFAULT_GAP_S)
+        items = doc['gestures']
+        if not isinstance(items, YamlDict) or not items:
+            raise doc.error('gestures must be a non-empty mapping: gesture name -> {sensors, min_active, ...}',
+                            'gestures')
+        parsed = {name: _parse_gesture(name, spec, items, body_map, default_dwell, default_gap)
+                  for name, spec in items.items()}
+        for name, g in parsed.items():
+            for i, other in enumerate(g.supersedes):
+                where = items[name]['supersedes']
+                if other not in parsed:
+                    raise where.error(f"gesture '{name}' supersedes unknown gesture '{other}'"
+                                      f'{did_you_mean(other, parsed)}; gestures are: {", ".join(parsed)}', i)
+                if other == name:
+                    raise where.error(f"gesture '{name}' cannot supersede itself", i)
+        return cls(_priority_order(parsed, items), source, default_dwell, default_gap)
+
+
+def _non_negative(mapping, key: str, what: str, default: float) -> float:
+    value = typed(mapping, key, float, what, default=default)
+    if not math.isfinite(value) or value < 0:
+        raise mapping.error(f"'{key}' in {what} must be a number of seconds >= 0; got {value!r}", key)
+    return float(value)
+
+
+def _string_list(spec, key: str, what: str) -> YamlList:
+    value = spec[key]
+    if isinstance(value, str):
+        out = YamlList([value])
+        out.path, out.line, out.item_lines = spec.path, spec.line_of(key), [spec.line_of(key)]
+        return out
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise spec.error(f"'{key}' in {what} must be a name or a list of names; got {value!r}", key)
+    return value
+
+
+def _parse_gesture(name, spec, items, body_map, default_dwell: float, default_gap: float) -> GestureFilter:
+    what = f"gesture '{name}'"
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise items.error(f'gesture name {name!r} must be lower case letters, digits and _ (e.g. head_pat)', name)
+    if not isinstance(spec, YamlDict):
+        raise items.error(f'{what} must be a mapping with keys {", ".join(_GESTURE_KEYS)}; got {spec!r}', name)
+    check_keys(spec, optional=_GESTURE_KEYS, what=what)
+    detectable = typed(spec, 'detectable', bool, what, default=True)
+    note = typed(spec, 'note', str, what, default='')
+    table_i = typed(spec, 'table_i', str, what, default='')
+    paper = typed(spec, 'paper', bool, what, default=False)
+    if not detectable:
+        if not note:
+            raise spec.error(f"{what} is marked detectable: false; add a 'note' saying what touch alone cannot "
+                             'tell and which sensing it would need', 'detectable')
+        return GestureFilter(name, np.zeros(0, dtype=np.intp), (), 1, default_dwell, default_gap, False, (), (),
+                             False, table_i, paper, note)
+
+    channels: dict[int, str] = {}
+    region_names = _regions_of(body_map)
+    if 'sensors' in spec:
+        names = _string_list(spec, 'sensors', what)
+        for i, sensor in enumerate(names):
+            try:
+                channels[int(body_map.by_name(sensor).channel)] = sensor
+            except ConfigError:
+                hint = did_you_mean(sensor, [s.name for s in body_map.sensors])
+                if sensor in region_names:
+                    hint = f" ('{sensor}' is a region: list it under 'regions')"
+                raise names.error(f"{what}: unknown sensor '{sensor}'{hint}; sensors are named in the body map "
+                                  f'({getattr(body_map, "source", None) or "config/bear_body.yaml"})', i) from None
+    if 'regions' in spec:
+        regions = _string_list(spec, 'regions', what)
+        for i, region in enumerate(regions):
+            members = [s for s in body_map.sensors if s.region == region]
+            if not members:
+                raise regions.error(f"{what}: unknown region '{region}'{did_you_mean(region, region_names)}; "
+                                    f'regions with sensors are: {", ".join(sorted(region_names))}', i)
+            channels.update({int(s.channel): s.name for s in members})
+    if not channels:
+        raise spec.error(f"{what} needs a locational filter: 'sensors' and/or 'regions' (or detectable: false "
+                         'with a note)')
+    order = sorted(channels)
+    min_active = typed(spec, 'min_active', int, what, default=1)
+    if not 1 <= min_active <= len(order):
+        raise spec.error(f'{what}: min_active must be 1..{len(order)} (the filter has {len(order)} sensors); '
+                         f'got {min_active}', 'min_active')
+    both_sides = typed(spec, 'both_sides', bool, what, default=False)
+    if both_sides:
+        sides = {body_map.by_channel(c).side for c in order}
+        if not {'left', 'right'} <= sides:
+            raise spec.error(f'{what}: both_sides needs filter sensors on the left and on the right; the filter '
+                             f'has sides {sorted(sides)}', 'both_sides')
+    subtypes: tuple[str, ...] = ()
+    if 'subtype' in spec:
+        listed = _string_list(spec, 'subtype', what)
+        for i, sub in enumerate(listed):
+            if sub not in TOUCH_SUBTYPES:
+                raise listed.error(f"{what}: unknown subtype '{sub}'{did_you_mean(sub, TOUCH_SUBTYPES)}; "
+                                   f'subtypes are: {", ".join(TOUCH_SUBTYPES)}', i)
+        subtypes = tuple(listed)
+    supersedes = tuple(_string_list(spec, 'supersedes', what)) if 'supersedes' in spec else ()
+    return GestureFilter(name, np.array(order, dtype=np.intp), tuple(channels[c] for c in order), min_active,
+                         _non_negative(spec, 'dwell_s', what, default_dwell),
+                         _non_negative(spec, 'gap_s', what, default_gap), both_sides, subtypes, supersedes, True,
+                         table_i, paper, note)
+
+
+def _regions_of(body_map) -> set[str]:
+    return {s.region for s in body_map.sensors}
+
+
+def _priority_order(parsed: dict[str, GestureFilter], items: YamlDict) -> list[GestureFilter]:
+    """Kahn's topological sort of "supersedes" (supersessors first, config order among equals)."""
+    incoming = {name: 0 for name in parsed}
+    for g in parsed.values():
+        for other in g.supersedes:
+            incoming[other] += 1
+    ready = [n for n in parsed if incoming[n] == 0]
+    out: list[GestureFilter] = []
+    while ready:
+        name = ready.pop(0)
+        out.append(parsed[name])
+        for other in parsed[name].supersedes:
+            incoming[other] -= 1
+            if incoming[other] == 0:
+                ready.append(other)
+    if len(out) < len(parsed):
+        stuck = [n for n in parsed if incoming[n] > 0]
+        raise items[stuck[0]].error(f'supersedes relations form a cycle among: {", ".join(stuck)}; priority logic '
+                                    'needs an order, so remove one relation', 'supersedes')
+    return out
+
+
+class SymbolicRecognizer:
+    """Runs a :class:`GestureLibrary` once per cycle and emits START / END events.
+
+    Args:
+        library: the gestures (default: ``config/bear_gestures.yaml``).
+        body_map: the body map (default: the package's); gives the sides for ``both_sides``.
+        n_channels: wire channels.
+    """
+
+    def __init__(self, library: GestureLibrary | None = None, body_map=None, n_channels: int = 64) -> None:
+        if body_map is None:
+            from touch_driver.bear.body_map import BodyMap
+            body_map = BodyMap.default()
+        self.library = library if library is not None else GestureLibrary.default(body_map)
+        self.gestures = self.library.detectable
+        names = [g.name for g in self.gestures]
+        index = {n: i for i, n in enumerate(names)}
+        G = len(self.gestures)
+        self._member = np.zeros((G, n_channels), dtype=bool)
+        self._allowed = np.ones((G, len(SUBTYPES)), dtype=bool)
+        for i, g in enumerate(self.gestures):
+            self._member[i, g.channels] = True
+            if g.subtypes:
+                self._allowed[i] = [s in g.subtypes for s in SUBTYPES]
+        self._left = np.zeros(n_channels, dtype=bool)
+        self._right = np.zeros(n_channels, dtype=bool)
+        for s in body_map.sensors:
+            self._left[s.channel] = s.side == 'left'
+            self._right[s.channel] = s.side == 'right'
+        self._min_active = np.array([g.min_active for g in self.gestures], dtype=np.int64)
+        self._both = np.array([g.both_sides for g in self.gestures], dtype=bool)
+        self._needs_subtype = np.array([bool(g.subtypes) for g in self.gestures], dtype=bool)
+        # superseded_by[i]: indices of detectable gestures that supersede gesture i
+        self._superseded_by = [[index[h.name] for h in self.gestures if g.name in h.supersedes] for g in self.gestures]
+        self._names_by_channel = {s.channel: s.name for s in body_map.sensors}
+        self.n_channels = n_channels
+        self.reset()
+
+    def reset(self) -> None:
+        G = len(self.gestures)
+        #: per gesture: time the filter first matched (None: not a candidate), s
+        self.onset: list[float | None] = [None] * G
+        #: per gesture: time of the latest match, s
+        self.last_match: list[float | None] = [None] * G
+        #: per gesture: START sent and no END yet
+        self.started: list[bool] = [False] * G
+        self._start_onset = [0.0] * G                     # onset of the started episode (for its END)
+        self._last_counting: list[np.ndarray | None] = [None] * G   # counting sensors at the latest match
+
+    def _sensor_names(self, i: int) -> tuple[str, ...]:
+        row = self._last_counting[i]
+        if row is None:
+            return ()
+        return tuple(self._names_by_channel.get(int(c), str(c)) for c in np.flatnonzero(row))
+
+    def active_gestures(self) -> dict[str, float]:
+        """Gesture name -> onset (s) of the gestures started and not ended."""
+        return {g.name: float(self._start_onset[i]) for i, g in enumerate(self.gestures) if self.started[i]}
+
+    def update(self, t: float, active: np.ndarray, subtype_codes: np.ndarray | None = None) -> list[SymbolicEvent]:
+        """One cycle.
+
+        Args:
+            t: cycle time, s (non-decreasing).
+            active: (64,) bool, sensors at or above the activation threshold.
+            subtype_codes: (64,) int codes into SUBTYPES (needed only by gestures that require subtypes;
+                None means no subtype is known, so such gestures never match).
+
+        Returns:
+            The events of this cycle: ENDs first (in priority order), then STARTs.
+        """
+        active = np.asarray(active, dtype=bool)
+        counting = self._member & active[None, :]
+        if self._needs_subtype.any():
+            if subtype_codes is None:
+                counting[self._needs_subtype] = False
+            else:
+                codes = np.clip(np.asarray(subtype_codes, dtype=np.intp), 0, len(SUBTYPES) - 1)
+                counting &= self._allowed[:, codes]
+        counts = counting.sum(axis=1)
+        sides_ok = ~self._both | ((counting & self._left).any(axis=1) & (counting & self._right).any(axis=1))
+        matched = (counts >= self._min_active) & sides_ok
+
+        # The state machine runs on Python lists: scalar numpy indexing would cost more than the maths.
+        matched_l = matched.tolist()
+        onset, last, started = self.onset, self.last_match, self.started
+        ends: list[SymbolicEvent] = []
+        starts: list[SymbolicEvent] = []
+        live = [False] * len(self.gestures)          # candidate and not suppressed
+        for i, g in enumerate(self.gestures):        # priority order: supersessors are decided first
+            if matched_l[i]:
+                if onset[i] is None:
+                    onset[i] = t
+                last[i] = t
+                self._last_counting[i] = counting[i]
+            elif last[i] is not None and t - last[i] > g.gap_s + 1e-9:   # 1e-9: float time steps
+                onset[i] = last[i] = None
+            candidate = onset[i] is not None
+            by = [h for h in self._superseded_by[i] if live[h]]
+            live[i] = candidate and not by
+            if started[i] and not live[i]:
+                reason = f'superseded by {self.gestures[by[0]].name}' if by else 'released'
+                begin = self._start_onset[i]
+                ends.append(SymbolicEvent(g.name, END, t, begin, t - begin, self._sensor_names(i), reason))
+                started[i] = False
+            elif not started[i] and live[i] and matched_l[i] and t - onset[i] >= g.dwell_s:
+                started[i] = True
+                self._start_onset[i] = onset[i]
+                starts.append(SymbolicEvent(g.name, START, t, onset[i], t - onset[i], self._sensor_names(i)))
+        return ends + starts
