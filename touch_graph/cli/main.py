@@ -15,6 +15,7 @@ from ..errors import SocialTouchError
 
 # name -> (module, one-line help). The module defines add_arguments(parser) and run(args).
 COMMANDS: dict[str, tuple[str, str]] = {
+    'demo': ('touch_graph.cli.demo', 'the demo scene on virtual sensors, printing what the robot perceives'),
     'launch': ('touch_graph.launch.cli', 'start a scene: a ROS 2 YAML launch file, in this process'),
     'topic': ('touch_graph.cli.topic', 'topics of the running graph: list, echo, hz, info, pub'),
     'node': ('touch_graph.cli.node', 'nodes of the running graph: list, info'),
