@@ -49,7 +49,6 @@ setup(
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
                  'colcon-python-setup-py'],
     },
-    tests_require=['pytest'],
     zip_safe=True,
     entry_points={
         'console_scripts': [

@@ -17,6 +17,7 @@ TARGETS = {
     'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
     'drivers': ('touch_driver.bench', 'bench_drivers'),
     'bridge': ('touch_graph.bridge.bench', 'bench_bridge'),
+    'patch': ('touch_gestures.patch.bench', 'bench_frame'),
 }
 
 

@@ -1,0 +1,145 @@
+"""Benchmark: cost per frame of the patch gesture recogniser (for ``social-touch bench patch``).
+
+One frame of work is what the node does at 20 Hz: update the window features from a
+(16, 16) activation map, evaluate the log posterior of every class's mixture, apply the
+event rule. Frames come from a simulated mixed scene (SYNTHETIC) rendered through the
+sensor chain, so the share of frames with contact is realistic; the classifier is fitted
+on simulated people first (not timed).
+
+For comparison the same run times scikit-learn's ``GaussianMixture.score_samples`` called
+once per class per frame (what a naive node would do), and reports the ratio.
+
+Run: ``python -m touch_gestures.patch.bench [--json] [--repeats N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import statistics
+import time
+
+import numpy as np
+
+from .classifier import EventDetector, PatchGestureClassifier
+from .features import WindowFeatures, window_features
+from .scene import demo_scene, simulate_people
+from .sensor_chain import FRAME_RATE_HZ, render_scene
+
+__all__ = ['GOAL_US', 'bench_frame', 'main']
+
+#: Goal of issue 5: features and posterior within 50 us per frame.
+GOAL_US = 50.0
+
+
+def _fitted(window: int, n_components: int, seed: int, chain: str) -> PatchGestureClassifier:
+    X, y = [], []
+    for i, (_person, gesture, scene) in enumerate(simulate_people(3, 3, seed=seed)):
+        acts = render_scene(scene, seed=i, chain=chain).activations
+        X.append(window_features(acts, window))
+        y += [gesture] * len(acts)
+    return PatchGestureClassifier(n_components=n_components, random_state=seed).fit(np.concatenate(X), y)
+
+
+def _median_us(fn, n: int, repeats: int) -> float:
+    runs = []
+    for _ in range(repeats):
+        gc.collect()
+        start = time.perf_counter()
+        fn()
+        runs.append((time.perf_counter() - start) / n * 1e6)
+    return statistics.median(runs)
+
+
+def bench_frame(window: int = 60, n_components: int = 5, repeats: int = 7, frames: int = 2000, seed: int = 0,
+                chain: str = 'auto', sklearn_frames: int = 200) -> dict:
+    """Median microseconds per frame of the recogniser, and of scikit-learn's per-call scoring.
+
+    Args:
+        window: window length in frames (paper: 60). n_components: per class (paper: 5).
+        repeats: timed runs; medians are reported. frames: frames per run.
+        seed: of the simulated people and scene. chain: sensor chain for the frames (see sensor_chain).
+        sklearn_frames: frames for the (slow) scikit-learn comparison.
+
+    Returns:
+        dict with ``us_per_frame`` (features + posterior + event rule, on the scene's mix of
+        idle and touched frames), ``us_per_frame_contact`` (the same on touched frames only), ``us_features``,
+        ``us_posterior``, ``us_sklearn_score_samples`` (per frame, all classes), ``speedup``
+        (sklearn / ours, posterior only), ``goal_us``, ``active_fraction``, settings, and
+        ``synthetic: True``.
+    """
+    clf = _fitted(window, n_components, seed, chain)
+    scene = demo_scene(seed=seed + 1, n_events=max(4, frames // 160))
+    acts = render_scene(scene, seed=seed + 1, chain=chain).activations
+    acts = np.resize(acts, (frames, *acts.shape[1:])) if len(acts) < frames else acts[:frames]
+    classes = tuple(str(c) for c in clf.classes_)
+    feats = window_features(acts, window)
+
+    def full() -> None:
+        wf, det = WindowFeatures(window), EventDetector(classes, threshold=clf.threshold, rate_hz=FRAME_RATE_HZ)
+        for frame in acts:
+            x = wf.update(frame)
+            det.update(clf.log_posterior(x), wf.onset_age)
+
+    def features_only() -> None:
+        wf = WindowFeatures(window)
+        for frame in acts:
+            wf.update(frame)
+
+    def posterior_only() -> None:
+        for x in feats:
+            clf.log_posterior(x)
+
+    params = clf.params_
+    z = (feats[:sklearn_frames] - params.feature_mean) / params.feature_scale
+
+    def sklearn_scoring() -> None:
+        for row in z:
+            row = row[None]
+            for gm in clf.mixtures_:
+                gm.score_samples(row)
+
+    active_mask = (acts.reshape(len(acts), -1) > 0.08 + 1e-6).any(axis=1)
+    busy = np.resize(acts[active_mask], acts.shape) if active_mask.any() else acts
+
+    def full_busy() -> None:  # every frame with contact: the worst case
+        wf, det = WindowFeatures(window), EventDetector(classes, threshold=clf.threshold, rate_hz=FRAME_RATE_HZ)
+        for frame in busy:
+            x = wf.update(frame)
+            det.update(clf.log_posterior(x), wf.onset_age)
+
+    full()  # warm up
+    us = _median_us(full, len(acts), repeats)
+    us_busy = _median_us(full_busy, len(busy), repeats)
+    us_features = _median_us(features_only, len(acts), repeats)
+    us_posterior = _median_us(posterior_only, len(feats), repeats)
+    us_sklearn = _median_us(sklearn_scoring, len(z), max(1, repeats // 2))
+    return {
+        'us_per_frame': us, 'us_per_frame_contact': us_busy, 'us_features': us_features, 'us_posterior': us_posterior,
+        'us_sklearn_score_samples': us_sklearn, 'speedup': us_sklearn / us_posterior,
+        'goal_us': GOAL_US, 'meets_goal': us <= GOAL_US, 'frames': len(acts),
+        'active_fraction': float(active_mask.mean()),
+        'window': window, 'n_components': n_components, 'classes': list(classes), 'repeats': repeats,
+        'synthetic': True,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description='Per-frame cost of the patch gesture recogniser.')
+    parser.add_argument('--json', action='store_true', help='print one JSON object')
+    parser.add_argument('--repeats', type=int, default=7, help='timed runs (median reported)')
+    parser.add_argument('--window', type=int, default=60, help='window, frames (paper: 60)')
+    parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
+    args = parser.parse_args(argv)
+    result = bench_frame(window=args.window, n_components=args.components, repeats=args.repeats)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        for key, value in result.items():
+            print(f'{key:<26} {value:.2f}' if isinstance(value, float) else f'{key:<26} {value}')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

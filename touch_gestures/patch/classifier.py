@@ -1,0 +1,443 @@
+"""Maximum-likelihood patch gesture classifier: one Gaussian mixture per class (sympartner2018 6.2).
+
+For each gesture class ``c`` a mixture ``p(f | c) = sum_k w_k N(f | mu_k, Sigma_k)`` is fitted
+by EM (scikit-learn ``GaussianMixture``, 5 components in the paper) to the window features
+of every frame of that class's sessions, silences included. With a uniform prior the
+posterior is ``p(c | f) = p(f | c) / sum_c' p(f | c')``, computed in the log domain.
+
+Per frame, :meth:`PatchGestureClassifier.log_posterior` evaluates all the classes' mixtures
+with one matrix product on parameters prepared at fit time (precision Cholesky factors,
+with the feature standardisation folded in), so no scikit-learn input validation runs per
+frame; :class:`EventDetector` turns posteriors into gesture events.
+
+Hard cases handled at fit: a class with fewer (distinct) frames than components gets as
+many components as it has distinct frames; constant or collinear features give singular
+covariances, which ``reg_covar`` (added to the diagonal, in standardised units) regularises;
+if EM still fails, ``reg_covar`` is raised tenfold (up to three times) and the effective
+value is kept per class in ``reg_covar_``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import cholesky, solve_triangular
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.exceptions import ConvergenceWarning, NotFittedError
+from sklearn.mixture import GaussianMixture
+from sklearn.utils.validation import check_array, check_is_fitted, check_X_y
+
+__all__ = ['NOT_RECOGNISED', 'Detection', 'EventDetector', 'GaussianMixtureParams', 'PatchGestureClassifier',
+           'decide', 'precision_cholesky']
+
+#: Decision index of a sample whose best posterior stays below the threshold.
+NOT_RECOGNISED = -1
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def precision_cholesky(covariances: np.ndarray) -> np.ndarray:
+    """Upper factors ``U`` with ``U @ U.T = inv(Sigma)`` for (K, d, d) covariances.
+
+    Raises:
+        np.linalg.LinAlgError: when a covariance is not positive definite.
+    """
+    cov = np.asarray(covariances, dtype=np.float64)
+    out = np.empty_like(cov)
+    eye = np.eye(cov.shape[-1])
+    for i, sigma in enumerate(cov):
+        lower = cholesky(sigma, lower=True)
+        out[i] = solve_triangular(lower, eye, lower=True).T
+    return out
+
+
+@dataclass(frozen=True)
+class GaussianMixtureParams:
+    """The fitted mixtures of all classes, in standardised feature units.
+
+    Attributes:
+        classes: (C,) class names.
+        component_class: (K,) int, class index of each component (grouped by class).
+        weights: (K,) float64 mixture weights, summing to 1 within each class.
+        means: (K, d) float64 component means.
+        covariances: (K, d, d) float64 full covariances (diagonal/spherical fits expanded).
+        feature_mean: (d,) float64 mean subtracted before the mixtures (standardisation).
+        feature_scale: (d,) float64 divisor after the subtraction (1 for constant features).
+    """
+
+    classes: tuple[str, ...]
+    component_class: np.ndarray
+    weights: np.ndarray
+    means: np.ndarray
+    covariances: np.ndarray
+    feature_mean: np.ndarray
+    feature_scale: np.ndarray
+
+
+class _Evaluator:
+    """All mixtures as one affine map plus per-component constants (prepared once)."""
+
+    def __init__(self, params: GaussianMixtureParams) -> None:
+        n_classes = len(params.classes)
+        d = params.means.shape[1]
+        counts = np.bincount(params.component_class, minlength=n_classes)
+        m = int(counts.max())
+        prec = precision_cholesky(params.covariances)           # (K, d, d)
+        inv_scale = 1.0 / params.feature_scale
+        # y_k = ((x - mean) / scale - mu_k) @ U_k = x @ (diag(1/scale) U_k) - (mean/scale + mu_k) @ U_k
+        shift = params.feature_mean * inv_scale                  # (d,)
+        # Slots (class, j) padded to m per class; padded slots have constant -inf.
+        weight = np.zeros((n_classes, m, d, d))
+        offset = np.zeros((n_classes, m, d))
+        const = np.full((n_classes, m), -np.inf)
+        slot = np.zeros(n_classes, dtype=int)
+        log_det = np.log(np.diagonal(prec, axis1=1, axis2=2)).sum(axis=1)
+        for comp, c in enumerate(params.component_class):
+            j = slot[c]
+            slot[c] += 1
+            weight[c, j] = inv_scale[:, None] * prec[comp]
+            offset[c, j] = (shift + params.means[comp]) @ prec[comp]
+            with np.errstate(divide='ignore'):
+                const[c, j] = math.log(params.weights[comp]) if params.weights[comp] > 0 else -np.inf
+            const[c, j] += log_det[comp] - 0.5 * d * _LOG_2PI
+        self.n_classes, self.m, self.d = n_classes, m, d
+        # (d, C*m*d): one matrix product evaluates every component of every class.
+        self.matrix = np.ascontiguousarray(weight.transpose(2, 0, 1, 3).reshape(d, n_classes * m * d))
+        self.offset = offset.reshape(-1)
+        self.const = const
+        # The standardisation's Jacobian, the same for every class: only log_likelihood needs it.
+        self.log_jacobian = -float(np.log(params.feature_scale).sum())
+        self.uniform = np.full(n_classes, -math.log(n_classes))
+
+    def class_log_likelihood(self, X: np.ndarray) -> np.ndarray:
+        """(n, C) log p(x | c), up to the shared Jacobian; NaN rows where x is not finite."""
+        y = X @ self.matrix - self.offset
+        maha = np.einsum('nj,nj->n', y.reshape(-1, self.d), y.reshape(-1, self.d))
+        logp = self.const[None] - 0.5 * maha.reshape(X.shape[0], self.n_classes, self.m)
+        top = logp.max(axis=2)
+        safe = np.where(np.isfinite(top), top, 0.0)
+        with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+            return safe + np.log(np.exp(logp - safe[..., None]).sum(axis=2))
+
+    def log_posterior_batch(self, X: np.ndarray) -> np.ndarray:
+        ll = self.class_log_likelihood(X)
+        top = ll.max(axis=1, keepdims=True)
+        ok = np.isfinite(top[:, 0])
+        out = np.tile(self.uniform, (X.shape[0], 1))
+        if ok.any():
+            shifted = ll[ok] - top[ok]
+            out[ok] = shifted - np.log(np.exp(shifted).sum(axis=1, keepdims=True))
+        return out
+
+    def log_posterior_one(self, x: np.ndarray) -> np.ndarray:
+        y = x @ self.matrix - self.offset
+        y *= y
+        logp = self.const - 0.5 * y.reshape(self.n_classes, self.m, self.d).sum(axis=2)
+        top = logp.max(axis=1)
+        ll = top + np.log(np.exp(logp - top[:, None]).sum(axis=1))
+        best = ll.max()
+        if not math.isfinite(best):  # x not finite or astronomically far from every class
+            return self.uniform.copy()
+        ll -= best
+        ll -= math.log(np.exp(ll).sum())
+        return ll
+
+
+class PatchGestureClassifier(ClassifierMixin, BaseEstimator):
+    """One Gaussian mixture per gesture class, uniform prior, log-domain posterior.
+
+    Args:
+        n_components: mixture components per class (sympartner2018 6.3: best at 5).
+        threshold: posterior a class must reach to be recognised (sympartner2018 6.3: 0.99).
+        covariance_type: 'full', 'diag', 'tied' or 'spherical' (GaussianMixture's).
+        reg_covar: added to covariance diagonals, in standardised units (features are scaled
+            to unit variance first, so one value suits features of any scale).
+        max_iter, n_init, tol: EM settings passed to GaussianMixture.
+        random_state: seed for the EM initialisation.
+
+    Attributes (after fit):
+        classes_: (C,) class names. n_features_in_: 12 for the patch features.
+        n_components_: (C,) components actually fitted per class.
+        reg_covar_: (C,) regularisation actually used per class.
+        mixtures_: the fitted GaussianMixture objects (standardised units), for reference.
+        params_: :class:`GaussianMixtureParams`, what a model file stores.
+    """
+
+    def __init__(self, n_components: int = 5, threshold: float = 0.99, covariance_type: str = 'full',
+                 reg_covar: float = 1e-3, max_iter: int = 200, n_init: int = 1, tol: float = 1e-3,
+                 random_state: int | None = 0) -> None:
+        self.n_components = n_components
+        self.threshold = threshold
+        self.covariance_type = covariance_type
+        self.reg_covar = reg_covar
+        self.max_iter = max_iter
+        self.n_init = n_init
+        self.tol = tol
+        self.random_state = random_state
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, X: np.ndarray, y: np.ndarray) -> PatchGestureClassifier:
+        """Fit one mixture per class to the frames of that class.
+
+        Args:
+            X: (n, d) float features, finite (NaN is rejected with ValueError).
+            y: (n,) class labels (str or int), at least two classes.
+        """
+        if int(self.n_components) != self.n_components or self.n_components < 1:
+            raise ValueError(f'n_components must be a positive int; got {self.n_components!r}')
+        if not 0.0 < self.threshold <= 1.0:
+            raise ValueError(f'threshold must be a probability in (0, 1]; got {self.threshold!r}')
+        if not self.reg_covar > 0:
+            raise ValueError(f'reg_covar must be > 0 to keep covariances invertible; got {self.reg_covar!r}')
+        X, y = check_X_y(X, y, dtype=np.float64, ensure_min_samples=1)
+        classes = np.unique(y)
+        if len(classes) < 2:
+            raise ValueError(f'need frames of at least two classes to classify; got only {list(classes)}')
+        self.n_features_in_ = X.shape[1]
+        mean = X.mean(axis=0)
+        scale = X.std(axis=0)
+        scale[~(scale > 1e-12 * np.maximum(1.0, np.abs(mean)))] = 1.0  # constant feature: leave unscaled
+        Z = (X - mean) / scale
+        mixtures, n_comp, regs = [], [], []
+        comp_class, weights, means, covs = [], [], [], []
+        for ci, c in enumerate(classes):
+            gm, reg = self._fit_class(Z[y == c])
+            mixtures.append(gm)
+            n_comp.append(gm.n_components)
+            regs.append(reg)
+            comp_class += [ci] * gm.n_components
+            weights.append(gm.weights_)
+            means.append(gm.means_)
+            covs.append(_full_covariances(gm))
+        self.classes_ = classes
+        self.mixtures_ = mixtures
+        self.n_components_ = np.array(n_comp)
+        self.reg_covar_ = np.array(regs)
+        self.params_ = GaussianMixtureParams(
+            classes=tuple(str(c) for c in classes), component_class=np.array(comp_class),
+            weights=np.concatenate(weights), means=np.concatenate(means), covariances=np.concatenate(covs),
+            feature_mean=mean, feature_scale=scale)
+        self._evaluator = _Evaluator(self.params_)
+        return self
+
+    def _fit_class(self, Z: np.ndarray) -> tuple[GaussianMixture, float]:
+        if len(Z) == 1:  # EM needs two rows; a repeated row gives the same one-point Gaussian
+            Z = np.repeat(Z, 2, axis=0)
+        distinct = len(np.unique(Z, axis=0))
+        n = max(1, min(int(self.n_components), distinct))
+        reg = float(self.reg_covar)
+        last_err: Exception | None = None
+        for _ in range(4):
+            gm = GaussianMixture(n_components=n, covariance_type=self.covariance_type, reg_covar=reg,
+                                 max_iter=self.max_iter, n_init=self.n_init, tol=self.tol,
+                                 random_state=self.random_state)
+            try:
+                with warnings.catch_warnings():
+                    # Few distinct points or slow EM: the result is still usable; we report n_components_.
+                    warnings.simplefilter('ignore', ConvergenceWarning)
+                    gm.fit(Z)
+                precision_cholesky(_full_covariances(gm))
+                return gm, reg
+            except (ValueError, np.linalg.LinAlgError) as err:
+                last_err = err
+                reg *= 10.0
+        raise ValueError(f'EM failed for a class of {len(Z)} frames even with reg_covar={reg / 10:g}: {last_err}; '
+                         'use fewer components or a larger reg_covar') from last_err
+
+    @classmethod
+    def from_params(cls, params: GaussianMixtureParams, threshold: float = 0.99, **kwargs) -> PatchGestureClassifier:
+        """A fitted classifier from stored parameters (see model_io); ``mixtures_`` is None."""
+        clf = cls(threshold=threshold, **kwargs)
+        clf.classes_ = np.array(params.classes)
+        clf.n_features_in_ = params.means.shape[1]
+        clf.n_components_ = np.bincount(params.component_class, minlength=len(params.classes))
+        clf.reg_covar_ = np.full(len(params.classes), np.nan)
+        clf.mixtures_ = None
+        clf.params_ = params
+        clf._evaluator = _Evaluator(params)
+        return clf
+
+    # ------------------------------------------------------------------ inference
+    def log_posterior(self, x: np.ndarray) -> np.ndarray:
+        """log p(c | x) of one feature vector, the per-frame path (no validation beyond shape).
+
+        Args:
+            x: (d,) float64 features.
+
+        Returns:
+            (C,) float64 log posteriors (logsumexp = 0). A non-finite ``x`` gives the uniform
+            posterior (no evidence) rather than NaN.
+        """
+        try:
+            evaluator = self._evaluator
+        except AttributeError:
+            raise NotFittedError('this PatchGestureClassifier is not fitted yet; call fit(X, y) or load a '
+                                 'model file first') from None
+        return evaluator.log_posterior_one(x)
+
+    def _check_batch(self, X: np.ndarray, allow_nan: bool) -> np.ndarray:
+        check_is_fitted(self, 'params_')
+        X = check_array(X, dtype=np.float64, ensure_all_finite=not allow_nan)
+        if X.shape[1] != self.n_features_in_:
+            raise ValueError(f'X has {X.shape[1]} features; this classifier was fitted on {self.n_features_in_}')
+        return X
+
+    def predict_log_proba(self, X: np.ndarray) -> np.ndarray:
+        """(n, C) log posteriors of a batch; rows with non-finite features are uniform."""
+        X = self._check_batch(X, allow_nan=True)
+        out = np.empty((X.shape[0], len(self.classes_)))
+        for start in range(0, X.shape[0], 4096):  # bounds the (n, K*d) temporary
+            out[start:start + 4096] = self._evaluator.log_posterior_batch(X[start:start + 4096])
+        return out
+
+    def predict_proba(self, X: np.ndarray) -> np.ndarray:
+        """(n, C) posteriors p(c | x) of a batch."""
+        return np.exp(self.predict_log_proba(X))
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """(n,) most probable class of each row (no threshold; see :meth:`recognise`)."""
+        log_proba = self.predict_log_proba(X)
+        return self.classes_[np.argmax(log_proba, axis=1)]
+
+    def recognise(self, X: np.ndarray) -> np.ndarray:
+        """(n,) class index whose posterior reaches ``threshold``, else ``NOT_RECOGNISED`` (-1)."""
+        return decide(self.predict_log_proba(X), self.threshold)
+
+    def log_likelihood(self, X: np.ndarray) -> np.ndarray:
+        """(n, C) log p(x | c) in the units of the features."""
+        X = self._check_batch(X, allow_nan=False)
+        ev = self._evaluator
+        return ev.class_log_likelihood(X) + ev.log_jacobian
+
+
+def _full_covariances(gm: GaussianMixture) -> np.ndarray:
+    """(K, d, d) covariances of a fitted GaussianMixture of any covariance_type."""
+    cov = gm.covariances_
+    k, d = gm.means_.shape
+    if gm.covariance_type == 'full':
+        return np.array(cov, dtype=np.float64)
+    if gm.covariance_type == 'tied':
+        return np.repeat(cov[None], k, axis=0)
+    if gm.covariance_type == 'diag':
+        return np.einsum('kd,de->kde', cov, np.eye(d))
+    return cov[:, None, None] * np.eye(d)[None]  # spherical
+
+
+def decide(log_posteriors: np.ndarray, threshold: float) -> np.ndarray:
+    """(n,) index of the class whose posterior reaches ``threshold``, else -1.
+
+    >>> decide(np.log([[0.995, 0.005], [0.6, 0.4]]), 0.99)
+    array([ 0, -1])
+    """
+    lp = np.asarray(log_posteriors)
+    best = np.argmax(lp, axis=1)
+    ok = lp[np.arange(len(lp)), best] >= math.log(threshold)
+    return np.where(ok, best, NOT_RECOGNISED)
+
+
+@dataclass(frozen=True)
+class Detection:
+    """A gesture event (one /touch/gesture message).
+
+    Attributes:
+        gesture: class name. index: class index. probability: its posterior in [0, 1].
+        posteriors: (C,) posteriors of all classes. frame: frame number of the decision.
+        time_s: time of the decision, s. latency_s: time since the first active frame in the
+            window, s (what GestureEvent.latency_s carries).
+    """
+
+    gesture: str
+    index: int
+    probability: float
+    posteriors: np.ndarray
+    frame: int
+    time_s: float
+    latency_s: float
+
+
+class EventDetector:
+    """The event rule of sympartner2018 6.2, per frame.
+
+    An event is sent when one class's posterior reaches ``threshold`` (paper: 0.99) and
+    the class differs from the current one. The current class is forgotten (so the same
+    gesture can be reported again) when its posterior falls below ``release`` or when the
+    window holds no active frame (the touch is over). With ``release == threshold`` this is
+    the paper's rule read literally, the decision returning to "none" between events; a
+    lower ``release`` adds hysteresis against a posterior flickering around the threshold.
+    No event is sent from a window without any active frame.
+
+    ``hold`` asks the same class to stay above the threshold for that many consecutive
+    frames before the event is sent (1 = the paper's rule). A sliding window sees only the
+    beginning of a gesture at first: the first frames of a push look like a slap, those of
+    a stroke like a tickle; a short hold lets the window see a little more before the
+    robot reacts, at the price of ``hold - 1`` frames of latency.
+
+    Args:
+        classes: class names, in the classifier's order.
+        threshold: posterior needed for an event (paper: 0.99).
+        release: posterior below which the current class is forgotten (default 0.9).
+        rate_hz: frame rate, to turn frame counts into seconds (patch: 20 Hz).
+        hold: consecutive frames above the threshold before an event (paper: 1).
+    """
+
+    def __init__(self, classes: tuple[str, ...] | list[str], threshold: float = 0.99, release: float = 0.9,
+                 rate_hz: float = 20.0, hold: int = 1) -> None:
+        if not 0.0 < threshold <= 1.0:
+            raise ValueError(f'threshold must be in (0, 1]; got {threshold!r}')
+        if not 0.0 <= release <= threshold:
+            raise ValueError(f'release must be in [0, threshold={threshold}]; got {release!r}')
+        if not rate_hz > 0:
+            raise ValueError(f'rate_hz must be > 0; got {rate_hz!r}')
+        self.classes = tuple(classes)
+        self.threshold = threshold
+        self.release = release
+        if int(hold) != hold or hold < 1:
+            raise ValueError(f'hold must be a positive number of frames; got {hold!r}')
+        self.rate_hz = float(rate_hz)
+        self.hold = int(hold)
+        self._candidate = -1
+        self._run = 0
+        self._log_threshold = math.log(threshold)
+        self._log_release = math.log(release) if release > 0 else -math.inf
+        self.current: int | None = None
+        self.frame = -1
+        self.events = 0
+
+    def reset(self) -> None:
+        self.current = None
+        self.frame = -1
+        self._candidate, self._run = -1, 0
+
+    def update(self, log_posterior: np.ndarray, onset_age: int | None, time_s: float | None = None) -> Detection | None:
+        """Feed one frame's (C,) log posterior; return the event it triggers, if any.
+
+        Args:
+            log_posterior: (C,) log p(c | window).
+            onset_age: frames from the first active frame in the window to this frame
+                (``WindowFeatures.onset_age``), or None when the window holds no contact.
+            time_s: time of the frame, s (default: frame number / rate).
+        """
+        self.frame += 1
+        if onset_age is None:
+            self.current = None
+            self._run = 0
+            return None
+        best = int(np.argmax(log_posterior))
+        lp_best = float(log_posterior[best])
+        if lp_best >= self._log_threshold:
+            self._run = self._run + 1 if best == self._candidate else 1
+            self._candidate = best
+        else:
+            self._run = 0
+        if self._run >= self.hold and best != self.current:
+            self.current = best
+            self.events += 1
+            t = self.frame / self.rate_hz if time_s is None else time_s
+            post = np.exp(log_posterior)
+            return Detection(self.classes[best], best, float(post[best]), post, self.frame, t,
+                             onset_age / self.rate_hz)
+        if self.current is not None and float(log_posterior[self.current]) < self._log_release:
+            self.current = None
+        return None
