@@ -188,3 +188,16 @@ def test_reset_counts_buffered_bytes_as_dropped() -> None:
     assert dec.buffered == 0
     check_accounting(dec, [], 8)
     assert dec.feed(wire) == [Frame(0x02, 1, bytes(10))]
+
+
+def test_a_frame_ending_in_the_first_sync_byte_is_not_counted_as_dropped():
+    # Regression: the trailing 0xA5 kept for a possible next sync was the CRC of the frame just
+    # returned, which made dropped_bytes go negative (and broke the uint64 status field).
+    from touch_driver.framing import FrameDecoder as Decoder
+    from touch_driver.framing import encode_frame as encode
+    decoder = Decoder({0x42: 4})
+    for seq in range(300):
+        wire = encode(0x42, seq, bytes([seq % 256, 1, 2, 3]))
+        assert len(decoder.feed(wire)) == 1
+        assert decoder.stats.dropped_bytes == 0
+    assert any(encode(0x42, s, bytes([s % 256, 1, 2, 3]))[-1] == 0xA5 for s in range(300))

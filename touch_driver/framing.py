@@ -122,7 +122,8 @@ class FrameDecoder:
             start = buf.find(SYNC, pos)
             if start < 0:
                 # Keep a trailing 0xA5: it may be the first half of the next sync.
-                keep_from = n - 1 if n and buf[-1] == SYNC[0] else n
+                # (never a byte of the frame just returned: pos may already be at the end).
+                keep_from = max(pos, n - 1) if n and buf[-1] == SYNC[0] else n
                 stats.dropped_bytes += keep_from - pos
                 pos = keep_from
                 break
