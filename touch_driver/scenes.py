@@ -23,6 +23,13 @@ and (``sensor: patch``; cells are (row, col), fractional allowed)::
     panels:
       - {panels: [0, 1], start: 6.0, duration: 2.0, level: 1.0}
 
+or a generated scene: ``generator`` names a function of this project (``module:function`` in
+``touch_gestures`` or ``touch_driver``) that returns the stimulus, called with ``options``::
+
+    sensor: bear
+    generator: touch_gestures.bear.scene:make_scene
+    options: {n_people: 2, seed: 7, gestures: [hug, head_pat]}
+
 Envelopes (``u`` = seconds since the touch started, each also ramped in and out over ``ramp_s``):
 ``constant`` (``level``), ``sine`` (``level * (1 - cos(2 pi f u)) / 2``: stroking, tickling),
 ``pulse`` (``level`` for the first ``duty`` of every ``1/f`` period: pats, taps).
@@ -344,15 +351,60 @@ def _pair(item: YamlDict, key: str, what: str) -> tuple[float, float]:
     return float(value[0]), float(value[1])
 
 
-def _load_yaml_script(path: Path, sensor: str | None, body_map: Any) -> BearScript | PatchScript:
+#: Packages whose functions a scene file may name as its ``generator`` (a config file imports no other code).
+GENERATOR_PACKAGES = ('touch_gestures.', 'touch_driver.')
+
+
+def _generated(doc: YamlDict, kind: str, body_map: Any) -> Any:
+    """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples)."""
+    import importlib
+    import inspect
+    spec = typed(doc, 'generator', str, 'stimulus scene')
+    module_name, _, func_name = spec.partition(':')
+    if not func_name or not module_name.startswith(GENERATOR_PACKAGES):
+        raise doc.error(f"generator must be 'module:function' in {' or '.join(p[:-1] for p in GENERATOR_PACKAGES)}, "
+                        f'e.g. touch_gestures.bear.scene:make_scene; got {spec!r}', 'generator')
+    try:
+        func = getattr(importlib.import_module(module_name), func_name)
+    except (ImportError, AttributeError) as err:
+        raise doc.error(f'cannot find generator {spec!r}: {err}', 'generator') from None
+    options = doc.get('options', YamlDict())
+    if not isinstance(options, YamlDict):
+        raise doc.error(f'options must be a mapping of keyword arguments of {spec}', 'options')
+    accepted = [n for n in inspect.signature(func).parameters if n != 'body_map']
+    for key in options:
+        if key not in accepted:
+            raise options.error(f'{spec} takes no option {key!r}{did_you_mean(str(key), accepted)}; options: '
+                                f'{", ".join(accepted)}', key)
+    kwargs = {k: tuple(v) if isinstance(v, list) else v for k, v in options.items()}
+    if body_map is not None and 'body_map' in inspect.signature(func).parameters:
+        kwargs['body_map'] = body_map
+    try:
+        stimulus = func(**kwargs)
+    except (TypeError, ValueError) as err:
+        raise doc.error(f'{spec} rejected the options: {err}', 'options' if 'options' in doc else 'generator') from None
+    want = BearStimulus if kind == 'bear' else PatchStimulus
+    if not isinstance(stimulus, want):
+        raise doc.error(f'{spec} returned a {type(stimulus).__name__}, not a {kind} stimulus', 'generator')
+    return stimulus
+
+
+def _load_yaml_script(path: Path, sensor: str | None, body_map: Any) -> Any:
     doc = load_yaml(path)
-    check_keys(doc, required=('sensor',), optional=('touches', 'panels', 'description'),
+    check_keys(doc, required=('sensor',), optional=('touches', 'panels', 'description', 'generator', 'options'),
                what='stimulus scene')
     kind = typed(doc, 'sensor', str, 'stimulus scene')
     if kind not in ('bear', 'patch'):
         raise doc.error(f"sensor must be 'bear' or 'patch'; got {kind!r}", 'sensor')
     if sensor is not None and kind != sensor:
         raise doc.error(f'this scene is for the {kind}, not the {sensor}', 'sensor')
+    if 'generator' in doc:
+        scripted = [k for k in ('touches', 'panels') if k in doc]
+        if scripted:
+            raise doc.error(f"a scene has a generator or a timeline, not both: remove '{scripted[0]}'", scripted[0])
+        return _generated(doc, kind, body_map)
+    if 'options' in doc:
+        raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if kind == 'bear':
         if 'panels' in doc:
             raise doc.error("'panels' belong to a patch scene", 'panels')

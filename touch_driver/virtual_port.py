@@ -33,7 +33,8 @@ from typing import Any, Protocol
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
-__all__ = ['DeviceModel', 'DeviceState', 'VirtualSerial', 'device_state', 'forget_devices', 'parse_url']
+__all__ = ['DeviceModel', 'DeviceState', 'VirtualSerial', 'device_state', 'forget_device', 'forget_devices',
+           'parse_url']
 
 
 class DeviceModel(Protocol):
@@ -88,6 +89,12 @@ _FAULT_OPTIONS = ('garbage', 'corrupt', 'drop', 'unplug_at', 'replug_at', 'buffe
 def device_state(name: str) -> DeviceState:
     """The registered virtual device ``name`` (KeyError if none was opened)."""
     return _registry[name]
+
+
+def forget_device(name: str) -> None:
+    """Drop the registered virtual device ``name``, if any (a run that made its own device)."""
+    with _registry_lock:
+        _registry.pop(name, None)
 
 
 def forget_devices() -> None:
