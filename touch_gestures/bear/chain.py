@@ -1,13 +1,14 @@
 """Sensor chains: from a stimulus to calibrated levels, one scan cycle at a time.
 
-:class:`DriverChain` is the real one the evaluation uses: stimulus -> ``touch_driver.bear.device.
+:class:`DriverChain` is the real sensor chain without the graph: stimulus -> ``touch_driver.bear.device.
 BearDevice`` (wire bytes, with the device's sensor model: noise, drift, per-channel scan timing)
 -> ``touch_driver.bear.protocol.BearDecoder`` (framing + payload decode, counts bad bytes) ->
 ``touch_driver.bear.calibration.BearCalibrator`` (levels 0..1, fault flags). :class:`LevelModelChain`
 is a stand-in for unit tests of the recognisers: the stimulus sampled at the scan time plus Gaussian
-noise, no bytes.
+noise, no bytes. :class:`~.graph_chain.GraphChain` (the evaluation's default) runs the same device and
+calibrator through the ``bear_driver`` node of a simulated-time graph.
 
-Both yield :class:`Cycle` objects: the scan time, (64,) float32 levels and (64,) bool fault flags.
+All yield :class:`Cycle` objects: the scan time, (64,) float32 levels and (64,) bool fault flags.
 
 >>> from touch_driver.scenes import BearScript, BearTouch
 >>> chain = LevelModelChain(BearScript([BearTouch(channels=(3,), start=0.0, duration=5.0, level=0.8)]),

@@ -18,12 +18,14 @@ import json
 import math
 import sys
 
-from .evaluate import EvalConfig, evaluate, stderr_progress
+from .evaluate import CHAINS, EvalConfig, evaluate, stderr_progress
 from .subtype_labels import TOUCH_SUBTYPES
 
 __all__ = ['DESCRIPTION', 'add_arguments', 'format_text', 'run']
 
 DESCRIPTION = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
+#: The graph gives the driver chain's figures within noise (docs/bear-evaluation.md) and is the robot's path.
+DEFAULT_CHAIN = 'graph'
 
 
 def _positive_float(text: str) -> float:
@@ -58,8 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--buffer', type=_positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
     parser.add_argument('--reps', type=_positive_int, default=2,
                         help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
-    parser.add_argument('--chain', choices=('driver', 'level'), default='driver',
-                        help="'driver': device bytes -> decoder -> calibrator (default); 'level': no bytes (quick)")
+    parser.add_argument('--chain', choices=CHAINS, default=DEFAULT_CHAIN,
+                        help="'graph': virtual bear -> bear_driver node -> /bear/frame in simulated time; 'driver': "
+                             "device bytes -> decoder -> calibrator without the graph; 'level': no bytes (quick) "
+                             f'({DEFAULT_CHAIN})')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 

@@ -1,9 +1,13 @@
 """Evaluate the bear recognisers on labelled scenes (synthetic people) through the real sensor chain.
 
 ``evaluate(EvalConfig(...))`` scripts a training scene and a test scene with different simulated
-people, runs both through the chain (``BearDevice`` bytes -> ``BearDecoder`` -> ``BearCalibrator``,
-:class:`~.chain.DriverChain`), trains the eight-subtype model on the first, and scores the paper's
-rule and the trained model on the second. All figures are on **synthetic** data.
+people, runs both through the chain, trains the eight-subtype model on the first, and scores the
+paper's rule and the trained model on the second. All figures are on **synthetic** data. Chains:
+``'graph'`` (:class:`~.graph_chain.GraphChain`: virtual device -> ``bear_driver`` node ->
+``/bear/frame`` in simulated time, the robot's path), ``'driver'`` (:class:`~.chain.DriverChain`:
+``BearDevice`` bytes -> ``BearDecoder`` -> ``BearCalibrator``, no graph; same levels, cycle times
+without the driver's poll latency) and ``'level'`` (no bytes, for quick tests). The trained model sits
+behind :class:`~.gate.NoTouchGate` (``no_touch_gate``), as in the ``bear_gestures`` node.
 
 Scoring (documented here because the numbers mean nothing without it):
 
@@ -39,14 +43,16 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .chain import REAL_RATE_HZ, DriverChain, LevelModelChain
+from .gate import NoTouchGate
 from .pipeline import BearRecognizer
 from .scene import BearScene, make_scene
+from .sensor_level import ACTIVATION_THRESHOLD
 from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from .subtype_model import SubtypeClassifier
 from .symbolic import START, GestureLibrary
 
-__all__ = ['EvalConfig', 'SceneRun', 'collect_training_rows', 'evaluate', 'make_chain', 'run_scene',
-           'score_subtypes', 'score_symbolic', 'train_subtype_model']
+__all__ = ['CHAINS', 'EvalConfig', 'SceneRun', 'chain_counters', 'collect_training_rows', 'evaluate', 'make_chain',
+           'run_scene', 'score_subtypes', 'score_symbolic', 'train_subtype_model']
 
 PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
 #: Seconds after a labelled gesture's end during which its START still counts.
@@ -63,9 +69,13 @@ class EvalConfig:
         n_people: simulated people in the test scene; ``train_people`` in the training scene.
         seed: test scene seed; the training scene uses ``seed + 1000`` (different people).
         subtype_reps, gesture_reps: repetitions per person (gesture_reps >= 2 gives Table III's second column).
-        chain: ``'driver'`` (device bytes -> decoder -> calibrator) or ``'level'`` (test stand-in).
-        device_options: extra ``BearDevice`` keywords (noise, faults, scan, ...).
+        chain: ``'driver'`` (device bytes -> decoder -> calibrator), ``'graph'`` (the same through the
+            driver node and a simulated-time graph) or ``'level'`` (test stand-in).
+        device_options: extra ``BearDevice`` keywords (noise, faults, scan, ...); the graph chain takes
+            only those a ``bearsim://`` URL carries.
         detrend: feature detrending, see :mod:`.features`.
+        no_touch_gate: the trained model answers 'none' where the buffer never reached the threshold
+            (knight2009 V.D's first rule line, :class:`~.gate.NoTouchGate`), as the node does.
     """
 
     rate_hz: float = REAL_RATE_HZ
@@ -78,19 +88,26 @@ class EvalConfig:
     chain: str = 'driver'
     device_options: dict = field(default_factory=dict)
     detrend: str = 'constant'
+    no_touch_gate: bool = True
+
+
+CHAINS = ('driver', 'graph', 'level')
 
 
 def make_chain(stimulus, config: EvalConfig, seed: int):
     """The configured sensor chain for ``stimulus``."""
-    if config.chain == 'driver':
+    if config.chain in ('driver', 'graph'):
         options = dict(config.device_options)
         # The real bear reads its 56 channels one by one (5 ms each): that fits up to ~3.57 Hz. Faster
         # rates need the Midplanes read in parallel (8 x 5 ms = 40 ms, the ideal 25 Hz).
         options.setdefault('scan', 'sequential' if config.rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel')
+        if config.chain == 'graph':
+            from .graph_chain import GraphChain
+            return GraphChain(stimulus, config.rate_hz, seed=seed, device_options=options)
         return DriverChain(stimulus, config.rate_hz, seed=seed, device_options=options)
     if config.chain == 'level':
         return LevelModelChain(stimulus, config.rate_hz, seed=seed)
-    raise ValueError(f"chain must be 'driver' or 'level'; got {config.chain!r}")
+    raise ValueError(f'chain must be one of {", ".join(CHAINS)}; got {config.chain!r}')
 
 
 @dataclass
@@ -161,6 +178,15 @@ def collect_training_rows(run: SceneRun, fitted: np.ndarray, idle_fraction: floa
     idle = np.random.default_rng(seed).random(y.shape) < idle_fraction
     keep = busy | idle
     return F[keep], y[keep]
+
+
+def chain_counters(chain) -> dict:
+    """The wire and graph counters of a chain after a run (empty for the level chain)."""
+    if isinstance(chain, DriverChain):
+        s = chain.decoder.stats
+        return {'frames': s.frames, 'dropped_bytes': s.dropped_bytes, 'checksum_errors': s.checksum_errors,
+                'sequence_gaps': s.sequence_gaps, 'corrupt_frames': chain.decoder.corrupt_frames}
+    return dict(getattr(chain, 'counters', {}))
 
 
 def train_subtype_model(config: EvalConfig, progress: Callable[[str], None] | None = None) -> SubtypeClassifier:
@@ -315,12 +341,13 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
     say = progress or (lambda msg: None)
     say(f'training scene: {config.train_people} simulated people at {config.rate_hz} Hz, buffer {config.buffer_len}')
     model = train_subtype_model(config, progress=say)
+    classifier = NoTouchGate(model, ACTIVATION_THRESHOLD) if config.no_touch_gate else model
     scene = make_scene(n_people=config.n_people, seed=config.seed, subtype_reps=config.subtype_reps,
                        gesture_reps=config.gesture_reps)
     say(f'test scene: {config.n_people} simulated people, {len(scene.labels)} labelled interactions, '
         f'{scene.duration_s:.0f} s')
     recognizers = {
-        'model': BearRecognizer(config.rate_hz, config.buffer_len, classifier=model, detrend=config.detrend),
+        'model': BearRecognizer(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
         'rule': BearRecognizer(config.rate_hz, config.buffer_len, detrend=config.detrend),
     }
     chain = make_chain(scene, config, config.seed)
@@ -335,11 +362,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
             'symbolic': score_symbolic(scene, run, run.events[name], library),
             'us_per_cycle': float(np.median(run.step_us[name])),
         }
-    chain_stats = {}
-    if isinstance(chain, DriverChain):
-        s = chain.decoder.stats
-        chain_stats = {'frames': s.frames, 'dropped_bytes': s.dropped_bytes, 'checksum_errors': s.checksum_errors,
-                       'sequence_gaps': s.sequence_gaps, 'corrupt_frames': chain.decoder.corrupt_frames}
+    chain_stats = chain_counters(chain)
     best = results['model']
     return {
         'data': 'synthetic: simulated people (knight2009 Table II statistics), not recordings of real people',
