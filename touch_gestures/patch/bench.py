@@ -9,7 +9,15 @@ on simulated people first (not timed).
 For comparison the same run times scikit-learn's ``GaussianMixture.score_samples`` called
 once per class per frame (what a naive node would do), and reports the ratio.
 
-Run: ``python -m touch_gestures.patch.bench [--json] [--repeats N]``.
+:func:`bench_node` times the ``patch_gestures`` node's frame callback (message in, event
+out) against the bare recogniser on the same frames with the same model: the node's share of
+the cost (message fields, stamps, publishing).
+
+:func:`bench_chains` times rendering a simulated session through the driver chain (device,
+decoder and calibrators called directly) and the graph chain (the same through the
+``patch_driver`` node in simulated time): what ``--chain graph`` costs an evaluation.
+
+Run: ``python -m touch_gestures.patch.bench [--json] [--repeats N] [--node | --chains]``.
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ from .features import WindowFeatures, window_features
 from .scene import demo_scene, simulate_people
 from .sensor_chain import FRAME_RATE_HZ, render_scene
 
-__all__ = ['GOAL_US', 'bench_frame', 'main']
+__all__ = ['GOAL_US', 'bench_chains', 'bench_frame', 'bench_node', 'main']
 
 #: Goal of issue 5: features and posterior within 50 us per frame.
 GOAL_US = 50.0
@@ -125,14 +133,102 @@ def bench_frame(window: int = 60, n_components: int = 5, repeats: int = 7, frame
     }
 
 
+def bench_node(repeats: int = 7, frames: int = 2000, seed: int = 0, model: str | None = None) -> dict:
+    """Median microseconds per frame of the ``patch_gestures`` node's callback and of the bare recogniser.
+
+    Frames come from the simulated demo scene (SYNTHETIC) through the driver chain, as
+    ``PatchFrame`` messages with 20 Hz stamps; the node runs in a simulated-time context with
+    no executor (its callback is called directly; the publisher has a subscriber, so events are
+    delivered). ``model`` defaults to the package's ``config/patch_gestures.npz``.
+
+    Returns:
+        dict with ``us_node`` (callback per frame), ``us_recogniser`` (features + direct posterior +
+        event rule on the same frames), ``node_overhead`` (ratio), ``events``, ``frames`` and ``synthetic``.
+    """
+    from touch_graph.messages import get_message
+    from touch_graph.runtime import Context, Node, Parameter
+
+    from .node import PatchGesturesNode
+    patch_frame, header_type = get_message('social_touch_msgs/msg/PatchFrame'), get_message('std_msgs/msg/Header')
+    time_type = get_message('builtin_interfaces/msg/Time')
+    acts = render_scene(demo_scene(seed=seed + 1, n_events=max(4, frames // 160)), seed=seed + 1).activations
+    acts = np.resize(acts, (frames, *acts.shape[1:])) if len(acts) < frames else acts[:frames]
+    msgs = [patch_frame(header=header_type(stamp=time_type(sec=1_700_000_000 + i // 20, nanosec=(i % 20) * 50_000_000)),
+                        sequence=i & 0xFFFF, activation=a.reshape(-1)) for i, a in enumerate(acts)]
+    context = Context('sim')
+    context.init()
+    try:
+        overrides = [Parameter('model', value=model)] if model else []
+        node = PatchGesturesNode(context=context, parameter_overrides=overrides,
+                                 cli_args=['--ros-args', '--log-level', 'error'])  # each run restarts: quiet
+        sink = Node('bench_sink', context=context)
+        received: list = []
+        sink.create_subscription(get_message('social_touch_msgs/msg/GestureEvent'), '/touch/gesture',
+                                 received.append, 10)
+        m = node.model
+
+        def through_node() -> None:
+            node._last_ns = None
+            node._restart('bench run')
+            for msg in msgs:
+                node._on_frame(msg)
+
+        def recogniser() -> None:
+            wf, det, clf = m.features(), node.detector, m.classifier
+            det.reset()
+            for a in acts:
+                det.update(clf.log_posterior(wf.update(a)), wf.onset_age)
+
+        through_node()  # warm up
+        us_node = _median_us(through_node, len(msgs), repeats)
+        us_recogniser = _median_us(recogniser, len(acts), repeats)
+        events = node.events // (repeats + 1)
+    finally:
+        context.shutdown()
+    return {'us_node': us_node, 'us_recogniser': us_recogniser, 'node_overhead': us_node / us_recogniser,
+            'events': events, 'frames': len(msgs), 'repeats': repeats, 'synthetic': True}
+
+
+def bench_chains(repeats: int = 3, seed: int = 0) -> dict:
+    """Median wall seconds per simulated minute of the driver and graph chains on one session (SYNTHETIC).
+
+    Returns:
+        dict with ``s_per_min_driver``, ``s_per_min_graph``, ``graph_over_driver`` (ratio),
+        ``identical`` (the two gave the same activations), ``scene_s``, ``repeats``, ``synthetic``.
+    """
+    _person, _gesture, scene = simulate_people(1, 6, seed=seed, gestures=('tickle',))[0]
+    times: dict[str, list[float]] = {'driver': [], 'graph': []}
+    outputs = {}
+    for _ in range(repeats):
+        for chain in times:
+            gc.collect()
+            start = time.perf_counter()
+            outputs[chain] = render_scene(scene, seed=seed, chain=chain).activations
+            times[chain].append(time.perf_counter() - start)
+    per_min = {c: statistics.median(t) / scene.duration_s * 60.0 for c, t in times.items()}
+    return {'s_per_min_driver': per_min['driver'], 's_per_min_graph': per_min['graph'],
+            'graph_over_driver': per_min['graph'] / per_min['driver'],
+            'identical': bool(np.array_equal(outputs['driver'], outputs['graph'])),
+            'scene_s': scene.duration_s, 'repeats': repeats, 'synthetic': True}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description='Per-frame cost of the patch gesture recogniser.')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
     parser.add_argument('--repeats', type=int, default=7, help='timed runs (median reported)')
     parser.add_argument('--window', type=int, default=60, help='window, frames (paper: 60)')
     parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument('--node', action='store_true',
+                       help="time the patch_gestures node's frame callback against the bare recogniser instead")
+    which.add_argument('--chains', action='store_true', help='time the driver and graph sensor chains instead')
     args = parser.parse_args(argv)
-    result = bench_frame(window=args.window, n_components=args.components, repeats=args.repeats)
+    if args.node:
+        result = bench_node(repeats=args.repeats)
+    elif args.chains:
+        result = bench_chains(repeats=min(args.repeats, 3))
+    else:
+        result = bench_frame(window=args.window, n_components=args.components, repeats=args.repeats)
     if args.json:
         print(json.dumps(result, indent=2))
     else:

@@ -68,8 +68,10 @@ def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gain', type=float, help='eq. (2) gain per count for raw CSV values (default 1/1023)')
     parser.add_argument('--events', type=int, default=6, help='simulated gestures per session (default 6)')
     parser.add_argument('--seed', type=int, default=0, help='seed of the simulated people and of EM (default 0)')
-    parser.add_argument('--chain', choices=('auto', 'driver', 'simple'), default='auto',
-                        help='sensor chain for simulated data (default: the driver when installed)')
+    parser.add_argument('--chain', choices=('auto', 'driver', 'graph', 'simple'), default='auto',
+                        help='sensor chain for simulated data: driver (device, decoder and calibrators called '
+                        'directly), graph (the virtual device opened by URL and read by the patch_driver node in '
+                        'simulated time), simple (a stand-in); default: driver when installed')
     parser.add_argument('--window-s', type=float, default=3.0, help='window length, s (paper: 3 s)')
     parser.add_argument('--covariance', choices=('full', 'diag', 'tied', 'spherical'), default='full',
                         help='mixture covariance type (default full)')
@@ -141,12 +143,38 @@ def run_train(args: argparse.Namespace) -> int:
     except ValueError as err:  # one class only, bad settings: say so, no traceback
         raise SystemExit(f'train patch: {err}') from err
     model = PatchModel(clf, window=window, rate_hz=rate, grid=sessions[0].grid, release=args.release,
-                       hold=max(1, round(args.hold_s * rate)))
+                       hold=max(1, round(args.hold_s * rate)), metadata=_training_metadata(args, sessions, len(X)))
     save_model(args.output, model)
     synthetic = ' (SYNTHETIC data)' if any(s.synthetic for s in sessions) else ''
     say(f'wrote {args.output}: classes {", ".join(model.classes)}, components {clf.n_components_.tolist()}'
         f'{synthetic}')
     return 0
+
+
+def _chain_of(sessions: list[Session]) -> str:
+    """The sensor chain(s) simulated sessions went through ('driver', 'graph', 'simple')."""
+    chains = sorted({s.source.split('(')[-1].split(' chain')[0] for s in sessions if 'chain)' in s.source})
+    return '+'.join(chains) or 'unknown'
+
+
+def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_frames: int) -> dict:
+    """What a model file records about how it was made (model_io's optional ``metadata``)."""
+    import datetime
+    import shlex
+    from pathlib import Path
+    if args.csv or args.bags:
+        data = f"{'CSV' if args.csv else 'bags'} {args.csv or args.bags}"
+    else:
+        data = (f'simulated people (SYNTHETIC): {args.simulate} people x {args.events} events per gesture, seed '
+                f'{args.seed}, {_chain_of(sessions)} sensor chain (touch_gestures/patch/scene.py)')
+    prog = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else 'social-touch'
+    return {
+        'synthetic': any(s.synthetic for s in sessions), 'data': data,
+        'subjects': len({s.subject for s in sessions}), 'sessions': len(sessions), 'frames': int(n_frames),
+        'seed': int(args.seed), 'components': int(args.components), 'covariance': args.covariance,
+        'reg_covar': float(args.reg_covar), 'command': shlex.join([prog, *sys.argv[1:]]),
+        'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
+    }
 
 
 # ---------------------------------------------------------------------- eval
@@ -176,7 +204,8 @@ def run_eval(args: argparse.Namespace) -> int:
     except ValueError as err:  # too few subjects or classes, mixed rates: say so, no traceback
         raise SystemExit(f'eval patch: {err}') from err
     report = result.as_dict()
-    report['source'] = args.csv or args.bags or f'simulated people: {args.simulate} (seed {args.seed})'
+    report['source'] = args.csv or args.bags or \
+        f'simulated people: {args.simulate} (seed {args.seed}, {_chain_of(sessions)} sensor chain)'
     if args.json:
         print(json.dumps(_jsonable(report), indent=2))
     else:

@@ -1,6 +1,7 @@
 """Play the patch demo scene through the sensor chain and the recogniser, printing events as they happen.
 
-A stand-in for the demo node until the graph wiring exists (SYNTHETIC data)::
+The recogniser without the graph, frame by frame (SYNTHETIC data); the same on the node graph
+is ``social-touch launch launch/patch.launch.yaml --sim-time --rate 10 --duration 60``::
 
     python -m touch_gestures.patch.demo [--model FILE.npz] [--seed N] [--events N]
 

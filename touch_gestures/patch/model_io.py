@@ -25,6 +25,9 @@ means               (K, d) float64 component means, standardised units
 covariances         (K, d, d) f64  full covariances, standardised units, positive definite
 feature_mean        (d,) float64   subtracted from the features before the mixtures
 feature_scale       (d,) float64   divides them after (> 0)
+metadata            () str         optional: a JSON object of strings, numbers and
+                                   booleans (how the model was made: data, command,
+                                   ``synthetic``); older readers ignore it
 ==================  =============  ==================================================
 
 >>> import tempfile, os, numpy as np
@@ -40,9 +43,10 @@ feature_scale       (d,) float64   divides them after (> 0)
 
 from __future__ import annotations
 
+import json
 import os
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +79,8 @@ class PatchModel:
         grid: (rows, cols) of the activation maps.
         feature_names: the features the classifier expects, in order.
         release, hold: the event rule's settings (see :class:`EventDetector`).
+        metadata: how the model was made (training data, command, ``synthetic``): JSON-able
+            scalars by name, stored in the file's optional ``metadata`` key.
     """
 
     classifier: PatchGestureClassifier
@@ -85,6 +91,12 @@ class PatchModel:
     feature_names: tuple[str, ...] = FEATURE_NAMES
     release: float = 0.9
     hold: int = 1
+    metadata: dict = field(default_factory=dict)
+
+    @property
+    def synthetic(self) -> bool:
+        """True when the metadata say the model was trained on synthetic (simulated) data."""
+        return bool(self.metadata.get('synthetic', False))
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -117,10 +129,35 @@ def save_model(path: str | os.PathLike, model: PatchModel) -> None:
         'means': params.means, 'covariances': params.covariances,
         'feature_mean': params.feature_mean, 'feature_scale': params.feature_scale,
     }
+    if model.metadata:
+        arrays['metadata'] = np.array(_metadata_json(model.metadata))
     path = Path(path)
     tmp = path.with_name(path.name + '.tmp.npz')
     np.savez(tmp, **arrays)
     os.replace(tmp, path)
+
+
+def _metadata_json(metadata: dict) -> str:
+    """``metadata`` as a JSON object; ValueError for values other than str, number, bool or None."""
+    for key, value in metadata.items():
+        if not isinstance(key, str) or not (value is None or isinstance(value, (str, bool, int, float))):
+            raise ValueError(f'model metadata must map names to str, number, bool or None; got {key!r}: {value!r}')
+    return json.dumps(metadata, sort_keys=True)
+
+
+def _read_metadata(data: dict, where: str) -> dict:
+    if 'metadata' not in data:
+        return {}
+    value = data['metadata']
+    try:
+        if value.shape != () or value.dtype.kind != 'U':
+            raise ValueError(f'dtype {value.dtype} shape {value.shape}')
+        meta = json.loads(str(value))
+        if not isinstance(meta, dict):
+            raise ValueError(f'a JSON {type(meta).__name__}')
+    except ValueError as err:
+        raise ModelFileError(f"'metadata' must be a JSON object in a str scalar; got {err}", where) from err
+    return meta
 
 
 def _scalar(data: dict, key: str, kind: str, where: str):
@@ -196,7 +233,7 @@ def load_model(path: str | os.PathLike, feature_names: tuple[str, ...] = FEATURE
     clf = PatchGestureClassifier.from_params(params, threshold=threshold,
                                              covariance_type=str(data['covariance_type']))
     return PatchModel(clf, window=int(window), rate_hz=rate_hz, k=k, grid=file_grid, feature_names=names,
-                      release=release, hold=int(hold))
+                      release=release, hold=int(hold), metadata=_read_metadata(data, where))
 
 
 def _check_params(data: dict, classes: tuple[str, ...], d: int, where: str) -> GaussianMixtureParams:

@@ -42,8 +42,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
-__all__ = ['GESTURES', 'PatchScene', 'PersonStyle', 'TouchEvent', 'demo_scene', 'make_people', 'simulate_people',
-           'simulate_session']
+__all__ = ['GESTURES', 'PatchScene', 'PersonStyle', 'TouchEvent', 'demo_scene', 'make_people', 'people_scene',
+           'simulate_people', 'simulate_session']
 
 #: The four gesture classes of sympartner2018 6.3.
 GESTURES: tuple[str, ...] = ('stroke', 'tickle', 'push', 'slap')
@@ -403,4 +403,62 @@ def demo_scene(seed: int = 0, n_events: int = 12, person: PersonStyle | None = N
             grab = rng.uniform(0.5, 2.0)
             holds.append(_PanelHold(int(rng.choice(GRAB_PANELS)), t, t + grab, float(rng.uniform(0.8, 1.0))))
             t += grab + 2.0
+    return PatchScene(duration_s=t, events=events, tracks=tracks, holds=holds)
+
+
+def people_scene(n_people: int = 2, seed: int = 0, gestures: tuple[str, ...] = GESTURES, events_per_gesture: int = 1,
+                 order: str = 'shuffled', pause_s: tuple[float, float] = (4.0, 6.0), lead_s: float = 3.0,
+                 grab_prob: float = 0.25, grab_s: tuple[float, float] = (0.5, 2.0)) -> PatchScene:
+    """Simulated people taking turns at the patch, for a launch file's scene (SYNTHETIC).
+
+    A ``generator`` of ``touch_driver.scenes`` (``config/scenes/patch_people.yaml``): each of
+    ``n_people`` performs every gesture of ``gestures`` ``events_per_gesture`` times, then the
+    next person comes. After a gesture someone sometimes grabs the robot's shell without
+    touching the patch (a panel contact only, "being handled").
+
+    Args:
+        n_people: people, one after the other (styles from :func:`make_people` with ``seed``).
+        seed: makes the scene reproducible.
+        gestures: classes each person performs (of :data:`GESTURES`).
+        events_per_gesture: repetitions of each class per person.
+        order: ``'shuffled'`` (each person's gestures in random order) or ``'sessions'`` (one class
+            after the other, in the order given, as the paper's recordings, sympartner2018 6.3).
+        pause_s: (min, max) seconds from the end of one gesture to the next; pauses shorter than
+            the recogniser's 3 s window let a gesture share a window with the one before.
+        lead_s: untouched seconds at the start (the driver's calibrator starts its minima there).
+        grab_prob: probability of a grab after a gesture, in [0, 1].
+        grab_s: (min, max) duration of a grab, s.
+
+    Raises:
+        ValueError: for an unknown gesture or order, or a negative or inverted range.
+    """
+    unknown = [g for g in gestures if g not in _MAKERS]
+    if unknown or not gestures:
+        raise ValueError(f"gestures must be some of {', '.join(GESTURES)}; got {list(gestures)}")
+    if order not in ('shuffled', 'sessions'):
+        raise ValueError(f"order must be 'shuffled' or 'sessions'; got {order!r}")
+    if int(n_people) != n_people or n_people < 1 or int(events_per_gesture) != events_per_gesture \
+            or events_per_gesture < 1:
+        raise ValueError(f'n_people and events_per_gesture must be integers >= 1; got {n_people}, '
+                         f'{events_per_gesture}')
+    for name, pair in (('pause_s', pause_s), ('grab_s', grab_s)):
+        if len(pair) != 2 or not 0 <= pair[0] <= pair[1] or not math.isfinite(pair[1]):
+            raise ValueError(f'{name} must be (min, max) seconds with 0 <= min <= max; got {pair}')
+    if not 0 <= lead_s < math.inf or not 0 <= grab_prob <= 1:
+        raise ValueError(f'lead_s must be >= 0 s and grab_prob in [0, 1]; got {lead_s}, {grab_prob}')
+    rng = np.random.default_rng((seed, 0x9E0))
+    tracks: list[_Track] = []
+    holds: list[_PanelHold] = []
+    events: list[TouchEvent] = []
+    t = float(lead_s)
+    for person in make_people(int(n_people), seed):
+        todo = [g for g in gestures for _ in range(int(events_per_gesture))]
+        if order == 'shuffled':
+            todo = [todo[i] for i in rng.permutation(len(todo))]
+        for gesture in todo:
+            t = _add_event(tracks, holds, events, rng, person, gesture, t) + rng.uniform(*pause_s)
+            if rng.random() < grab_prob:
+                grab = rng.uniform(*grab_s)
+                holds.append(_PanelHold(int(rng.choice(GRAB_PANELS)), t, t + grab, float(rng.uniform(0.8, 1.0))))
+                t += grab + rng.uniform(*pause_s) / 2
     return PatchScene(duration_s=t, events=events, tracks=tracks, holds=holds)

@@ -7,7 +7,11 @@ with the driver's classes (``touch_driver.patch.device.PatchDevice``,
 and ``PanelCalibrator``) when they are installed (``chain='driver'``), and otherwise with a
 stand-in (``chain='simple'``): the 100 Hz scans averaged five at a time to 20 Hz
 (sympartner2018 6.1), Gaussian noise, and eq. (2) with the floor k and a gain that gives
-full activation at 4 N/cm^2 (the end of the sensor's useful range, 5.3).
+full activation at 4 N/cm^2 (the end of the sensor's useful range, 5.3). ``chain='graph'``
+runs the robot's own graph instead (:mod:`.graph_chain`): the virtual device opened by its
+``patchsim://`` URL and read by the ``patch_driver`` node in simulated time, activations
+taken from its ``/patch/frame`` messages; the same seed gives the same activations as the
+driver chain.
 
 Panels (item 4 of issue 5): the panel signals travel in every wire frame, so contact is
 known as soon as one frame arrives. With the virtual patch's default raw stream (every
@@ -42,7 +46,7 @@ class ChainOutput:
     Attributes:
         activations: (T, 16, 16) float32 activation maps at 20 Hz, unitless in [k, 1].
         panel_contact: (T, 11) bool panel contact per frame.
-        chain: 'driver' or 'simple', what produced them.
+        chain: 'driver', 'graph' or 'simple', what produced them.
         stats: counters of the chain (frames, decoder errors, ...).
     """
 
@@ -69,16 +73,19 @@ def render_scene(scene: PatchScene, seed: int = 0, chain: str = 'auto', k: float
     Args:
         scene: the stimulus.
         seed: sensor noise seed.
-        chain: 'driver', 'simple' or 'auto' (the driver when available).
+        chain: 'driver', 'graph', 'simple' or 'auto' (the driver when available).
         k, full_scale, noise: the stand-in's floor, N/cm^2 at activation 1, and noise std
-            (activation units); unused by the driver chain.
+            (activation units); unused by the driver and graph chains.
     """
     if chain == 'auto':
         chain = 'driver' if driver_available() else 'simple'
     if chain == 'driver':
         return _render_driver(scene, seed)
+    if chain == 'graph':
+        from .graph_chain import render_graph
+        return render_graph(scene, seed)
     if chain != 'simple':
-        raise ValueError(f"chain must be 'auto', 'driver' or 'simple'; got {chain!r}")
+        raise ValueError(f"chain must be 'auto', 'driver', 'graph' or 'simple'; got {chain!r}")
     return _render_simple(scene, seed, k, full_scale, noise)
 
 
