@@ -1,0 +1,254 @@
+"""The interface every skin recogniser shares: a codebook of templates and a rejection rule.
+
+A recogniser is a scikit-learn estimator (``__init__`` only stores parameters, ``fit``
+validates and returns ``self``, learned attributes end in ``_``) whose ``fit(gestures,
+labels)`` turns n gestures x m repetitions into a codebook of feature vectors
+(cirillo2017 Fig. 5, training branch), and whose ``predict(gesture)`` returns a
+:class:`Match`: the nearest class, its distance and its margin over the runner-up
+(recognition branch; "the gesture corresponding to the lowest error index is selected").
+Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | None`` and
+``_distances(query) -> (T,) float`` against the whole codebook at once (with
+``_prepare_codebook()`` to precompute what the codebook alone determines).
+
+**Rejection** (not in the paper, which always answers): no command when
+
+- the best distance exceeds the nearest class's threshold. With ``max_distance='auto'``
+  the thresholds come from the codebook itself at fit time: for each class, ``auto_scale``
+  times the ``auto_quantile`` quantile of its templates' leave-one-out distances to the
+  nearest other template of the class (how far a genuine repetition lies from the
+  codebook; a star varies more than a line, so each class gets its own scale). Nothing is
+  tuned to the people who use it. A number is one absolute threshold for every class,
+  None disables the rule; or
+- the margin (runner-up class distance minus best) is below ``min_margin`` times the best
+  distance: two classes are about equally close, the touch is ambiguous.
+
+Degenerate codebooks: a class with one template has no within-class distance and takes the
+median scale of the other classes; if no class has two templates, every class's scale is
+half the smallest distance between templates of different classes; a single template in
+all gets no distance limit. A codebook with one class has no runner-up: the margin is
+``inf`` and only the distance rule applies.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.exceptions import NotFittedError
+
+from .gesture import TouchGesture
+
+__all__ = ['Match', 'TemplateRecogniser']
+
+
+@dataclass(frozen=True, slots=True)
+class Match:
+    """The answer of a recogniser for one gesture.
+
+    Attributes:
+        label: the recognised gesture, or None when rejected.
+        distance: distance to the nearest template (recogniser units; inf if unusable).
+        margin: distance of the nearest template of another class minus ``distance``
+            (inf when the codebook has one class).
+        nearest: the nearest class even when rejected (None if the gesture was unusable).
+        rejected: why there is no label: ``'distance'``, ``'margin'``, ``'unusable'`` (no
+            feature could be computed, e.g. an empty map), or None when accepted.
+    """
+
+    label: str | None
+    distance: float
+    margin: float
+    nearest: str | None = None
+    rejected: str | None = None
+
+
+class TemplateRecogniser(BaseEstimator):
+    """Base class: nearest-template matching over a codebook, with rejection (see module doc).
+
+    Subclass parameters (in their ``__init__``) must include ``max_distance``,
+    ``auto_scale``, ``auto_quantile`` and ``min_margin``; their meaning is the module docstring's.
+    """
+
+    #: registry name, e.g. ``'centroid'``
+    name = 'template'
+    #: True when the features follow the direction of the trace
+    direction_aware = False
+
+    max_distance: float | str | None
+    auto_scale: float
+    auto_quantile: float
+    min_margin: float
+
+    # ----------------------------------------------------------------- subclass API
+    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+        """(d,) float32 feature vector of ``gesture``, or None if it has none (empty map...)."""
+        raise NotImplementedError
+
+    def _distances(self, query: np.ndarray) -> np.ndarray:
+        """(T,) distances from ``query`` (d,) to every row of ``self.templates_`` (T, d)."""
+        raise NotImplementedError
+
+    def _prepare_codebook(self) -> None:
+        """Precompute per-template quantities after ``templates_`` is set (norms, ...)."""
+
+    # ----------------------------------------------------------------- estimator API
+    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> TemplateRecogniser:
+        """Build the codebook: one template per usable gesture.
+
+        Args:
+            gestures: the recorded repetitions (n gestures x m repetitions, any order).
+            labels: the gesture name of each, same length.
+
+        Raises:
+            ValueError: lengths differ, no usable gesture, or bad rejection parameters.
+        """
+        self._check_params()
+        if len(gestures) != len(labels):
+            raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
+        feats, names, dropped = [], [], 0
+        for gesture, label in zip(gestures, labels, strict=True):
+            f = self._features(gesture)
+            if f is None:
+                dropped += 1
+                continue
+            feats.append(f)
+            names.append(str(label))
+        if not feats:
+            raise ValueError(f'none of the {len(gestures)} gestures gives a usable template (empty maps or '
+                             'trajectories?); record the codebook again')
+        self.set_codebook(np.stack(feats), names)
+        self.n_dropped_ = dropped
+        return self
+
+    def set_codebook(self, templates: np.ndarray, labels: Sequence[str],
+                     class_thresholds: np.ndarray | None = None) -> None:
+        """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
+        ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration."""
+        self._check_params()
+        templates = np.asarray(templates, dtype=np.float32)
+        labels = np.asarray([str(x) for x in labels])
+        if templates.ndim != 2 or len(templates) != len(labels) or len(labels) == 0:
+            raise ValueError(f'templates must be (T, d) with one label each; got {templates.shape} and '
+                             f'{len(labels)} labels')
+        if not np.all(np.isfinite(templates)):
+            raise ValueError('templates contain NaN or infinite values')
+        classes, codes = np.unique(labels, return_inverse=True)
+        order = np.argsort(codes, kind='stable')  # templates grouped by class for reduceat
+        self.classes_ = classes
+        self.templates_ = templates[order]
+        self.template_labels_ = codes[order]
+        self.class_starts_ = np.searchsorted(self.template_labels_, np.arange(len(classes)))
+        self.n_features_in_ = templates.shape[1]
+        self._prepare_codebook()
+        if class_thresholds is None:
+            self.class_thresholds_ = self._rejection_thresholds()
+        else:
+            thresholds = np.asarray(class_thresholds, dtype=np.float64).reshape(-1)
+            if thresholds.shape != classes.shape or np.isnan(thresholds).any():
+                raise ValueError(f'class_thresholds must hold one number per class ({len(classes)}); got '
+                                 f'{thresholds.shape}')
+            self.class_thresholds_ = thresholds
+
+    def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
+        """(n_classes,) float64 distance to the nearest template of each class, or None if unusable."""
+        self._check_fitted()
+        query = self._features(gesture)
+        if query is None:
+            return None
+        d = self._distances(query)
+        return np.minimum.reduceat(d, self.class_starts_).astype(np.float64, copy=False)
+
+    def predict(self, gesture: TouchGesture) -> Match:
+        """The nearest class of ``gesture`` with its distance and margin, or a rejection."""
+        per_class = self.class_distances(gesture)
+        if per_class is None:
+            return Match(None, float('inf'), 0.0, None, 'unusable')
+        return self.decide(per_class)
+
+    def decide(self, per_class: np.ndarray) -> Match:
+        """Apply the rejection rule to per-class distances (n_classes,)."""
+        best = int(np.argmin(per_class))
+        d1 = float(per_class[best])
+        if len(per_class) > 1:
+            d2 = float(np.partition(per_class, 1)[1])
+            margin = d2 - d1
+        else:
+            margin = float('inf')
+        nearest = str(self.classes_[best])
+        if not d1 <= self.class_thresholds_[best]:
+            return Match(None, d1, margin, nearest, 'distance')
+        if margin < self.min_margin * d1:
+            return Match(None, d1, margin, nearest, 'margin')
+        return Match(nearest, d1, margin, nearest, None)
+
+    def predict_many(self, gestures: Sequence[TouchGesture]) -> list[Match]:
+        return [self.predict(g) for g in gestures]
+
+    def score(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> float:
+        """Fraction recognised correctly (a rejection counts as wrong)."""
+        if len(gestures) == 0:
+            raise ValueError('score needs at least one gesture')
+        hits = sum(m.label == str(y) for m, y in zip(self.predict_many(gestures), labels, strict=True))
+        return hits / len(gestures)
+
+    # ----------------------------------------------------------------- helpers
+    def _check_fitted(self) -> None:
+        if not hasattr(self, 'templates_'):
+            raise NotFittedError(f'this {type(self).__name__} has no codebook yet; call fit(gestures, labels) '
+                                 'or load a codebook first')
+
+    def _check_params(self) -> None:
+        md = self.max_distance
+        if not (md is None or md == 'auto' or (isinstance(md, (int, float)) and md >= 0)):
+            raise ValueError(f"max_distance must be 'auto', None (no limit) or a distance >= 0; got {md!r}")
+        if not (np.isfinite(self.auto_scale) and self.auto_scale > 0):
+            raise ValueError(f'auto_scale must be > 0, got {self.auto_scale!r}')
+        if not 0 <= self.auto_quantile <= 1:
+            raise ValueError(f'auto_quantile must be in [0, 1], got {self.auto_quantile!r}')
+        if not (np.isfinite(self.min_margin) and self.min_margin >= 0):
+            raise ValueError(f'min_margin must be >= 0, got {self.min_margin!r}')
+
+    def _rejection_thresholds(self) -> np.ndarray:
+        """(n_classes,) distance thresholds for the current codebook (module doc)."""
+        n = len(self.classes_)
+        md = self.max_distance
+        if md is None:
+            return np.full(n, np.inf)
+        if md != 'auto':
+            return np.full(n, float(md))
+        within, between = self._loo_distances()
+        scales = np.full(n, np.nan)
+        for c in range(n):
+            own = within[self.template_labels_ == c]
+            own = own[np.isfinite(own)]  # NaN: not sampled; inf: the class's only template
+            if own.size:
+                scales[c] = np.quantile(own, self.auto_quantile)
+        if np.isnan(scales).all():
+            finite = between[np.isfinite(between)]  # drops NaN and inf
+            if not finite.size:
+                return np.full(n, np.inf)  # one template in all: nothing to calibrate against
+            return np.full(n, 0.5 * finite.min())
+        scales[np.isnan(scales)] = np.median(scales[~np.isnan(scales)])
+        return self.auto_scale * scales
+
+    def _loo_distances(self, per_class: int = 40) -> tuple[np.ndarray, np.ndarray]:
+        """(T,) each template's distance to the nearest other template of its class and (T,) to
+        the nearest template of another class; NaN for templates not sampled (at most
+        ``per_class`` evenly spaced templates per class are, which bounds the cost of a big
+        codebook to n_classes x per_class recognitions), inf where there is no such template."""
+        T = len(self.templates_)
+        within, between = np.full(T, np.nan), np.full(T, np.nan)
+        bounds = np.r_[self.class_starts_, T]
+        for lo, hi in itertools.pairwise(bounds):
+            for i in np.unique(np.linspace(lo, hi - 1, min(hi - lo, per_class)).astype(np.intp)):
+                d = np.asarray(self._distances(self.templates_[i]), dtype=np.float64)
+                same = self.template_labels_ == self.template_labels_[i]
+                other = ~same
+                same[i] = False
+                within[i] = d[same].min() if same.any() else np.inf
+                between[i] = d[other].min() if other.any() else np.inf
+        return within, between

@@ -1,0 +1,126 @@
+"""Pre-elaboration of maps and trajectories (cirillo2017 3.1-3.2), as small pure functions.
+
+Maps are (12, 12) bool, trajectories (n, 2) float mm. Every function handles the
+degenerate inputs a real touch produces: an empty map, a one-point trajectory, a trace
+along one row (min == max in eq. 6), a trajectory that does not move at all.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    'arc_length_resample',
+    'bounding_box',
+    'minmax_normalise',
+    'nna_indices',
+    'nna_resample',
+    'nna_rescale',
+    'shift_to_corner',
+]
+
+
+def bounding_box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    """``(row0, row1, col0, col1)`` (end-exclusive) of the True cells, or None if there are none.
+
+    >>> m = np.zeros((4, 4), bool); m[1, 2] = m[2, 3] = True
+    >>> bounding_box(m), bounding_box(np.zeros((4, 4), bool))
+    ((1, 3, 2, 4), None)
+    """
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def shift_to_corner(mask: np.ndarray) -> np.ndarray:
+    """The map with its bounding box moved to the upper-left corner (cirillo2017 3.1).
+
+    >>> m = np.zeros((3, 3), bool); m[2, 1] = True
+    >>> shift_to_corner(m).astype(int).tolist()
+    [[1, 0, 0], [0, 0, 0], [0, 0, 0]]
+    """
+    out = np.zeros_like(mask)
+    box = bounding_box(mask)
+    if box is not None:
+        r0, r1, c0, c1 = box
+        out[: r1 - r0, : c1 - c0] = mask[r0:r1, c0:c1]
+    return out
+
+
+def nna_indices(n_in: int, n_out: int) -> np.ndarray:
+    """Source index of each of ``n_out`` samples taken from ``n_in`` by the nearest-neighbour
+    algorithm (cirillo2017 eq. 5: the sample whose cell centre is nearest).
+
+    >>> nna_indices(4, 8).tolist(), nna_indices(8, 4).tolist(), nna_indices(1, 3).tolist()
+    ([0, 0, 1, 1, 2, 2, 3, 3], [1, 3, 5, 7], [0, 0, 0])
+    """
+    if n_in < 1 or n_out < 1:
+        raise ValueError(f'nearest-neighbour resampling needs n_in >= 1 and n_out >= 1, got {n_in}, {n_out}')
+    # Output cell k covers [k, k+1) * n_in / n_out; its centre falls in input cell floor(.).
+    idx = ((np.arange(n_out) + 0.5) * (n_in / n_out)).astype(np.intp)
+    return np.minimum(idx, n_in - 1)
+
+
+def nna_rescale(mask: np.ndarray, size: int = 12) -> np.ndarray | None:
+    """Crop the map to its bounding box and rescale it to ``size`` x ``size`` by nearest
+    neighbour (cirillo2017 3.2.1, Fig. 6); None for an empty map.
+
+    >>> m = np.zeros((12, 12), bool); m[5, 2:8] = True   # a horizontal line
+    >>> r = nna_rescale(m); r.shape, int(r.sum())
+    ((12, 12), 144)
+    """
+    box = bounding_box(mask)
+    if box is None:
+        return None
+    r0, r1, c0, c1 = box
+    crop = mask[r0:r1, c0:c1]
+    return crop[np.ix_(nna_indices(r1 - r0, size), nna_indices(c1 - c0, size))]
+
+
+def nna_resample(points: np.ndarray, length: int) -> np.ndarray:
+    """``length`` rows of ``points`` chosen by nearest neighbour along the sample index
+    (cirillo2017 3.2.2: "resampled exploiting the NNA ... time-independent"). (n, d) -> (length, d).
+
+    >>> nna_resample(np.array([[0.0, 0.0], [1.0, 2.0]]), 4).tolist()
+    [[0.0, 0.0], [0.0, 0.0], [1.0, 2.0], [1.0, 2.0]]
+    """
+    return points[nna_indices(len(points), length)]
+
+
+def minmax_normalise(values: np.ndarray, axis: int = 0, eps: float = 1e-6) -> np.ndarray:
+    """Min-max normalisation of cirillo2017 eq. (6), per column, into [0, 1].
+
+    A column whose range is below ``eps`` (a trace along one row, a single point: max ==
+    min) has no extent to normalise; it maps to 0.5, the middle of the range, instead of
+    dividing by zero.
+
+    >>> minmax_normalise(np.array([[0.0, 3.0], [2.0, 3.0], [4.0, 3.0]])).tolist()
+    [[0.0, 0.5], [0.5, 0.5], [1.0, 0.5]]
+    """
+    lo = values.min(axis=axis, keepdims=True)
+    span = values.max(axis=axis, keepdims=True) - lo
+    flat = span < eps
+    out = (values - lo) / np.where(flat, 1.0, span)
+    return np.where(flat, 0.5, out).astype(values.dtype, copy=False)
+
+
+def arc_length_resample(points: np.ndarray, n: int) -> np.ndarray:
+    """``n`` points equally spaced along the path (the $1 recogniser's resampling), (m, 2) -> (n, 2).
+
+    A path of one point, or one that never moves, gives ``n`` copies of its first point.
+
+    >>> arc_length_resample(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]]), 5).tolist()
+    [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0]]
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) == 0:
+        raise ValueError('cannot resample an empty path')
+    step = np.hypot(*np.diff(pts, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(step)])
+    total = cum[-1]
+    if not total > 0:
+        return np.repeat(pts[:1], n, axis=0)
+    target = np.linspace(0.0, total, n)
+    return np.column_stack([np.interp(target, cum, pts[:, 0]), np.interp(target, cum, pts[:, 1])])

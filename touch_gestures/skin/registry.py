@@ -1,0 +1,48 @@
+"""Every skin recogniser by name, for the CLI, codebook files and the evaluation.
+
+>>> sorted(RECOGNISERS)
+['centroid', 'dollar1', 'dtw', 'map', 'pdollar', 'protractor', 'static', 'trace']
+>>> make_recogniser('trace', n_points=16).n_points
+16
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .base import TemplateRecogniser
+from .paper import CentroidRecogniser, MapRecogniser, StaticRecogniser
+from .peers import DollarOneRecogniser, DTWRecogniser, PointCloudRecogniser, ProtractorRecogniser
+from .proposed import TraceRecogniser
+
+__all__ = ['DEFAULT_RECOGNISER', 'PAPER', 'PEERS', 'RECOGNISERS', 'make_recogniser']
+
+#: name -> class, in report order: the paper's three, the peers, ours.
+RECOGNISERS: dict[str, type[TemplateRecogniser]] = {
+    cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, DollarOneRecogniser,
+                              ProtractorRecogniser, PointCloudRecogniser, DTWRecogniser, TraceRecogniser)
+}
+PAPER = ('static', 'map', 'centroid')
+PEERS = ('dollar1', 'protractor', 'pdollar', 'dtw')
+#: the recogniser chosen by measurement (docs/skin-evaluation.md)
+DEFAULT_RECOGNISER = 'trace'
+
+
+def make_recogniser(name: str, **params: Any) -> TemplateRecogniser:
+    """A new, unfitted recogniser ``name`` with ``params``.
+
+    Raises:
+        ValueError: unknown name or parameter (with the known ones and a did-you-mean).
+    """
+    from touch_graph.yamlconf import did_you_mean
+
+    cls = RECOGNISERS.get(name)
+    if cls is None:
+        raise ValueError(f'unknown recogniser {name!r}; known: {", ".join(RECOGNISERS)}'
+                         f'{did_you_mean(name, RECOGNISERS)}')
+    known = cls().get_params()
+    for key in params:
+        if key not in known:
+            raise ValueError(f'recogniser {name!r} has no parameter {key!r}; its parameters are: '
+                             f'{", ".join(known)}{did_you_mean(key, known)}')
+    return cls(**params)

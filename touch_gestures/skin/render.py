@@ -1,0 +1,225 @@
+"""Trace samples through the skin into :class:`TouchGesture` objects, for evaluation.
+
+Two paths, so the cost of the sensor is visible:
+
+- ``'sensor'``: the virtual skin of :mod:`touch_driver.skin` (finger contact model,
+  hysteresis, repeatability, noise, 150 Hz) renders raw frames; each frame is encoded to
+  wire bytes and goes through the real stream decoder (framing, CRC, reorder) and the real
+  :class:`~touch_driver.skin.calibration.SkinCalibrator` (tare, contact, contact point);
+  the :class:`GestureSegmenter` cuts the gestures. Synthetic sensor data.
+- ``'direct'`` ("before the sensor"): the same placement and timing, but the segmenter is
+  fed the true finger position at 150 Hz and a perfect pressure map
+  (:func:`~touch_gestures.skin.gesture.ideal_frame`).
+
+A sample of the file becomes a :class:`TraceStimulus` (its bounding box scaled onto the
+active area, aspect kept); synthetic samples already in mm (``placement='mm'``) keep their
+size and position. Multi-stroke samples are traced stroke by stroke with the finger lifted
+in between; the segmenter joins strokes whose gap is shorter than its hysteresis and
+splits the others into separate gestures (the evaluation counts a split sample as wrong).
+
+Rendering costs about 25 ms a sample, so :func:`render_samples` caches its output in an
+``.npz`` file (no pickle) keyed by the samples' content and the settings.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .gesture import GRID, TouchGesture, ideal_frame
+from .segmentation import GestureSegmenter
+from .traces import TraceSample
+
+__all__ = ['RenderSettings', 'RenderedSample', 'default_cache_dir', 'render_sample', 'render_samples']
+
+_CACHE_VERSION = 2  # bump when the segmenter or the chain changes what a sample renders to
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How samples are traced; part of the cache key.
+
+    Attributes:
+        mode: ``'sensor'`` or ``'direct'`` (module doc).
+        placement: ``'fit'`` (bounding box onto the active area) or ``'mm'`` (x, y are mm already).
+        force_n, radius_mm: the finger (TraceStimulus defaults: 1.5 N, 4 mm).
+        seed: noise seed of the first sample; sample i uses ``seed + i``.
+        off_hysteresis_s, max_duration_s, min_frames: the segmenter's (see GestureSegmenter).
+    """
+
+    mode: str = 'sensor'
+    placement: str = 'fit'
+    force_n: float = 1.5
+    radius_mm: float = 4.0
+    seed: int = 0
+    off_hysteresis_s: float = 0.15
+    max_duration_s: float = 10.0
+    min_frames: int = 3
+
+    def __post_init__(self) -> None:
+        if self.mode not in ('sensor', 'direct'):
+            raise ValueError(f"mode must be 'sensor' or 'direct', got {self.mode!r}")
+        if self.placement not in ('fit', 'mm'):
+            raise ValueError(f"placement must be 'fit' or 'mm', got {self.placement!r}")
+
+    def segmenter(self) -> GestureSegmenter:
+        return GestureSegmenter(off_hysteresis_s=self.off_hysteresis_s, max_duration_s=self.max_duration_s,
+                                min_frames=self.min_frames)
+
+
+@dataclass(eq=False)
+class RenderedSample:
+    """A sample's key and the gestures the segmenter cut from its frames (normally one)."""
+
+    subject: str
+    variant: str
+    label: str
+    sample: str
+    gestures: list[TouchGesture]
+
+
+def _stimulus(sample: TraceSample, settings: RenderSettings):
+    from touch_driver.skin.traces import TraceStimulus
+
+    if settings.placement == 'fit':
+        return TraceStimulus.from_points(sample.x, sample.y, sample.t_ms, sample.stroke, force_n=settings.force_n,
+                                         radius_mm=settings.radius_mm)
+    lead = 0.55  # untouched skin first (the calibrator tares on it), then the touch-down ramp
+    strokes = []
+    for sid in np.unique(sample.stroke):
+        sel = sample.stroke == sid
+        t = lead + (sample.t_ms[sel] - sample.t_ms.min()) / 1000.0
+        keep = np.r_[np.diff(t) > 0, True]
+        strokes.append(np.column_stack([t[keep], sample.x[sel][keep], sample.y[sel][keep]]))
+    return TraceStimulus(strokes, force_n=settings.force_n, radius_mm=settings.radius_mm)
+
+
+def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings(), seed: int | None = None
+                  ) -> list[TouchGesture]:
+    """The gestures the segmenter cuts from one sample traced across the skin (module doc)."""
+    from touch_driver.skin.calibration import SkinCalibrator
+    from touch_driver.skin.device import render_frames
+    from touch_driver.skin.protocol import FRAME_RATE_HZ, SkinStreamDecoder, encode_skin_frame
+
+    stim = _stimulus(sample, settings)
+    seg = settings.segmenter()
+    out: list[TouchGesture] = []
+    if settings.mode == 'direct':
+        n = int(stim.duration_s * FRAME_RATE_HZ) + 1
+        times = np.arange(n) / FRAME_RATE_HZ
+        xy, down = stim.truth(times)
+        empty = np.zeros((GRID, GRID), dtype=np.float32)
+        for t, p, d in zip(times, xy, down, strict=True):
+            out += seg.feed(ideal_frame(p, settings.radius_mm) if d else empty, bool(d), p, t)
+    else:
+        frames = render_frames(stim, seed=settings.seed if seed is None else seed)
+        decoder, calibrator = SkinStreamDecoder(), SkinCalibrator()
+        for i, raw in enumerate(frames):
+            for frame in decoder.feed(encode_skin_frame(i, raw)):
+                state = calibrator.update(frame.raw)
+                if state.tared:
+                    out += seg.feed(state.pressure, state.contact, state.contact_xy_mm, i / FRAME_RATE_HZ)
+    return out + seg.flush()
+
+
+# ----------------------------------------------------------------------------- cache
+_ARRAYS = ('binary_map', 'peak_map', 'trajectory', 'times', 'stroke')
+_SCALARS = ('frames', 'start_s', 'duration_s', 'strokes', 'multi_contact', 'truncated')
+
+
+def default_cache_dir() -> Path:
+    return Path.home() / '.cache' / 'social_touch' / 'skin_eval'
+
+
+def _cache_key(samples: Sequence[TraceSample], settings: RenderSettings) -> str:
+    h = hashlib.sha256()
+    seg = settings.segmenter()
+    seg_params = {k: v for k, v in vars(seg).items() if not k.startswith('_') and k != 'stats'}
+    h.update(json.dumps([_CACHE_VERSION, asdict(settings), seg_params], sort_keys=True).encode())
+    for s in samples:
+        h.update('\x1f'.join(s.key).encode())
+        for arr in (s.x, s.y, s.t_ms, s.stroke):
+            h.update(np.ascontiguousarray(arr).tobytes())
+    return h.hexdigest()[:24]
+
+
+def _save(path: Path, rendered: list[RenderedSample]) -> None:
+    gestures = [g for r in rendered for g in r.gestures]
+    counts = np.array([len(r.gestures) for r in rendered], dtype=np.int64)
+    lengths = np.array([len(g.trajectory) for g in gestures], dtype=np.int64)
+    data = {
+        'version': np.array(_CACHE_VERSION),
+        'keys': np.array([[r.subject, r.variant, r.label, r.sample] for r in rendered], dtype=str).reshape(-1, 4),
+        'counts': counts, 'lengths': lengths,
+        'binary_map': np.array([g.binary_map for g in gestures], dtype=bool).reshape(-1, GRID, GRID),
+        'peak_map': np.array([g.peak_map for g in gestures], dtype=np.float32).reshape(-1, GRID, GRID),
+        'trajectory': np.concatenate([g.trajectory for g in gestures] or [np.zeros((0, 2), np.float32)]),
+        'times': np.concatenate([g.times for g in gestures] or [np.zeros(0)]),
+        'stroke': np.concatenate([g.stroke for g in gestures] or [np.zeros(0, np.int16)]),
+    }
+    for name in _SCALARS:
+        data[name] = np.array([getattr(g, name) for g in gestures])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix('.tmp.npz')
+    np.savez_compressed(tmp, **data)
+    tmp.replace(path)
+
+
+def _load(path: Path) -> list[RenderedSample] | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if int(z['version']) != _CACHE_VERSION:
+                return None
+            d = {k: z[k] for k in z.files}
+    except (OSError, ValueError, KeyError):
+        return None  # unreadable cache: render again
+    ends = np.cumsum(d['lengths'])
+    gestures = []
+    for i, end in enumerate(ends):
+        start = end - d['lengths'][i]
+        gestures.append(TouchGesture(
+            binary_map=d['binary_map'][i], peak_map=d['peak_map'][i], trajectory=d['trajectory'][start:end],
+            times=d['times'][start:end], stroke=d['stroke'][start:end], frames=int(d['frames'][i]),
+            start_s=float(d['start_s'][i]), duration_s=float(d['duration_s'][i]), strokes=int(d['strokes'][i]),
+            multi_contact=bool(d['multi_contact'][i]), truncated=bool(d['truncated'][i])))
+    out, k = [], 0
+    for key, count in zip(d['keys'], d['counts'], strict=True):
+        out.append(RenderedSample(*[str(v) for v in key], gestures=gestures[k:k + count]))
+        k += count
+    return out
+
+
+def render_samples(samples: Sequence[TraceSample], settings: RenderSettings = RenderSettings(),
+                   cache_dir: Path | str | None = None, progress: Callable[[int, int], None] | None = None
+                   ) -> list[RenderedSample]:
+    """Render every sample (sample i with noise seed ``settings.seed + i``), using the cache.
+
+    Args:
+        cache_dir: where to keep rendered gestures; None disables caching.
+        progress: called as ``progress(done, total)`` now and then (e.g. to print on stderr).
+    """
+    path = None
+    if cache_dir is not None:
+        path = Path(cache_dir) / f'{settings.mode}-{_cache_key(samples, settings)}.npz'
+        cached = _load(path) if path.is_file() else None
+        if cached is not None and len(cached) == len(samples):
+            return cached
+    out = []
+    for i, s in enumerate(samples):
+        try:
+            gestures = render_sample(s, settings, seed=settings.seed + i)
+        except ValueError as err:  # e.g. a sample whose times do not increase: say which and go on
+            print(f'skin render: sample {s.key} skipped: {err}', file=sys.stderr)
+            gestures = []
+        out.append(RenderedSample(s.subject, s.variant, s.gesture, s.sample, gestures))
+        if progress is not None and ((i + 1) % 50 == 0 or i + 1 == len(samples)):
+            progress(i + 1, len(samples))
+    if path is not None:
+        _save(path, out)
+    return out

@@ -1,0 +1,246 @@
+"""Cut the skin's frame stream into gestures (cirillo2017 3.2, Fig. 5).
+
+"The sensor starts acquiring the gesture applied by the user as soon as a contact on the
+deformable layer is detected. The gesture data are collected until the contact ends."
+:class:`GestureSegmenter` does this one calibrated frame at a time, with three additions
+the paper leaves open:
+
+- **hysteresis**: a lift shorter than ``off_hysteresis_s`` does not end the gesture (a
+  finger skipping between taxels, or the strokes of a multi-stroke gesture traced in
+  quick succession). The points of each stroke keep their stroke index; a longer lift
+  ends the gesture, so a multi-stroke sample with slow pen-ups becomes several gestures.
+- **a limit**: a touch that never ends (a hand resting on the skin) is cut at
+  ``max_duration_s`` and emitted with ``truncated=True``; the segmenter then waits for the
+  release before it starts another gesture, so a resting hand yields one gesture, not
+  one every ``max_duration_s``. State is bounded by ``max_frames`` preallocated rows.
+- **two fingers**: a frame whose thresholded map has two or more blobs more than
+  ``merge_gap_taxels`` empty taxels apart is a multi-contact frame (one finger pad can
+  show holes: sliding tilts each module's dome, so its four taxels read unevenly). When at
+  least ``min_multi_frames`` frames and ``multi_fraction`` of the gesture's frames are
+  multi-contact, the gesture is flagged ``multi_contact``: its contact point, a
+  pressure-weighted mean, lies between the fingers, so the recognisers should not trust
+  it. With the defaults two fingertips about 18 mm or more apart (centre to centre) are
+  told apart; closer ones merge into one blob, as on the real skin's 3.9 mm taxels.
+
+Bad input is counted, not raised: NaN pressures count as 0 (``stats.nan_frames``), a
+frame whose time goes backwards is skipped (``stats.time_reversals``), a contact without
+a finite contact point adds to the map but not the trajectory (``stats.missing_points``).
+A contact frame whose highest pressure is below ``map_threshold`` (the finger landing or
+lifting) counts as part of the gesture but gives no trajectory point
+(``stats.faint_points``): with almost no load under the finger, noise and the silicone's
+hysteresis residue elsewhere pull the pressure-weighted contact point anywhere on the skin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from .gesture import GRID, TouchGesture
+
+__all__ = ['GestureSegmenter', 'SegmenterStats']
+
+_EIGHT = np.ones((3, 3), dtype=bool)
+
+
+@dataclass
+class SegmenterStats:
+    """Counters since the segmenter was made."""
+
+    frames: int = 0             # frames fed
+    gestures: int = 0           # gestures emitted (including truncated ones)
+    too_short: int = 0          # contacts shorter than min_frames, dropped
+    truncated: int = 0          # gestures cut at max_duration_s / max_frames
+    multi_contact: int = 0      # gestures flagged multi_contact
+    nan_frames: int = 0         # frames with NaN pressure (treated as 0)
+    missing_points: int = 0     # contact frames without a finite contact point
+    faint_points: int = 0       # contact frames too faint (peak < map_threshold) for a trusted point
+    time_reversals: int = 0     # frames whose time was before the previous one, skipped
+
+
+class GestureSegmenter:
+    """Feed calibrated frames, get completed :class:`TouchGesture` objects.
+
+    Args:
+        off_hysteresis_s: a lift must last this long (s) to end the gesture. Not in the
+            paper; 0.15 s joins the gaps of a finger skipping taxels and quick pen-ups.
+        max_duration_s: a touch is cut after this long (s). Not in the paper; 10 s is
+            longer than any traced gesture of the $1 logs (7.5 s, slow).
+        min_frames: contacts with fewer frames are dropped as taps or noise.
+        map_threshold: pressure (1 = full scale) a taxel must reach to enter the binary map
+            (cirillo2017 3.1: "a binary image is obtained by thresholding"); 0.02 is twice the
+            calibration's contact threshold, above the noise.
+        map_relative: a taxel must also reach this fraction of the frame's highest pressure,
+            so the map shows the finger's pad whatever the force (a hard press spreads to
+            more taxels, but not to more than the ones near the pad).
+        merge_gap_taxels: blobs separated by at most this many empty taxels are one contact.
+        min_multi_frames: multi-blob frames needed to flag a gesture multi_contact...
+        multi_fraction: ...and the fraction of its contact frames they must make up.
+        max_frames: capacity of the per-gesture buffers; the gesture is cut when full.
+
+    >>> seg = GestureSegmenter(off_hysteresis_s=0.05, min_frames=2)
+    >>> touch = np.zeros((12, 12), np.float32); touch[3, 4] = 1.0
+    >>> out = [seg.feed(touch, True, np.array([17.0, 13.7]), i / 150) for i in range(5)]
+    >>> out += [seg.feed(np.zeros((12, 12), np.float32), False, None, (5 + i) / 150) for i in range(10)]
+    >>> [g for batch in out for g in batch]
+    [TouchGesture(points=5, frames=5, duration_s=0.027, taxels=1, strokes=1)]
+    """
+
+    def __init__(self, off_hysteresis_s: float = 0.15, max_duration_s: float = 10.0, min_frames: int = 3,
+                 map_threshold: float = 0.02, map_relative: float = 0.3, merge_gap_taxels: int = 2,
+                 min_multi_frames: int = 3, multi_fraction: float = 0.25, max_frames: int = 3000) -> None:
+        if not off_hysteresis_s >= 0:
+            raise ValueError(f'off_hysteresis_s must be >= 0 s, got {off_hysteresis_s}')
+        if not max_duration_s > 0:
+            raise ValueError(f'max_duration_s must be > 0 s, got {max_duration_s}')
+        if min_frames < 1 or max_frames < 1 or min_multi_frames < 1:
+            raise ValueError(f'min_frames, min_multi_frames and max_frames must be >= 1; got {min_frames}, '
+                             f'{min_multi_frames}, {max_frames}')
+        if not (np.isfinite(map_threshold) and map_threshold > 0):
+            raise ValueError(f'map_threshold must be a finite pressure > 0, got {map_threshold}')
+        if not 0 <= map_relative < 1:
+            raise ValueError(f'map_relative must be in [0, 1), got {map_relative}')
+        if not 0 <= multi_fraction <= 1 or merge_gap_taxels < 0:
+            raise ValueError(f'need 0 <= multi_fraction <= 1 and merge_gap_taxels >= 0; got {multi_fraction}, '
+                             f'{merge_gap_taxels}')
+        self.off_hysteresis_s = float(off_hysteresis_s)
+        self.max_duration_s = float(max_duration_s)
+        self.min_frames = int(min_frames)
+        self.map_threshold = float(map_threshold)
+        self.map_relative = float(map_relative)
+        self.merge_gap_taxels = int(merge_gap_taxels)
+        self.min_multi_frames = int(min_multi_frames)
+        self.multi_fraction = float(multi_fraction)
+        self.max_frames = int(max_frames)
+        self.stats = SegmenterStats()
+        self._points = np.empty((self.max_frames, 2), dtype=np.float32)
+        self._times = np.empty(self.max_frames, dtype=np.float64)
+        self._strokes = np.empty(self.max_frames, dtype=np.int16)
+        self._peak = np.zeros((GRID, GRID), dtype=np.float32)
+        self._binary = np.zeros((GRID, GRID), dtype=bool)
+        self._last_t = -np.inf
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget any gesture in progress (the counters are kept)."""
+        self._active = False          # a gesture is being collected
+        self._suppressed = False      # cut at the limit: wait for the release
+        self._n = 0                   # trajectory points
+        self._frames = 0              # contact frames
+        self._multi_frames = 0
+        self._stroke = 0
+        self._start_t = 0.0
+        self._last_contact_t = 0.0
+        self._lifted = False
+        self._peak.fill(0.0)
+        self._binary.fill(False)
+
+    @property
+    def active(self) -> bool:
+        """True while a gesture is being collected (including its hysteresis tail)."""
+        return self._active
+
+    def feed(self, pressure: np.ndarray, contact: bool, contact_xy_mm: np.ndarray | None,
+             t: float) -> list[TouchGesture]:
+        """Add one frame; return the gestures it completes (usually none, at most one).
+
+        Args:
+            pressure: (12, 12) (or (144,)) pressure map, 1 = full scale; NaN counts as 0.
+            contact: the calibration's contact flag for the frame.
+            contact_xy_mm: (2,) contact point, mm, NaN (or None) when there is none.
+            t: frame time, s, non-decreasing.
+
+        Raises:
+            ValueError: ``pressure`` does not hold 144 values (a wiring mistake, not bad data).
+        """
+        pressure = np.asarray(pressure, dtype=np.float32)
+        if pressure.size != GRID * GRID:
+            raise ValueError(f'pressure must be ({GRID}, {GRID}) or ({GRID * GRID},); got shape {pressure.shape}')
+        self.stats.frames += 1
+        t = float(t)
+        if not t >= self._last_t:  # also catches NaN
+            self.stats.time_reversals += 1
+            return []
+        self._last_t = t
+        pressure = pressure.reshape(GRID, GRID)
+        if np.isnan(pressure).any():
+            self.stats.nan_frames += 1
+            pressure = np.nan_to_num(pressure, nan=0.0)
+        out: list[TouchGesture] = []
+        if not contact:
+            if self._suppressed:
+                self._suppressed = False
+            elif self._active:
+                if not self._lifted:
+                    self._lifted = True
+                if t - self._last_contact_t >= self.off_hysteresis_s:
+                    self._finish(out, truncated=False)
+            return out
+        if self._suppressed:
+            return out
+        if not self._active:
+            self._active, self._start_t, self._stroke = True, t, 0
+        elif self._lifted:
+            self._stroke += 1
+        self._lifted = False
+        self._last_contact_t = t
+        self._add(pressure, contact_xy_mm, t)
+        if t - self._start_t >= self.max_duration_s or self._n >= self.max_frames \
+                or self._frames >= self.max_frames:
+            self._finish(out, truncated=True)
+            self._suppressed = True
+        return out
+
+    def flush(self) -> list[TouchGesture]:
+        """End any gesture in progress as if the finger had lifted (e.g. at the end of a recording)."""
+        out: list[TouchGesture] = []
+        if self._active:
+            self._finish(out, truncated=False)
+        self._suppressed = False
+        return out
+
+    def _add(self, pressure: np.ndarray, xy: np.ndarray | None, t: float) -> None:
+        self._frames += 1
+        np.maximum(self._peak, pressure, out=self._peak)
+        peak = float(pressure.max())
+        above = pressure >= max(self.map_threshold, self.map_relative * peak)
+        self._binary |= above
+        if above.any() and self._count_blobs(above) >= 2:
+            self._multi_frames += 1
+        if peak < self.map_threshold:
+            self.stats.faint_points += 1
+            return
+        if xy is None or not np.all(np.isfinite(xy)) or np.size(xy) != 2:
+            self.stats.missing_points += 1
+            return
+        self._points[self._n] = np.asarray(xy, dtype=np.float32).reshape(2)
+        self._times[self._n] = t
+        self._strokes[self._n] = self._stroke
+        self._n += 1
+
+    def _count_blobs(self, above: np.ndarray) -> int:
+        # Growing each blob by half the allowed gap joins blobs at most merge_gap_taxels apart.
+        grow = (self.merge_gap_taxels + 1) // 2
+        if grow:
+            above = ndimage.binary_dilation(above, structure=_EIGHT, iterations=grow)
+        return int(ndimage.label(above, structure=_EIGHT)[1])
+
+    def _finish(self, out: list[TouchGesture], truncated: bool) -> None:
+        if self._frames < self.min_frames and not truncated:
+            self.stats.too_short += 1
+            self.reset()
+            return
+        n = self._n
+        gesture = TouchGesture(
+            binary_map=self._binary.copy(), peak_map=self._peak.copy(), trajectory=self._points[:n].copy(),
+            times=self._times[:n].copy(), stroke=self._strokes[:n].copy(), frames=self._frames,
+            start_s=self._start_t, duration_s=self._last_contact_t - self._start_t, strokes=self._stroke + 1,
+            multi_contact=self._multi_frames >= max(self.min_multi_frames, self.multi_fraction * self._frames),
+            truncated=truncated)
+        self.stats.gestures += 1
+        self.stats.truncated += int(truncated)
+        self.stats.multi_contact += int(gesture.multi_contact)
+        out.append(gesture)
+        self.reset()
