@@ -19,6 +19,8 @@ NODES: dict[str, tuple[str, str]] = {
     'recorder': ('touch_graph.bag.recorder_node', 'RecorderNode'),
     'player': ('touch_graph.bag.player_node', 'PlayerNode'),
     'touch_monitor': ('touch_gestures.monitor_node', 'TouchMonitorNode'),
+    'bear_gestures': ('touch_gestures.bear.node', 'BearGesturesNode'),
+    'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
 }
 
 setup(
@@ -33,7 +35,8 @@ setup(
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/launch', glob('launch/*.yaml')),
-        (f'share/{PACKAGE}/config', glob('config/*.yaml') + glob('config/*.npz')),
+        (f'share/{PACKAGE}/config', glob('config/*.yaml') + glob('config/*.npz') + glob('config/*.md')),
+        (f'share/{PACKAGE}/config/scenes', glob('config/scenes/*.yaml')),
         (f'share/{PACKAGE}/msg', glob('msg/*.msg')),
     ],
     install_requires=[

@@ -17,7 +17,9 @@ TARGETS = {
     'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
     'drivers': ('touch_driver.bench', 'bench_drivers'),
     'bridge': ('touch_graph.bridge.bench', 'bench_bridge'),
+    'bear': ('touch_gestures.bear.bench', 'bench_cycle'),
     'patch': ('touch_gestures.patch.bench', 'bench_frame'),
+    'skin': ('touch_gestures.skin.bench', 'bench_recognition'),
 }
 
 

@@ -9,6 +9,7 @@ from .dispatch import add_target_arguments, run_target
 TARGETS = {
     'bear': ('touch_gestures.bear.cli', 'add_arguments', 'run'),
     'patch': ('touch_gestures.patch.cli', 'add_eval_arguments', 'run_eval'),
+    'skin': ('touch_gestures.skin.cli', 'add_eval_arguments', 'run_eval'),
 }
 
 
