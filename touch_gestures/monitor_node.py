@@ -33,7 +33,7 @@ class TouchMonitorNode(Node):
 
     def __init__(self, stream: TextIO | None = None, **kwargs: Any) -> None:
         super().__init__('touch_monitor', **kwargs)
-        self.show_subtypes = self.declare_parameter('show_subtypes', True).value
+        self.show_subtypes = self.declare_parameter('show_subtypes', False).value
         self.stream = stream or sys.stdout
         self.lines: list[str] = []
         self._start_ns = self.get_clock().now().nanoseconds
