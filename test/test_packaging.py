@@ -1,0 +1,91 @@
+"""The ROS 2 package: colcon builds it with the node executables, export-interfaces writes the msgs package."""
+
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from importlib.metadata import entry_points
+from pathlib import Path
+
+import pytest
+
+from touch_graph.cli.export_interfaces import export_interfaces
+from touch_graph.errors import ConfigError
+from touch_graph.messages import msg_files
+
+ROOT = Path(__file__).resolve().parent.parent
+NODES = ('bear_driver', 'patch_driver', 'skin_driver', 'bear_gestures', 'patch_gestures', 'touch_monitor',
+         'recorder', 'player')
+
+
+def _setup_nodes() -> dict:
+    import ast
+    tree = ast.parse((ROOT / 'setup.py').read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.AnnAssign) and getattr(node.target, 'id', None) == 'NODES':
+            return ast.literal_eval(node.value)
+    raise AssertionError('NODES not found in setup.py')
+
+
+def test_package_xml_is_format_3_ament_python_with_declared_dependencies():
+    root = ET.parse(ROOT / 'package.xml').getroot()
+    assert root.get('format') == '3' and root.findtext('name') == 'social_touch'
+    assert root.find('export/build_type').text == 'ament_python'
+    depends = {e.text for e in root if e.tag.endswith('depend')}
+    assert {'rclpy', 'std_msgs', 'diagnostic_msgs', 'python3-numpy', 'python3-serial', 'python3-yaml',
+            'python3-pytest', 'python3-hypothesis'} <= depends
+
+
+def test_every_node_module_has_a_main_and_its_class():
+    import importlib
+    nodes = _setup_nodes()
+    assert set(NODES) <= set(nodes)
+    for name, (module_name, class_name) in nodes.items():
+        module = importlib.import_module(module_name)
+        assert callable(module.main), name
+        assert isinstance(getattr(module, class_name), type), name
+
+
+def test_installed_entry_points_match_setup_py():
+    installed = {e.name: e.value for e in entry_points(group='social_touch.nodes')}
+    if not installed:
+        pytest.skip('the package is not installed (pip install .): entry points come from its metadata')
+    assert installed == {name: f'{m}:{c}' for name, (m, c) in _setup_nodes().items()}
+
+
+def test_export_interfaces_writes_an_ament_cmake_package(tmp_path):
+    package = export_interfaces(tmp_path)
+    root = ET.parse(package / 'package.xml').getroot()
+    assert root.findtext('name') == 'social_touch_msgs'
+    assert root.findtext('member_of_group') == 'rosidl_interface_packages'
+    assert {e.text for e in root.findall('depend')} == {'builtin_interfaces', 'std_msgs'}
+    cmake = (package / 'CMakeLists.txt').read_text()
+    for path in msg_files():
+        assert f'"msg/{path.name}"' in cmake
+        assert (package / 'msg' / path.name).read_text() == path.read_text()
+    assert 'DEPENDENCIES builtin_interfaces std_msgs' in cmake
+    with pytest.raises(ConfigError, match='--force'):
+        export_interfaces(tmp_path)
+    export_interfaces(tmp_path, force=True)
+
+
+@pytest.mark.slow
+def test_colcon_builds_the_package_and_installs_the_executables(tmp_path):
+    pytest.importorskip('colcon_core')
+    pytest.importorskip('colcon_ros')
+    source = tmp_path / 'src' / 'social_touch'
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        '.git', '.venv', 'build', 'install', 'log', '__pycache__', '*.egg-info', '.pytest_cache', '.ruff_cache',
+        '.hypothesis'))
+    result = subprocess.run([sys.executable, '-m', 'colcon', 'build', '--base-paths', 'src'], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    lib = tmp_path / 'install' / 'social_touch' / 'lib' / 'social_touch'
+    for name in (*NODES, 'social-touch'):
+        assert (lib / name).is_file(), f'{name} missing from {sorted(p.name for p in lib.iterdir())}'
+    share = tmp_path / 'install' / 'social_touch' / 'share' / 'social_touch'
+    assert (share / 'launch' / 'demo.launch.yaml').is_file()
+    assert (share / 'config' / 'scenes' / 'bear_people.yaml').is_file()
+    assert len(list((share / 'msg').glob('*.msg'))) == len(msg_files())
+    assert (tmp_path / 'install' / 'social_touch' / 'share' / 'ament_index' / 'resource_index' / 'packages'
+            / 'social_touch').is_file()
