@@ -42,6 +42,7 @@ setup(
     install_requires=[
         'numpy>=1.24',
         'scikit-learn>=1.3',
+        'scipy>=1.10',  # also a dependency of scikit-learn; used directly (linalg, ndimage, signal)
         'pyserial>=3.5',
         'pyyaml>=6.0',
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
