@@ -32,7 +32,8 @@ from .contact import FingerContactModel, HysteresisPlay, SkinStimulus
 from .protocol import FRAME_RATE_HZ, N_TAXELS, encode_skin_frame
 from .stimuli import NoTouch
 
-__all__ = ['SkinDevice', 'forget_stimuli', 'register_stimulus', 'registered_stimulus', 'render_frames']
+__all__ = ['SkinDevice', 'forget_stimuli', 'register_stimulus', 'registered_stimulus', 'render_frames',
+           'unregister_stimulus']
 
 _stimuli: dict[str, SkinStimulus] = {}
 _stimuli_lock = threading.Lock()
@@ -46,6 +47,12 @@ def register_stimulus(name: str, stimulus: SkinStimulus) -> None:
         raise ValueError(f'a skin stimulus needs a contacts(t) method; got {type(stimulus).__name__}')
     with _stimuli_lock:
         _stimuli[name] = stimulus
+
+
+def unregister_stimulus(name: str) -> None:
+    """Forget the stimulus registered as ``name``, if any."""
+    with _stimuli_lock:
+        _stimuli.pop(name, None)
 
 
 def registered_stimulus(name: str) -> SkinStimulus:

@@ -13,6 +13,14 @@ A timeline is also a YAML scene, read with :func:`load_scene`::
       - line: {from_mm: [6, 6], to_mm: [41, 41], at_s: 3.5, for_s: 1.0, force_n: 1.5}
       - trace: {points: [[0, 0, 0], [10, 0, 200], [10, 10, 400]], at_s: 5.0}
 
+or a generated scene: ``generator`` names a function of this project (``module:function`` in
+``touch_gestures`` or ``touch_driver``, as for the bear and patch scenes of :mod:`touch_driver.scenes`)
+that returns the stimulus, called with ``options``::
+
+    skin_scene: 1
+    generator: touch_gestures.skin.scene:people_scene
+    options: {n_people: 2, seed: 7}
+
 ``at_s`` is when full force is reached (the touch-down ramp comes before it) and ``for_s`` how
 long it lasts. ``press`` and ``line`` also take ``radius_mm`` and ``ramp_s``; ``trace`` takes
 ``force_n``, ``radius_mm``, ``ramp_s``, ``margin_mm``, ``time_scale`` and ``stroke`` (one id per
@@ -30,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
+from touch_graph.yamlconf import YamlDict, check_keys, did_you_mean, load_yaml, typed
 
 from .contact import Contact, SkinStimulus
 
@@ -211,12 +219,55 @@ def _event(node: Any, where: Any, index: int) -> SkinStimulus:
         raise params.error(f'{what}: {err}') from err
 
 
-def scene_from_mapping(doc: Any) -> Timeline:
-    """A :class:`Timeline` from a parsed YAML scene (see the module doc); ConfigError names the line."""
-    check_keys(doc, required=('skin_scene', 'events'), optional=('duration_s',), what='skin scene')
+def _generated(doc: YamlDict) -> SkinStimulus:
+    """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples)."""
+    import importlib
+    import inspect
+
+    from touch_driver.scenes import GENERATOR_PACKAGES  # one rule for every sensor's scenes
+    spec = typed(doc, 'generator', str, 'skin scene')
+    module_name, _, func_name = spec.partition(':')
+    if not func_name or not module_name.startswith(GENERATOR_PACKAGES):
+        raise doc.error(f"generator must be 'module:function' in {' or '.join(p[:-1] for p in GENERATOR_PACKAGES)}, "
+                        f'e.g. touch_gestures.skin.scene:people_scene; got {spec!r}', 'generator')
+    try:
+        func = getattr(importlib.import_module(module_name), func_name)
+    except (ImportError, AttributeError) as err:
+        raise doc.error(f'cannot find generator {spec!r}: {err}', 'generator') from None
+    options = doc.get('options', YamlDict())
+    if not isinstance(options, YamlDict):
+        raise doc.error(f'options must be a mapping of keyword arguments of {spec}', 'options')
+    accepted = list(inspect.signature(func).parameters)
+    for key in options:
+        if key not in accepted:
+            raise options.error(f'{spec} takes no option {key!r}{did_you_mean(str(key), accepted)}; options: '
+                                f'{", ".join(accepted)}', key)
+    try:
+        stimulus = func(**{k: tuple(v) if isinstance(v, list) else v for k, v in options.items()})
+    except (TypeError, ValueError) as err:
+        raise doc.error(f'{spec} rejected the options: {err}', 'options' if 'options' in doc else 'generator') from None
+    if not callable(getattr(stimulus, 'contacts', None)):
+        raise doc.error(f'{spec} returned a {type(stimulus).__name__}, not a skin stimulus (contacts(t))', 'generator')
+    return stimulus
+
+
+def scene_from_mapping(doc: Any) -> SkinStimulus:
+    """A :class:`Timeline` (or a generated stimulus) from a parsed YAML scene (see the module doc);
+    ConfigError names the line."""
+    check_keys(doc, required=('skin_scene',), optional=('events', 'duration_s', 'description', 'generator', 'options'),
+               what='skin scene')
     version = typed(doc, 'skin_scene', int, 'skin scene')
     if version != SCENE_FORMAT_VERSION:
         raise doc.error(f'skin_scene format {version} is not supported; expected {SCENE_FORMAT_VERSION}', 'skin_scene')
+    if 'generator' in doc:
+        scripted = [k for k in ('events', 'duration_s') if k in doc]
+        if scripted:
+            raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
+        return _generated(doc)
+    if 'options' in doc:
+        raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
+    if 'events' not in doc:
+        raise doc.error("a skin scene needs 'events: [...]' or 'generator: module:function'")
     events = doc['events']
     if not isinstance(events, list):
         raise doc.error(f"'events' must be a list of events; got {type(events).__name__}", 'events')
@@ -226,6 +277,6 @@ def scene_from_mapping(doc: Any) -> Timeline:
     return Timeline([_event(node, events, i) for i, node in enumerate(events)], duration)
 
 
-def load_scene(path: str | Path) -> Timeline:
-    """Read a YAML skin scene file into a :class:`Timeline`."""
+def load_scene(path: str | Path) -> SkinStimulus:
+    """Read a YAML skin scene file into a :class:`Timeline` (or the stimulus its generator returns)."""
     return scene_from_mapping(load_yaml(path))

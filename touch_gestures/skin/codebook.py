@@ -12,14 +12,16 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     templates           (T, d)      float32   feature vectors, grouped by class
     template_labels     (T,)        int64     index into classes
     class_thresholds    (n,)        float64   rejection distance per class (inf: none)
+    description         ()          str       optional: how it was recorded (synthetic or not)
 
 At load the format, version, recogniser name and parameters are checked, and so is the
 feature dimension (against the features the named recogniser computes with those
 parameters): a codebook recorded with 32 points does not silently match 16-point queries.
 
 :class:`CodebookRecorder` collects m repetitions of each gesture from a stream of
-segmented gestures (the ``social-touch codebook record`` tool feeds it from the skin),
-refusing two-finger, truncated and empty touches.
+segmented gestures (``social-touch codebook record``, :mod:`.record_cli`, feeds it from the
+skin), refusing two-finger, truncated, empty and tiny touches; :mod:`.recording` saves what it
+holds so a recording can be resumed.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from .base import TemplateRecogniser
 from .errors import CodebookError
 from .gesture import TouchGesture
 from .registry import RECOGNISERS, make_recogniser
+from .screening import MIN_EXTENT_MM, MIN_POINTS, gesture_extent_mm, screen_gesture
 
 __all__ = ['FORMAT', 'FORMAT_VERSION', 'CodebookRecorder', 'load_codebook', 'save_codebook']
 
@@ -46,8 +49,11 @@ _KEYS = ('format', 'format_version', 'recogniser', 'params', 'classes', 'templat
          'class_thresholds')
 
 
-def save_codebook(path: str | Path, recogniser: TemplateRecogniser) -> Path:
-    """Write a fitted recogniser's codebook to ``path`` (``.npz`` is appended if missing)."""
+def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description: str | None = None) -> Path:
+    """Write a fitted recogniser's codebook to ``path`` (``.npz`` is appended if missing).
+
+    ``description`` (optional, e.g. how it was recorded and whether the data are synthetic) is
+    kept in the file and comes back as the loaded recogniser's ``description_``."""
     if not hasattr(recogniser, 'templates_'):
         raise ValueError('the recogniser has no codebook yet: fit it (or record one) before saving')
     if recogniser.name not in RECOGNISERS:
@@ -61,7 +67,8 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser) -> Path:
         recogniser=np.array(recogniser.name), params=np.array(json.dumps(recogniser.get_params(), sort_keys=True)),
         classes=np.asarray(recogniser.classes_, dtype=str), templates=recogniser.templates_.astype(np.float32),
         template_labels=recogniser.template_labels_.astype(np.int64),
-        class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64))
+        class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64),
+        **({} if description is None else {'description': np.array(str(description))}))
     return path
 
 
@@ -121,6 +128,7 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
         model.set_codebook(templates, classes[codes], class_thresholds=thresholds)
     except ValueError as err:
         raise CodebookError(str(err), where) from err
+    model.description_ = str(data['description']) if 'description' in data else None
     return model
 
 
@@ -135,6 +143,11 @@ def _feature_size(model: TemplateRecogniser) -> int | None:
 class CodebookRecorder:
     """Collect ``repetitions`` usable gestures of each name in ``gestures``, in order.
 
+    A touch is refused (with a line saying why and what to do) when it is no traced gesture:
+    two fingers, a touch that never ended, too few points or smaller than ``min_extent_mm``
+    (:func:`~.screening.screen_gesture`, the same rule as the skin node's). :meth:`undo` drops
+    the last kept repetition, :meth:`skip` leaves the current gesture out of the codebook.
+
     >>> rec = CodebookRecorder(['line_right'], repetitions=1)
     >>> rec.current
     'line_right'
@@ -146,40 +159,60 @@ class CodebookRecorder:
 
     gestures: Sequence[str]
     repetitions: int = 30
-    min_points: int = 2
+    min_points: int = MIN_POINTS
     samples: list[TouchGesture] = field(default_factory=list)
     labels: list[str] = field(default_factory=list)
+    min_extent_mm: float = MIN_EXTENT_MM
+    skipped: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
+        self.gestures = list(self.gestures)
         if not self.gestures or len(set(self.gestures)) != len(self.gestures):
-            raise ValueError(f'give one or more distinct gesture names; got {list(self.gestures)}')
+            raise ValueError(f'give one or more distinct gesture names; got {self.gestures}')
         if self.repetitions < 1:
             raise ValueError(f'repetitions must be >= 1, got {self.repetitions}')
+        if not (np.isfinite(self.min_extent_mm) and self.min_extent_mm >= 0) or self.min_points < 1:
+            raise ValueError(f'need min_extent_mm >= 0 (mm) and min_points >= 1; got {self.min_extent_mm}, '
+                             f'{self.min_points}')
+        unknown = sorted({*self.labels, *self.skipped} - set(self.gestures))
+        if unknown or len(self.labels) != len(self.samples):
+            raise ValueError(f'samples and labels must pair up, with labels and skipped among the gestures; got '
+                             f'{len(self.samples)} samples, {len(self.labels)} labels, unknown names {unknown}')
+
+    def count(self, name: str) -> int:
+        """Repetitions of ``name`` kept so far."""
+        return self.labels.count(name)
 
     @property
     def done(self) -> bool:
-        return len(self.samples) >= len(self.gestures) * self.repetitions
+        return self.current is None
 
     @property
     def current(self) -> str | None:
-        """The gesture to trace next, or None when done."""
-        return None if self.done else self.gestures[len(self.samples) // self.repetitions]
+        """The gesture to trace next (the first not complete and not skipped), or None when done."""
+        for name in self.gestures:
+            if name not in self.skipped and self.count(name) < self.repetitions:
+                return name
+        return None
 
     def add(self, gesture: TouchGesture) -> tuple[bool, str]:
         """Offer one segmented gesture; returns (kept, a line for the person recording)."""
         name = self.current
         if name is None:
             return False, 'the codebook is complete'
-        if gesture.multi_contact:
+        reason = screen_gesture(gesture, self.min_extent_mm, self.min_points)
+        if reason == 'multi_contact':
             return False, f'{name}: two fingers seen, trace with one finger and try again'
-        if gesture.truncated:
+        if reason == 'truncated':
             return False, f'{name}: the touch did not end, lift the finger after the gesture'
-        if len(gesture.trajectory) < self.min_points:
+        if reason == 'too_few_points':
             return False, f'{name}: too short ({len(gesture.trajectory)} points), trace the whole gesture'
+        if reason == 'too_small':
+            return False, (f'{name}: too small ({gesture_extent_mm(gesture):.1f} mm across), trace it over at '
+                           f'least {self.min_extent_mm:.0f} mm of the skin')
         self.samples.append(gesture)
         self.labels.append(name)
-        k = len(self.samples) - self.gestures.index(name) * self.repetitions
-        return True, f'{name} {k}/{self.repetitions}'
+        return True, f'{name} {self.count(name)}/{self.repetitions}'
 
     def undo(self) -> str | None:
         """Drop the last kept gesture (a bad repetition); returns its name."""
@@ -188,9 +221,22 @@ class CodebookRecorder:
         self.samples.pop()
         return self.labels.pop()
 
+    def skip(self) -> str | None:
+        """Leave the current gesture out (what was kept of it is dropped); returns its name."""
+        name = self.current
+        if name is None:
+            return None
+        self.skipped.append(name)
+        keep = [i for i, label in enumerate(self.labels) if label != name]
+        self.samples = [self.samples[i] for i in keep]
+        self.labels = [self.labels[i] for i in keep]
+        return name
+
     def fit(self, recogniser: TemplateRecogniser) -> TemplateRecogniser:
-        """Fit ``recogniser`` on what was collected (all gestures need at least one sample)."""
-        missing = [g for g in self.gestures if g not in self.labels]
+        """Fit ``recogniser`` on what was collected (every gesture not skipped needs at least one sample)."""
+        missing = [g for g in self.gestures if g not in self.labels and g not in self.skipped]
         if missing:
             raise ValueError(f'no repetition recorded yet for: {", ".join(missing)}')
+        if not self.samples:
+            raise ValueError('nothing was recorded: every gesture was skipped')
         return recogniser.fit(self.samples, self.labels)

@@ -137,6 +137,12 @@ class GestureSegmenter:
         self._peak.fill(0.0)
         self._binary.fill(False)
 
+    def restart(self) -> None:
+        """Forget the gesture in progress and the time of the last frame (a replay looped, a clock
+        restarted): the next frame may have any time. The counters are kept."""
+        self.reset()
+        self._last_t = -np.inf
+
     @property
     def active(self) -> bool:
         """True while a gesture is being collected (including its hysteresis tail)."""

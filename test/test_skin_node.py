@@ -1,0 +1,261 @@
+"""The haptic_commands node fed SkinFrame messages: commands, stamps, bad frames, parameters.
+
+Frames are synthetic: perfect pressure maps (``ideal_frame``) under a finger moving along a
+path, published on /skin/frame in a simulated-time graph. The driver + node graph on the
+virtual skin is test/test_skin_node_graph.py.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from touch_gestures.skin.codebook import load_codebook, save_codebook
+from touch_gestures.skin.commands import load_command_map
+from touch_gestures.skin.gesture import TouchGesture, ideal_frame
+from touch_gestures.skin.node import HapticCommandsNode, default_codebook_path, default_commands_path
+from touch_gestures.skin.registry import make_recogniser
+from touch_graph.errors import ParameterError
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+
+SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
+HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
+Header = get_message('std_msgs/msg/Header')
+Time = get_message('builtin_interfaces/msg/Time')
+NS = 1_000_000_000
+T0_NS = 1_700_000_000 * NS
+PERIOD_NS = round(NS / 150)
+EMPTY = np.zeros(144, np.float32)
+
+
+def path(start, end, seconds):
+    """(n, 2) finger positions, mm, at 150 Hz from ``start`` to ``end`` in ``seconds``."""
+    n = round(seconds * 150) + 1
+    return np.linspace(start, end, n)
+
+
+class Harness:
+    """A HapticCommandsNode in a simulated-time graph, fed SkinFrames, collecting /touch/haptic_command."""
+
+    def __init__(self, **params):
+        self.ctx = Context('sim')
+        self.ctx.init()
+        self.node = HapticCommandsNode(context=self.ctx, namespace='skin',
+                                       parameter_overrides=[Parameter(k, value=v) for k, v in params.items()],
+                                       cli_args=['--ros-args', '--log-level', 'error'])
+        self.io = Node('test_io', context=self.ctx)
+        self.pub = self.io.create_publisher(SkinFrame, '/skin/frame', 10)
+        self.commands = []
+        self.io.create_subscription(HapticCommand, '/touch/haptic_command', self.commands.append, 100)
+        self.executor = SingleThreadedExecutor(context=self.ctx)
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.io)
+        self.i = 0
+
+    def frame(self, point=None, stamp_ns=None, pressure=None):
+        """Publish one frame: a finger at ``point`` (mm) or an untouched skin; returns its stamp."""
+        stamp_ns = T0_NS + self.i * PERIOD_NS if stamp_ns is None else stamp_ns
+        sec, nanosec = divmod(stamp_ns, NS)
+        touched = point is not None
+        msg = SkinFrame(header=Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id='skin_link'),
+                        sequence=self.i & 0xFFFF, contact=touched,
+                        pressure=ideal_frame(point).reshape(-1) if touched else EMPTY,
+                        contact_x=float(point[0]) if touched else float('nan'),
+                        contact_y=float(point[1]) if touched else float('nan'))
+        if pressure is not None:
+            msg.pressure = pressure   # assigned after construction: the message class would refuse it
+        self.pub.publish(msg)
+        for _ in range(3):
+            self.executor.spin_once(0)
+        self.i += 1
+        return stamp_ns
+
+    def touch(self, points, lift_s=0.3):
+        """A touch along ``points`` then an untouched skin for ``lift_s``; returns the last contact's stamp."""
+        last = None
+        for p in points:
+            last = self.frame(p)
+        for _ in range(round(lift_s * 150)):
+            self.frame()
+        return last
+
+    def close(self):
+        self.node.destroy_node()
+        self.io.destroy_node()
+        self.ctx.shutdown()
+
+
+@pytest.fixture
+def harness():
+    made = []
+
+    def make(**params):
+        h = Harness(**params)
+        made.append(h)
+        return h
+    yield make
+    for h in made:
+        h.close()
+
+
+def test_a_traced_line_becomes_its_command_stamped_at_the_lift(harness):
+    h = harness()
+    for _ in range(30):
+        h.frame()
+    end = h.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    (cmd,) = h.commands
+    assert (cmd.gesture, cmd.command, cmd.recogniser) == ('line_right', 'move_right', 'trace')
+    assert cmd.header.stamp.sec * NS + cmd.header.stamp.nanosec == end and cmd.header.frame_id == 'skin'
+    assert cmd.frames == 121 and cmd.duration_s == pytest.approx(120 * PERIOD_NS / NS, abs=1e-6)
+    match = h.node.last_match
+    assert cmd.distance == pytest.approx(match.distance) and cmd.margin == pytest.approx(match.margin)
+    assert 0 < cmd.distance < h.node.recogniser.class_thresholds_[list(h.node.recogniser.classes_).index(
+        'line_right')]
+    h.touch(path([20.0, 5.0], [22.0, 42.0], 0.6))            # top to bottom: line_down -> stop
+    h.touch(path([41.0, 41.0], [6.0, 6.0], 0.7))             # bottom-right to upper-left: diagonal_up
+    assert [c.command for c in h.commands] == ['move_right', 'stop', 'previous_task']
+    assert h.node.outcomes == {'published': 3} and h.node.callback_errors == 0
+
+
+def test_presses_and_tiny_touches_fire_nothing_and_are_counted(harness):
+    h = harness()
+    h.touch([np.array([20.0, 20.0])] * 200)                   # a finger resting still for 1.3 s
+    h.touch(path([20.0, 20.0], [23.0, 21.0], 0.3))            # a brush of 3 mm
+    h.touch([np.array([30.0, 10.0])] * 2)                     # a tap of 2 frames: below min_frames
+    assert h.commands == []
+    assert h.node.outcomes == {'too_small': 2} and h.node.stream.segmenter.stats.too_short == 1
+
+
+def test_a_touch_that_never_ends_is_cut_and_does_not_block_the_next(harness):
+    h = harness(max_duration_s=1.0)
+    h.touch(list(path([10.0, 10.0], [40.0, 30.0], 0.5)) + [np.array([40.0, 30.0])] * 300)  # then rests 2 s
+    assert h.node.outcomes == {'truncated': 1} and h.commands == []
+    h.touch(path([41.0, 23.0], [6.0, 23.0], 0.8))
+    assert [c.command for c in h.commands] == ['move_left']
+
+
+def test_bad_frames_are_counted_and_skipped(harness):
+    h = harness()
+    nan = np.full(144, np.nan, np.float32)
+    for p in path([6.0, 23.0], [20.0, 23.0], 0.3):
+        h.frame(p)
+    h.frame(pressure=nan)                 # NaN in the middle of a trace: skipped, the trace goes on
+    h.frame(pressure=np.zeros(100, np.float32))
+    for p in path([20.0, 23.0], [41.0, 23.0], 0.4):
+        h.frame(p)
+    for _ in range(40):
+        h.frame()
+    assert dict(h.node.stream.skipped) == {'non_finite': 1, 'wrong_size': 1}
+    assert [c.command for c in h.commands] == ['move_right'] and h.node.callback_errors == 0
+
+
+def test_time_going_back_drops_the_touch_under_way_and_starts_afresh(harness):
+    h = harness()
+    for p in path([6.0, 23.0], [30.0, 23.0], 0.4):
+        h.frame(p)
+    h.i = 0                                # a looped bag: stamps start again
+    h.touch(path([6.0, 6.0], [41.0, 41.0], 0.7))
+    assert h.node.stream.restarts == 1 and not h.node.stream.skipped
+    assert [c.command for c in h.commands] == ['next_task']
+
+
+def test_a_gap_in_the_frames_drops_the_touch_under_way(harness):
+    h = harness(max_gap_s=0.2)
+    for p in path([6.0, 23.0], [20.0, 23.0], 0.3):
+        h.frame(p)
+    h.i += 150                             # the driver stalled for a second mid-trace
+    h.touch(path([20.0, 5.0], [22.0, 42.0], 0.6))
+    assert h.node.stream.interrupted == 1 and [c.command for c in h.commands] == ['stop']
+
+
+def test_rejected_and_unmapped_gestures_publish_nothing(harness, tmp_path):
+    strict = harness(max_distance=0.0)
+    strict.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert strict.commands == [] and strict.node.outcomes == {'rejected_distance': 1}
+    commands = tmp_path / 'commands.yaml'
+    commands.write_text('format_version: 1\ncommands:\n  line_left: move_left\n')
+    few = harness(commands=str(commands))
+    few.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert few.commands == [] and few.node.outcomes == {'unmapped': 1}
+
+
+def test_rejection_parameters_default_to_the_codebook_and_recompute_its_thresholds(harness):
+    h = harness()
+    stored = load_codebook(default_codebook_path())
+    assert h.node.get_parameter('max_distance').value == -1.0          # 'auto' in the file
+    assert h.node.get_parameter('auto_scale').value == stored.auto_scale
+    np.testing.assert_array_equal(h.node.recogniser.class_thresholds_, stored.class_thresholds_)
+    wider = harness(auto_scale=2 * stored.auto_scale)
+    np.testing.assert_allclose(wider.node.recogniser.class_thresholds_, 2 * stored.class_thresholds_, rtol=1e-6)
+    none = harness(max_distance=float('inf'))
+    assert np.isinf(none.node.recogniser.class_thresholds_).all()
+
+
+def test_the_shipped_codebook_knows_every_command_and_says_it_is_synthetic():
+    model = load_codebook(default_codebook_path())
+    commands = load_command_map(default_commands_path(), gestures=model.classes_)
+    assert set(commands.commands) <= set(model.classes_)
+    assert model.name == 'trace' and model.description_.startswith('SYNTHETIC')
+    assert np.bincount(model.template_labels_).tolist() == [30] * len(model.classes_)
+    assert default_codebook_path().stat().st_size < 100_000
+
+
+def small_codebook(tmp_path, recogniser='trace'):
+    lines = [TouchGesture.from_trajectory(path([6.0, y], [41.0, y], 0.5)) for y in (10.0, 20.0, 30.0)]
+    model = make_recogniser(recogniser).fit(lines, ['line_right'] * 3)
+    return save_codebook(tmp_path / f'{recogniser}.npz', model)
+
+
+@pytest.mark.parametrize('params, fragments', [
+    ({'codebook': 'nowhere.npz'}, ["parameter 'codebook' of /skin/haptic_commands", 'not found',
+                                   'relative paths start at']),
+    ({'recogniser': 'centroid'}, ["made for recogniser 'trace', not 'centroid'"]),
+    ({'max_duration_s': -1.0}, ['segmentation parameters of /skin/haptic_commands', 'max_duration_s must be > 0']),
+    ({'max_distance': -2.0}, ["parameter 'max_distance'", '-1 (per-class, from the codebook)']),
+    ({'auto_quantile': 1.5}, ['rejection parameters', 'auto_quantile must be in [0, 1]']),
+    ({'min_extent_mm': -1.0}, ["parameter 'min_extent_mm'", 'a size >= 0 mm']),
+    ({'max_gap_s': 0.0}, ['max_gap_s must be a positive number']),
+])
+def test_parameter_errors_say_what_and_how(params, fragments):
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(ParameterError) as info:
+            HapticCommandsNode(context=ctx, namespace='skin', parameter_overrides=[
+                Parameter(k, value=v) for k, v in params.items()], cli_args=['--ros-args', '--log-level', 'error'])
+        for fragment in fragments:
+            assert fragment in str(info.value)
+    finally:
+        ctx.shutdown()
+
+
+def test_a_mapped_gesture_missing_from_the_codebook_stops_the_node_at_its_line(tmp_path):
+    codebook = small_codebook(tmp_path)
+    commands = tmp_path / 'commands.yaml'
+    commands.write_text('format_version: 1\ncommands:\n  line_right: move_right\n  line_lefft: move_left\n')
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(ParameterError) as info:
+            HapticCommandsNode(context=ctx, parameter_overrides=[Parameter('codebook', value=str(codebook)),
+                                                                 Parameter('commands', value=str(commands))])
+        text = str(info.value)
+        assert f'{commands}:4' in text and "gesture 'line_lefft' is not in the codebook" in text
+        assert 'the codebook' in text and 'knows line_right' in text
+    finally:
+        ctx.shutdown()
+
+
+def test_an_unusable_default_codebook_says_how_it_is_made(monkeypatch, tmp_path):
+    import touch_gestures.skin.node as node_module
+    broken = tmp_path / 'skin_codebook.npz'
+    broken.write_bytes(b'not a zip')
+    monkeypatch.setattr(node_module, 'default_codebook_path', lambda: Path(broken))
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(ParameterError, match='social-touch codebook record --simulate 10 --seed 2026'):
+            HapticCommandsNode(context=ctx)
+    finally:
+        ctx.shutdown()

@@ -1,0 +1,265 @@
+"""``haptic_commands``: commands traced on the optoelectronic skin, on the graph (cirillo2017 3.2, Fig. 5).
+
+Subscribes to ``frame`` (``/skin/frame`` in the ``skin`` namespace: ``SkinFrame`` from
+``skin_driver``, 150 Hz) and does the recognition branch of cirillo2017 Fig. 5 on every touch:
+
+1. **segmentation** (:class:`~.frames.SkinFrameStream`, :class:`~.segmentation.GestureSegmenter`):
+   a gesture runs from the first contact to the end of the last one, time from the header stamps;
+2. **screening** (:func:`~.screening.screen_gesture`): two fingers, a touch that never ended
+   (cut at ``max_duration_s``), too few points and touches smaller than ``min_extent_mm`` (a
+   press, a tap) are no command;
+3. **recognition** against the codebook (default recogniser ``trace``, docs/skin-evaluation.md),
+   with its rejection rule (distance over the class's threshold, or too small a margin);
+4. **the command map**: an accepted gesture with a command is published on
+   ``/touch/haptic_command`` (``HapticCommand``: gesture, command, recogniser, distance, margin,
+   duration_s, frames; the header stamp is the end of the gesture, frame_id ``skin``).
+
+Everything else (screened out, rejected, a codebook gesture without a command) is logged at
+debug level and counted in :attr:`HapticCommandsNode.outcomes`; nothing is published. Bad
+frames (wrong size, NaN) are counted in ``stream.skipped`` and skipped.
+
+Parameters (read once at start):
+
+- ``codebook``: the ``.npz`` codebook (default: the package's ``config/skin_codebook.npz``,
+  recorded from simulated performers, SYNTHETIC: ``config/skin_codebook.md``);
+- ``commands``: the gesture -> command map (default: ``config/skin_commands.yaml``); a mapped
+  gesture the codebook does not know stops the node at start, naming the file and line;
+- ``recogniser``: must match the codebook's (empty: whatever the codebook was made with);
+- segmentation: ``off_hysteresis_s``, ``max_duration_s``, ``min_frames``, ``map_threshold``,
+  ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction`` (see
+  GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
+- screening: ``min_extent_mm``;
+- rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds,
+  ``auto_scale`` x the ``auto_quantile`` quantile of the codebook's own spread; a number >= 0:
+  one threshold for all; ``.inf``: none), ``auto_scale``, ``auto_quantile``, ``min_margin``.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from touch_graph.compat import Node, ParameterDescriptor, get_message
+from touch_graph.errors import ConfigError, ParameterError
+
+from .base import Match, TemplateRecogniser
+from .codebook import load_codebook
+from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
+from .frames import SkinFrameStream
+from .gesture import TouchGesture
+from .screening import MIN_EXTENT_MM, gesture_extent_mm, screen_gesture
+from .segmentation import GestureSegmenter
+
+__all__ = ['CODEBOOK_COMMAND', 'DEFAULT_CODEBOOK', 'DEFAULT_COMMANDS', 'HapticCommandsNode', 'main']
+
+SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
+HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
+TimeMsg = get_message('builtin_interfaces/msg/Time')
+
+#: The shipped codebook and command map, relative to the package's share directory.
+DEFAULT_CODEBOOK = ('config', 'skin_codebook.npz')
+DEFAULT_COMMANDS = ('config', 'skin_commands.yaml')
+#: How the shipped codebook is made (config/skin_codebook.md).
+CODEBOOK_COMMAND = ('social-touch codebook record --simulate 10 --seed 2026 --repetitions 30 '
+                    '-o config/skin_codebook.npz')
+_NS = 1_000_000_000
+#: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
+_SEGMENTER_DOC = {
+    'off_hysteresis_s': 'a lift must last this long (s) to end a gesture (not in cirillo2017)',
+    'max_duration_s': 'a touch is cut after this long (s) and gives no command (a hand resting on the skin)',
+    'min_frames': 'contacts with fewer frames are dropped as taps or noise',
+    'map_threshold': 'pressure (1 = full scale) a taxel must reach to enter the map (cirillo2017 3.1)',
+    'map_relative': 'and this fraction of the frame\'s highest pressure',
+    'merge_gap_taxels': 'blobs at most this many empty taxels apart are one finger',
+    'min_multi_frames': 'frames with two blobs needed to call a gesture two-finger...',
+    'multi_fraction': '...and the fraction of its frames they must make up',
+}
+_SEGMENTER_DEFAULTS = {name: p.default for name, p in inspect.signature(GestureSegmenter).parameters.items()
+                       if name in _SEGMENTER_DOC}
+#: Rejection parameters every TemplateRecogniser has (touch_gestures.skin.base).
+_REJECTION = ('max_distance', 'auto_scale', 'auto_quantile', 'min_margin')
+
+
+def default_codebook_path() -> Path:
+    from touch_graph.paths import share_file
+    return share_file(*DEFAULT_CODEBOOK)
+
+
+def default_commands_path() -> Path:
+    from touch_graph.paths import share_file
+    return share_file(*DEFAULT_COMMANDS)
+
+
+def _time_msg(ns: int) -> Any:
+    sec, nanosec = divmod(int(ns), _NS)
+    return TimeMsg(sec=sec, nanosec=nanosec)
+
+
+class HapticCommandsNode(Node):
+    """Haptic commands from the skin driver's frames (see the module doc).
+
+    Attributes:
+        recogniser: the loaded codebook (a fitted :class:`~.base.TemplateRecogniser`).
+        commands: the :class:`~.commands.CommandMap`.
+        stream: frames -> gestures; ``stream.frames``, ``stream.skipped`` (bad frames by reason),
+            ``stream.interrupted``, ``stream.restarts``, ``stream.segmenter.stats``.
+        outcomes: what became of each gesture: ``'published'``, ``'unmapped'``, ``'rejected_distance'``,
+            ``'rejected_margin'``, ``'rejected_unusable'``, or a screening reason (``'multi_contact'``,
+            ``'truncated'``, ``'too_few_points'``, ``'too_small'``).
+        last_match: the recogniser's answer for the latest gesture it saw (None before any).
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('haptic_commands', **kwargs)
+        self._fqn = self.get_fully_qualified_name()
+        self.recogniser = self._load_codebook()
+        self.recogniser_name = self.recogniser.name
+        self.commands = self._load_commands()
+        self._configure_rejection()
+        self.stream = self._make_stream()
+        self.min_extent_mm = self._param('min_extent_mm', float(MIN_EXTENT_MM),
+                                         'touches whose trajectory is smaller than this (mm, longer side of its '
+                                         'box) give no command: a press, a tap (not in cirillo2017; default two '
+                                         'taxel pitches)')
+        if not (math.isfinite(self.min_extent_mm) and self.min_extent_mm >= 0):
+            raise self._bad('min_extent_mm', self.min_extent_mm, 'a size >= 0 mm')
+        self.outcomes: Counter[str] = Counter()
+        self.last_match: Match | None = None
+        self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
+        self.create_subscription(SkinFrame, 'frame', self._on_frame, 50)
+        classes = [str(c) for c in self.recogniser.classes_]
+        unmapped = [c for c in classes if c not in self.commands.commands]
+        origin = self.recogniser.description_ or 'a codebook without a description'
+        self.get_logger().info(
+            f'{self.codebook_path.name} ({origin}): {len(self.recogniser.templates_)} templates of {len(classes)} '
+            f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands'
+            + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
+
+    # ------------------------------------------------------------------ parameters
+    def _param(self, name: str, default: Any, description: str) -> Any:
+        return self.declare_parameter(name, default, ParameterDescriptor(description=description,
+                                                                         read_only=True)).value
+
+    def _bad(self, name: str, value: Any, expected: str) -> ParameterError:
+        return ParameterError(f"parameter '{name}' of {self._fqn} must be {expected}; got {value!r}")
+
+    def _load_codebook(self) -> TemplateRecogniser:
+        given = self._param('codebook', '', "skin codebook .npz (default: the package's config/skin_codebook.npz, "
+                                            'recorded from simulated performers)')
+        wanted = self._param('recogniser', '', "the codebook's recogniser must be this one (empty: whichever "
+                                               'the codebook was made with)')
+        self.codebook_path = Path(given) if given else default_codebook_path()
+        try:
+            return load_codebook(self.codebook_path, recogniser=wanted or None)
+        except ConfigError as err:
+            if not given:
+                how = f'; it is the package default, made with `{CODEBOOK_COMMAND}`; or set codebook:=FILE'
+            elif not self.codebook_path.exists():
+                how = f' (relative paths start at {Path.cwd()})'
+            elif wanted:
+                how = f'; record one with `social-touch codebook record --recogniser {wanted} -o FILE`'
+            else:
+                how = ''
+            raise ParameterError(f"parameter 'codebook' of {self._fqn}: {err}{how}") from err
+
+    def _load_commands(self) -> CommandMap:
+        given = self._param('commands', '', 'gesture -> command map YAML (default: config/skin_commands.yaml)')
+        path = Path(given) if given else default_commands_path()
+        try:
+            return load_command_map(path, gestures=[str(c) for c in self.recogniser.classes_])
+        except ConfigError as err:
+            how = (f' (relative paths start at {Path.cwd()})' if given and not path.exists() else
+                   f'; the codebook {self.codebook_path} knows {", ".join(map(str, self.recogniser.classes_))}')
+            raise ParameterError(f"parameter 'commands' of {self._fqn}: {err}{how}") from err
+
+    def _configure_rejection(self) -> None:
+        """Rejection parameters default to the codebook's; other values recompute its class thresholds."""
+        model = self.recogniser
+        stored = model.get_params()
+        md = stored['max_distance']
+        stored_md = -1.0 if md == 'auto' else math.inf if md is None else float(md)
+        given = {
+            'max_distance': self._param('max_distance', stored_md,
+                                        'rejection distance: -1 = per class from the codebook (auto_scale x the '
+                                        'auto_quantile quantile of its own spread), >= 0 = one for all, .inf = none'),
+            'auto_scale': self._param('auto_scale', float(stored['auto_scale']), 'see max_distance'),
+            'auto_quantile': self._param('auto_quantile', float(stored['auto_quantile']), 'see max_distance'),
+            'min_margin': self._param('min_margin', float(stored['min_margin']),
+                                      'no command when the runner-up class is closer than (1 + min_margin) x '
+                                      'the best distance'),
+        }
+        value = given['max_distance']
+        if not (value == -1.0 or value >= 0):   # NaN fails too
+            raise self._bad('max_distance', value, '-1 (per-class, from the codebook), a distance >= 0 or .inf')
+        new = {**given, 'max_distance': 'auto' if value == -1.0 else None if math.isinf(value) else value}
+        if all(new[k] == stored[k] for k in _REJECTION):
+            return  # the file's thresholds hold
+        try:
+            model.set_params(**new)
+            model.set_codebook(model.templates_, model.classes_[model.template_labels_])
+        except ValueError as err:
+            raise ParameterError(f'rejection parameters of {self._fqn}: {err}') from err
+        self.get_logger().info(f'rejection {new} (the codebook has {({k: stored[k] for k in _REJECTION})}): class '
+                               f'thresholds recomputed')
+
+    def _make_stream(self) -> SkinFrameStream:
+        seg = {name: self._param(name, default, f'{_SEGMENTER_DOC[name]} (see GestureSegmenter)')
+               for name, default in _SEGMENTER_DEFAULTS.items()}
+        max_gap_s = self._param('max_gap_s', 0.5, 'no frame for this long (s): the gesture under way is dropped')
+        try:
+            return SkinFrameStream(GestureSegmenter(**seg), max_gap_s=max_gap_s)
+        except ValueError as err:
+            raise ParameterError(f'segmentation parameters of {self._fqn}: {err}') from err
+
+    # ------------------------------------------------------------------ frames
+    def _on_frame(self, msg: Any) -> None:
+        stream = self.stream
+        skipped, restarts = sum(stream.skipped.values()), stream.restarts
+        gestures = stream.feed(msg)
+        if sum(stream.skipped.values()) != skipped:
+            self.get_logger().warning(f'skipped a frame: its pressure must be 144 finite values; frames skipped so '
+                                      f'far: {dict(stream.skipped)}', throttle_duration_sec=5.0)
+        if stream.restarts != restarts:
+            self.get_logger().warning('time went back (a looped bag or a restarted driver?): the touch under way '
+                                      'is dropped, starting afresh')
+        for gesture in gestures:
+            self._on_gesture(gesture)
+
+    def _on_gesture(self, gesture: TouchGesture) -> None:
+        log = self.get_logger()
+        reason = screen_gesture(gesture, self.min_extent_mm)
+        if reason is not None:
+            self.outcomes[reason] += 1
+            log.debug(f'no command: {reason} ({gesture!r}, {gesture_extent_mm(gesture):.1f} mm across)')
+            return
+        match = self.recogniser.predict(gesture)
+        self.last_match = match
+        if match.rejected is not None:
+            self.outcomes[f'rejected_{match.rejected}'] += 1
+            log.debug(f'no command: rejected ({match.rejected}); nearest {match.nearest} at distance '
+                      f'{match.distance:.3f}, margin {match.margin:.3f}, threshold '
+                      f'{self._threshold(match.nearest):.3f}')
+            return
+        stamp = _time_msg(self.stream.end_stamp_ns(gesture))
+        msg = haptic_command(match, gesture, self.commands, self.recogniser_name, stamp)
+        if msg is None:
+            self.outcomes['unmapped'] += 1
+            log.debug(f"no command: gesture '{match.label}' has none in the command map")
+            return
+        self.outcomes['published'] += 1
+        log.debug(f"command '{msg.command}' from '{match.label}' (distance {match.distance:.3f}, margin "
+                  f'{match.margin:.3f})')
+        self.command_pub.publish(msg)
+
+    def _threshold(self, name: str | None) -> float:
+        classes = [str(c) for c in self.recogniser.classes_]
+        return float(self.recogniser.class_thresholds_[classes.index(name)]) if name in classes else math.nan
+
+
+def main(args: list[str] | None = None) -> int:
+    """``ros2 run social_touch haptic_commands`` / the ``haptic_commands`` console script."""
+    from touch_graph.node_main import run_node
+    return run_node(HapticCommandsNode, args)
