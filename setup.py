@@ -21,6 +21,7 @@ NODES: dict[str, tuple[str, str]] = {
     'touch_monitor': ('touch_gestures.monitor_node', 'TouchMonitorNode'),
     'bear_gestures': ('touch_gestures.bear.node', 'BearGesturesNode'),
     'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
+    'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
 }
 
 setup(

@@ -14,7 +14,8 @@ from touch_graph.errors import ConfigError
 from touch_graph.messages import msg_files
 
 ROOT = Path(__file__).resolve().parent.parent
-NODES = ('bear_driver', 'patch_driver', 'skin_driver', 'bear_gestures', 'patch_gestures', 'touch_monitor',
+NODES = ('bear_driver', 'patch_driver', 'skin_driver', 'bear_gestures', 'patch_gestures', 'haptic_commands',
+         'touch_monitor',
          'recorder', 'player')
 
 

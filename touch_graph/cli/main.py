@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     'bag': ('touch_graph.cli.bag', 'bag info, bag reindex (recover a bag whose recorder died)'),
     'eval': ('touch_graph.cli.evaluate', 'evaluate recognisers on simulated people or recorded data'),
     'train': ('touch_graph.cli.train', 'train a recogniser (patch gestures) from recordings or simulated people'),
+    'codebook': ('touch_graph.cli.codebook', 'record a haptic-command codebook from the skin (live or simulated)'),
     'interface': ('touch_graph.cli.interface', 'list message types or show one (like ros2 interface)'),
     'export-interfaces': ('touch_graph.cli.export_interfaces',
                           'write the social_touch_msgs ament_cmake package for a ROS 2 workspace'),

@@ -1,0 +1,19 @@
+"""``social-touch codebook record ...``: record m repetitions per gesture from the skin into a codebook."""
+
+from __future__ import annotations
+
+import argparse
+
+from .dispatch import add_target_arguments, run_target
+
+TARGETS = {
+    'record': ('touch_gestures.skin.record_cli', 'add_arguments', 'run'),
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_target_arguments(parser, TARGETS)
+
+
+def run(args: argparse.Namespace) -> int:
+    return run_target(args, TARGETS)
