@@ -31,7 +31,8 @@ import struct
 from binascii import crc_hqx
 from dataclasses import dataclass, field
 
-__all__ = ['HEADER_SIZE', 'OVERHEAD', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'crc16', 'encode_frame']
+__all__ = ['HEADER_SIZE', 'OVERHEAD', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'SensorStreamDecoder', 'crc16',
+           'encode_frame']
 
 SYNC = b'\xa5\x5a'
 _HEADER = struct.Struct('<2sBHH')
@@ -163,3 +164,32 @@ class FrameDecoder:
             stats.dropped_bytes += excess
             del buf[:excess]
         return out
+
+
+class SensorStreamDecoder:
+    """Base of the sensors' stream decoders: a :class:`FrameDecoder` for their frame ids.
+
+    Subclasses implement ``feed(data)`` on top of :attr:`_frames`, turning checked frames
+    into the sensor's decoded payloads; the counters and buffering are the framing's.
+
+    Args:
+        payload_sizes: sensor id -> payload length, as for :class:`FrameDecoder`.
+        max_buffer: bytes kept while waiting for the rest of a frame.
+    """
+
+    def __init__(self, payload_sizes: dict[int, int], max_buffer: int = 1 << 16) -> None:
+        self._frames = FrameDecoder(payload_sizes, max_buffer=max_buffer)
+
+    @property
+    def stats(self) -> DecoderStats:
+        """Framing counters since construction (frames, dropped_bytes, checksum_errors, sequence_gaps, ...)."""
+        return self._frames.stats
+
+    @property
+    def buffered(self) -> int:
+        """Bytes held while waiting for the rest of a frame (bounded by ``max_buffer``)."""
+        return self._frames.buffered
+
+    def reset(self) -> None:
+        """Forget partial frames and sequence history (after a reconnect); counters are kept."""
+        self._frames.reset()

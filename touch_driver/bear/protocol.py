@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from touch_driver.framing import DecoderStats, FrameDecoder, encode_frame
+from touch_driver.framing import SensorStreamDecoder, encode_frame
 from touch_graph.errors import MessageError
 
 __all__ = ['ADC_MAX', 'BEAR_ID', 'N_CHANNELS', 'PAYLOAD_SIZE', 'BearDecoder', 'BearPayloadError', 'BearScan',
@@ -95,7 +95,7 @@ def encode_scan(seq: int, raw: np.ndarray) -> bytes:
     return encode_frame(BEAR_ID, seq, encode_payload(raw))
 
 
-class BearDecoder:
+class BearDecoder(SensorStreamDecoder):
     """Bytes from the bear's port -> :class:`BearScan` objects; never raises on bad bytes.
 
     Wraps a :class:`~touch_driver.framing.FrameDecoder` (resynchronisation, checksum,
@@ -104,21 +104,8 @@ class BearDecoder:
     """
 
     def __init__(self, max_buffer: int = 1 << 16) -> None:
-        self._frames = FrameDecoder({BEAR_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
+        super().__init__({BEAR_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
         self.corrupt_frames = 0
-
-    @property
-    def stats(self) -> DecoderStats:
-        """Framing counters (frames, dropped_bytes, checksum_errors, sequence_gaps, ...)."""
-        return self._frames.stats
-
-    @property
-    def buffered(self) -> int:
-        return self._frames.buffered
-
-    def reset(self) -> None:
-        """Forget buffered bytes and sequence history (after a reconnect); counters are kept."""
-        self._frames.reset()
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[BearScan]:
         """Add bytes; return the scans they complete, in order."""

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from touch_driver.framing import DecoderStats, FrameDecoder, encode_frame
+from touch_driver.framing import SensorStreamDecoder, encode_frame
 from touch_graph.errors import MessageError
 
 __all__ = ['ADC_MAX', 'GRID', 'N_PANELS', 'PATCH_FRAME_ID', 'PATCH_SCAN_ID', 'PAYLOAD_SIZE', 'PatchDecoder',
@@ -119,7 +119,7 @@ def encode_scan(seq: int, cells: np.ndarray, panels: np.ndarray, raw_scan: bool 
     return encode_frame(PATCH_SCAN_ID if raw_scan else PATCH_FRAME_ID, seq, encode_payload(cells, panels))
 
 
-class PatchDecoder:
+class PatchDecoder(SensorStreamDecoder):
     """Bytes from the patch's port -> :class:`PatchScan` objects; never raises on bad bytes.
 
     Accepts both frame kinds (0x50 averaged, 0x51 raw scans); resynchronisation, checksum
@@ -127,21 +127,7 @@ class PatchDecoder:
     """
 
     def __init__(self, max_buffer: int = 1 << 16) -> None:
-        self._frames = FrameDecoder({PATCH_FRAME_ID: PAYLOAD_SIZE, PATCH_SCAN_ID: PAYLOAD_SIZE},
-                                    max_buffer=max_buffer)
-
-    @property
-    def stats(self) -> DecoderStats:
-        """Framing counters (frames, dropped_bytes, checksum_errors, sequence_gaps, ...)."""
-        return self._frames.stats
-
-    @property
-    def buffered(self) -> int:
-        return self._frames.buffered
-
-    def reset(self) -> None:
-        """Forget buffered bytes and sequence history (after a reconnect); counters are kept."""
-        self._frames.reset()
+        super().__init__({PATCH_FRAME_ID: PAYLOAD_SIZE, PATCH_SCAN_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[PatchScan]:
         """Add bytes; return the frames they complete, in order."""

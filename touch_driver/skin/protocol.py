@@ -33,7 +33,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..framing import DecoderStats, FrameDecoder, encode_frame
+from ..framing import SensorStreamDecoder, encode_frame
 
 __all__ = [
     'ACTIVE_SIDE_MM', 'FRAME_PERIOD_S', 'FRAME_RATE_HZ', 'MODULES_PER_GROUP', 'MODULE_TAXELS', 'N_COLS',
@@ -156,7 +156,7 @@ class SkinRawFrame(NamedTuple):
     raw: np.ndarray
 
 
-class SkinStreamDecoder:
+class SkinStreamDecoder(SensorStreamDecoder):
     """Bytes from the serial port -> :class:`SkinRawFrame` objects; never raises on bad bytes.
 
     A thin layer over :class:`touch_driver.framing.FrameDecoder` that accepts only id 0x53 with
@@ -171,21 +171,7 @@ class SkinStreamDecoder:
     """
 
     def __init__(self, max_buffer: int = 1 << 16) -> None:
-        self._frames = FrameDecoder({SENSOR_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
-
-    @property
-    def stats(self) -> DecoderStats:
-        """Counters since construction: frames, dropped_bytes, checksum_errors, sequence_gaps, ..."""
-        return self._frames.stats
-
-    @property
-    def buffered(self) -> int:
-        """Bytes held while waiting for the rest of a frame (bounded by ``max_buffer``)."""
-        return self._frames.buffered
-
-    def reset(self) -> None:
-        """Forget partial frames and sequence history (after a reconnect); counters are kept."""
-        self._frames.reset()
+        super().__init__({SENSOR_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[SkinRawFrame]:
         """Add bytes read from the port; return the scans they completed, oldest first."""

@@ -15,22 +15,11 @@ class SkinGestureError(SocialTouchError):
     """Base class of the errors raised on purpose by :mod:`touch_gestures.skin`."""
 
 
-class TraceFormatError(SkinGestureError, ValueError):
+class TraceFormatError(ConfigError, SkinGestureError):
     """A trace CSV file (``subject,variant,gesture,sample,stroke,x,y,t_ms``) is malformed.
 
-    Attributes:
-        path: the file.
-        line: 1-based line number of the offending row, when known.
+    A :class:`ConfigError` (so a ``ValueError``): ``path`` and ``line`` name the offending row.
     """
-
-    def __init__(self, message: str, path: str | None = None, line: int | None = None) -> None:
-        self.path = path
-        self.line = line
-        where = ''
-        if path is not None:
-            where = f'{path}:{line}: ' if line is not None else f'{path}: '
-        self.bare_message = message
-        super().__init__(where + message)
 
 
 class CodebookError(ConfigError, SkinGestureError):
