@@ -184,8 +184,9 @@ class WindowFeatures:
         if x.shape[0] != self._n_cells:
             raise ValueError(f'activation frame has {x.shape[0]} cells; expected {self._n_cells} for a '
                              f'{self.grid[0]}x{self.grid[1]} grid (set grid= to the sensor layout)')
-        f2 = float(x.sum())
-        if not math.isfinite(f2):  # sum is non-finite iff some cell is: slow path only then
+        with np.errstate(invalid='ignore', over='ignore'):  # inf + -inf: detected just below
+            f2 = float(x.sum())
+        if not math.isfinite(f2):  # a non-finite cell makes the sum non-finite: slow path only then
             bad = ~np.isfinite(x)
             self.nonfinite_cells += int(bad.sum())
             x = np.where(bad, 0.0, x)
