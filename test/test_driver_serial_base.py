@@ -33,7 +33,7 @@ class ToyModel:
 class ToySerial(VirtualSerial):
     scheme = 'toysim'
 
-    def make_model(self, name, options):
+    def make_model(self, name, options, seed=0):
         if options:
             raise ValueError(f'unknown options {sorted(options)}')
         return ToyModel()

@@ -141,8 +141,9 @@ class VirtualSerial(SerialBase):
         super().__init__(*args, **kwargs)
 
     # ---------------------------------------------------------------- sensor-specific
-    def make_model(self, name: str, options: dict[str, str]) -> Any:
-        """Build the device model from the URL; raise ValueError on bad options."""
+    def make_model(self, name: str, options: dict[str, str], seed: int = 0) -> Any:
+        """Build the device model from the URL options (fault options removed) and the URL's
+        ``seed``, which also seeds the fault injection; raise ValueError on bad options."""
         raise NotImplementedError
 
     # ---------------------------------------------------------------- pyserial API
@@ -157,8 +158,11 @@ class VirtualSerial(SerialBase):
             if state is None:
                 faults = {k: _float_option(options, k) for k in _FAULT_OPTIONS if k in options}
                 model_options = {k: v for k, v in options.items() if k not in _FAULT_OPTIONS}
+                seed = faults.get('seed', 0)
+                if seed != int(seed):
+                    raise SerialException(f'option seed={options["seed"]!r} must be an integer')
                 try:
-                    model = self.make_model(name, model_options)
+                    model = self.make_model(name, model_options, seed=int(seed))
                 except (ValueError, KeyError, OSError) as err:
                     raise SerialException(f'cannot open {self.port}: {err}') from err
                 state = DeviceState(name, model, faults)

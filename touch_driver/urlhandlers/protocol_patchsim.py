@@ -27,7 +27,7 @@ from typing import Any
 
 from touch_driver.patch.device import PatchDevice
 from touch_driver.scenes import load_stimulus
-from touch_driver.virtual_port import VirtualSerial, parse_url
+from touch_driver.virtual_port import VirtualSerial
 
 
 class Serial(VirtualSerial):
@@ -35,12 +35,7 @@ class Serial(VirtualSerial):
 
     scheme = 'patchsim'
 
-    def make_model(self, name: str, options: dict[str, str]) -> Any:
+    def make_model(self, name: str, options: dict[str, str], seed: int = 0) -> Any:
         options = dict(options)
         stimulus = load_stimulus(options.pop('scene', 'idle'), sensor='patch')
-        seed_text = parse_url(self.port, self.scheme)[1].get('seed', '0')  # the port keeps 'seed' for itself
-        try:
-            seed = int(float(seed_text))
-        except ValueError:
-            raise ValueError(f'option seed={seed_text!r} must be an integer') from None
         return PatchDevice.from_options(stimulus, options, seed=seed)

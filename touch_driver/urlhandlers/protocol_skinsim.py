@@ -26,7 +26,7 @@ from touch_graph.yamlconf import did_you_mean
 
 from ..skin.device import SkinDevice, registered_stimulus
 from ..skin.stimuli import load_scene
-from ..virtual_port import VirtualSerial, parse_url
+from ..virtual_port import VirtualSerial
 
 __all__ = ['Serial']
 
@@ -74,11 +74,5 @@ class Serial(VirtualSerial):
 
     scheme = 'skinsim'
 
-    def make_model(self, name: str, options: dict[str, str]) -> SkinDevice:
-        # The base class keeps 'seed' for its fault injection; the device model is seeded from it too.
-        _, all_options = parse_url(self.port, self.scheme)
-        try:
-            seed = int(float(all_options.get('seed', 0)))
-        except ValueError as err:
-            raise ValueError(f"option seed={all_options['seed']!r} must be an integer") from err
+    def make_model(self, name: str, options: dict[str, str], seed: int = 0) -> SkinDevice:
         return make_device(options, seed=seed)
