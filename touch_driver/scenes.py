@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
@@ -54,8 +54,8 @@ from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, typed
 
 __all__ = ['ENVELOPES', 'BearScript', 'BearStimulus', 'BearTouch', 'IdleBear', 'IdlePatch', 'PanelTouch',
-           'PatchScript', 'PatchStimulus', 'PatchTouch', 'envelope', 'load_stimulus', 'register_stimulus',
-           'registered_stimuli', 'unregister_stimulus']
+           'PatchScript', 'PatchStimulus', 'PatchTouch', 'envelope', 'generated_stimulus', 'load_stimulus',
+           'register_stimulus', 'registered_stimuli', 'unregister_stimulus']
 
 N_BEAR_CHANNELS = 64
 PATCH_GRID = (16, 16)
@@ -355,15 +355,22 @@ def _pair(item: YamlDict, key: str, what: str) -> tuple[float, float]:
 GENERATOR_PACKAGES = ('touch_gestures.', 'touch_driver.')
 
 
-def _generated(doc: YamlDict, kind: str, body_map: Any) -> Any:
-    """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples)."""
+def generated_stimulus(doc: YamlDict, what: str, is_stimulus: Callable[[Any], bool], example: str,
+                       body_map: Any = None) -> Any:
+    """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples).
+
+    Shared by every sensor's scene files. ``generator`` is ``module:function`` inside
+    :data:`GENERATOR_PACKAGES` (a scene file cannot import arbitrary code); unknown options,
+    options the function rejects and a result that ``is_stimulus`` refuses are ConfigErrors
+    naming the file and line. A ``body_map`` is passed to functions that take one.
+    """
     import importlib
     import inspect
-    spec = typed(doc, 'generator', str, 'stimulus scene')
+    spec = typed(doc, 'generator', str, what)
     module_name, _, func_name = spec.partition(':')
     if not func_name or not module_name.startswith(GENERATOR_PACKAGES):
         raise doc.error(f"generator must be 'module:function' in {' or '.join(p[:-1] for p in GENERATOR_PACKAGES)}, "
-                        f'e.g. touch_gestures.bear.scene:make_scene; got {spec!r}', 'generator')
+                        f'e.g. {example}; got {spec!r}', 'generator')
     try:
         func = getattr(importlib.import_module(module_name), func_name)
     except (ImportError, AttributeError) as err:
@@ -371,21 +378,21 @@ def _generated(doc: YamlDict, kind: str, body_map: Any) -> Any:
     options = doc.get('options', YamlDict())
     if not isinstance(options, YamlDict):
         raise doc.error(f'options must be a mapping of keyword arguments of {spec}', 'options')
-    accepted = [n for n in inspect.signature(func).parameters if n != 'body_map']
+    parameters = inspect.signature(func).parameters
+    accepted = [n for n in parameters if n != 'body_map']
     for key in options:
         if key not in accepted:
             raise options.error(f'{spec} takes no option {key!r}{did_you_mean(str(key), accepted)}; options: '
                                 f'{", ".join(accepted)}', key)
     kwargs = {k: tuple(v) if isinstance(v, list) else v for k, v in options.items()}
-    if body_map is not None and 'body_map' in inspect.signature(func).parameters:
+    if body_map is not None and 'body_map' in parameters:
         kwargs['body_map'] = body_map
     try:
         stimulus = func(**kwargs)
     except (TypeError, ValueError) as err:
         raise doc.error(f'{spec} rejected the options: {err}', 'options' if 'options' in doc else 'generator') from None
-    want = BearStimulus if kind == 'bear' else PatchStimulus
-    if not isinstance(stimulus, want):
-        raise doc.error(f'{spec} returned a {type(stimulus).__name__}, not a {kind} stimulus', 'generator')
+    if not is_stimulus(stimulus):
+        raise doc.error(f'{spec} returned a {type(stimulus).__name__}, not a {what} stimulus', 'generator')
     return stimulus
 
 
@@ -402,7 +409,9 @@ def _load_yaml_script(path: Path, sensor: str | None, body_map: Any) -> Any:
         scripted = [k for k in ('touches', 'panels') if k in doc]
         if scripted:
             raise doc.error(f"a scene has a generator or a timeline, not both: remove '{scripted[0]}'", scripted[0])
-        return _generated(doc, kind, body_map)
+        want = BearStimulus if kind == 'bear' else PatchStimulus
+        return generated_stimulus(doc, f'{kind} scene', lambda s: isinstance(s, want),
+                                  'touch_gestures.bear.scene:make_scene', body_map)
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if kind == 'bear':

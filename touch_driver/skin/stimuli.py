@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.yamlconf import YamlDict, check_keys, did_you_mean, load_yaml, typed
+from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
 
 from .contact import Contact, SkinStimulus
 
@@ -219,38 +219,6 @@ def _event(node: Any, where: Any, index: int) -> SkinStimulus:
         raise params.error(f'{what}: {err}') from err
 
 
-def _generated(doc: YamlDict) -> SkinStimulus:
-    """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples)."""
-    import importlib
-    import inspect
-
-    from touch_driver.scenes import GENERATOR_PACKAGES  # one rule for every sensor's scenes
-    spec = typed(doc, 'generator', str, 'skin scene')
-    module_name, _, func_name = spec.partition(':')
-    if not func_name or not module_name.startswith(GENERATOR_PACKAGES):
-        raise doc.error(f"generator must be 'module:function' in {' or '.join(p[:-1] for p in GENERATOR_PACKAGES)}, "
-                        f'e.g. touch_gestures.skin.scene:people_scene; got {spec!r}', 'generator')
-    try:
-        func = getattr(importlib.import_module(module_name), func_name)
-    except (ImportError, AttributeError) as err:
-        raise doc.error(f'cannot find generator {spec!r}: {err}', 'generator') from None
-    options = doc.get('options', YamlDict())
-    if not isinstance(options, YamlDict):
-        raise doc.error(f'options must be a mapping of keyword arguments of {spec}', 'options')
-    accepted = list(inspect.signature(func).parameters)
-    for key in options:
-        if key not in accepted:
-            raise options.error(f'{spec} takes no option {key!r}{did_you_mean(str(key), accepted)}; options: '
-                                f'{", ".join(accepted)}', key)
-    try:
-        stimulus = func(**{k: tuple(v) if isinstance(v, list) else v for k, v in options.items()})
-    except (TypeError, ValueError) as err:
-        raise doc.error(f'{spec} rejected the options: {err}', 'options' if 'options' in doc else 'generator') from None
-    if not callable(getattr(stimulus, 'contacts', None)):
-        raise doc.error(f'{spec} returned a {type(stimulus).__name__}, not a skin stimulus (contacts(t))', 'generator')
-    return stimulus
-
-
 def scene_from_mapping(doc: Any) -> SkinStimulus:
     """A :class:`Timeline` (or a generated stimulus) from a parsed YAML scene (see the module doc);
     ConfigError names the line."""
@@ -263,7 +231,9 @@ def scene_from_mapping(doc: Any) -> SkinStimulus:
         scripted = [k for k in ('events', 'duration_s') if k in doc]
         if scripted:
             raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
-        return _generated(doc)
+        from touch_driver.scenes import generated_stimulus  # one rule for every sensor's scenes
+        return generated_stimulus(doc, 'skin scene', lambda s: callable(getattr(s, 'contacts', None)),
+                                  'touch_gestures.skin.scene:people_scene')
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if 'events' not in doc:
