@@ -12,7 +12,6 @@ Run: ``python -m touch_driver.bear.bench [--json] [--repeats N] [--frames N]``.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import statistics
 import sys
@@ -22,6 +21,7 @@ from touch_driver.bear.calibration import BearCalibrator
 from touch_driver.bear.device import BearDevice
 from touch_driver.bear.protocol import BearDecoder
 from touch_driver.scenes import BearScript, BearTouch
+from touch_graph.benchmarking import gc_paused
 
 __all__ = ['bench_decode_calibrate', 'main']
 
@@ -66,15 +66,10 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 300, seed: int = 0) -
         raise ValueError(f'repeats >= 1 and frames >= 10 are required; got {repeats}, {frames}')
     data = _frames(frames, seed)
     results = {}
-    gc_was_enabled = gc.isenabled()
-    gc.disable()  # a collection inside one repeat would be noise, not the cost of the code
-    try:
+    with gc_paused():
         for key, decode, calibrate in (('us_per_frame', True, True), ('decode_us', True, False),
                                        ('calibrate_us', False, True)):
             results[key] = 1e6 * statistics.median(_time_per_frame(data, decode, calibrate) for _ in range(repeats))
-    finally:
-        if gc_was_enabled:
-            gc.enable()
     period_us, period_real_us = 1e6 / IDEAL_RATE_HZ, 1e6 / REAL_RATE_HZ
     return {
         'sensor': 'bear', 'synthetic_data': True, **results,

@@ -17,7 +17,6 @@ Run: ``python -m touch_driver.patch.bench [--json] [--repeats N] [--frames N]``.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import statistics
 import sys
@@ -27,6 +26,7 @@ from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator
 from touch_driver.patch.device import PatchDevice
 from touch_driver.patch.protocol import PatchDecoder
 from touch_driver.scenes import PanelTouch, PatchScript, PatchTouch
+from touch_graph.benchmarking import gc_paused
 
 __all__ = ['bench_decode_calibrate', 'main']
 
@@ -65,18 +65,13 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 500, seed: int = 0) -
     if repeats < 1 or frames < 10:
         raise ValueError(f'repeats >= 1 and frames >= 10 are required; got {repeats}, {frames}')
     out: dict = {'sensor': 'patch', 'synthetic_data': True}
-    gc_was_enabled = gc.isenabled()
-    gc.disable()  # a collection inside one repeat would be noise, not the cost of the code
-    try:
+    with gc_paused():
         for mode, suffix in (('raw', ''), ('averaged', '_averaged')):
             data, period = _frames(frames, mode, seed)
             us = 1e6 * statistics.median(_time_per_frame(data, 1.0 / period) for _ in range(repeats))
             out[f'us_per_frame{suffix}'] = us
             out[f'frame_period_us{suffix}'] = 1e6 * period
             out[f'ratio{suffix}'] = us / (1e6 * period)
-    finally:
-        if gc_was_enabled:
-            gc.enable()
     out.update(goal_ratio=GOAL_FRACTION, meets_goal=max(out['ratio'], out['ratio_averaged']) <= GOAL_FRACTION,
                repeats=repeats, frames=frames)
     return out

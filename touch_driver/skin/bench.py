@@ -13,11 +13,12 @@ The dictionary has the same keys as the bear and patch benchmarks.
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import statistics
 import sys
 import time
+
+from touch_graph.benchmarking import gc_paused
 
 from .calibration import SkinCalibrationConfig, SkinCalibrator
 from .device import render_frames
@@ -71,16 +72,11 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 600, seed: int = 0,
     if decoded != frames:
         raise RuntimeError(f'decoder returned {decoded} of {frames} frames; the benchmark input is broken')
     results = {}
-    gc_was_enabled = gc.isenabled()
-    gc.disable()  # a collection inside one pass would be noise, not the cost of the code
-    try:
+    with gc_paused():
         for key, decode, calibrate in (('us_per_frame', True, True), ('decode_us', True, False),
                                        ('calibrate_us', False, True)):
             results[key] = 1e6 / frames * statistics.median(
                 _seconds(wires, decode, calibrate, config) for _ in range(repeats))
-    finally:
-        if gc_was_enabled:
-            gc.enable()
     period_us = FRAME_PERIOD_S * 1e6
     return {
         'sensor': 'skin', 'synthetic_data': True, **results,

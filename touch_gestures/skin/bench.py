@@ -17,13 +17,14 @@ the centroid method, measured in the same run::
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import statistics
 import sys
 import time
 
 import numpy as np
+
+from touch_graph.benchmarking import gc_paused
 
 from .gesture import TouchGesture
 from .registry import RECOGNISERS, make_recogniser
@@ -67,17 +68,12 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         for g in probe[:3]:
             model.predict(g)  # warm up caches and lazy imports
         runs = []
-        gc_was_enabled = gc.isenabled()
-        gc.disable()
-        try:
+        with gc_paused():
             for _ in range(repeats):
                 start = time.perf_counter()
                 for g in probe:
                     model.predict(g)
                 runs.append((time.perf_counter() - start) / len(probe) * 1e6)
-        finally:
-            if gc_was_enabled:
-                gc.enable()
         us = statistics.median(runs)
         out['recognisers'][name] = {'us_per_recognition': us, 'ratio_to_goal': us / GOAL_US,
                                     'templates': len(model.templates_)}
