@@ -112,3 +112,14 @@ def test_trace_features_ignore_position_size_and_speed():
     np.testing.assert_allclose(base, moved, atol=1e-5)
     reverse = trace_features(path[::-1], t, 32)
     assert np.abs(base - reverse).max() > 0.1  # direction counts
+
+
+def test_a_subnormal_duration_falls_back_to_the_sample_index_without_overflow():
+    import warnings
+
+    from touch_gestures.skin.proposed import time_bin_resample
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        out = time_bin_resample(points, np.array([0.0, 5e-324, 1e-323]), 4)
+    assert out[:, 0].tolist() == time_bin_resample(points, np.array([0.0, 0.0, 0.0]), 4)[:, 0].tolist()

@@ -32,6 +32,8 @@ The distance is the root-mean-square point distance in units of the gesture's si
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .base import TemplateRecogniser
@@ -60,9 +62,12 @@ def time_bin_resample(points: np.ndarray, times: np.ndarray, n_bins: int) -> np.
         return np.repeat(pts, n_bins, axis=0)
     t = np.asarray(times, dtype=np.float64)
     duration = t[-1] - t[0]
-    if not duration > 0 or (t[1:] < t[:-1]).any():
-        t, duration = np.arange(n, dtype=np.float64), float(n - 1)
-    k = ((t - t[0]) * (n_bins / duration)).astype(np.intp)
+    # A subnormal duration passes `> 0` but overflows n_bins / duration: treat it as constant time.
+    with np.errstate(over='ignore', divide='ignore'):
+        scale = n_bins / duration if duration > 0 else math.inf
+    if not math.isfinite(scale) or (t[1:] < t[:-1]).any():
+        t, scale = np.arange(n, dtype=np.float64), n_bins / float(n - 1)
+    k = ((t - t[0]) * scale).astype(np.intp)
     np.minimum(k, n_bins - 1, out=k)  # the last point falls on the upper edge: last bin
     counts = np.bincount(k, minlength=n_bins)
     out = np.empty((n_bins, 2))
