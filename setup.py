@@ -40,15 +40,17 @@ setup(
         (f'share/{PACKAGE}/config/scenes', glob('config/scenes/*.yaml')),
         (f'share/{PACKAGE}/msg', glob('msg/*.msg')),
     ],
+    # Bounds are the versions CI tests: the lower ones through constraints/lowest.txt, the upper
+    # ones by a plain install (the newest each bound allows). Widen a bound only after testing it.
     install_requires=[
-        'numpy>=1.24',
-        'scikit-learn>=1.3',
-        'scipy>=1.10',  # also a dependency of scikit-learn; used directly (linalg, ndimage, signal)
-        'pyserial>=3.5',
-        'pyyaml>=6.0',
+        'numpy>=2.0.2,<2.5',
+        'scikit-learn>=1.6.0,<1.10',  # 1.6: check_array(ensure_all_finite=...)
+        'scipy>=1.13.1,<1.18',  # also a dependency of scikit-learn; used directly (linalg, ndimage, signal)
+        'pyserial>=3.5,<4',
+        'pyyaml>=6.0,<7',
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
         # writer's chunk flush, so the minor version is pinned.
-        'rosbags>=0.10,<0.12',
+        'rosbags>=0.11.6,<0.12',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
