@@ -68,9 +68,6 @@ def test_malformed_parameter_files_are_config_errors(tmp_path):
     bad.write_text('node:\n  ros__parameters:\n    a: [1, x]\n')
     with pytest.raises(ConfigError, match=r':3:.*one type'):
         load_parameter_file(bad)
-    bad.write_text('node:\n  ros__parameters:\n    a: 1\n    a: 2\n')
-    with pytest.raises(ConfigError, match='duplicate key'):
-        load_parameter_file(bad)
     with pytest.raises(ConfigError, match='file not found'):
         load_parameter_file(tmp_path / 'missing.yaml')
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import GraphError
 from .clock import SimTimeSource, TimeSource, WallTimeSource
 from .logging import set_default_level
-from .parameters import FileOverride, ParameterSource, RosArgs, load_parameter_file, parse_ros_args
+from .parameters import RosArgs, parse_ros_args
 
 if TYPE_CHECKING:
     from .node import Node, Publisher, Subscription
@@ -70,8 +70,6 @@ class Context:
         self.topics: dict[str, Topic] = {}
         self.nodes: list[Node] = []
         self.global_args = RosArgs()
-        self.global_file_overrides: list[FileOverride] = []
-        self.global_param_overrides: list[tuple[str, Any, ParameterSource]] = []
         self.callback_errors = 0
         self._shutdown_callbacks: list[Callable[[], None]] = []
         self._graph_listeners: list[Callable[[str, Any], None]] = []
@@ -83,9 +81,7 @@ class Context:
             if self._ok:
                 raise GraphError('context is already initialised; call shutdown() first')
             self.global_args = parse_ros_args(args)
-            self.global_file_overrides = [o for f in self.global_args.params_files for o in load_parameter_file(f)]
-            self.global_param_overrides = [(n, v, ParameterSource('--ros-args -p')) for n, v in
-                                           self.global_args.params]
+            self.global_args.overrides()  # reads the files now: a bad file fails init, not the first node
             if self.global_args.log_level:
                 set_default_level(self.global_args.log_level)
             self._ok = True

@@ -36,8 +36,6 @@ from .parameters import (
     SetParametersResult,
     check_ranges,
     coerce_to_type,
-    load_parameter_file,
-    node_matches,
     parse_ros_args,
 )
 from .qos import DurabilityPolicy, QoSProfile, qos_profile_from
@@ -88,22 +86,19 @@ class Node:
         self.callback_errors = 0
         self._destroyed = False
 
-        # Parameters: later sources win (global files, node files, -p, then parameter_overrides).
+        # Parameters, as rclpy resolves them: the context's --ros-args, then the node's own (each
+        # its files and -p values merged in argument order), then parameter_overrides.
         self._parameters: dict[str, Parameter] = {}
         self._descriptors: dict[str, ParameterDescriptor] = {}
-        self._overrides: dict[str, tuple[Any, ParameterSource]] = {}
-        file_overrides = list(self.context.global_file_overrides) if global_args else []
-        for path in args.params_files:
-            file_overrides += load_parameter_file(path)
-        for item in file_overrides:
-            if node_matches(item.pattern, self._name, self._fqn):
-                self._overrides[item.name] = (item.value, item.source)
-        cli_params = (list(self.context.global_param_overrides) if global_args else []) + \
-            [(n, v, ParameterSource('--ros-args -p')) for n, v in args.params]
-        for name, value, source in cli_params:
-            self._overrides[name] = (value, source)
+        self._overrides: dict[str, tuple[Any, Any]] = {}
+        self._override_keys: dict[str, str] = {}  # parameter -> the file's node key it came from
+        for source_args in ((global_args, args) if global_args is not None else (args,)):
+            for name, (value, key) in source_args.overrides().for_node(self._fqn).items():
+                self._overrides[name] = (value.value, value)
+                self._override_keys[name] = key
         for param in parameter_overrides or []:
             self._overrides[param.name] = (param.value, ParameterSource('parameter_overrides'))
+            self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
         self._set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]] = []
         self.declare_parameter('use_sim_time', False)
@@ -320,6 +315,15 @@ class Node:
             raise ParameterNotDeclaredException(f"parameter '{name}' of {self._fqn} is not declared; declared: "
                                                 f'{", ".join(sorted(self._parameters))}')
         return param
+
+    def override_origins(self) -> list[tuple[str, Any, str, bool]]:
+        """``(name, source, node key, declared)`` of every override given to this node: where it was
+        written, which parameter-file key brought it, and whether the node declared it (an
+        undeclared one is a misspelt parameter or one meant for another node; a node that
+        allows undeclared parameters takes them all)."""
+        return [(name, source, self._override_keys.get(name, self._fqn),
+                 self._allow_undeclared or name in self._parameters)
+                for name, (_, source) in self._overrides.items()]
 
     def get_parameter(self, name: str) -> Parameter:
         return self._require(name)

@@ -8,9 +8,9 @@ A parameter file is what ``ros2 run ... --ros-args --params-file F`` reads::
         cutoffs:              # nested mappings flatten to dotted names: cutoffs.tickle
           tickle: 3.0
 
-A key without a leading ``/`` matches a node of that name in any namespace. Values keep
-their file and line, so a wrong type is reported as ``config/x.yaml:4: parameter 'alpha'
-of /bear/subtype ...``.
+Files and ``-p`` values are read and typed by rcl's rules and applied to the nodes rclpy
+applies them to (:mod:`.param_yaml`). Values keep their file and line, so a wrong type is
+reported as ``config/x.yaml:4: parameter 'alpha' of /bear/subtype ...``.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, ParameterError
-from ..yamlconf import YamlDict, YamlList, load_yaml, loads_yaml
+from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value, pattern_matches
 
 __all__ = [
-    'FloatingPointRange', 'IntegerRange', 'Parameter', 'ParameterDescriptor', 'ParameterNotDeclaredException',
-    'ParameterSource', 'ParameterType', 'RosArgs', 'SetParametersResult', 'load_parameter_file',
-    'parse_ros_args',
+    'FloatingPointRange', 'IntegerRange', 'OverrideValue', 'Parameter', 'ParameterDescriptor',
+    'ParameterNotDeclaredException', 'ParameterOverrides', 'ParameterSource', 'ParameterType', 'RosArgs',
+    'SetParametersResult', 'load_parameter_file', 'parse_ros_args',
 ]
 
 
@@ -196,97 +196,56 @@ def check_ranges(name: str, value: Any, descriptor: ParameterDescriptor, node: s
 
 # --------------------------------------------------------------------------- parameter files
 
-@dataclass(frozen=True)
-class FileOverride:
-    """One parameter value from a file, with the node pattern it applies to."""
-
-    pattern: str
-    name: str
-    value: Any
-    source: ParameterSource
-
-
-def _flatten(prefix: str, mapping: YamlDict, out: list[tuple[str, Any, int | None]]) -> None:
-    for key, value in mapping.items():
-        name = f'{prefix}.{key}' if prefix else str(key)
-        if isinstance(value, dict):
-            _flatten(name, value, out)
-        else:
-            if isinstance(value, YamlList):
-                value = list(value)
-            out.append((name, value, mapping.line_of(key) if isinstance(mapping, YamlDict) else None))
-
-
-def load_parameter_file(path: str | Path, text: str | None = None) -> list[FileOverride]:
-    """Read a ROS 2 parameter YAML file into overrides; errors name file and line."""
-    doc = loads_yaml(text, str(path)) if text is not None else load_yaml(path)
-    if doc is None:
-        return []
-    if not isinstance(doc, dict):
-        raise ConfigError('a parameter file is a mapping of node names to {ros__parameters: ...}', str(path), 1)
-    out = []
-    for pattern, body in doc.items():
-        if not isinstance(body, dict) or 'ros__parameters' not in body:
-            raise doc.error(f"node entry '{pattern}' must hold a 'ros__parameters' mapping "
-                            f'(node_name: {{ros__parameters: {{param: value}}}})', pattern)
-        extra = [k for k in body if k != 'ros__parameters']
-        if extra:
-            raise body.error(f"unexpected key '{extra[0]}' beside ros__parameters under '{pattern}'", extra[0])
-        params = body['ros__parameters']
-        if params is None:
-            continue
-        if not isinstance(params, dict):
-            raise body.error(f"ros__parameters of '{pattern}' must be a mapping of names to values",
-                             'ros__parameters')
-        flat: list[tuple[str, Any, int | None]] = []
-        _flatten('', params, flat)
-        for name, value, line in flat:
-            try:
-                _infer_type(value)
-            except ParameterError as err:
-                raise ConfigError(f"parameter '{name}': {err}", str(path), line) from err
-            out.append(FileOverride(str(pattern), name, value, ParameterSource(str(path), line)))
-    return out
+def load_parameter_file(path: str | Path, text: str | None = None) -> ParameterOverrides:
+    """Read a ROS 2 parameter YAML file by rcl's rules (:mod:`.param_yaml`); errors name file and line."""
+    return ParameterOverrides.from_file(path, text)
 
 
 def node_matches(pattern: str, node_name: str, fqn: str) -> bool:
-    """Does a parameter-file key match a node (rcl rules, plus bare names for any namespace)?
+    """Does a parameter-file node key apply to a node? rclpy's rule (:func:`.param_yaml.pattern_matches`).
 
-    >>> node_matches('/**', 'a', '/x/a'), node_matches('/x/*', 'a', '/x/a'), node_matches('a', 'a', '/x/a')
+    >>> node_matches('/**', 'a', '/x/a'), node_matches('/x/*', 'a', '/x/a'), node_matches('a', 'a', '/a')
     (True, True, True)
-    >>> node_matches('/y/a', 'a', '/x/a'), node_matches('/**/a', 'a', '/x/y/a')
-    (False, True)
+    >>> node_matches('/y/a', 'a', '/x/a'), node_matches('/**/a', 'a', '/x/y/a'), node_matches('a', 'a', '/x/a')
+    (False, True, False)
     """
-    if not pattern.startswith('/'):
-        return pattern == node_name
-    return _match_tokens(pattern.strip('/').split('/'), fqn.strip('/').split('/'))
-
-
-def _match_tokens(pattern: list[str], tokens: list[str]) -> bool:
-    # '**' matches any number of tokens (none included), '*' exactly one.
-    if not pattern:
-        return not tokens
-    head, rest = pattern[0], pattern[1:]
-    if head == '**':
-        return any(_match_tokens(rest, tokens[i:]) for i in range(len(tokens) + 1))
-    return bool(tokens) and head in ('*', tokens[0]) and _match_tokens(rest, tokens[1:])
+    return pattern_matches(pattern, fqn)
 
 
 # --------------------------------------------------------------------------- --ros-args
 
 @dataclass
 class RosArgs:
-    """What ``--ros-args`` gave: remap rules, parameter values, parameter files, log level."""
+    """What ``--ros-args`` gave: remap rules, parameter values, parameter files, log level.
+
+    ``params`` and ``params_files`` list what was given; :meth:`overrides` merges them in the
+    order they were given, as rcl merges them into one set of overrides.
+    """
 
     remaps: list[str] = field(default_factory=list)
     params: list[tuple[str, Any]] = field(default_factory=list)
     params_files: list[str] = field(default_factory=list)
     log_level: str | None = None
     unparsed: list[str] = field(default_factory=list)
+    _ordered: list[tuple[str, Any]] = field(default_factory=list, repr=False, compare=False)
+
+    def overrides(self) -> ParameterOverrides:
+        """Files and ``-p`` values merged in argument order; ``-p`` applies to every node (``/**``)."""
+        out = ParameterOverrides()
+        for kind, item in self._ordered:
+            if kind == 'file':
+                out.merge(load_parameter_file(item))
+            else:
+                name, value = item
+                out.set('/**', name, OverrideValue(value, '--ros-args -p'))
+        return out
 
 
 def parse_ros_args(args: list[str] | None) -> RosArgs:
-    """Parse ``[... --ros-args -r a:=b -p x:=1 --params-file F --log-level debug -- ...]``."""
+    """Parse ``[... --ros-args -r a:=b -p x:=1 --params-file F --log-level debug -- ...]``.
+
+    ``-p`` values are typed by rcl's rules (``-p rate:=1e-6`` is a double, ``-p t:=1:30`` a string).
+    """
     out = RosArgs()
     if not args:
         return out
@@ -310,9 +269,17 @@ def parse_ros_args(args: list[str] | None) -> RosArgs:
                 if ':=' not in value:
                     raise ParameterError(f'--ros-args -p expects name:=value, got {value!r}')
                 name, text = value.split(':=', 1)
-                out.params.append((name, loads_yaml(text, f'-p {name}') if text else ''))
+                if not name:
+                    raise ParameterError(f'--ros-args -p {value!r}: the parameter name is empty')
+                try:
+                    parsed = parse_parameter_value(text, f'-p {name}')
+                except ConfigError as err:
+                    raise ParameterError(f'--ros-args -p {value!r}: {err.bare_message}') from err
+                out.params.append((name, parsed))
+                out._ordered.append(('param', (name, parsed)))
             elif arg == '--params-file':
                 out.params_files.append(value)
+                out._ordered.append(('file', value))
             elif arg == '--log-level':
                 out.log_level = value
         else:
