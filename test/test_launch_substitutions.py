@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from touch_graph.errors import ConfigError, LaunchError
-from touch_graph.launch.safe_eval import EvalError, safe_eval
+from touch_graph.launch.safe_eval import MAX_WEIGHT, EvalError, safe_eval
 from touch_graph.launch.substitutions import (
     Call,
     Location,
@@ -221,6 +221,12 @@ def test_safe_eval_allows_literals_arithmetic_logic(expression, value):
     ('1 / 0', 'ZeroDivisionError'),
     ("'a' + 1", 'TypeError'),
     ('round(1.5, 10 ** 6)', 'round() digits'),
+    # the robustness review: each ran for seconds or ended in MemoryError
+    ('str([[0] * 99999] * 99999)', 'repetition'),
+    ("'%*d' % (2000000000, 1)", "'%' formatting"),
+    ('max([[0] * 99999] * 99999)', 'repetition'),
+    ("[['x' * 99999]] * 2", 'too large'),
+    ("['ab' * 30000] + ['cd' * 30000]", 'result too large'),
 ])
 def test_safe_eval_rejects_code_and_huge_results(expression, fragment):
     with pytest.raises(EvalError) as info:
@@ -236,6 +242,21 @@ def test_safe_eval_rejects_code_and_huge_results(expression, fragment):
     max_leaves=12))
 def test_safe_eval_agrees_with_python_on_integer_expressions(expression):
     assert safe_eval(expression) == eval(expression)  # the reference is Python itself on trusted input
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.recursive(
+    st.sampled_from(['0', "'ab'", '[0]', '[1, 2]', '999']),
+    lambda inner: st.one_of(
+        st.tuples(inner, st.sampled_from(['*', '+']), inner).map(lambda t: f'({t[0]} {t[1]} {t[2]})'),
+        st.tuples(inner, st.integers(1, 10 ** 6)).map(lambda t: f'({t[0]} * {t[1]})'),
+        inner.map(lambda t: f'[{t}, {t}]'), inner.map(lambda t: f'str({t})')),
+    max_leaves=10))
+def test_safe_eval_results_stay_within_the_weight_bound(expression):
+    # Whatever the nesting and repetition, a result's text stays within a fixed multiple of
+    # MAX_WEIGHT: so nothing computed from it (str, max, ==) can run away.
+    with contextlib.suppress(EvalError):
+        assert len(str(safe_eval(expression))) <= 25 * MAX_WEIGHT
 
 
 @settings(max_examples=300, deadline=None)

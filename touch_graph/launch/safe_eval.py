@@ -7,8 +7,12 @@ subset is walked: numbers, strings, booleans, ``None``, tuples and lists of thos
 y``, a few pure builtins (``abs min max round int float str bool len``) and the functions and
 constants of :mod:`math` (as ``sqrt(2)`` or ``math.sqrt(2)``, as ROS allows both). Attribute
 access other than ``math.<name>``, subscripts, comprehensions, lambdas and names other than
-those are rejected, and sizes are bounded so ``9**9**9`` or ``'a' * 10**9`` cannot hang or
-exhaust memory.
+those are rejected, and sizes are bounded so ``9**9**9``, ``'a' * 10**9``,
+``str([[0] * 99999] * 99999)`` or ``'%*d' % (2000000000, 1)`` cannot hang or exhaust memory:
+every value's *weight* (characters of its strings, digits of its integers and items of its
+lists, nested lists counted in full even when they share one object) stays under
+:data:`MAX_WEIGHT`, so anything computed from it (``str``, ``max``, a comparison) is bounded
+too; ``%`` formats no strings.
 
 >>> safe_eval('2 * (3 + 4)')
 14
@@ -32,14 +36,14 @@ import operator
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ['MAX_EXPRESSION_CHARS', 'MAX_POWER_EXPONENT', 'MAX_SEQUENCE_LENGTH', 'EvalError', 'safe_eval']
+__all__ = ['MAX_EXPRESSION_CHARS', 'MAX_INT_BITS', 'MAX_POWER_EXPONENT', 'MAX_WEIGHT', 'EvalError', 'safe_eval']
 
 #: Longest expression accepted; also keeps :func:`ast.parse` far from its recursion limit.
 MAX_EXPRESSION_CHARS = 2000
 #: Largest ``|exponent|`` of ``**`` (``2 ** 1000`` is fine, ``9 ** 9 ** 9`` is not).
 MAX_POWER_EXPONENT = 1000
-#: Longest string, list or tuple an operation may produce.
-MAX_SEQUENCE_LENGTH = 100_000
+#: Largest weight of a value (module doc); its ``str()`` has at most ~25 characters per unit.
+MAX_WEIGHT = 100_000
 #: Largest integer magnitude, in bits, an operation may produce.
 MAX_INT_BITS = 4096
 
@@ -76,11 +80,29 @@ def _allowed_constants() -> str:
     return ', '.join(sorted({*_CONSTANTS, *(name for name, value in _MATH.items() if not callable(value))}))
 
 
+def _weight(value: Any, budget: int = MAX_WEIGHT) -> int:
+    """The weight of ``value`` (module doc), counting stopped as soon as it passes ``budget``, so
+    a list that holds one big list many times costs no more than ``budget`` steps."""
+    if isinstance(value, str):
+        return len(value)
+    if isinstance(value, int) and not isinstance(value, bool):
+        return 1 + value.bit_length() // 3  # about its decimal digits
+    if isinstance(value, (list, tuple)):
+        total = 1 + len(value)
+        for item in value:
+            if total > budget:
+                break
+            if isinstance(item, (str, int, list, tuple)):
+                total += _weight(item, budget - total) - 1
+        return total
+    return 1
+
+
 def _check_size(value: Any) -> Any:
-    if isinstance(value, (str, list, tuple)) and len(value) > MAX_SEQUENCE_LENGTH:
-        raise EvalError(f'result longer than {MAX_SEQUENCE_LENGTH} items')
     if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > MAX_INT_BITS:
         raise EvalError(f'integer result larger than 2**{MAX_INT_BITS}')
+    if _weight(value) > MAX_WEIGHT:
+        raise EvalError(f'result too large (more than {MAX_WEIGHT} characters, digits and items in all)')
     return value
 
 
@@ -90,12 +112,15 @@ def _binary(op: ast.operator, left: Any, right: Any) -> Any:
         raise EvalError(f'operator {type(op).__name__} is not allowed; use + - * / // % **')
     if isinstance(op, ast.Pow) and isinstance(right, (int, float)) and abs(right) > MAX_POWER_EXPONENT:
         raise EvalError(f'exponent {right!r} is larger than {MAX_POWER_EXPONENT}')
+    if isinstance(op, ast.Mod) and isinstance(left, str):
+        raise EvalError("'%' formatting of strings is not allowed in $(eval); join strings with + and str()")
     if isinstance(op, ast.Mult):
-        # Repetition ('ab' * n, [0] * n) is bounded before it allocates.
+        # Repetition ('ab' * n, [[0] * 9] * n) is bounded before it allocates.
         for seq, count in ((left, right), (right, left)):
-            if isinstance(seq, (str, list, tuple)) and isinstance(count, int) and \
-                    len(seq) * max(count, 0) > MAX_SEQUENCE_LENGTH:
-                raise EvalError(f'repetition would make more than {MAX_SEQUENCE_LENGTH} items')
+            if isinstance(seq, (str, list, tuple)) and isinstance(count, int) and not isinstance(count, bool) \
+                    and count > 0 and _weight(seq) * count > MAX_WEIGHT:
+                raise EvalError(f'repetition would make a result too large (more than {MAX_WEIGHT} characters, '
+                                'digits and items in all)')
     return _check_size(func(left, right))
 
 
