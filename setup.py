@@ -31,7 +31,7 @@ setup(
     license='Apache-2.0',
     python_requires='>=3.10',
     packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
-                                    'touch_gestures', 'touch_gestures.*']),
+                                    'touch_gestures', 'touch_gestures.*', 'social_touch_msgs', 'social_touch_msgs.*']),
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),

@@ -7,7 +7,8 @@ import importlib
 
 import pytest
 
-MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', 'touch_graph.yamlconf']
+MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', 'touch_graph.yamlconf',
+           'social_touch_msgs.msg']
 
 
 @pytest.mark.parametrize('name', MODULES)
