@@ -22,6 +22,8 @@ NODES: dict[str, tuple[str, str]] = {
     'bear_gestures': ('touch_gestures.bear.node', 'BearGesturesNode'),
     'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
     'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
+    'touch_view': ('touch_view.node', 'TouchViewNode'),
+    'foxglove_server': ('touch_view.foxglove_node', 'FoxgloveServerNode'),
 }
 
 setup(
@@ -31,7 +33,10 @@ setup(
     license='Apache-2.0',
     python_requires='>=3.10',
     packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
-                                    'touch_gestures', 'touch_gestures.*']),
+                                    'touch_gestures', 'touch_gestures.*', 'touch_view', 'touch_view.*']),
+    # The view's page, its assets and the Foxglove layout: shipped in the package, nothing fetched online.
+    package_data={'touch_view': ['static/*.html', 'static/*.js', 'static/*.css', 'bear_layout.yaml',
+                                 'layouts/*.json']},
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
