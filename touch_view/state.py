@@ -69,6 +69,7 @@ class SensorActivity:
     publishers: int = 0
     frames: int = 0
     last_wall: float | None = None
+    since_wall: float | None = None  #: when the view first knew the sensor is in the scene
     silent: bool = False
 
     @property
@@ -247,16 +248,16 @@ class ViewState:
         now = self._wall()
         with self._lock:
             for name, activity in self.sensors.items():
-                silent = activity.present and (activity.last_wall is None or
-                                               now - activity.last_wall > self.stale_after_s)
-                if activity.last_wall is None and activity.publishers and not activity.silent:
-                    # A driver that has not sent a frame yet is silent only after the grace period too.
-                    activity.last_wall = now
-                    silent = False
+                if not activity.present:
+                    continue
+                if activity.since_wall is None:
+                    activity.since_wall = now   # a driver without a frame yet gets the same grace period
+                reference = activity.last_wall if activity.last_wall is not None else activity.since_wall
+                silent = now - reference > self.stale_after_s
                 if silent != activity.silent:
                     activity.silent = silent
-                    self._say(self._graph_now, name, 'SILENT: no frame for over '
-                              f'{self.stale_after_s:g} s' if silent else 'frames again')
+                    self._say(self._graph_now, name, f'SILENT: no frame for over {self.stale_after_s:g} s'
+                              if silent else 'frames again')
 
     def snapshot(self) -> dict[str, Any]:
         """The whole picture as JSON-ready data (see the module docstring for encodings)."""
