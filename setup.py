@@ -56,10 +56,15 @@ setup(
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
         # writer's chunk flush, so the minor version is pinned.
         'rosbags>=0.11.6,<0.12',
+        # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.22 is the
+        # first release with message_backlog_size and foxglove.messages.
+        'foxglove-sdk>=0.22.0,<0.31',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
-                 'colcon-python-setup-py'],
+                 'colcon-python-setup-py',
+                 # the view's browser test (system chromium + chromedriver) and Foxglove client test
+                 'selenium>=4.11,<5', 'websockets>=13.0,<18'],
     },
     zip_safe=True,
     entry_points={
