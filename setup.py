@@ -56,9 +56,9 @@ setup(
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
         # writer's chunk flush, so the minor version is pinned.
         'rosbags>=0.11.6,<0.12',
-        # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.22 is the
-        # first release with message_backlog_size and foxglove.messages.
-        'foxglove-sdk>=0.22.0,<0.31',
+        # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.25 is the
+        # first release whose start_server takes message_backlog_size (a bounded queue per client).
+        'foxglove-sdk>=0.25.0,<0.31',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',

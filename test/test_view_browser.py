@@ -11,48 +11,17 @@ from __future__ import annotations
 import pytest
 from selenium.webdriver.support.ui import WebDriverWait
 
-from touch_driver.virtual_port import forget_devices
 from touch_view.browser import headless_chromium
-from touch_view.scene import BackgroundScene
 
 HUG = '[chest_left, back_upper, back_middle, side_left_upper, side_right_lower]'
 
 
-def write_scene(tmp_path):
-    """A launch file with the package's bear and skin launch files on scripted scenes, and the view."""
-    (tmp_path / 'hug.yaml').write_text(
-        'sensor: bear\ntouches:\n'
-        f'  - {{sensors: {HUG}, start: 4.0, duration: 9.0, level: 1.0}}\n')
-    (tmp_path / 'line.yaml').write_text(
-        'skin_scene: 1\nduration_s: 30.0\nevents:\n'
-        '  - line: {from_mm: [6, 23], to_mm: [41, 23], at_s: 3.0, for_s: 0.8, force_n: 1.5}\n')
-    launch = tmp_path / 'scene.launch.yaml'
-    launch.write_text(f"""launch:
-- include:
-    file: $(find-pkg-share social_touch)/launch/bear.launch.yaml
-    arg: [{{name: monitor, value: 'false'}}, {{name: bear_port, value: 'bearsim://bear?scene={tmp_path}/hug.yaml'}}]
-- include:
-    file: $(find-pkg-share social_touch)/launch/skin.launch.yaml
-    arg: [{{name: monitor, value: 'false'}}, {{name: skin_port, value: 'skinsim://skin?scene={tmp_path}/line.yaml'}}]
-- node:
-    pkg: social_touch
-    exec: touch_view
-    name: touch_view
-    param:
-    - {{name: port, value: 0, type: int}}
-""")
-    return launch
-
-
 @pytest.fixture
-def scene(tmp_path):
-    forget_devices()
-    scene = BackgroundScene(write_scene(tmp_path), rate=2.0).start()
-    try:
-        yield scene
-    finally:
-        scene.stop()
-        forget_devices()
+def scene(scene_launch, run_scene):
+    return run_scene(scene_launch(
+        bear=[f'{{sensors: {HUG}, start: 4.0, duration: 9.0, level: 1.0}}'],
+        skin=['line: {from_mm: [6, 23], to_mm: [41, 23], at_s: 3.0, for_s: 0.8, force_n: 1.5}'],
+        serve=['touch_view']))
 
 
 def text_of(browser, css):

@@ -11,7 +11,6 @@ virtual device plays a line traced left to right.
 from __future__ import annotations
 
 import json
-import socket
 import struct
 import subprocess
 import sys
@@ -20,7 +19,6 @@ import time
 import pytest
 from websockets.sync.client import connect
 
-from touch_driver.virtual_port import forget_devices
 from touch_gestures.patch.model_io import load_model
 from touch_graph import messages
 from touch_graph.bag.definitions import check_definition
@@ -30,28 +28,8 @@ from touch_view.errors import ViewError
 from touch_view.foxglove_cli import layout_path
 from touch_view.foxglove_layout import POSTERIOR_CLASSES
 from touch_view.foxglove_node import IMAGE_TOPICS, FoxgloveServerNode
-from touch_view.scene import BackgroundScene
 
 SUBPROTOCOLS = ['foxglove.websocket.v1', 'foxglove.sdk.v1']
-
-
-def write_scene(tmp_path):
-    (tmp_path / 'line.yaml').write_text(
-        'skin_scene: 1\nduration_s: 30.0\nevents:\n'
-        '  - line: {from_mm: [6, 23], to_mm: [41, 23], at_s: 2.0, for_s: 0.8, force_n: 1.5}\n')
-    launch = tmp_path / 'scene.launch.yaml'
-    launch.write_text(f"""launch:
-- node:
-    pkg: social_touch
-    exec: foxglove_server
-    name: foxglove_server
-    param:
-    - {{name: port, value: 0, type: int}}
-- include:
-    file: $(find-pkg-share social_touch)/launch/skin.launch.yaml
-    arg: [{{name: monitor, value: 'false'}}, {{name: skin_port, value: 'skinsim://skin?scene={tmp_path}/line.yaml'}}]
-""")
-    return launch
 
 
 class FoxgloveClient:
@@ -95,14 +73,10 @@ class FoxgloveClient:
 
 
 @pytest.fixture
-def scene(tmp_path):
-    forget_devices()
-    scene = BackgroundScene(write_scene(tmp_path), rate=2.0).start()
-    try:
-        yield scene
-    finally:
-        scene.stop()
-        forget_devices()
+def scene(scene_launch, run_scene):
+    return run_scene(scene_launch(
+        skin=['line: {from_mm: [6, 23], to_mm: [41, 23], at_s: 2.0, for_s: 0.8, force_n: 1.5}'],
+        serve=['foxglove_server']))
 
 
 def test_a_client_receives_cdr_messages_with_their_ros2msg_schemas_and_the_map_as_an_image(scene):
@@ -135,25 +109,18 @@ def test_a_client_receives_cdr_messages_with_their_ros2msg_schemas_and_the_map_a
     assert node.forwarded['/skin/frame'] >= len(frames)
 
 
-def test_a_port_in_use_is_one_clear_error_naming_the_flag():
-    busy = socket.socket()
-    busy.bind(('127.0.0.1', 0))
-    busy.listen()
-    port = busy.getsockname()[1]
+def test_a_port_in_use_is_one_clear_error_naming_the_flag(busy_port):
+    ctx = Context('sim')
+    ctx.init()
     try:
-        ctx = Context('sim')
-        ctx.init()
-        try:
-            with pytest.raises(ViewError, match=rf'Foxglove server cannot listen on 127.0.0.1:{port}: the port is '
-                                                r'already in use.*--port N'):
-                FoxgloveServerNode(context=ctx, parameter_overrides=[Parameter('port', value=port)])
-        finally:
-            ctx.shutdown()
-        result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'foxglove', '--port', str(port)],
-                                capture_output=True, text=True, timeout=120)
-        assert result.returncode == 1 and 'already in use' in result.stderr and '--port N' in result.stderr
+        with pytest.raises(ViewError, match=rf'Foxglove server cannot listen on 127.0.0.1:{busy_port}: the port is '
+                                            r'already in use.*--port N'):
+            FoxgloveServerNode(context=ctx, parameter_overrides=[Parameter('port', value=busy_port)])
     finally:
-        busy.close()
+        ctx.shutdown()
+    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'foxglove', '--port', str(busy_port)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1 and 'already in use' in result.stderr and '--port N' in result.stderr
 
 
 def test_the_packaged_layout_opens_the_served_topics():

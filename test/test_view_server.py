@@ -162,20 +162,13 @@ def test_a_failing_snapshot_is_counted_and_reported_and_serving_goes_on():
         view.stop()
 
 
-def test_a_port_in_use_is_one_clear_error_naming_the_flag():
-    busy = socket.socket()
-    busy.bind(('127.0.0.1', 0))
-    busy.listen()
-    port = busy.getsockname()[1]
-    try:
-        with pytest.raises(ViewError, match=rf'127.0.0.1:{port}: the port is already in use.*--port N'):
-            ViewServer(Picture(), {}, port=port)
-        result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'view', '--port', str(port)],
-                                capture_output=True, text=True, timeout=120)
-        assert result.returncode == 1
-        assert 'already in use' in result.stderr and '--port N' in result.stderr
-    finally:
-        busy.close()
+def test_a_port_in_use_is_one_clear_error_naming_the_flag(busy_port):
+    with pytest.raises(ViewError, match=rf'127.0.0.1:{busy_port}: the port is already in use.*--port N'):
+        ViewServer(Picture(), {}, port=busy_port)
+    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'view', '--port', str(busy_port)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1
+    assert 'already in use' in result.stderr and '--port N' in result.stderr
 
 
 def test_client_queue_keeps_the_newest_frames_and_counts_the_dropped():

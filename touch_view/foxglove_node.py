@@ -32,10 +32,11 @@ from foxglove.channels import RawImageChannel
 from foxglove.messages import RawImage, Timestamp
 
 from touch_graph import messages
-from touch_graph.compat import Node, ParameterDescriptor, QoSProfile, get_message
+from touch_graph.compat import Node, QoSProfile, get_message
 
 from .colormap import heat_rgb
 from .errors import bind_error
+from .parameters import declare_listen_parameters, declare_read_only
 
 __all__ = ['IMAGE_TOPICS', 'FoxgloveServerNode', 'main', 'ros2msg_schema']
 
@@ -64,8 +65,7 @@ class FoxgloveServerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('foxglove_server', **kwargs)
-        host = self._param('host', '127.0.0.1', "address to listen on ('0.0.0.0': every interface)")
-        port = self._param('port', 8765, 'port to listen on (0: any free port)')
+        host, port = declare_listen_parameters(self, 8765)
         image_rate_hz = self._param('image_rate_hz', 20.0, 'images per second per map, at most')
         discovery_period_s = self._param('discovery_period_s', 1.0, 'how often to look for new topics, s')
         backlog = self._param('backlog', 1024, 'messages queued per client before its oldest are dropped')
@@ -94,8 +94,7 @@ class FoxgloveServerNode(Node):
                                'Foxglove WebSocket); layout: touch_view/layouts/social_touch.json')
 
     def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(description=description,
-                                                                         read_only=True)).value
+        return declare_read_only(self, name, default, description)
 
     @property
     def port(self) -> int:

@@ -31,9 +31,10 @@ from typing import Any
 
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.patch.panels import PanelCalibrator
-from touch_graph.compat import Node, ParameterDescriptor, QoSProfile, get_message, qos_profile_sensor_data
+from touch_graph.compat import Node, QoSProfile, get_message, qos_profile_sensor_data
 
 from .body_layout import VIEW_SIZE, sensor_layout
+from .parameters import declare_listen_parameters, declare_read_only
 from .server import ViewServer
 from .state import POSTERIOR_WINDOW_S, SENSORS, ViewState
 
@@ -64,8 +65,7 @@ class TouchViewNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('touch_view', **kwargs)
-        host = self._param('host', '127.0.0.1', "address to listen on ('0.0.0.0': every interface)")
-        port = self._param('port', 8080, 'port to listen on (0: any free port)')
+        host, port = declare_listen_parameters(self, 8080)
         rate_hz = self._param('rate_hz', 20.0, 'snapshots per second sent to each page, at most')
         stale_after_s = self._param('stale_after_s', 1.0, 'a sensor with no frame for this long (wall s) is SILENT')
         max_clients = self._param('max_clients', 32, 'pages served at once')
@@ -90,8 +90,7 @@ class TouchViewNode(Node):
         self.get_logger().info(f'the touch view is on {self.server.url} (open it in a browser)')
 
     def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(description=description,
-                                                                         read_only=True)).value
+        return declare_read_only(self, name, default, description)
 
     def _subscribe(self) -> None:
         state, frames, events = self.state, qos_profile_sensor_data, QoSProfile(depth=50)
