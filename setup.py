@@ -22,6 +22,8 @@ NODES: dict[str, tuple[str, str]] = {
     'bear_gestures': ('touch_gestures.bear.node', 'BearGesturesNode'),
     'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
     'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
+    'touch_view': ('touch_view.node', 'TouchViewNode'),
+    'foxglove_server': ('touch_view.foxglove_node', 'FoxgloveServerNode'),
 }
 
 setup(
@@ -31,7 +33,11 @@ setup(
     license='Apache-2.0',
     python_requires='>=3.10',
     packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
-                                    'touch_gestures', 'touch_gestures.*', 'social_touch_msgs', 'social_touch_msgs.*']),
+                                    'touch_gestures', 'touch_gestures.*', 'touch_view', 'touch_view.*',
+                                    'social_touch_msgs', 'social_touch_msgs.*']),
+    # The view's page, its assets and the Foxglove layout: shipped in the package, nothing fetched online.
+    package_data={'touch_view': ['static/*.html', 'static/*.js', 'static/*.css', 'bear_layout.yaml',
+                                 'layouts/*.json']},
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
@@ -51,10 +57,15 @@ setup(
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
         # writer's chunk flush, so the minor version is pinned.
         'rosbags>=0.11.6,<0.12',
+        # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.25 is the
+        # first release whose start_server takes message_backlog_size (a bounded queue per client).
+        'foxglove-sdk>=0.25.0,<0.31',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
-                 'colcon-python-setup-py'],
+                 'colcon-python-setup-py',
+                 # the view's browser test (system chromium + chromedriver) and Foxglove client test
+                 'selenium>=4.11,<5', 'websockets>=13.0,<18'],
     },
     zip_safe=True,
     entry_points={

@@ -24,6 +24,7 @@ from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 
 PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
 GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')
+GesturePosteriors = get_message('social_touch_msgs/msg/GesturePosteriors')
 Header = get_message('std_msgs/msg/Header')
 Time = get_message('builtin_interfaces/msg/Time')
 NS = 1_000_000_000
@@ -44,6 +45,8 @@ class Harness:
         self.pub = io.create_publisher(PatchFrame, '/patch/frame', 10)
         self.events = []
         io.create_subscription(GestureEvent, '/touch/gesture', self.events.append, 100)
+        self.posteriors = []
+        io.create_subscription(GesturePosteriors, '/patch/posteriors', self.posteriors.append, 100)
         self.executor = SingleThreadedExecutor(context=self.ctx)
         self.executor.add_node(self.node)
         self.executor.add_node(io)
@@ -55,7 +58,7 @@ class Harness:
             header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id='patch_link')
             self.pub.publish(PatchFrame(header=header, sequence=i & 0xFFFF,
                                         activation=np.asarray(act, np.float32).reshape(-1)))
-            for _ in range(3):  # the node's callback, then the listener's
+            for _ in range(4):  # the node's callback, then the listeners'
                 self.executor.spin_once(0)
 
     def close(self):
@@ -116,6 +119,29 @@ def test_events_are_the_offline_recognisers_with_the_frames_stamps(session_frame
         assert e.posteriors.sum() == pytest.approx(1.0) and e.probability == max(e.posteriors) >= 0.99
         assert node.frames == len(frames) and node.events == len(h.events) and not node.skipped
         assert node.callback_errors == 0
+    finally:
+        h.close()
+
+
+def test_every_frame_publishes_the_posteriors_the_events_come_from(session_frames):
+    frames, _, _ = session_frames
+    h = Harness()
+    try:
+        h.feed(frames[:300])
+        model = h.node.model
+        features, classifier = model.features(), model.classifier
+        expected = np.exp([classifier.log_posterior(features.update(a)) for a in frames[:300]])
+        assert len(h.posteriors) == 300
+        assert all(list(m.classes) == list(model.classes) for m in h.posteriors)
+        got = np.array([m.posteriors for m in h.posteriors])
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-300)  # the same float64 computation
+        np.testing.assert_allclose(got.sum(axis=1), 1.0, atol=1e-12)
+        stamps = [m.header.stamp for m in h.posteriors]
+        assert [(s.sec * NS + s.nanosec - T0_NS) // (NS // 20) for s in stamps] == list(range(300))
+        assert h.events
+        for event in h.events:  # an event carries the posteriors of its frame
+            frame = next(m for m in h.posteriors if m.header.stamp == event.header.stamp)
+            np.testing.assert_array_equal(event.posteriors, frame.posteriors)
     finally:
         h.close()
 

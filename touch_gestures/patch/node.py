@@ -3,10 +3,11 @@
 Subscribes to ``frame`` (``/patch/frame`` in the ``patch`` namespace, ``PatchFrame`` from
 ``patch_driver``, 20 Hz) and publishes ``/touch/gesture`` (``GestureEvent``) when one class's
 posterior reaches the threshold and differs from the current class (the event rule of 6.2, with
-the model file's hold and release). Per frame it does what the evaluation measured
-(docs/patch-evaluation.md): the incremental window features (:class:`~.features.WindowFeatures`),
-the log posterior of every class evaluated directly from the stored mixtures (no scikit-learn
-call), and the event rule (:class:`~.classifier.EventDetector`).
+the model file's hold and release), and ``posteriors`` (``/patch/posteriors``, ``GesturePosteriors``)
+for every frame: all classes' posteriors, the curves of the paper's Fig. 7, for views and evaluation.
+Per frame it does what the evaluation measured (docs/patch-evaluation.md): the incremental window
+features (:class:`~.features.WindowFeatures`), the log posterior of every class evaluated directly
+from the stored mixtures (no scikit-learn call), and the event rule (:class:`~.classifier.EventDetector`).
 
 A ``GestureEvent`` carries the frame's header (its stamp is the frame's), the class and its
 posterior, all classes' posteriors, and ``latency_s``: the stamp of this frame minus the stamp
@@ -47,6 +48,7 @@ __all__ = ['DEFAULT_MODEL', 'PatchGesturesNode', 'default_model_path', 'main']
 
 PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
 GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')
+GesturePosteriors = get_message('social_touch_msgs/msg/GesturePosteriors')
 
 #: The shipped model, relative to the package's share directory (see config/patch_gestures.md).
 DEFAULT_MODEL = ('config', 'patch_gestures.npz')
@@ -94,6 +96,7 @@ class PatchGesturesNode(Node):
         self.resets = 0
         self.skipped: Counter[str] = Counter()
         self.gesture_pub = self.create_publisher(GestureEvent, '/touch/gesture', 20)
+        self.posteriors_pub = self.create_publisher(GesturePosteriors, 'posteriors', 20)
         self.create_subscription(PatchFrame, 'frame', self._on_frame, 20)
         det = self.detector
         meta = self.model.metadata
@@ -197,7 +200,10 @@ class PatchGesturesNode(Node):
         if not self._rate_checked and len(self._stamps) == self._stamps.maxlen:
             self._check_rate()
         age = features.onset_age
-        hit = self.detector.update(self.classifier.log_posterior(x), age, stamp_ns / _NS)
+        log_posterior = self.classifier.log_posterior(x)
+        self.posteriors_pub.publish(GesturePosteriors(header=msg.header, classes=self._classes,
+                                                      posteriors=np.exp(log_posterior)))
+        hit = self.detector.update(log_posterior, age, stamp_ns / _NS)
         if hit is None:
             return
         latency_s = (stamp_ns - self._stamps[-1 - age]) / _NS

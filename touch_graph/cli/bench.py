@@ -1,8 +1,8 @@
 """``social-touch bench TARGET [--json]``: medians of repeated runs on this machine, one core.
 
 Targets: ``runtime`` (pub/sub throughput, latency, CDR), ``drivers`` (decode + calibrate per
-frame). Each prints a table, or with ``--json`` one JSON object, so figures in the docs can
-be regenerated and compared.
+frame), ``view`` (the web view's extra CPU with five pages connected). Each prints a table, or
+with ``--json`` one JSON object, so figures in the docs can be regenerated and compared.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ TARGETS = {
     'bear': ('touch_gestures.bear.bench', 'bench_cycle'),
     'patch': ('touch_gestures.patch.bench', 'bench_frame'),
     'skin': ('touch_gestures.skin.bench', 'bench_recognition'),
+    'view': ('touch_view.bench', 'bench_view'),
 }
 
 

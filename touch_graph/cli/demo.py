@@ -5,7 +5,8 @@ by scripted scenes of simulated people: all data is synthetic), their drivers, t
 recognisers and ``touch_monitor``, which prints one line per perceived event. The graph
 runs on a simulated clock, ``--rate`` times real time, and stops by itself after
 ``--duration`` simulated seconds. While it runs, other terminals can watch it
-(``social-touch topic echo /touch/symbolic``) or record it (``social-touch record -a -o demo``).
+(``social-touch topic echo /touch/symbolic``) or record it (``social-touch record -a -o demo``);
+``--view`` serves the live web view of the scene, ``--foxglove`` every topic to Foxglove.
 """
 
 from __future__ import annotations
@@ -27,6 +28,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     speed.add_argument('--rate', type=float, default=1.5, metavar='R',
                        help='how many times faster than real time (default 1.5)')
     speed.add_argument('--fast', action='store_true', help='as fast as the machine can (deterministic)')
+    parser.add_argument('--view', action='store_true',
+                        help='serve the live web view of the scene (social-touch view); its address is logged')
+    parser.add_argument('--view-port', type=int, default=8080, metavar='PORT',
+                        help='port of the web view (default 8080; 0: any free port)')
+    parser.add_argument('--foxglove', action='store_true',
+                        help='serve every topic over the Foxglove WebSocket protocol (social-touch foxglove)')
+    parser.add_argument('--foxglove-port', type=int, default=8765, metavar='PORT',
+                        help='port of the Foxglove server (default 8765; 0: any free port)')
     parser.add_argument('arguments', nargs='*', metavar='name:=value',
                         help='launch arguments of demo.launch.yaml (see social-touch launch --show-args)')
 
@@ -38,7 +47,12 @@ def run(args: argparse.Namespace) -> int:
     if not rate > 0:
         raise LaunchError(f'--rate must be > 0, got {args.rate}')
     from ..launch.cli import parse_launch_arguments
-    plan = evaluate_launch(share_file('launch', 'demo.launch.yaml'), parse_launch_arguments(args.arguments))
+    arguments = parse_launch_arguments(args.arguments)
+    if args.view:
+        arguments.update(view='true', view_port=str(args.view_port))
+    if args.foxglove:
+        arguments.update(foxglove='true', foxglove_port=str(args.foxglove_port))
+    plan = evaluate_launch(share_file('launch', 'demo.launch.yaml'), arguments)
     print(f'social_touch demo: {len(plan.nodes)} nodes, {args.duration:g} s of a simulated scene '
           f'({"as fast as possible" if args.fast else f"{rate:g}x real time"}); all sensor data is synthetic.',
           file=sys.stderr)

@@ -29,6 +29,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     'export-interfaces': ('touch_graph.cli.export_interfaces',
                           'write the social_touch_msgs ament_cmake package for a ROS 2 workspace'),
     'bench': ('touch_graph.cli.bench', 'measure speed: runtime, drivers, recognisers'),
+    'view': ('touch_view.cli', 'serve a live web page of what the robot feels (the running graph)'),
+    'foxglove': ('touch_view.foxglove_cli', 'serve every topic of the running graph to Foxglove (WebSocket)'),
 }
 
 EPILOG = """\

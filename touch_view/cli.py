@@ -1,0 +1,34 @@
+"""``social-touch view``: serve the live web view of the running graph on localhost.
+
+Starts the ``touch_view`` node in its own process: it subscribes to the perception topics of
+the graph (the scene of ``social-touch demo`` or ``launch`` in another terminal, or on another
+machine once the graph is on the network) and serves a page that shows them live. Open the
+address it prints in a browser; Ctrl-C stops it. To view the demo in one process:
+``social-touch demo --view``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ['add_arguments', 'run']
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')
+    parser.add_argument('--host', default='127.0.0.1',
+                        help='address to listen on (default 127.0.0.1, this machine only; 0.0.0.0: every interface)')
+    parser.add_argument('--port', type=int, default=8080, help='port to listen on (default 8080; 0: any free port)')
+    parser.add_argument('--rate', type=float, default=20.0, metavar='HZ',
+                        help='snapshots per second sent to each page, at most (default 20)')
+    parser.add_argument('--stale-after', type=float, default=1.0, metavar='SECONDS',
+                        help='a sensor with no frame for this long is shown as SILENT (default 1.0)')
+
+
+def run(args: argparse.Namespace) -> int:
+    from touch_graph.node_main import run_node
+
+    from .node import TouchViewNode
+    ros_args = ['--ros-args', '-p', f'host:={args.host}', '-p', f'port:={args.port}',
+                '-p', f'rate_hz:={float(args.rate)!r}', '-p', f'stale_after_s:={float(args.stale_after)!r}']
+    return run_node(TouchViewNode, ros_args)

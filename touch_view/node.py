@@ -1,0 +1,128 @@
+"""``touch_view``: a node that shows what the robot feels on a live web page.
+
+It subscribes to the perception topics like any other node (so it sees a graph on another
+machine once the graph is on the network) and serves a page on ``http://host:port/``
+(:mod:`touch_view.server`) that shows, live:
+
+- the bear: its body outline with every sensor's level, the regions of the active symbolic
+  gestures, the active touch subtypes (``/bear/frame``, ``/touch/symbolic``, ``/touch/subtype``);
+- the patch: the activation map, the 11 panels' contact, the class posteriors over the last
+  10 s with the gesture events marked, as in sympartner2018 Fig. 7 (``/patch/frame``,
+  ``/patch/panels``, ``/patch/posteriors``, ``/touch/gesture``);
+- the skin: the 12x12 map, the contact point's trace of the current and the last gesture, the
+  force vector, the last command with its distance and margin (``/skin/frame``,
+  ``/touch/haptic_command``);
+- the drivers' diagnostics (``/diagnostics``) and a log of events.
+
+Only the sensors whose frame topics have publishers (or whose frames arrive) are shown; one
+that sends no frame for ``stale_after_s`` wall seconds is marked SILENT. The graph never
+waits for a page: callbacks only store references (:mod:`touch_view.state`), and snapshots
+are built and sent from the server's threads at ``rate_hz`` at most.
+
+Parameters: ``host`` ('127.0.0.1'; '0.0.0.0' serves other machines too), ``port`` (8080; 0
+picks a free one), ``rate_hz`` (20: snapshots per second at most), ``stale_after_s`` (1.0),
+``max_clients`` (32), ``body_map`` and ``panels`` (config files; default the package's).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from touch_driver.bear.body_map import BodyMap
+from touch_driver.patch.panels import PanelCalibrator
+from touch_graph.compat import Node, QoSProfile, get_message, qos_profile_sensor_data
+
+from .body_layout import VIEW_SIZE, sensor_layout
+from .parameters import declare_listen_parameters, declare_read_only
+from .server import ViewServer
+from .state import POSTERIOR_WINDOW_S, SENSORS, ViewState
+
+__all__ = ['TouchViewNode', 'main']
+
+BearFrame = get_message('social_touch_msgs/msg/BearFrame')
+SymbolicGesture = get_message('social_touch_msgs/msg/SymbolicGesture')
+TouchSubtype = get_message('social_touch_msgs/msg/TouchSubtype')
+PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
+PanelContact = get_message('social_touch_msgs/msg/PanelContact')
+GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')
+GesturePosteriors = get_message('social_touch_msgs/msg/GesturePosteriors')
+SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
+HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
+DiagnosticArray = get_message('diagnostic_msgs/msg/DiagnosticArray')
+
+#: How often the node asks the graph which sensors have publishers, s of ROS time.
+PRESENCE_PERIOD_S = 0.5
+
+
+class TouchViewNode(Node):
+    """Subscribes to the perception topics and serves them as a live page.
+
+    Attributes:
+        state: the :class:`~touch_view.state.ViewState` the callbacks feed.
+        server: the running :class:`~touch_view.server.ViewServer` (``server.url``).
+    """
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('touch_view', **kwargs)
+        host, port = declare_listen_parameters(self, 8080)
+        rate_hz = self._param('rate_hz', 20.0, 'snapshots per second sent to each page, at most')
+        stale_after_s = self._param('stale_after_s', 1.0, 'a sensor with no frame for this long (wall s) is SILENT')
+        max_clients = self._param('max_clients', 32, 'pages served at once')
+        body_path = self._param('body_map', '', "the bear's body map YAML (default: the package's)")
+        panels_path = self._param('panels', '', "the patch's panels YAML (default: the package's)")
+        body = BodyMap.load(body_path) if body_path else BodyMap.default()
+        sensors = sensor_layout(body)
+        panel_names = PanelCalibrator.from_yaml(Path(panels_path) if panels_path else None).names or ()
+        start_s = self.get_clock().now().nanoseconds * 1e-9
+        self.state = ViewState(sensors, panel_names, stale_after_s=stale_after_s, start_s=start_s)
+        config = {'bear': {'sensors': sensors, 'view_size': VIEW_SIZE, 'source': str(body.source or 'code')},
+                  'patch': {'grid': [16, 16], 'panel_names': list(panel_names),
+                            'posterior_window_s': POSTERIOR_WINDOW_S},
+                  'skin': {'grid': [12, 12], 'side_mm': 47.0},
+                  'rate_hz': rate_hz, 'stale_after_s': stale_after_s, 'node': self.get_fully_qualified_name()}
+        self.server = ViewServer(self.state.snapshot, config, tick=self.state.check_silence, host=host, port=port,
+                                 rate_hz=rate_hz, max_clients=max_clients, on_error=self._on_server_error)
+        self._subscribe()
+        self.create_timer(PRESENCE_PERIOD_S, self._poll_presence)
+        self._poll_presence()
+        self.server.start()
+        self.get_logger().info(f'the touch view is on {self.server.url} (open it in a browser)')
+
+    def _param(self, name: str, default: Any, description: str) -> Any:
+        return declare_read_only(self, name, default, description)
+
+    def _subscribe(self) -> None:
+        state, frames, events = self.state, qos_profile_sensor_data, QoSProfile(depth=50)
+        start = SymbolicGesture.START
+        self.create_subscription(BearFrame, SENSORS['bear'], state.on_bear_frame, frames)
+        self.create_subscription(SymbolicGesture, '/touch/symbolic', lambda m: state.on_symbolic(m, start), events)
+        self.create_subscription(TouchSubtype, '/touch/subtype', state.on_subtype, QoSProfile(depth=200))
+        self.create_subscription(PatchFrame, SENSORS['patch'], state.on_patch_frame, frames)
+        self.create_subscription(PanelContact, '/patch/panels', state.on_panels, events)
+        self.create_subscription(GesturePosteriors, '/patch/posteriors', state.on_posteriors, events)
+        self.create_subscription(GestureEvent, '/touch/gesture', state.on_gesture, events)
+        self.create_subscription(SkinFrame, SENSORS['skin'], state.on_skin_frame, QoSProfile(depth=20))
+        self.create_subscription(HapticCommand, '/touch/haptic_command', state.on_command, events)
+        self.create_subscription(DiagnosticArray, '/diagnostics', state.on_diagnostics, events)
+
+    def _poll_presence(self) -> None:
+        for sensor, topic in SENSORS.items():
+            self.state.set_publishers(sensor, self.count_publishers(topic))
+
+    def _on_server_error(self, text: str) -> None:
+        self.get_logger().error(text, throttle_duration_sec=5.0)
+
+    @property
+    def url(self) -> str:
+        return self.server.url
+
+    def destroy_node(self) -> None:
+        self.server.stop()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    """``ros2 run social_touch touch_view`` / the ``touch_view`` console script."""
+    from touch_graph.node_main import run_node
+    return run_node(TouchViewNode, args)
