@@ -51,6 +51,9 @@ setup(
         # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
         # writer's chunk flush, so the minor version is pinned.
         'rosbags>=0.11.6,<0.12',
+        # Cyclone DDS between processes and machines; the wheel bundles the C library. 11.0.1 is
+        # the oldest release with a wheel for Python 3.11 (0.10.x must be built from source).
+        'cyclonedds>=11.0.1,<12',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
