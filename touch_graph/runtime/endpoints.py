@@ -1,14 +1,22 @@
-"""Publishers, subscriptions and timers of the in-process graph.
+"""Publishers, subscriptions and timers of the graph.
 
-Delivery is a direct queue append: ``publish`` walks the topic's subscriptions and puts
-the message on each one's bounded queue (the oldest dropped and counted when full),
-then tells the subscription's executor it has work. A message published from another
-thread is handed to the executor's thread-safe inbox instead, so queues are only ever
-touched by the thread that spins them.
+Delivery in the process is a direct queue append: ``publish`` walks the topic's
+subscriptions and puts the message on each one's bounded queue (the oldest dropped and
+counted when full), then tells the subscription's executor it has work. A message
+published from another thread is handed to the executor's thread-safe inbox instead, so
+queues are only ever touched by the thread that spins them. On a networked context each
+publisher also has a DDS writer (``_dds``), which sends the message to the remote
+readers, if there are any; messages from remote writers come in through
+:meth:`Subscription._deliver`, from the DDS receive thread.
+
+A subscription callback may take one argument (the message) or two (the message and a
+``message_info`` dict with ``source_timestamp`` and ``received_timestamp`` in ns), as in
+rclpy; the source timestamp is the publishing context's ROS time.
 """
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import threading
 from collections import deque
@@ -43,6 +51,7 @@ class Publisher:
         self._latched: deque | None = deque(maxlen=qos.queue_bound) \
             if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
         self._destroyed = False
+        self._dds: Any = None  # the DDS writer, on a networked context
 
     @property
     def topic_name(self) -> str:
@@ -75,13 +84,23 @@ class Publisher:
         if topic.raw_subscriptions and raw is None:
             raw = messages.serialize(msg, topic.type_name)
         node = self.node
+        info = None
+        if topic.info_subscriptions:
+            now = node.context.now_ns()
+            info = {'source_timestamp': now, 'received_timestamp': now}
         for sub in topic.subscriptions:
             if sub.ignore_local_publications and sub.node is node:
                 continue
-            sub._enqueue(raw if sub.raw else msg)
+            item = raw if sub.raw else msg
+            sub._enqueue((item, info) if sub.with_info else item)
+        dds = self._dds
+        if dds is not None:
+            dds.write(msg, raw)
 
     def get_subscription_count(self) -> int:
-        return len(self._topic.subscriptions)
+        """Subscriptions matched: the process's own and, on a networked context, remote DDS readers."""
+        dds = self._dds
+        return len(self._topic.subscriptions) + (dds.matched() if dds is not None else 0)
 
     def destroy(self) -> bool:
         return self.node.destroy_publisher(self)
@@ -110,6 +129,8 @@ class Subscription:
         self.received = 0
         self.dropped = 0
         self._executor: Executor | None = None
+        self.with_info = _takes_message_info(callback)
+        self._dds: Any = None  # the DDS reader, on a networked context
 
     @property
     def topic_name(self) -> str:
@@ -125,6 +146,18 @@ class Subscription:
             executor.call_soon_threadsafe(self._enqueue_local, item)
             return
         self._enqueue_local(item)
+
+    def _deliver(self, items: list) -> None:
+        """Queue messages that came from the network (called from the DDS receive thread)."""
+        executor = self._executor
+        if executor is not None:
+            executor.call_soon_threadsafe(self._enqueue_many, items)
+        else:
+            self._enqueue_many(items)
+
+    def _enqueue_many(self, items: list) -> None:
+        for item in items:
+            self._enqueue_local(item)
 
     def _enqueue_local(self, item: Any) -> None:
         queue = self._queue
@@ -149,6 +182,18 @@ class Subscription:
 
     def destroy(self) -> bool:
         return self.node.destroy_subscription(self)
+
+
+def _takes_message_info(callback: Callable) -> bool:
+    """True for a callback that takes ``(msg, message_info)``, as rclpy allows."""
+    try:
+        params = list(inspect.signature(callback).parameters.values())
+    except (TypeError, ValueError):  # a builtin without a signature: the one-argument form
+        return False
+    if any(p.kind == p.VAR_POSITIONAL for p in params):
+        return False
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 2 and all(p.default is p.empty for p in positional[:2])
 
 
 class Timer:

@@ -155,7 +155,9 @@ class Executor:
             if not sub._queue or sub._executor is not self:
                 sub._ready = False
                 return True
-            self._guarded(sub.callback, (sub._take(),), sub.node, f"subscription to '{sub.topic_name}'")
+            item = sub._take()
+            self._guarded(sub.callback, item if sub.with_info else (item,), sub.node,
+                          f"subscription to '{sub.topic_name}'")
             return True
         return False
 
