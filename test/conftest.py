@@ -2,10 +2,12 @@
 
 ``SOCIAL_TOUCH_NETWORK=0`` makes every ``Context`` that is not told otherwise stay in
 process, so in-process tests never meet another graph on this machine (another test
-run, a robot). A test that wants DDS takes the ``dds_domain`` fixture: a domain id no
-other test on the machine holds (a lock file per id), with discovery limited to this
-host; it sets ``ROS_DOMAIN_ID`` and ``ROS_AUTOMATIC_DISCOVERY_RANGE`` for the test and
-for the processes it starts, and lifts ``SOCIAL_TOUCH_NETWORK``.
+run, a robot). What joins DDS anyway (``social-touch demo`` and ``launch`` join because
+they are told to) lands in a domain this test session holds, with discovery on this host
+only. A test that wants DDS takes the ``dds_domain`` fixture: a domain id no other test
+on the machine holds (a lock file per id); it sets ``ROS_DOMAIN_ID`` and
+``ROS_AUTOMATIC_DISCOVERY_RANGE`` for the test and for the processes it starts, and lifts
+``SOCIAL_TOUCH_NETWORK``.
 """
 
 import os
@@ -14,6 +16,12 @@ import pytest
 from dds_testing import allocate_domain
 
 os.environ['SOCIAL_TOUCH_NETWORK'] = '0'
+# Held until the session's process ends (the lock goes with its file descriptor).
+_session_domain = allocate_domain()
+os.environ['ROS_DOMAIN_ID'] = str(_session_domain.__enter__())
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+for _name in ('ROS_STATIC_PEERS', 'CYCLONEDDS_URI', 'ROS_LOCALHOST_ONLY'):
+    os.environ.pop(_name, None)
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ from typing import Any
 from cyclonedds.core import DDSException, Entity
 from cyclonedds.internal import DDS
 
-__all__ = ['WaitSet', 'delete_entity', 'matched_readers']
+__all__ = ['WaitSet', 'delete_entity', 'forget', 'matched_readers', 'wait_for_acks']
 
 _lib = DDS._dll_handle
 _entity = ct.c_int32
@@ -41,6 +41,7 @@ _create_guard = _fn('dds_create_guardcondition', _entity, _entity)
 _set_guard = _fn('dds_set_guardcondition', ct.c_int32, _entity, ct.c_bool)
 _delete = _fn('dds_delete', ct.c_int32, _entity)
 _matched_subscriptions = _fn('dds_get_matched_subscriptions', ct.c_int32, _entity, ct.c_void_p, ct.c_size_t)
+_wait_for_acks = _fn('dds_wait_for_acks', ct.c_int32, _entity, ct.c_int64)
 
 
 def delete_entity(entity: Entity | int) -> None:
@@ -58,6 +59,14 @@ def forget(entity: Entity) -> None:
 def matched_readers(writer_ref: int) -> int:
     """How many readers a writer is matched with (0 on error)."""
     return max(0, _matched_subscriptions(writer_ref, None, 0))
+
+
+def wait_for_acks(writer_ref: int, timeout_ns: int) -> bool:
+    """Wait until every reliable reader acknowledged the writer's samples; False on timeout or error.
+
+    (cyclonedds' ``DataWriter.wait_for_acks`` raises AttributeError on a timeout in 11.0.1.)
+    """
+    return _wait_for_acks(writer_ref, max(0, timeout_ns)) == 0
 
 
 class WaitSet:

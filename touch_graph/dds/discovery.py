@@ -274,6 +274,11 @@ class GraphDiscovery:
                 self._lock.wait(left)
             return self.version
 
+    def remote_participant_count(self) -> int:
+        """How many other participants are alive in the domain (cheaper than :meth:`view`)."""
+        with self._lock:
+            return sum(1 for gid in self._participants if gid != self.p.gid)
+
     def view(self) -> GraphView:
         """The graph as this participant sees it now (its own nodes included)."""
         local_nodes = self.local_nodes()

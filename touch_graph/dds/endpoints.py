@@ -6,10 +6,10 @@ that join later) and writes the CDR bytes as they are, padded with zeros to a mu
 of four as rmw_cyclonedds pads them; the sample's source timestamp is the publishing
 context's ROS time (simulated time in a simulated graph, else the wall clock as in ROS 2).
 
-A reader is taken from in the participant's receive thread (:meth:`DdsReader.drain`):
-each sample is decoded there (raw subscriptions get the bytes), and the batch is handed
-to the subscription's executor thread. A sample that does not decode is counted and
-skipped, and reported once per writer with both type names.
+A reader is taken from by the executor of its subscription, in that executor's thread
+(:mod:`.waker`): each sample is decoded there (raw subscriptions get the bytes) and queued
+on the subscription. A sample that does not decode is counted and skipped, and reported
+once per writer with both type names.
 """
 
 from __future__ import annotations
@@ -92,10 +92,9 @@ class DdsWriter:
         ret = ddspy_write_ts(self.ref, data, self._now_ns())
         if ret < 0:
             self.failed += 1
-            if ret == _RETCODE_TIMEOUT:
-                self.publisher.node.get_logger().warn(
-                    f"'{self.topic_name}': a reliable reader did not take a sample within the blocking time; dropped",
-                    throttle_duration_sec=5.0)
+            why = ('a reliable reader did not take a sample within the blocking time' if ret == _RETCODE_TIMEOUT
+                   else f'DDS refused a sample (error {ret}: CDR bytes that are no {self.type_name}?)')
+            self.publisher.node.get_logger().warn(f"'{self.topic_name}': {why}; dropped", throttle_duration_sec=5.0)
         else:
             self.written += 1
 
@@ -112,30 +111,31 @@ class DdsReader:
         undecodable: samples that did not decode as the subscription's type (skipped).
     """
 
-    def __init__(self, participant: DdsParticipant, subscription: Subscription, key: int) -> None:
+    def __init__(self, participant: DdsParticipant, subscription: Subscription) -> None:
         self.participant = participant
         self.subscription = subscription
-        self.key = key
         self.topic_name = subscription.topic_name
         self.type_name = subscription._topic.type_name
         self.reader = _make(DataReader, participant.dds_subscriber, participant, subscription)
         self.condition = ReadCondition(self.reader, _ANY_STATE)
         forget(self.condition)
+        self.condition_ref = self.condition._ref
         self.ref = self.reader._ref
         self.gid = self.reader.get_guid().bytes
         self.received = 0
         self.undecodable = 0
+        self.waker: Any = None  # the DdsWaker of the executor taking from this reader
         self._reported: set[int] = set()
 
-    def drain(self) -> None:
-        """Take everything DDS holds for this reader and hand it to the subscription (receive thread)."""
+    def drain(self) -> bool:
+        """Take everything DDS holds for this reader onto the subscription's queue; True if anything came."""
         sub = self.subscription
         raw, with_info = sub.raw, sub.with_info
+        took = False
         while True:
             samples = ddspy_take(self.ref, _ANY_STATE, TAKE_BATCH)
             if not isinstance(samples, list) or not samples:
-                return
-            items = []
+                return took
             now = time.time_ns() if with_info else 0
             for data, info in samples:
                 if not info.valid_data:
@@ -151,11 +151,10 @@ class DdsReader:
                         continue
                 if with_info:
                     item = (item, {'source_timestamp': info.source_timestamp, 'received_timestamp': now})
-                items.append(item)
-            if items:
-                sub._deliver(items)
+                sub._enqueue_local(item)
+                took = True
             if len(samples) < TAKE_BATCH:
-                return
+                return took
 
     def _undecodable(self, writer_handle: int, err: MessageError) -> None:
         self.undecodable += 1

@@ -11,11 +11,15 @@ Design (one :class:`DdsParticipant` per initialised, networked
 - **No loopback**: readers and writers ignore the endpoints of their own participant, so
   DDS never echoes a process's samples back to it and a writer whose only readers are
   local counts no match; inside the process the runtime delivers in memory as before.
-- **One receive thread** (``dds-<domain>``) waits on a wait set holding every reader's
-  read condition, the discovery readers (:mod:`.discovery`) and a guard condition. It
-  takes and decodes samples and hands each batch to the subscription's executor through
-  ``call_soon_threadsafe``; it also publishes ``ros_discovery_info`` when the local graph
-  changed and checks for incompatible QoS. Node callbacks never run in it.
+- **Samples wake the executor itself**: an executor of a networked context waits on a
+  Cyclone wait set holding the read conditions of its subscriptions' readers
+  (:mod:`.waker`), so a remote sample wakes the thread that runs the callback, which takes
+  and decodes it there: one thread hand-over, as with rclpy. A reader whose node no
+  executor spins keeps at most its depth of samples in DDS, as in ROS 2.
+- **One discovery thread** (``dds-<domain>``) waits on the discovery readers
+  (:mod:`.discovery`) and a guard condition: it keeps the graph view, publishes
+  ``ros_discovery_info`` and subscription statistics when they changed, and reports
+  incompatible QoS. Node callbacks never run in it.
 - **Shutdown**: :meth:`close` (called by ``Context.shutdown``) stops and joins the
   thread, deletes the participant with everything in it and releases the domain (the last
   user deletes it, and Cyclone's threads with it).
@@ -183,23 +187,31 @@ class DdsParticipant:
 
     def _add_reader(self, subscription: Any) -> None:
         try:
-            reader = DdsReader(self, subscription, key=0)
+            reader = DdsReader(self, subscription)
         except Exception as err:
             subscription.node.get_logger().error(
                 f"subscription to '{subscription.topic_name}' is not on the network: {err}")
             return
-        reader.key = self.attach(reader.condition._ref, reader.drain)
         with self._lock:
             self.readers[id(subscription)] = reader
         subscription._dds = reader
+        executor = subscription._executor
+        if executor is not None:  # made while its node spins: that executor takes from it
+            executor._attach_reader(reader)
 
     def _remove_reader(self, subscription: Any) -> None:
         with self._lock:
             reader = self.readers.pop(id(subscription), None)
         subscription._dds = None
         if reader is not None:
-            self.detach(reader.condition._ref, reader.key)
+            if reader.waker is not None:
+                reader.waker.detach(reader)
             delete_entity(reader.ref)
+
+    def make_waker(self) -> Any:
+        """A :class:`~touch_graph.dds.waker.DdsWaker` for an executor of this context."""
+        from .waker import DdsWaker
+        return DdsWaker(self.participant._ref, owner=self)
 
     # ------------------------------------------------------------------ receive thread
     def _run(self) -> None:

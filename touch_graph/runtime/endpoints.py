@@ -6,8 +6,8 @@ counted when full), then tells the subscription's executor it has work. A messag
 published from another thread is handed to the executor's thread-safe inbox instead, so
 queues are only ever touched by the thread that spins them. On a networked context each
 publisher also has a DDS writer (``_dds``), which sends the message to the remote
-readers, if there are any; messages from remote writers come in through
-:meth:`Subscription._deliver`, from the DDS receive thread.
+readers, if there are any, and each subscription a DDS reader, which its executor takes
+from in its own thread (:mod:`touch_graph.dds.waker`).
 
 A subscription callback may take one argument (the message) or two (the message and a
 ``message_info`` dict with ``source_timestamp`` and ``received_timestamp`` in ns), as in
@@ -68,19 +68,20 @@ class Publisher:
             TypeError: ``msg`` is neither this publisher's message type nor CDR bytes.
         """
         raw = None
+        topic = self._topic
         if type(msg) is not self.msg_type:
-            if isinstance(msg, (bytes, bytearray, memoryview)):
-                raw = bytes(msg)
-                msg = messages.deserialize(raw, self._topic.type_name)
-            else:
-                raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {self._topic.type_name} on '
-                                f"'{self._topic.name}', not {type(msg).__name__}")
+            if not isinstance(msg, (bytes, bytearray, memoryview)):
+                raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {topic.type_name} on '
+                                f"'{topic.name}', not {type(msg).__name__}")
+            raw = bytes(msg)
+            # Decoded only for whom needs a message: a remote reader takes the bytes as they are.
+            needs_message = self._latched is not None or len(topic.subscriptions) > topic.raw_subscriptions
+            msg = messages.deserialize(raw, topic.type_name) if needs_message else None
         if self._destroyed:
-            raise GraphError(f"publisher on '{self._topic.name}' was destroyed")
+            raise GraphError(f"publisher on '{topic.name}' was destroyed")
         self.published += 1
         if self._latched is not None:
             self._latched.append(msg)
-        topic = self._topic
         if topic.raw_subscriptions and raw is None:
             raw = messages.serialize(msg, topic.type_name)
         node = self.node
@@ -146,18 +147,6 @@ class Subscription:
             executor.call_soon_threadsafe(self._enqueue_local, item)
             return
         self._enqueue_local(item)
-
-    def _deliver(self, items: list) -> None:
-        """Queue messages that came from the network (called from the DDS receive thread)."""
-        executor = self._executor
-        if executor is not None:
-            executor.call_soon_threadsafe(self._enqueue_many, items)
-        else:
-            self._enqueue_many(items)
-
-    def _enqueue_many(self, items: list) -> None:
-        for item in items:
-            self._enqueue_local(item)
 
     def _enqueue_local(self, item: Any) -> None:
         queue = self._queue
