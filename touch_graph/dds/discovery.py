@@ -179,7 +179,9 @@ class GraphDiscovery:
         return out
 
     def housekeeping(self) -> None:
-        """Republish what changed: ``ros_discovery_info`` and the subscription statistics."""
+        """Take pending discovery samples; republish what changed: ``ros_discovery_info``, statistics."""
+        for kind, reader in self._builtin.items():
+            self._take_builtin(kind, reader)
         self._publish_info()
         stats = self.local_stats()
         snapshot = sorted((gid, tuple(sorted(s.items()))) for gid, s in stats.items())
