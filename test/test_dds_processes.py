@@ -144,3 +144,16 @@ def test_a_vanished_peer_blocks_nobody(dds_domain, tmp_path):
         if doomed.poll() is None:
             doomed.kill()
             doomed.wait(10)
+
+
+def test_transport_bench_measures_both_paths(dds_domain, monkeypatch):
+    """A short run of `social-touch bench transport`: every ping comes back on both paths, figures are sane."""
+    from touch_graph.dds.bench import bench_transport
+    monkeypatch.setenv('SOCIAL_TOUCH_BENCH_DOMAIN', str(dds_domain))
+    result = bench_transport(repeats=1, pings=20, kinds=['gesture_event'], ramp_steps=1)
+    figures = result['kinds']['gesture_event']
+    assert result['domain'] == dds_domain
+    assert figures['ours_lost_pings'] == figures['ours_cdr_lost_pings'] == figures['raw_lost_pings'] == 0
+    assert 0 < figures['raw_latency_median_us'] <= figures['raw_latency_p99_us']
+    assert figures['overhead_ratio'] > 0 and figures['overhead_ratio_cdr'] > 0
+    assert figures['ours_lossless_rate_hz'] == figures['rate_ramp_top_hz'] == 25.0  # goal/4: 10 Hz x 10 / 4

@@ -1,5 +1,6 @@
 """The runtime on DDS: contexts join their domain, deliver in memory inside, over DDS between them."""
 
+import os
 import threading
 import time
 
@@ -144,7 +145,10 @@ def test_a_full_queue_is_counted_not_blocking(graphs):
 
 
 def test_shutdown_leaves_no_threads(dds_domain):
-    before = set(threading.enumerate())
+    """Neither Python threads nor Cyclone's own (OS threads of this process) outlive the context."""
+    def os_threads():
+        return len(os.listdir('/proc/self/task'))
+    before, os_before = set(threading.enumerate()), os_threads()
     for _ in range(2):
         ctx = Context(network=True)
         ctx.init()
@@ -157,6 +161,7 @@ def test_shutdown_leaves_no_threads(dds_domain):
         ctx.shutdown()
         assert ctx.transport is None
     wait_until(lambda: set(threading.enumerate()) <= before, 10, 'threads to end')
+    wait_until(lambda: os_threads() <= os_before, 10, "Cyclone's threads to end")
 
 
 def test_graph_queries_of_a_node_see_the_domain(graphs):

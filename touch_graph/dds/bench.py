@@ -13,9 +13,10 @@ participant ping them, alternating in blocks, so both paths see the same machine
   subscribes raw (the transport without (de)serialisation); ``raw`` writes and takes bytes
   with cyclonedds. ``overhead_ratio`` is ours / raw of the median latencies
   (``overhead_ratio_cdr`` likewise for ``ours_cdr``).
-- **throughput**: bursts paced at rising rates (from a quarter of the goal, 10x the
-  sensor's rate, doubling) on a reliable topic until a burst loses a message on the round
-  trip or cannot be sent at the rate; the highest lossless rate is reported, per path.
+- **throughput**: one-second bursts paced at rising rates (from a quarter of the goal, 10x
+  the sensor's rate, doubling up to 8x the goal, ``rate_ramp_top_hz``) on a reliable topic
+  until a burst loses a message on the round trip (ping and pong) or cannot be sent at the
+  rate; the highest lossless rate is reported, per path.
 
 Runs in ``$SOCIAL_TOUCH_BENCH_DOMAIN`` (default 231) with discovery on this host only,
 so it never disturbs a robot's graph.
@@ -43,6 +44,8 @@ __all__ = ['bench_transport']
 #: gesture events are rare, 10 Hz is far above a person's pace).
 SENSOR_RATES_HZ = {'bear_frame': 25.0, 'patch_frame': 100.0, 'skin_frame': 150.0, 'gesture_event': 10.0}
 DEFAULT_DOMAIN = 231
+#: Steps of the rate ramp: goal/4 doubling up to 8 x the goal.
+RAMP_STEPS = 6
 
 
 def sample_message(kind: str) -> Any:
@@ -186,7 +189,7 @@ def _latencies(path: Any, count: int) -> list[float]:
     return out
 
 
-def _lossless_rate(path: Any, goal_hz: float, seconds: float = 1.0, max_steps: int = 6) -> float:
+def _lossless_rate(path: Any, goal_hz: float, seconds: float = 1.0, max_steps: int = RAMP_STEPS) -> float:
     """The highest rate (Hz) of the ramp goal/4, goal/2, goal, 2 goal, ... sent and echoed back without loss."""
     best = 0.0
     rate = goal_hz / 4
@@ -220,8 +223,12 @@ def _wait_ready(paths: list[Any], timeout_s: float = 15.0) -> None:
     time.sleep(0.2)
 
 
-def bench_transport(repeats: int = 5, pings: int = 200) -> dict:
-    """Per kind: latency median/p99 (us) of ours, ours_cdr and raw, overhead ratios, lossless rates (Hz)."""
+def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None = None,
+                    ramp_steps: int = RAMP_STEPS) -> dict:
+    """Per kind: latency median/p99 (us) of ours, ours_cdr and raw, overhead ratios, lossless rates (Hz).
+
+    ``kinds`` (default all of :data:`~.bench_echo.KINDS`) and ``ramp_steps`` make a short run (tests).
+    """
     from cyclonedds.domain import DomainParticipant
 
     from .cdds import delete_entity
@@ -238,8 +245,8 @@ def bench_transport(repeats: int = 5, pings: int = 200) -> dict:
         acquire_domain(domain, read_discovery())
         participant = DomainParticipant(domain)
         try:
-            for kind in KINDS:
-                results[kind] = _bench_kind(participant, kind, repeats, pings)
+            for kind in kinds or list(KINDS):
+                results[kind] = _bench_kind(participant, kind, repeats, pings, ramp_steps)
         finally:
             delete_entity(participant)
             release_domain(domain)
@@ -255,7 +262,7 @@ def bench_transport(repeats: int = 5, pings: int = 200) -> dict:
             'domain': domain, 'repeats': repeats, 'pings_per_repeat': pings, 'kinds': results}
 
 
-def _bench_kind(participant: Any, kind: str, repeats: int, pings: int) -> dict:
+def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_steps: int) -> dict:
     paths = {'ours': _OursPath(kind, cdr=False), 'ours_cdr': _OursPath(kind, cdr=True),
              'raw': _RawPath(participant, kind)}
     try:
@@ -268,7 +275,7 @@ def _bench_kind(participant: Any, kind: str, repeats: int, pings: int) -> dict:
                 for name, path in paths.items():
                     samples[name] += _latencies(path, pings)
         goal = 10 * SENSOR_RATES_HZ[kind]
-        rates = {name: _lossless_rate(paths[name], goal) for name in ('ours', 'raw')}
+        rates = {name: _lossless_rate(paths[name], goal, max_steps=ramp_steps) for name in ('ours', 'raw')}
     finally:
         for path in paths.values():
             path.close()
@@ -281,6 +288,7 @@ def _bench_kind(participant: Any, kind: str, repeats: int, pings: int) -> dict:
         out['overhead_ratio'] = round(out['ours_latency_median_us'] / out['raw_latency_median_us'], 2)
         out['overhead_ratio_cdr'] = round(out['ours_cdr_latency_median_us'] / out['raw_latency_median_us'], 2)
     out['goal_rate_hz'] = goal
+    out['rate_ramp_top_hz'] = goal / 4 * 2 ** (ramp_steps - 1)  # a rate equal to this: lossless all the way up
     out['ours_lossless_rate_hz'] = rates['ours']
     out['raw_lossless_rate_hz'] = rates['raw']
     out['meets_rate_goal'] = rates['ours'] >= goal

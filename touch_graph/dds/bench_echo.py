@@ -17,6 +17,7 @@ import sys
 import threading
 
 from .. import messages
+from ..benchmarking import gc_paused
 from ..runtime import QoSProfile
 
 #: The kinds of message the bench measures -> their type.
@@ -99,7 +100,8 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdin.read()
         stop.set()
     threading.Thread(target=watch_stdin, daemon=True).start()
-    (_ours if mode == 'ours' else _raw)(kinds, stop)
+    with gc_paused():  # as in the measuring process: a collection is noise, not the transport's cost
+        (_ours if mode == 'ours' else _raw)(kinds, stop)
     return 0
 
 
