@@ -17,7 +17,7 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
-from cyclonedds._clayer import ddspy_take, ddspy_write, ddspy_write_ts
+from cyclonedds._clayer import ddspy_take, ddspy_write_ts
 from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
@@ -98,10 +98,6 @@ class DdsWriter:
         else:
             self.written += 1
 
-    def write_raw(self, data: bytes) -> int:
-        """Write CDR bytes as they are, with Cyclone's timestamp (benchmarks compare this with raw cyclonedds)."""
-        return ddspy_write(self.ref, data)
-
 
 class DdsReader:
     """The DDS side of one runtime subscription.
@@ -112,7 +108,6 @@ class DdsReader:
     """
 
     def __init__(self, participant: DdsParticipant, subscription: Subscription) -> None:
-        self.participant = participant
         self.subscription = subscription
         self.topic_name = subscription.topic_name
         self.type_name = subscription._topic.type_name
