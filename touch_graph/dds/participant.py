@@ -59,8 +59,10 @@ from .qos import POLICY_NAMES, TYPE_CONSISTENCY_POLICY
 __all__ = ['DdsParticipant']
 
 _log = logging.getLogger('touch_graph.dds')
-#: How often the receive thread looks at QoS statuses and refreshes what it publishes, s.
+#: How often the discovery thread looks at QoS statuses and refreshes what it publishes, s.
 HOUSEKEEPING_S = 0.5
+#: Housekeeping rounds an incompatible type waits for its endpoint's discovery, to name its type.
+TYPE_REPORT_TRIES = 4
 
 
 class DdsParticipant:
@@ -101,7 +103,7 @@ class DdsParticipant:
         self._keys = itertools.count(1)
         self._handlers: dict[int, Callable[[], None]] = {}
         self._pending: deque[Callable[[], None]] = deque()
-        self._reported: set[tuple[int, int, int]] = set()
+        self._incompatible: list[list] = []  # [endpoint, count change, policy id, tries] to report
         self.waitset = WaitSet(self.participant._ref)
         from .discovery import GraphDiscovery  # the graph side needs the entities above
         self.graph = GraphDiscovery(self)
@@ -252,28 +254,34 @@ class DdsParticipant:
             readers = list(self.readers.values())
         for writer in writers:
             status = writer.writer.get_offered_incompatible_qos_status()
-            self._report_incompatible(writer, status, 'subscription', 'requesting',
-                                      'No messages will be sent to it.')
+            if status.total_count_change:
+                self._incompatible.append([writer, status.total_count_change, int(status.last_policy_id), 0])
         for reader in readers:
             status = reader.reader.get_requested_incompatible_qos_status()
-            self._report_incompatible(reader, status, 'publisher', 'offering',
-                                      'No messages will be received from it.')
+            if status.total_count_change:
+                self._incompatible.append([reader, status.total_count_change, int(status.last_policy_id), 0])
+        self._incompatible = [item for item in self._incompatible if not self._report_incompatible(item)]
 
-    def _report_incompatible(self, endpoint: Any, status: Any, other: str, verb: str, outcome: str) -> None:
-        if not status.total_count_change:
-            return
-        policy = int(status.last_policy_id)
-        runtime_endpoint = getattr(endpoint, 'publisher', None) or endpoint.subscription
-        logger = runtime_endpoint.node.get_logger()
+    def _report_incompatible(self, item: list) -> bool:
+        """Log one ``[endpoint, change, policy, tries]``; False: try again later (foreign type not discovered yet)."""
+        endpoint, change, policy, tries = item
+        is_writer = isinstance(endpoint, DdsWriter)
+        other, verb = ('subscription', 'requesting') if is_writer else ('publisher', 'offering')
+        outcome = 'No messages will be sent to it.' if is_writer else 'No messages will be received from it.'
+        logger = (endpoint.publisher if is_writer else endpoint.subscription).node.get_logger()
         if policy == TYPE_CONSISTENCY_POLICY:
             theirs = self.graph.foreign_types(endpoint.topic_name, endpoint.type_name)
+            if not theirs and tries < TYPE_REPORT_TRIES:
+                item[3] += 1
+                return False
             logger.warn(f"New {other} discovered on topic '{endpoint.topic_name}', {verb} an incompatible type: "
                         f"{', '.join(theirs) or 'another layout'} does not match ours, "
                         f"'{endpoint.type_name}'. {outcome}")
         else:
             logger.warn(f"New {other} discovered on topic '{endpoint.topic_name}', {verb} incompatible QoS. "
                         f"{outcome} Last incompatible policy: {POLICY_NAMES.get(policy, str(policy))}")
-        endpoint.incompatible = getattr(endpoint, 'incompatible', 0) + int(status.total_count_change)
+        endpoint.incompatible = getattr(endpoint, 'incompatible', 0) + int(change)
+        return True
 
     # ------------------------------------------------------------------ lifecycle
     def close(self) -> None:
