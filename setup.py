@@ -60,6 +60,9 @@ setup(
         # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.25 is the
         # first release whose start_server takes message_backlog_size (a bounded queue per client).
         'foxglove-sdk>=0.25.0,<0.31',
+        # Cyclone DDS between processes and machines; the wheel bundles the C library. 11.0.1 is
+        # the oldest release with a wheel for Python 3.11 (0.10.x must be built from source).
+        'cyclonedds>=11.0.1,<12',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',

@@ -1,4 +1,4 @@
-"""``social-touch topic`` and ``node`` against a graph running in another process."""
+"""``social-touch topic`` and ``node`` against a graph running in another process, over DDS."""
 
 import os
 import re
@@ -12,9 +12,10 @@ import time
 from pathlib import Path
 
 import pytest
+from dds_testing import allocate_domain
 
-from touch_graph.bridge.tool import GraphTool
 from touch_graph.cli import main as cli_main
+from touch_graph.dds.tool import GraphTool
 
 REPO = Path(__file__).resolve().parent.parent
 # The lines these commands take in touch_graph/cli/main.py's COMMANDS table.
@@ -65,28 +66,40 @@ def wait_until(predicate, timeout_s=20.0, what='condition'):
     raise AssertionError(f'timed out after {timeout_s} s waiting for {what}')
 
 
+def graph_env(domain):
+    """The environment of the test's graph: its own DDS domain, discovery on this host only."""
+    env = {k: v for k, v in os.environ.items() if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_STATIC_PEERS',
+                                                             'CYCLONEDDS_URI', 'ROS_DISTRO')}
+    return {**env, 'ROS_DOMAIN_ID': str(domain), 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST',
+            'PYTHONPATH': str(REPO)}
+
+
 def running_graph():
-    """A node process (run_node) publishing in a private graph directory; yields the directory."""
+    """A node process (run_node) publishing in a DDS domain of its own; yields a directory for scripts."""
     path = Path(tempfile.mkdtemp(prefix='stc', dir='/tmp'))
     (path / 'graph.py').write_text(GRAPH)
     (path / 'cli.py').write_text(CLI)
-    patch = pytest.MonkeyPatch()
-    patch.setenv('SOCIAL_TOUCH_GRAPH_DIR', str(path))
-    patch.delenv('ROS_DOMAIN_ID', raising=False)
-    patch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
-    proc = subprocess.Popen([sys.executable, str(path / 'graph.py')], cwd=REPO, stderr=subprocess.DEVNULL,
-                            env={**os.environ, 'PYTHONPATH': str(REPO)})
-    try:
-        def ready():
-            with GraphTool('probe', discovery_timeout_s=1.0) as tool:
-                return '/patch/frame' in tool.graph().topics
-        wait_until(ready, what='the graph process')
-        yield path
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(10)
-        patch.undo()
-        shutil.rmtree(path, ignore_errors=True)
+    with allocate_domain() as domain:
+        env = graph_env(domain)
+        patch = pytest.MonkeyPatch()
+        for key in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE'):
+            patch.setenv(key, env[key])
+        for key in ('ROS_STATIC_PEERS', 'CYCLONEDDS_URI', 'ROS_DISTRO'):
+            patch.delenv(key, raising=False)
+        patch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
+        proc = subprocess.Popen([sys.executable, str(path / 'graph.py')], cwd=REPO, stderr=subprocess.DEVNULL,
+                                env=env)
+        try:
+            def ready():
+                with GraphTool('probe', discovery_timeout_s=1.0) as tool:
+                    return '/patch/frame' in tool.graph().topics
+            wait_until(ready, what='the graph process')
+            yield path
+        finally:
+            proc.send_signal(signal.SIGTERM)
+            proc.wait(10)
+            patch.undo()
+            shutil.rmtree(path, ignore_errors=True)
 
 
 @pytest.fixture(scope='module')
@@ -101,15 +114,12 @@ def cli(capsys, *argv):
     return code, out, err
 
 
-def test_no_graph_is_a_clear_error(capsys, monkeypatch):
-    empty = tempfile.mkdtemp(prefix='ste', dir='/tmp')
-    monkeypatch.setenv('SOCIAL_TOUCH_GRAPH_DIR', empty)
+def test_no_graph_is_a_clear_error(capsys, monkeypatch, dds_domain):
     monkeypatch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
     for argv in (['topic', 'list'], ['node', 'list'], ['topic', 'echo', '/x'], ['topic', 'hz', '/x']):
         code, out, err = cli(capsys, *argv)
         assert code == 1 and out == ''
-        assert 'no social_touch graph is running in domain 0' in err and 'social-touch launch' in err
-    shutil.rmtree(empty)
+        assert f'no ROS 2 graph is running in DDS domain {dds_domain}' in err and 'social-touch launch' in err
 
 
 def test_topic_list_and_info(graph, capsys):
@@ -119,16 +129,24 @@ def test_topic_list_and_info(graph, capsys):
     assert '/patch/frame [social_touch_msgs/msg/PatchFrame]' in out.splitlines()
     _, out, _ = cli(capsys, 'topic', 'list', '-c')
     assert out.strip() == '4'
-    _, out, _ = cli(capsys, 'topic', 'info', '/chatter', '-v')
-    assert out.splitlines()[:2] == ['Type: std_msgs/msg/String', 'Publisher count: 1']
-    assert 'Node: /demo_talker' in out and 'KEEP_LAST (10), RELIABLE, VOLATILE' in out
+    _, out, _ = cli(capsys, 'topic', 'info', '/chatter')
+    assert out.splitlines() == ['Type: std_msgs/msg/String', 'Publisher count: 1', 'Subscription count: 0']
+    _, out, _ = cli(capsys, 'topic', 'info', '/cmd', '-v')
+    lines = out.splitlines()
+    assert lines[:4] == ['Type: std_msgs/msg/String', '', 'Publisher count: 0', '']
+    assert 'Node name: demo_talker' in lines and 'Node namespace: /' in lines and 'Endpoint type: SUBSCRIPTION' in lines
+    assert 'Topic type hash: RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18' in lines
+    assert '  Reliability: RELIABLE' in lines and '  History (Depth): KEEP_LAST (10)' in lines
+    assert any(line.startswith('Queue: ') and 'dropped (queue full)' in line for line in lines)
+    _, out, _ = cli(capsys, 'topic', 'list', '--include-hidden-topics')
+    assert '/_social_touch/subscription_stats' in out.split()
 
 
 def test_node_list_and_info(graph, capsys):
     _, out, _ = cli(capsys, 'node', 'list')
     assert out.split() == ['/demo_talker']
     _, out, _ = cli(capsys, 'node', 'list', '-a')
-    assert '/_bridge_demo_talker' in out.split()
+    assert any(name.startswith('/_social_touch_node_list_') for name in out.split())  # the command's own node
     _, out, _ = cli(capsys, 'node', 'info', '/demo_talker')
     assert out.splitlines() == ['/demo_talker', '  Subscribers:', '    /cmd: std_msgs/msg/String', '  Publishers:',
                                 '    /chatter: std_msgs/msg/String', '    /cmd_echo: std_msgs/msg/String',
@@ -164,7 +182,7 @@ def test_topic_hz(graph, capsys):
 def test_topic_pub_reaches_the_other_process(graph, capsys):
     echo = subprocess.Popen([sys.executable, str(graph / 'cli.py'), 'topic', 'echo', '/cmd_echo', '--once',
                              '--timeout', '30'], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, 'PYTHONPATH': str(REPO)})
+                            env=graph_env(os.environ['ROS_DOMAIN_ID']))
     try:
         # The echo process is in the graph once the talker's /cmd_echo has a subscription.
         def echo_ready():

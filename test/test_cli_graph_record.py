@@ -1,4 +1,4 @@
-"""``social-touch record | play | bag`` against a graph running in another process."""
+"""``social-touch record | play | bag`` against a graph running in another process, over DDS."""
 
 import os
 import signal
@@ -7,7 +7,7 @@ import sys
 
 import pytest
 from rosbags.rosbag2 import Reader
-from test_cli_graph_commands import REPO, cli, running_graph, wait_until
+from test_cli_graph_commands import REPO, cli, graph_env, running_graph, wait_until
 
 from touch_graph.bag import BagRecorder
 from touch_graph.bag.reindex import scan_mcap
@@ -33,7 +33,7 @@ def flushed(mcap):
 
 def start_cli(graph_dir, *argv, **kwargs):
     return subprocess.Popen([sys.executable, str(graph_dir / 'cli.py'), *argv], cwd=REPO, text=True,
-                            env={**os.environ, 'PYTHONPATH': str(REPO)}, **kwargs)
+                            env=graph_env(os.environ['ROS_DOMAIN_ID']), **kwargs)
 
 
 def chatter_numbers(bag):
@@ -101,7 +101,7 @@ def test_play_republishes_into_another_process(graph, tmp_path, capsys):
     echo = start_cli(graph, 'topic', 'echo', '/cmd_echo', '-n', '3', '--timeout', '30',
                      stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
-        from touch_graph.bridge.tool import GraphTool
+        from touch_graph.dds.tool import GraphTool
 
         def echo_ready():
             with GraphTool('probe', discovery_timeout_s=1.0) as tool:

@@ -2,7 +2,8 @@
 
 SYNTHETIC data throughout: simulated performers and scripted strokes on the virtual skin. The
 live tests run the recorder as its own process against a simulated-time graph in this
-process, joined by the bridge, and advance the graph's time only when the recorder is ready.
+process, both in a DDS domain of the test's own, and advance the graph's time only when the
+recorder is ready.
 """
 
 import argparse
@@ -10,7 +11,6 @@ import os
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -177,24 +177,21 @@ def test_resume_in_simulate_mode_completes_the_recording(tmp_path, capsys):
     assert 'resuming' in capsys.readouterr().err
 
 
-# ----------------------------------------------------------------------------- live, through the bridge
+# ----------------------------------------------------------------------------- live, over DDS
 class LiveGraph:
-    """A simulated-time skin graph in this process and the recorder in a child process, joined by the bridge."""
+    """A simulated-time skin graph in this process and the recorder in a child process, over DDS."""
 
-    def __init__(self, scene, argv, graph_dir):
-        from touch_graph.bridge import Bridge
+    def __init__(self, scene, argv, domain):
         from touch_graph.runtime import Context, SingleThreadedExecutor
 
         forget_devices()
         forget_stimuli()
         register_stimulus('skin-record-live', scene)
-        self.ctx = Context('sim')
+        self.ctx = Context('sim', network=True)
         self.ctx.init()
         self.executor = SingleThreadedExecutor(context=self.ctx)
-        self.bridge = Bridge(self.ctx, self.executor, name='test_skin', directory=graph_dir).start()
         self.lines: list[str] = []
-        env = {**os.environ, 'SOCIAL_TOUCH_GRAPH_DIR': str(graph_dir), 'PYTHONPATH': str(REPO)}
-        env.pop('ROS_DOMAIN_ID', None)
+        env = {**os.environ, 'ROS_DOMAIN_ID': str(domain), 'PYTHONPATH': str(REPO)}
         self.proc = subprocess.Popen([sys.executable, '-m', 'touch_gestures.skin.record_cli', '--wait', '0.2', *argv],
                                      cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         threading.Thread(target=self._read, daemon=True).start()
@@ -218,7 +215,12 @@ class LiveGraph:
         from touch_driver.skin.node import SkinDriverNode
         from touch_graph.runtime import Parameter
 
-        self.bridge.wait_until(lambda v: '/skin/frame' in v.topics and v.topics['/skin/frame'].subscriptions, 30.0)
+        deadline = time.monotonic() + 30.0
+        while time.monotonic() < deadline:  # the recorder's subscription is in the graph
+            topic = self.ctx.transport.graph.view().topics.get('/skin/frame')
+            if topic is not None and topic.subscriptions:
+                break
+            time.sleep(0.05)
         self.driver = SkinDriverNode(context=self.ctx, namespace='skin', cli_args=['--ros-args', '--log-level',
                                                                                    'error'],
                                      parameter_overrides=[Parameter('port', value='skinsim://live?scene='
@@ -227,7 +229,7 @@ class LiveGraph:
         self.t0 = self.ctx.now_ns()
 
     def run_until(self, scene_s):
-        """Spin to scene time ``scene_s`` at about 4x real time (the bridge carries every frame)."""
+        """Spin to scene time ``scene_s`` at about 4x real time (frames go over DDS best effort, on this host)."""
         while (self.ctx.now_ns() - self.t0) / 1e9 < scene_s:
             self.executor.spin_for(0.02)
             time.sleep(0.005)
@@ -242,17 +244,8 @@ class LiveGraph:
         self.proc.wait(10)
         if self.driver is not None:
             self.driver.destroy_node()
-        self.bridge.stop()
         self.ctx.try_shutdown()
         forget_stimuli()
-
-
-@pytest.fixture
-def graph_dir():
-    path = Path(tempfile.mkdtemp(prefix='stk', dir='/tmp'))   # socket paths must stay short
-    yield path
-    import shutil
-    shutil.rmtree(path, ignore_errors=True)
 
 
 def strokes(*ends, first_s=1.5, every_s=1.5, for_s=0.7):
@@ -262,10 +255,10 @@ def strokes(*ends, first_s=1.5, every_s=1.5, for_s=0.7):
 RIGHT, LEFT = ((6, 23), (41, 23)), ((41, 25), (6, 24))
 
 
-def test_live_recording_with_an_undo_writes_the_codebook(tmp_path, graph_dir):
+def test_live_recording_with_an_undo_writes_the_codebook(tmp_path, dds_domain):
     out = tmp_path / 'live.npz'
     live = LiveGraph(strokes(RIGHT, RIGHT, RIGHT, LEFT, LEFT),
-                     ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out)], graph_dir)
+                     ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out)], dds_domain)
     try:
         live.wait_for("trace 'line_right' (1/2)")
         live.start_driver()
@@ -285,9 +278,9 @@ def test_live_recording_with_an_undo_writes_the_codebook(tmp_path, graph_dir):
     assert model.description_.startswith('recorded on the skin (/skin/frame)')
 
 
-def test_live_recording_stopped_by_ctrl_c_saves_what_was_recorded(tmp_path, graph_dir):
+def test_live_recording_stopped_by_ctrl_c_saves_what_was_recorded(tmp_path, dds_domain):
     out = tmp_path / 'live.npz'
-    live = LiveGraph(strokes(RIGHT), ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out)], graph_dir)
+    live = LiveGraph(strokes(RIGHT), ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out)], dds_domain)
     try:
         live.wait_for("trace 'line_right' (1/2)")
         live.start_driver()

@@ -17,7 +17,7 @@ from __future__ import annotations
 import sys
 from typing import Any, TextIO
 
-from touch_graph.compat import Node, get_message
+from touch_graph.compat import Node, get_message, sensor_data_qos
 
 __all__ = ['TouchMonitorNode', 'main']
 
@@ -42,7 +42,7 @@ class TouchMonitorNode(Node):
         self.create_subscription(TouchSubtype, '/touch/subtype', self._on_subtype, 200)
         self.create_subscription(GestureEvent, '/touch/gesture', self._on_gesture, 50)
         self.create_subscription(HapticCommand, '/touch/haptic_command', self._on_command, 50)
-        self.create_subscription(PanelContact, '/patch/panels', self._on_panels, 50)
+        self.create_subscription(PanelContact, '/patch/panels', self._on_panels, sensor_data_qos(50))
 
     def _say(self, source: str, text: str) -> None:
         seconds = (self.get_clock().now().nanoseconds - self._start_ns) * 1e-9

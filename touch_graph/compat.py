@@ -18,7 +18,7 @@ from typing import Any
 
 __all__ = [
     'USING_ROS', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile', 'SetParametersResult',
-    'Time', 'get_message', 'qos_profile_sensor_data', 'rclpy', 'stamp_now',
+    'Time', 'get_message', 'qos_profile_sensor_data', 'rclpy', 'sensor_data_qos', 'stamp_now',
 ]
 
 
@@ -60,6 +60,15 @@ else:
         Time,
         qos_profile_sensor_data,
     )
+
+
+def sensor_data_qos(depth: int = 5) -> Any:
+    """rclpy's ``qos_profile_sensor_data`` (best effort, keep last, volatile) with queue ``depth``.
+
+    Sensor frames use it on both ends: a frame that comes too late is worth less than the
+    next one, and a best-effort subscription also matches a reliable publisher.
+    """
+    return QoSProfile(depth=depth, reliability=qos_profile_sensor_data.reliability)
 
 
 def stamp_now(node: Any) -> Any:

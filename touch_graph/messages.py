@@ -28,6 +28,7 @@ std_msgs/msg/Header has no field 'frame_idd' (did you mean 'frame_id'?); its fie
 from __future__ import annotations
 
 import math
+import struct
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -353,7 +354,8 @@ def serialize(message: Message, typename: str | None = None) -> bytes:
     get_message(typename)
     try:
         return bytes(typestore.serialize_cdr(message, typename, little_endian=True))
-    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError) as err:
+    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
+        # struct.error: rosbags packs a scalar 'byte' as int8, so 128-255 do not fit
         raise MessageError(f'cannot serialise {typename}: {err}') from err
 
 

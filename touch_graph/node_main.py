@@ -6,9 +6,9 @@
         return run_node(BearDriver, args)
 
 With the shim it initialises the process-wide context with ``args`` (``--ros-args -p
-rate:=20 -r frame:=/x``...), makes the node, starts a :class:`~touch_graph.bridge.Bridge`
-so other processes (``social-touch topic echo``, ``record``) see it, spins until Ctrl-C or
-SIGTERM, then shuts down cleanly and returns an exit code. Under real rclpy
+rate:=20 -r frame:=/x``...), which joins the DDS domain so other processes and machines
+(``social-touch topic echo``, ``record``, ROS 2 nodes) see the node, makes the node,
+spins until Ctrl-C or SIGTERM, then shuts down cleanly and returns an exit code. Under real rclpy
 (:data:`touch_graph.compat.USING_ROS`) it just inits, spins and shuts down rclpy.
 """
 
@@ -20,7 +20,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from .errors import GraphError, SocialTouchError
+from .errors import SocialTouchError
 
 __all__ = ['StopSignals', 'run_node']
 
@@ -70,7 +70,6 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
     from .compat import USING_ROS
     if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
         return _run_rclpy(node_class, args)
-    from .bridge import Bridge
     from .runtime import SingleThreadedExecutor, get_default_context
 
     argv = list(sys.argv[1:] if args is None else args)
@@ -85,11 +84,6 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
         return 1
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    bridge = None
-    try:
-        bridge = Bridge(context, executor, name=node.get_name()).start()
-    except (GraphError, OSError) as err:  # the node still works alone; tools will not see it
-        node.get_logger().warn(f'not visible to other processes: {err}')
     try:
         with StopSignals(executor.wake) as stop:
             while context.ok() and not stop.requested:
@@ -97,8 +91,6 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         pass
     finally:
-        if bridge is not None:
-            bridge.stop()
         node.destroy_node()
         executor.shutdown()
         context.try_shutdown()

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from touch_graph.compat import get_message
+from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import SerialDriver
@@ -40,7 +40,7 @@ class BearDriverNode(SerialDriverNode):
             drift_tau_s=self.declare_parameter('drift_tau_s', 120.0).value,
             fault_after_s=self.declare_parameter('fault_after_s', 60.0).value,
             saturated_after_s=self.declare_parameter('saturated_after_s', 300.0).value)
-        self.frame_pub = self.create_publisher(BearFrame, 'frame', 10)
+        self.frame_pub = self.create_publisher(BearFrame, 'frame', sensor_data_qos())
 
     def make_driver(self, port: str, clock: Any) -> SerialDriver:
         return SerialDriver(port, payload_sizes={BEAR_ID: PAYLOAD_SIZE},

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.compat import get_message
+from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import SerialDriver
@@ -53,8 +53,8 @@ class PatchDriverNode(SerialDriverNode):
         self._panels_config = self.declare_parameter('panels', '').value or None
         self._panel_calibrators: dict[int, PanelCalibrator] = {}
         self._last_contact: np.ndarray | None = None
-        self.frame_pub = self.create_publisher(PatchFrame, 'frame', 10)
-        self.panels_pub = self.create_publisher(PanelContact, 'panels', 10)
+        self.frame_pub = self.create_publisher(PatchFrame, 'frame', sensor_data_qos())
+        self.panels_pub = self.create_publisher(PanelContact, 'panels', sensor_data_qos())
 
     def make_driver(self, port: str, clock: Any) -> SerialDriver:
         def decode(frame: Any) -> tuple[bool, np.ndarray, np.ndarray]:

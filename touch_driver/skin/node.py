@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from touch_graph.compat import get_message
+from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import SerialDriver
@@ -33,7 +33,7 @@ class SkinDriverNode(SerialDriverNode):
         super().__init__('skin_driver', **kwargs)
         config_path = self.declare_parameter('calibration', '').value
         self.calibrator = SkinCalibrator(load_skin_calibration(config_path or None))
-        self.frame_pub = self.create_publisher(SkinFrame, 'frame', 10)
+        self.frame_pub = self.create_publisher(SkinFrame, 'frame', sensor_data_qos())
 
     def make_driver(self, port: str, clock: Any) -> SerialDriver:
         return SerialDriver(port, payload_sizes={SENSOR_ID: PAYLOAD_SIZE},

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.compat import Node, ParameterDescriptor, get_message
+from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 from touch_graph.yamlconf import did_you_mean
 
@@ -109,7 +109,7 @@ class BearGesturesNode(Node):
         self.subtype_pub = self.create_publisher(TouchSubtype, '/touch/subtype', 50) if self.publish_subtypes else None
         self.symbolic_pub = (self.create_publisher(SymbolicGesture, '/touch/symbolic', 20)
                              if self.publish_symbolic else None)
-        self.create_subscription(BearFrame, 'frame', self._on_frame, 10)
+        self.create_subscription(BearFrame, 'frame', self._on_frame, sensor_data_qos(10))
         self.create_timer(p['max_gap_s'] / 2, self._watchdog)   # ends things within 1.5 max_gap_s
         outputs = (('subtypes', self.publish_subtypes), ('symbolic gestures', self.publish_symbolic))
         what = [name for name, on in outputs if on]

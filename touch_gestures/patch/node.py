@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.compat import Node, ParameterDescriptor, get_message
+from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 
 from .classifier import EventDetector
@@ -97,7 +97,7 @@ class PatchGesturesNode(Node):
         self.skipped: Counter[str] = Counter()
         self.gesture_pub = self.create_publisher(GestureEvent, '/touch/gesture', 20)
         self.posteriors_pub = self.create_publisher(GesturePosteriors, 'posteriors', 20)
-        self.create_subscription(PatchFrame, 'frame', self._on_frame, 20)
+        self.create_subscription(PatchFrame, 'frame', self._on_frame, sensor_data_qos(20))
         det = self.detector
         meta = self.model.metadata
         origin = ('SYNTHETIC data (simulated people)' if self.model.synthetic else

@@ -42,7 +42,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from touch_graph.compat import Node, ParameterDescriptor, get_message
+from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
 
 from .base import Match, TemplateRecogniser
@@ -129,7 +129,7 @@ class HapticCommandsNode(Node):
         self.outcomes: Counter[str] = Counter()
         self.last_match: Match | None = None
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
-        self.create_subscription(SkinFrame, 'frame', self._on_frame, 50)
+        self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
         classes = [str(c) for c in self.recogniser.classes_]
         unmapped = [c for c in classes if c not in self.commands.commands]
         origin = self.recogniser.description_ or 'a codebook without a description'

@@ -5,7 +5,7 @@
 
 Two sources of touches:
 
-- **the live skin** (default): the tool joins the running graph through the bridge (start the
+- **the live skin** (default): the tool joins the running graph over DDS (start the
   skin first: ``social-touch launch launch/skin_driver.launch.yaml skin_port:=/dev/ttyACM0``),
   subscribes to ``/skin/frame``, cuts the frames into gestures as the skin node does, and
   prompts on stderr: ``trace 'line_right' (3/10)``. Type ``u`` + Enter to undo the last kept
@@ -220,9 +220,10 @@ def _stdin_lines(out: queue.Queue) -> None:
 
 def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
     """Record from the running graph; True when the recorder is complete, False when stopped early."""
-    from touch_graph.bridge.tool import GraphTool
-    from touch_graph.messages import deserialize
+    from touch_graph.dds.tool import GraphTool
+    from touch_graph.messages import get_message
     from touch_graph.node_main import StopSignals
+    from touch_graph.runtime import QoSProfile, ReliabilityPolicy
 
     type_name = 'social_touch_msgs/msg/SkinFrame'
     session = LiveSession(recorder)
@@ -230,17 +231,9 @@ def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
         info = tool.require_topic(args.topic, type_name, wait_s=args.wait)
         if not info.publishers:
             _say(f'[codebook record] nobody publishes {args.topic} yet (is skin_driver running?); waiting for frames')
-        bad = Counter()
-
-        def on_sample(sample: Any) -> None:
-            try:
-                msg = deserialize(sample.data, type_name)
-            except SocialTouchError:
-                bad['undecodable'] += 1
-                return
-            session.on_frame(msg)
-
-        tool.bridge.tap(args.topic, on_sample, type_name)
+        # Best effort matches the driver's sensor-data QoS and any reliable publisher too.
+        frames = tool.node.create_subscription(get_message(type_name), args.topic, session.on_frame,
+                                               QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT))
         _say(f'[codebook record] recording {", ".join(recorder.gestures)} from {args.topic}, '
              f'{recorder.repetitions} each; {_HELP_KEYS}')
         session.prompt()
@@ -252,13 +245,14 @@ def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
                 while not lines.empty():
                     session.on_line(lines.get())
                 tool.executor.spin_once(0.1)
-                if tool.bridge.peers():
+                if tool.discovery.remote_participant_count():
                     alone = False
                 elif not alone:
                     alone = True
                     _say('[codebook record] the graph has gone away; waiting for it to come back (q + Enter or '
                          'Ctrl-C: stop and save what was recorded)')
-        skipped = {**session.stream.skipped, **bad}
+        bad = Counter({'undecodable': frames._dds.undecodable}) if frames._dds is not None else Counter()
+        skipped = {**session.stream.skipped, **+bad}
         if skipped:
             _say(f'[codebook record] frames skipped: {skipped}')
     return recorder.done

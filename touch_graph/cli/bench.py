@@ -1,7 +1,8 @@
-"""``social-touch bench TARGET [--json]``: medians of repeated runs on this machine, one core.
+"""``social-touch bench TARGET [--json]``: medians of repeated runs on this machine.
 
 Targets: ``runtime`` (pub/sub throughput, latency, CDR), ``drivers`` (decode + calibrate per
-frame), ``view`` (the web view's extra CPU with five pages connected). Each prints a table, or
+frame), ``transport`` (our DDS path against raw cyclonedds, across processes), ``view`` (the
+web view's extra CPU with five pages connected), and the recognisers. Each prints a table, or
 with ``--json`` one JSON object, so figures in the docs can be regenerated and compared.
 """
 
@@ -16,7 +17,7 @@ import platform
 TARGETS = {
     'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
     'drivers': ('touch_driver.bench', 'bench_drivers'),
-    'bridge': ('touch_graph.bridge.bench', 'bench_bridge'),
+    'transport': ('touch_graph.dds.bench', 'bench_transport'),
     'bear': ('touch_gestures.bear.bench', 'bench_cycle'),
     'patch': ('touch_gestures.patch.bench', 'bench_frame'),
     'skin': ('touch_gestures.skin.bench', 'bench_recognition'),

@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     print(f'social_touch demo: {len(plan.nodes)} nodes, {args.duration:g} s of a simulated scene '
           f'({"as fast as possible" if args.fast else f"{rate:g}x real time"}); all sensor data is synthetic.',
           file=sys.stderr)
-    runner = LaunchRunner(plan.nodes, sim_time=True, rate=rate, bridge=True)
+    runner = LaunchRunner(plan.nodes, sim_time=True, rate=rate, network=True)
     try:
         runner.start()
         runner.spin(args.duration)

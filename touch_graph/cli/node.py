@@ -1,4 +1,9 @@
-"""``social-touch node list | info NODE``, as ``ros2 node`` prints them, over every graph process."""
+"""``social-touch node list | info NODE``, as ``ros2 node`` prints them: every node of the DDS domain.
+
+Nodes come from ``ros_discovery_info`` (ours and any ROS 2 node's); endpoints from DDS
+discovery. Hidden nodes (a name starting with ``_``, such as these commands' own) are
+listed with ``-a``.
+"""
 
 from __future__ import annotations
 
@@ -21,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bridge.tool import GraphTool
+    from ..dds.tool import GraphTool
     with GraphTool(f'node_{args.action}') as tool:
         view = tool.require_graph()
         return _list(view, args) if args.action == 'list' else _info(view, args)
@@ -45,7 +50,7 @@ def _info(view: Any, args: argparse.Namespace) -> int:
                          f'{", ".join(n for n in known if not n.rsplit("/", 1)[-1].startswith("_")) or "none"}')
     if len(found) > 1:
         print(f'There are {len(found)} nodes in the graph with the exact name "{found[0].name}" '
-              f'(processes {", ".join(n.peer for n in found)}); showing all.')
+              f'(participants {", ".join(n.participant for n in found)}); showing all.')
     for node in found:
         print(node.name)
         for title, endpoints in (('Subscribers', node.subscriptions), ('Publishers', node.publishers)):

@@ -1,11 +1,12 @@
 """``social-touch play BAG [--rate R | --fast] [--loop] [--topics T ...] [--start-offset S]``: replay a bag.
 
-The player republishes through the graph bridge to every process that subscribes, with the
-recorded timing (scaled by ``--rate``), after waiting up to ``--wait`` seconds for the
-subscribers the graph announces. ``--fast`` does not wait between messages (one per
-0.2 ms); a slow subscriber then drops the oldest messages of its queue, as it would
-with a fast publisher. Message definitions recorded in the bag are checked against ours
-first; a topic whose ``.msg`` changed is refused with the field that differs.
+The player joins the DDS domain and republishes, with the recorded timing (scaled by
+``--rate``), after waiting up to ``--wait`` seconds for the subscribers the graph announces
+to match; before exiting it waits until reliable subscribers acknowledged every message.
+``--fast`` does not wait between messages (one per 0.2 ms); a slow subscriber then drops
+the oldest messages of its queue, as it would with a fast publisher. Message definitions
+recorded in the bag are checked against ours first; a topic whose ``.msg`` changed is
+refused with the field that differs.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..bag.player_node import PlayerNode
-    from ..bridge.tool import GraphTool
+    from ..dds.tool import GraphTool
     from ..node_main import StopSignals
 
     params = [Parameter('bag', value=str(args.bag)), Parameter('rate', value=float(args.rate)),
@@ -45,24 +46,24 @@ def run(args: argparse.Namespace) -> int:
     if args.topics:
         params.append(Parameter('topics', value=list(args.topics)))
     with GraphTool('play') as tool:
-        if not tool.bridge.peers():
+        view = tool.graph()
+        if not view.remote_participants():
             print(f'social-touch play: {tool.no_graph_message()}; playing anyway', file=sys.stderr)
         player = PlayerNode(context=tool.context, parameter_overrides=params)
         tool.executor.add_node(player)
-        view = tool.graph()
-        wanted = [t for t in player.player.topics if t in view.topics and view.topics[t].subscriptions]
+        wanted = {t: len(view.topics[t].subscriptions) for t in player.player.topics
+                  if t in view.topics and view.topics[t].subscriptions}
 
-        def linked() -> bool:  # the bridge set up a link for every topic some peer subscribes to
-            return all(player._publishers[t].get_subscription_count() > 0 for t in wanted)
+        def matched() -> bool:  # every subscriber the graph announced is matched by our writer
+            return all(player._publishers[t].get_subscription_count() >= n for t, n in wanted.items())
         with StopSignals(tool.executor.wake) as stop:
             if wanted:
-                tool.spin_until(linked, args.wait, stop=stop)
+                tool.spin_until(matched, args.wait, stop=stop)
             player.start()
             tool.spin_until(lambda: player.done, None, stop=stop)
-            tool.bridge.flush(5.0)
-        stats = tool.bridge.stats()
+            acked = tool.flush(list(player._publishers.values()), 5.0)
         print(f'social-touch play: published {player.published} messages'
-              + (f', {stats["dropped"]} dropped by slow subscribers' if stats['dropped'] else '')
+              + ('' if acked else ', not all acknowledged by reliable subscribers within 5 s')
               + (f', {player.errors} unreadable' if player.errors else ''), file=sys.stderr)
         player.destroy_node()
     return 0

@@ -1,11 +1,13 @@
 """``social-touch record [-o BAG] (TOPIC ... | -a) [--duration S]``: record the running graph to a rosbag2 (MCAP).
 
-The recorder subscribes through the graph bridge, so it records a ``social-touch launch``
-running in another process; messages are stamped with the publishing graph's ROS time
-(simulated time in a simulated scene). Ctrl-C or SIGTERM closes the bag; the bag is
-flushed once a second, so if the recorder is killed instead, ``social-touch bag reindex
-BAG`` recovers all but the last second. Progress (messages and bytes per topic) goes to
-stderr.
+The recorder joins the DDS domain and subscribes (raw CDR, with a QoS every publisher
+matches) to the topics it is told, or to every published topic, also later ones: a
+``social-touch launch`` in another process or on another machine, or any ROS 2 node.
+Messages are stamped with their source timestamp: the publishing graph's ROS time
+(simulated time in a simulated scene of ours; the wall clock for ROS 2 nodes). Ctrl-C or
+SIGTERM closes the bag; the bag is flushed once a second, so if the recorder is killed
+instead, ``social-touch bag reindex BAG`` recovers all but the last second. Progress
+(messages and bytes per topic) goes to stderr.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import sys
 import time
 from typing import Any
 
-from ..errors import GraphError
+from ..errors import GraphError, SocialTouchError
 
 __all__ = ['add_arguments', 'format_size', 'run']
 
@@ -47,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..bag.recorder import BagRecorder
     from ..bag.recorder_node import default_bag_name
-    from ..bridge.tool import GraphTool
+    from ..dds.tool import GraphTool
     from ..node_main import StopSignals
 
     if bool(args.topics) == bool(args.all):
@@ -56,11 +58,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f'--duration must be > 0 s, got {args.duration}')
     output = args.output or default_bag_name()
     with GraphTool('record') as tool:
-        if not tool.bridge.peers():
+        if not tool.graph().remote_participants():
             print(f'social-touch record: {tool.no_graph_message()}; waiting for one', file=sys.stderr)
         bag = BagRecorder(output, flush_period_s=args.flush_period).open()
         try:
-            recorder = _TapRecorder(tool, bag, args.topics or None, quiet=args.quiet)
+            recorder = _TopicRecorder(tool, bag, args.topics or None, quiet=args.quiet)
             with StopSignals(tool.executor.wake) as stop:
                 recorder.update()
                 tool.spin_until(lambda: False, args.duration, stop=stop, every=recorder.tick, every_s=0.2)
@@ -78,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-class _TapRecorder:
-    """Taps the wanted topics as they appear in the graph and writes their samples to the bag."""
+class _TopicRecorder:
+    """Subscribes to the wanted topics as they appear in the graph and writes their samples to the bag."""
 
     def __init__(self, tool: Any, bag: Any, topics: list[str] | None, quiet: bool = False) -> None:
         self.tool = tool
@@ -87,24 +89,42 @@ class _TapRecorder:
         self.next_progress = time.monotonic() + 1.0
         self.bag = bag
         self.topics = topics
-        self.taps: dict[str, Any] = {}
+        self.subscriptions: dict[str, Any] = {}
         self.started = time.monotonic()
         self.warned: set[str] = set()
 
     def update(self) -> None:
+        from ..dds.qos import adapted_profile
+        from ..messages import get_message
         view = self.tool.graph()
         for name, info in view.published_topics().items():
-            if name in self.taps or (self.topics is not None and name not in self.topics):
+            if name in self.subscriptions or (self.topics is not None and name not in self.topics):
                 continue
             if len(info.types) > 1:
-                if name not in self.warned:
-                    self.warned.add(name)
-                    print(f"social-touch record: '{name}' has several types ({info.type_name}); not recorded",
-                          file=sys.stderr)
+                self._warn_once(name, f"'{name}' has several types ({info.type_name}); not recorded")
                 continue
             type_name = next(iter(info.types))
-            self.bag.add_topic(name, type_name, info.publishers[0].qos)
-            self.taps[name] = self.tool.bridge.tap(name, self.write, type_name)
+            try:
+                msg_type = get_message(type_name)
+            except SocialTouchError as err:
+                self._warn_once(name, f"'{name}': {err}; not recorded")
+                continue
+            offered = [ep.qos for ep in info.publishers]
+            self.bag.add_topic(name, type_name, offered[0] if offered else None)
+            self.subscriptions[name] = self.tool.node.create_subscription(
+                msg_type, name, self._writer(name, type_name), adapted_profile(offered, depth=1000), raw=True)
+
+    def _warn_once(self, topic: str, text: str) -> None:
+        if topic not in self.warned:
+            self.warned.add(topic)
+            print(f'social-touch record: {text}', file=sys.stderr)
+
+    def _writer(self, topic: str, type_name: str) -> Any:
+        bag = self.bag
+
+        def write(data: bytes, message_info: dict) -> None:
+            bag.write(topic, type_name, message_info['source_timestamp'], data)
+        return write
 
     def tick(self) -> None:
         """Every 0.2 s: pick up new topics; once a second: a progress line."""
@@ -112,9 +132,6 @@ class _TapRecorder:
         if not self.quiet and time.monotonic() >= self.next_progress:
             self.next_progress += 1.0
             self.progress()
-
-    def write(self, sample: Any) -> None:
-        self.bag.write(sample.topic, sample.type_name, sample.stamp_ns, sample.data)
 
     def progress(self) -> None:
         elapsed = time.monotonic() - self.started

@@ -1,9 +1,12 @@
-"""``social-touch topic list | echo | hz | info | pub``, as the ros2 CLI prints them, across processes.
+"""``social-touch topic list | echo | hz | info | pub``, as the ros2 CLI prints them, over DDS.
 
-``echo`` and ``hz`` subscribe through the graph bridge, so they see the messages of a
-``social-touch launch`` running in another terminal; ``hz`` measures the rate in the
-publishing graph's ROS time (simulated time in a simulated scene), or in wall time of
-arrival with ``--wall-time``.
+The commands join the DDS domain (``ROS_DOMAIN_ID``) as a hidden node, so they see the
+topics of a ``social-touch launch`` in another terminal or on another machine, and of
+any ROS 2 node. ``echo``, ``hz`` and ``record`` subscribe with a QoS every publisher
+matches (reliable only if all publishers are, as ``ros2 topic echo`` chooses it); ``hz``
+measures the rate in the publishing graph's ROS time (the samples' source timestamps:
+simulated time in a simulated scene of ours), or in wall time of arrival with
+``--wall-time``.
 """
 
 from __future__ import annotations
@@ -114,22 +117,6 @@ def select_field(data: Any, path: str) -> Any:
     return data
 
 
-def describe_qos(qos: dict[str, int]) -> str:
-    """A publisher's announced QoS in words (empty for a subscription, which announces none).
-
-    >>> describe_qos({'history': 1, 'depth': 10, 'reliability': 2, 'durability': 2})
-    '  QoS: KEEP_LAST (10), BEST_EFFORT, VOLATILE'
-    """
-    from ..runtime.qos import DurabilityPolicy, HistoryPolicy, ReliabilityPolicy
-    if not qos:
-        return ''
-    try:
-        return (f"  QoS: {HistoryPolicy(qos['history']).name} ({qos['depth']}), "
-                f"{ReliabilityPolicy(qos['reliability']).name}, {DurabilityPolicy(qos['durability']).name}")
-    except (KeyError, ValueError):
-        return f'  QoS: {qos}'
-
-
 def to_yaml(data: Any) -> str:
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=False, width=sys.maxsize, allow_unicode=True)
 
@@ -140,6 +127,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser('list', help='topics of the running graph')
     p.add_argument('-t', '--show-types', action='store_true', help='print each topic with its type')
     p.add_argument('-c', '--count-topics', action='store_true', help='print only the number of topics')
+    p.add_argument('--include-hidden-topics', action='store_true', help='also topics with a token starting with _')
     p = sub.add_parser('echo', help='print the messages of a topic')
     p.add_argument('topic')
     p.add_argument('type', nargs='?', help='message type, to wait for a topic that is not published yet')
@@ -155,7 +143,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('--duration', type=float, help='exit after SECONDS')
     p = sub.add_parser('info', help='type and endpoints of a topic')
     p.add_argument('topic')
-    p.add_argument('-v', '--verbose', action='store_true', help='list each publisher and subscription')
+    p.add_argument('-v', '--verbose', action='store_true',
+                   help='list each publisher and subscription: node, GID, QoS, and queue drops where known')
     p = sub.add_parser('pub', help='publish a message given as YAML')
     p.add_argument('topic')
     p.add_argument('type', help='e.g. std_msgs/msg/String or social_touch_msgs/msg/HapticCommand')
@@ -169,14 +158,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bridge.tool import GraphTool
+    from ..dds.tool import GraphTool
     with GraphTool(f'topic_{args.action}') as tool:
         return {'list': _list, 'echo': _echo, 'hz': _hz, 'info': _info, 'pub': _pub}[args.action](tool, args)
 
 
 # --------------------------------------------------------------------------- actions
 def _list(tool: Any, args: argparse.Namespace) -> int:
-    topics = tool.require_graph().topics
+    topics = tool.require_graph().visible_topics(args.include_hidden_topics)
     if args.count_topics:
         print(len(topics))
         return 0
@@ -186,14 +175,33 @@ def _list(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _info(tool: Any, args: argparse.Namespace) -> int:
+    from ..dds.graph import format_gid
+    from ..dds.qos import describe_qos
     info = tool.require_topic(args.topic)
     print(f'Type: {info.type_name}')
-    for title, endpoints in (('Publisher', info.publishers), ('Subscription', info.subscriptions)):
-        print(f'{title} count: {len(endpoints)}')
-        if args.verbose:
-            for ep in endpoints:
-                print(f'  Node: {ep.node}  (process {ep.peer}){describe_qos(ep.qos)}')
+    for title, kind, endpoints in (('Publisher', 'PUBLISHER', info.publishers),
+                                   ('Subscription', 'SUBSCRIPTION', info.subscriptions)):
+        print(f'{chr(10) if args.verbose else ""}{title} count: {len(endpoints)}')
+        if not args.verbose:
+            continue
+        for ep in sorted(endpoints, key=lambda e: (e.node, e.gid)):
+            namespace, _, name = ep.node.rpartition('/')
+            print(f'\nNode name: {name}\nNode namespace: {namespace or "/"}\nTopic type: {ep.type_name}')
+            print(f'Topic type hash: {ep.type_hash or "INVALID"}\nEndpoint type: {kind}\nGID: {format_gid(ep.gid)}')
+            print('QoS profile:\n' + '\n'.join(describe_qos(ep.qos)))
+            if ep.stats:
+                print(f"Queue: {ep.stats.get('received', 0)} received, {ep.stats.get('dropped', 0)} dropped "
+                      f"(queue full), {ep.stats.get('undecodable', 0)} undecodable")
     return 0
+
+
+def _subscribe(tool: Any, topic: str, type_name: str, callback: Any, *, raw: bool = False, depth: int = 100) -> Any:
+    """A subscription of the tool's node whose QoS every publisher of ``topic`` matches."""
+    from ..dds.qos import adapted_profile
+    info = tool.graph().topics.get(topic)
+    offered = [ep.qos for ep in info.publishers] if info is not None else []
+    return tool.node.create_subscription(messages.get_message(type_name), topic, callback,
+                                         adapted_profile(offered, depth), raw=raw)
 
 
 def _echo(tool: Any, args: argparse.Namespace) -> int:
@@ -210,10 +218,9 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
     last = [time.monotonic()]
     closed = [False]  # stdout went away (| head): stop quietly
 
-    def show(sample: Any) -> None:
+    def show(msg: Any) -> None:
         if (limit is not None and printed[0] >= limit) or closed[0]:
             return
-        msg = messages.deserialize(sample.data, type_name)
         data = abbreviate_arrays(msg) if args.no_arr else messages.to_dict(msg)
         if args.field:
             data = select_field(data, args.field)
@@ -225,7 +232,7 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
         printed[0] += 1
         last[0] = time.monotonic()
 
-    tool.bridge.tap(args.topic, show, type_name)
+    _subscribe(tool, args.topic, type_name, show)
     with StopSignals(tool.executor.wake) as stop:
         while not stop.requested and not closed[0] and (limit is None or printed[0] < limit):
             if args.timeout is not None and time.monotonic() - last[0] > args.timeout:
@@ -241,8 +248,8 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
     monitor = HzMonitor(args.window)
     seen = [0, 0]  # messages, messages at the last print
 
-    def on_sample(sample: Any) -> None:
-        monitor.add(time.time_ns() if args.wall_time else sample.stamp_ns)
+    def on_sample(_data: bytes, message_info: dict) -> None:
+        monitor.add(message_info['received_timestamp' if args.wall_time else 'source_timestamp'])
         seen[0] += 1
 
     def report() -> None:
@@ -253,7 +260,7 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
         rate, lo, hi, std, n = stats
         print(f'average rate: {rate:.3f}\n\tmin: {lo:.3f}s max: {hi:.3f}s std dev: {std:.5f}s window: {n}', flush=True)
 
-    tool.bridge.tap(args.topic, on_sample, next(iter(info.types)))
+    _subscribe(tool, args.topic, next(iter(info.types)), on_sample, raw=True, depth=1000)
     with StopSignals(tool.executor.wake) as stop:
         tool.spin_until(lambda: False, args.duration, stop=stop, every=report)
     report()
@@ -262,7 +269,6 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
 
 def _pub(tool: Any, args: argparse.Namespace) -> int:
     from ..node_main import StopSignals
-    from ..runtime import Node
     type_name = messages.normalize_type_name(args.type)
     try:
         values = yaml.safe_load(args.values)
@@ -274,16 +280,15 @@ def _pub(tool: Any, args: argparse.Namespace) -> int:
         raise ValueError(f'-t/--times must be >= 1, got {times}')
     if not args.rate > 0:
         raise ValueError(f'--rate must be > 0, got {args.rate}')
-    if not tool.bridge.peers():
+    view = tool.graph()
+    if not view.remote_participants():
         if times is not None:
             raise GraphError(tool.no_graph_message())
         print(f'social-touch topic pub: {tool.no_graph_message()}; publishing anyway', file=sys.stderr)
-    node = Node('topic_pub', context=tool.context)
-    pub = node.create_publisher(messages.get_message(type_name), args.topic, 10)
-    tool.executor.add_node(node)
-    seen = tool.graph().topics.get(args.topic)
-    if seen is not None and seen.subscriptions:  # give the bridge time to hear our publisher and set up the link
-        tool.spin_until(lambda: pub.get_subscription_count() > 0, args.wait)
+    pub = tool.node.create_publisher(messages.get_message(type_name), args.topic, 10)
+    seen = view.topics.get(args.topic)
+    if seen is not None and seen.subscriptions:  # wait for the subscribers the graph announced to match
+        tool.spin_until(lambda: pub.get_subscription_count() >= len(seen.subscriptions), args.wait)
     sent = [0]
 
     def tick() -> None:
@@ -293,8 +298,8 @@ def _pub(tool: Any, args: argparse.Namespace) -> int:
     tick()
     with StopSignals(tool.executor.wake) as stop:
         if times is None or times > 1:
-            timer = node.create_timer(1.0 / args.rate, tick)
+            timer = tool.node.create_timer(1.0 / args.rate, tick)
             tool.spin_until(lambda: times is not None and sent[0] >= times, None, stop=stop)
             timer.cancel()
-    tool.bridge.flush(2.0)
+    tool.flush([pub])
     return 0

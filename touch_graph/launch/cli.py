@@ -1,5 +1,9 @@
 """``social-touch launch FILE [name:=value ...]``: start a scene's nodes in this process.
 
+The graph joins the DDS domain (``ROS_DOMAIN_ID``; ``--no-network`` keeps it in the
+process), also with ``--sim-time``: other processes and ROS 2 machines see its nodes
+and topics, and its nodes hear theirs.
+
 Like ``ros2 launch``, FILE may be a path or ``PKG FILE`` (looked up in the package's share
 directory, under ``launch/`` first). Launch arguments are ``name:=value``; a name the file
 does not declare is an error listing the declared ones.
@@ -55,8 +59,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--duration', type=_non_negative, metavar='SECONDS',
                         help='stop after this many seconds of ROS time (default: until Ctrl-C / SIGTERM)')
     parser.add_argument('--sim-time', action='store_true', help='run the graph on a simulated clock')
-    parser.add_argument('--no-bridge', action='store_true',
-                        help='do not make the graph visible to other processes (topic echo, record)')
+    parser.add_argument('--no-network', action='store_true',
+                        help='keep the graph in this process: do not join the DDS domain (other processes and '
+                             'machines, social-touch topic echo and record, ROS 2 nodes do not see it)')
+    parser.add_argument('--no-bridge', action='store_true', dest='no_network', help=argparse.SUPPRESS)
     parser.add_argument('--rate', type=_positive_rate, metavar='R',
                         help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
                              'as possible)')
@@ -145,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
     if not plan.nodes:
         print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
         return 0
-    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, bridge=not args.no_bridge)
+    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, network=not args.no_network)
     try:
         runner.start()
         names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)

@@ -139,13 +139,16 @@ class LaunchRunner:
             default :mod:`touch_graph.runtime` (tests may pass a stand-in).
         sim_time: run on a simulated clock (``Context(clock_mode='sim', rate=rate)``).
         rate: simulated seconds per wall second (``math.inf``: as fast as possible); only with ``sim_time``.
+        network: join the DDS domain, so other processes and machines see the graph (``social-touch
+            topic echo``, ``record``, ROS 2 nodes); None leaves it to the context (a wall clock joins,
+            a simulated one does not).
 
     Use as a context manager, or call :meth:`start`, :meth:`spin` and :meth:`shutdown`.
     """
 
     def __init__(self, specs: Iterable[NodeSpec], *, registry: Registry | None = None,
                  runtime: types.ModuleType | Any = None, sim_time: bool = False, rate: float | None = None,
-                 bridge: bool = False) -> None:
+                 network: bool | None = None) -> None:
         if rate is not None and not sim_time:
             raise ValueError('rate applies to simulated time only; pass sim_time=True as well')
         if rate is not None and not (rate > 0):  # also rejects NaN
@@ -158,9 +161,7 @@ class LaunchRunner:
         self.context: Any = None
         self.executor: Any = None
         self.nodes: list[Any] = []
-        # With bridge=True other processes (social-touch topic echo, record) see the graph.
-        self.want_bridge = bridge
-        self.bridge: Any = None
+        self.network = network
         self._stop = threading.Event()
         self._signals = 0
 
@@ -172,10 +173,11 @@ class LaunchRunner:
             self.runtime = runtime
         registry = entry_point_registry() if self.registry is None else self.registry
         classes = [resolve_node_class(spec, registry, getattr(self.runtime, 'Node', None)) for spec in self.specs]
+        kwargs = {} if self.network is None else {'network': self.network}
         if self.sim_time:
-            self.context = self.runtime.Context(clock_mode='sim', rate=self.rate)
+            self.context = self.runtime.Context(clock_mode='sim', rate=self.rate, **kwargs)
         else:
-            self.context = self.runtime.Context()
+            self.context = self.runtime.Context(**kwargs)
         self.context.init()
         try:
             for spec, cls in zip(self.specs, classes, strict=True):
@@ -183,9 +185,6 @@ class LaunchRunner:
             self.executor = self.runtime.SingleThreadedExecutor(context=self.context)
             for node in self.nodes:
                 self.executor.add_node(node)
-            if self.want_bridge:
-                from ..bridge import Bridge
-                self.bridge = Bridge(self.context, self.executor, name='launch').start()
         except BaseException as err:
             try:
                 self.shutdown()
@@ -251,9 +250,6 @@ class LaunchRunner:
     def shutdown(self) -> None:
         """Destroy the nodes (last started first), stop the executor, shut the context down; safe twice."""
         errors = []
-        if self.bridge is not None:
-            self.bridge.stop()
-            self.bridge = None
         for node in reversed(self.nodes):
             try:
                 node.destroy_node()

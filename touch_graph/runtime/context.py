@@ -1,15 +1,23 @@
 """The graph a set of nodes share: topics, nodes, time, and the shutdown flag.
 
-One :class:`Context` is one in-process graph (rclpy's ``Context``). Topics live here:
+One :class:`Context` is one graph of nodes (rclpy's ``Context``). Topics live here:
 a topic has one message type, its publishers and its subscriptions; publishing walks
 the topic's subscriptions and queues the message on each, without copying or
-serialising it (serialising only for raw subscribers, such as a recorder or a bridge to
-another process).
+serialising it (serialising only for raw subscribers, such as a recorder).
+
+A context joins the DDS domain when it is initialised (:mod:`touch_graph.dds`: other
+processes and ROS 2 machines then see its nodes and topics, and it theirs), unless told
+not to: ``Context(network=False)``. Left unsaid (``network=None``), a wall-clock context
+joins and a simulated-time one does not (a simulated world is private: its clock means
+nothing to other processes, and evaluations run many of them side by side), and
+``SOCIAL_TOUCH_NETWORK=0`` in the environment keeps every context that was not told
+otherwise off the network (the test suite sets it).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -22,17 +30,25 @@ from .parameters import RosArgs, parse_ros_args
 if TYPE_CHECKING:
     from .node import Node, Publisher, Subscription
 
-__all__ = ['Context', 'ExternalShutdownException', 'Topic', 'get_default_context']
+__all__ = ['Context', 'ExternalShutdownException', 'Topic', 'get_default_context', 'network_default']
 
 
 class ExternalShutdownException(Exception):
     """Raised out of spin when the context was shut down from elsewhere (rclpy's name)."""
 
 
+def network_default(clock_mode: str) -> bool:
+    """Whether a context joins the DDS domain when its constructor was not told (see the module doc)."""
+    if os.environ.get('SOCIAL_TOUCH_NETWORK', '').strip().lower() in ('0', 'off', 'false', 'no'):
+        return False
+    return clock_mode == 'wall'
+
+
 class Topic:
     """A topic of the in-process graph: name, message type, endpoints."""
 
-    __slots__ = ('latched', 'msg_type', 'name', 'publishers', 'raw_subscriptions', 'subscriptions', 'type_name')
+    __slots__ = ('info_subscriptions', 'latched', 'msg_type', 'name', 'publishers', 'raw_subscriptions',
+                 'subscriptions', 'type_name')
 
     def __init__(self, name: str, msg_type: type) -> None:
         self.name = name
@@ -42,13 +58,14 @@ class Topic:
         # Kept as tuples, rebuilt on change, so publish() iterates without copying.
         self.subscriptions: tuple[Subscription, ...] = ()
         self.raw_subscriptions = 0
+        self.info_subscriptions = 0  # subscriptions whose callback takes (msg, message_info)
 
     def endpoint_count(self) -> int:
         return len(self.publishers) + len(self.subscriptions)
 
 
 class Context:
-    """An in-process ROS graph.
+    """A ROS graph of nodes, in memory inside the process and on DDS beyond it.
 
     Args:
         clock_mode: ``'wall'`` (ROS time is the system clock) or ``'sim'`` (simulated time,
@@ -56,9 +73,15 @@ class Context:
         rate: for ``'sim'``, how many times faster than real time (``math.inf``: as fast as
             the work allows, deterministic).
         start_s: for ``'sim'``, the simulated epoch in seconds.
+        network: join the DDS domain at :meth:`init` (None: see :func:`network_default`).
+        domain_id: the DDS domain (default ``$ROS_DOMAIN_ID``, else 0).
+
+    Attributes:
+        transport: the :class:`~touch_graph.dds.DdsParticipant` while initialised on the network, else None.
     """
 
-    def __init__(self, clock_mode: str = 'wall', rate: float = math.inf, start_s: float = 1_700_000_000.0) -> None:
+    def __init__(self, clock_mode: str = 'wall', rate: float = math.inf, start_s: float = 1_700_000_000.0, *,
+                 network: bool | None = None, domain_id: int | None = None) -> None:
         if clock_mode == 'wall':
             self.time_source: TimeSource = WallTimeSource()
         elif clock_mode == 'sim':
@@ -73,6 +96,9 @@ class Context:
         self.callback_errors = 0
         self._shutdown_callbacks: list[Callable[[], None]] = []
         self._graph_listeners: list[Callable[[str, Any], None]] = []
+        self.network = network_default(clock_mode) if network is None else bool(network)
+        self.domain_id = domain_id
+        self.transport: Any = None
 
     # ------------------------------------------------------------------ lifecycle
     def init(self, args: list[str] | None = None) -> None:
@@ -84,6 +110,9 @@ class Context:
             self.global_args.overrides()  # reads the files now: a bad file fails init, not the first node
             if self.global_args.log_level:
                 set_default_level(self.global_args.log_level)
+            if self.network:
+                from ..dds import DdsParticipant  # deferred: in-process graphs never load Cyclone
+                self.transport = DdsParticipant(self, domain=self.domain_id)
             self._ok = True
 
     def ok(self) -> bool:
@@ -96,8 +125,13 @@ class Context:
                 raise GraphError('context is not initialised (already shut down?)')
             self._ok = False
             callbacks, self._shutdown_callbacks = self._shutdown_callbacks, []
-        for callback in callbacks:
-            callback()
+        try:
+            for callback in callbacks:
+                callback()
+        finally:
+            transport, self.transport = self.transport, None
+            if transport is not None:
+                transport.close()
 
     def try_shutdown(self) -> None:
         if self._ok:
@@ -111,7 +145,7 @@ class Context:
         return self.time_source.now_ns()
 
     def add_graph_listener(self, listener: Callable[[str, Any], None]) -> None:
-        """``listener(event, endpoint)`` on every endpoint or node added/removed (for bridges)."""
+        """``listener(event, endpoint)`` on every endpoint or node added/removed (the DDS transport, recorders)."""
         self._graph_listeners.append(listener)
 
     def remove_graph_listener(self, listener: Callable[[str, Any], None]) -> None:

@@ -1,14 +1,22 @@
-"""Publishers, subscriptions and timers of the in-process graph.
+"""Publishers, subscriptions and timers of the graph.
 
-Delivery is a direct queue append: ``publish`` walks the topic's subscriptions and puts
-the message on each one's bounded queue (the oldest dropped and counted when full),
-then tells the subscription's executor it has work. A message published from another
-thread is handed to the executor's thread-safe inbox instead, so queues are only ever
-touched by the thread that spins them.
+Delivery in the process is a direct queue append: ``publish`` walks the topic's
+subscriptions and puts the message on each one's bounded queue (the oldest dropped and
+counted when full), then tells the subscription's executor it has work. A message
+published from another thread is handed to the executor's thread-safe inbox instead, so
+queues are only ever touched by the thread that spins them. On a networked context each
+publisher also has a DDS writer (``_dds``), which sends the message to the remote
+readers, if there are any, and each subscription a DDS reader, which its executor takes
+from in its own thread (:mod:`touch_graph.dds.waker`).
+
+A subscription callback may take one argument (the message) or two (the message and a
+``message_info`` dict with ``source_timestamp`` and ``received_timestamp`` in ns), as in
+rclpy; the source timestamp is the publishing context's ROS time.
 """
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import threading
 from collections import deque
@@ -43,6 +51,7 @@ class Publisher:
         self._latched: deque | None = deque(maxlen=qos.queue_bound) \
             if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
         self._destroyed = False
+        self._dds: Any = None  # the DDS writer, on a networked context
 
     @property
     def topic_name(self) -> str:
@@ -59,29 +68,40 @@ class Publisher:
             TypeError: ``msg`` is neither this publisher's message type nor CDR bytes.
         """
         raw = None
+        topic = self._topic
         if type(msg) is not self.msg_type:
-            if isinstance(msg, (bytes, bytearray, memoryview)):
-                raw = bytes(msg)
-                msg = messages.deserialize(raw, self._topic.type_name)
-            else:
-                raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {self._topic.type_name} on '
-                                f"'{self._topic.name}', not {type(msg).__name__}")
+            if not isinstance(msg, (bytes, bytearray, memoryview)):
+                raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {topic.type_name} on '
+                                f"'{topic.name}', not {type(msg).__name__}")
+            raw = bytes(msg)
+            # Decoded only for whom needs a message: a remote reader takes the bytes as they are.
+            needs_message = self._latched is not None or len(topic.subscriptions) > topic.raw_subscriptions
+            msg = messages.deserialize(raw, topic.type_name) if needs_message else None
         if self._destroyed:
-            raise GraphError(f"publisher on '{self._topic.name}' was destroyed")
+            raise GraphError(f"publisher on '{topic.name}' was destroyed")
         self.published += 1
         if self._latched is not None:
             self._latched.append(msg)
-        topic = self._topic
         if topic.raw_subscriptions and raw is None:
             raw = messages.serialize(msg, topic.type_name)
         node = self.node
+        info = None
+        if topic.info_subscriptions:
+            now = node.context.now_ns()
+            info = {'source_timestamp': now, 'received_timestamp': now}
         for sub in topic.subscriptions:
             if sub.ignore_local_publications and sub.node is node:
                 continue
-            sub._enqueue(raw if sub.raw else msg)
+            item = raw if sub.raw else msg
+            sub._enqueue((item, info) if sub.with_info else item)
+        dds = self._dds
+        if dds is not None:
+            dds.write(msg, raw)
 
     def get_subscription_count(self) -> int:
-        return len(self._topic.subscriptions)
+        """Subscriptions matched: the process's own and, on a networked context, remote DDS readers."""
+        dds = self._dds
+        return len(self._topic.subscriptions) + (dds.matched() if dds is not None else 0)
 
     def destroy(self) -> bool:
         return self.node.destroy_publisher(self)
@@ -110,6 +130,8 @@ class Subscription:
         self.received = 0
         self.dropped = 0
         self._executor: Executor | None = None
+        self.with_info = _takes_message_info(callback)
+        self._dds: Any = None  # the DDS reader, on a networked context
 
     @property
     def topic_name(self) -> str:
@@ -149,6 +171,18 @@ class Subscription:
 
     def destroy(self) -> bool:
         return self.node.destroy_subscription(self)
+
+
+def _takes_message_info(callback: Callable) -> bool:
+    """True for a callback that takes ``(msg, message_info)``, as rclpy allows."""
+    try:
+        params = list(inspect.signature(callback).parameters.values())
+    except (TypeError, ValueError):  # a builtin without a signature: the one-argument form
+        return False
+    if any(p.kind == p.VAR_POSITIONAL for p in params):
+        return False
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 2 and all(p.default is p.empty for p in positional[:2])
 
 
 class Timer:

@@ -36,7 +36,8 @@ class Executor:
         self._ready: deque[Subscription] = deque()
         self._timers: list[tuple[int, int, int, Timer]] = []
         self._inbox: deque[tuple[Callable[..., Any], tuple]] = deque()
-        self._wake = threading.Event()
+        self._wake: Any = threading.Event()
+        self._dds_waker: Any = None  # replaces _wake on a networked context (touch_graph.dds.waker)
         self._thread_id: int | None = None
         self._shutdown = False
         self.callbacks_run = 0
@@ -56,11 +57,45 @@ class Executor:
             if sub._queue and not sub._ready:
                 sub._ready = True
                 self._ready.append(sub)
+            if sub._dds is not None:
+                self._attach_reader(sub._dds)
         for timer in node.timers:
             timer._executor = self
             self._schedule(timer)
         self.wake()
         return True
+
+    def _attach_reader(self, reader: Any) -> None:
+        """Take from ``reader`` (the DDS reader of one of our subscriptions) in this executor's thread."""
+        waker = self._network_waker()
+        if waker is None:
+            return
+        if reader.waker is not None and reader.waker is not waker:
+            reader.waker.detach(reader)
+        reader.waker = waker
+        waker.attach(reader)
+        waker.set()
+
+    def _network_waker(self) -> Any:
+        """The DDS wait this executor sleeps on, made on first need on a networked context (else None)."""
+        transport = self.context.transport
+        if self._dds_waker is not None and self._dds_waker.owner is not transport:
+            self._dds_waker = None  # the context left the network (and maybe joined again)
+            self._wake = threading.Event()
+            self._wake.set()
+        if self._dds_waker is None:
+            if transport is None:
+                return None
+            waker = self._dds_waker = transport.make_waker()
+            if self._wake.is_set():
+                waker.set()
+            self._wake = waker
+            for node in self._nodes:
+                for sub in node.subscriptions:
+                    if sub._dds is not None and sub._dds.waker is None:
+                        sub._dds.waker = waker
+                        waker.attach(sub._dds)
+        return self._dds_waker
 
     def remove_node(self, node: Node) -> None:
         if node not in self._nodes:
@@ -70,6 +105,10 @@ class Executor:
         for sub in node.subscriptions:
             sub._executor = None
             sub._ready = False
+            reader = sub._dds
+            if reader is not None and reader.waker is not None and reader.waker is self._dds_waker:
+                reader.waker.detach(reader)
+                reader.waker = None
         self._ready = deque(s for s in self._ready if s.node is not node)
         for timer in node.timers:
             timer._executor = None
@@ -138,6 +177,9 @@ class Executor:
         while inbox:
             fn, args = inbox.popleft()
             self._guarded(fn, args, None, 'cross-thread call')
+        waker = self._dds_waker
+        if waker is not None:
+            waker.take()
         timers = self._timers
         if timers:
             now = self.context.now_ns()
@@ -155,13 +197,17 @@ class Executor:
             if not sub._queue or sub._executor is not self:
                 sub._ready = False
                 return True
-            self._guarded(sub.callback, (sub._take(),), sub.node, f"subscription to '{sub.topic_name}'")
+            item = sub._take()
+            self._guarded(sub.callback, item if sub.with_info else (item,), sub.node,
+                          f"subscription to '{sub.topic_name}'")
             return True
         return False
 
     def _run_one(self, timeout_sec: float | None, until_ns: int | None) -> None:
         if not self.context.ok():
             raise ExternalShutdownException('the context was shut down')
+        if (self._dds_waker.owner if self._dds_waker is not None else None) is not self.context.transport:
+            self._network_waker()
         self._wake.clear()
         if self._run_ready_work():
             return

@@ -165,6 +165,7 @@ class Node:
                                ignore_local_publications=ignore_local_publications)
             topic_obj.subscriptions = (*topic_obj.subscriptions, sub)
             topic_obj.raw_subscriptions += int(raw)
+            topic_obj.info_subscriptions += int(sub.with_info)
             self.subscriptions.append(sub)
             if self.executor is not None:
                 sub._executor = self.executor
@@ -172,7 +173,11 @@ class Node:
             from .. import messages
             for pub in topic_obj.publishers:
                 for msg in pub._latched or ():
-                    sub._enqueue(messages.serialize(msg, topic_obj.type_name) if raw else msg)
+                    item = messages.serialize(msg, topic_obj.type_name) if raw else msg
+                    if sub.with_info:
+                        now = self.context.now_ns()
+                        item = (item, {'source_timestamp': now, 'received_timestamp': now})
+                    sub._enqueue(item)
         self.context._notify('subscription_added', sub)
         return sub
 
@@ -208,6 +213,7 @@ class Node:
             topic = subscription._topic
             topic.subscriptions = tuple(s for s in topic.subscriptions if s is not subscription)
             topic.raw_subscriptions -= int(subscription.raw)
+            topic.info_subscriptions -= int(subscription.with_info)
             subscription._queue.clear()
             subscription._executor = None
             self.context._drop_topic_if_unused(topic)
@@ -240,22 +246,44 @@ class Node:
         self.context._notify('node_removed', self)
 
     # ------------------------------------------------------------------ graph queries
+    # On a networked context these see the whole domain (DDS discovery), as rclpy's do.
+    def _graph_view(self) -> Any:
+        transport = self.context.transport
+        return transport.graph.view() if transport is not None else None
+
     def get_topic_names_and_types(self) -> list[tuple[str, list[str]]]:
-        return self.context.topic_names_and_types()
+        view = self._graph_view()
+        if view is None:
+            return self.context.topic_names_and_types()
+        return sorted((name, sorted(t.types)) for name, t in view.topics.items())
 
     def get_node_names(self) -> list[str]:
-        return [n.get_name() for n in self.context.nodes]
+        return [name for name, _ in self.get_node_names_and_namespaces()]
 
     def get_node_names_and_namespaces(self) -> list[tuple[str, str]]:
-        return [(n.get_name(), n.get_namespace()) for n in self.context.nodes]
+        view = self._graph_view()
+        if view is None:
+            return [(n.get_name(), n.get_namespace()) for n in self.context.nodes]
+        out = []
+        for node in view.nodes:
+            namespace, _, name = node.name.rpartition('/')
+            out.append((name, namespace or '/'))
+        return out
 
     def count_publishers(self, topic_name: str) -> int:
-        topic = self.context.topics.get(self.resolve_topic_name(topic_name))
-        return len(topic.publishers) if topic else 0
+        return self._count(topic_name, 'publishers')
 
     def count_subscribers(self, topic_name: str) -> int:
-        topic = self.context.topics.get(self.resolve_topic_name(topic_name))
-        return len(topic.subscriptions) if topic else 0
+        return self._count(topic_name, 'subscriptions')
+
+    def _count(self, topic_name: str, kind: str) -> int:
+        name = self.resolve_topic_name(topic_name)
+        view = self._graph_view()
+        if view is not None:
+            topic = view.topics.get(name)
+            return len(getattr(topic, kind)) if topic else 0
+        topic = self.context.topics.get(name)
+        return len(getattr(topic, kind)) if topic else 0
 
     # ------------------------------------------------------------------ parameters
     def declare_parameter(self, name: str, value: Any = None, descriptor: ParameterDescriptor | None = None,

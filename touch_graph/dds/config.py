@@ -1,0 +1,112 @@
+"""Which DDS domain to join and how far to look for peers, read from the environment as ROS 2 reads it.
+
+- ``ROS_DOMAIN_ID``: the domain (0 when unset), 0-232 as rcl allows; graphs in different
+  domains never see each other.
+- ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (rcl, Iron and later): ``SUBNET`` (the default:
+  multicast on the local network), ``LOCALHOST`` (unicast to this machine only), ``OFF``
+  (no discovery at all: only static peers could reach us, and rmw_cyclonedds ignores
+  those too), ``SYSTEM_DEFAULT`` (leave Cyclone's own configuration alone). Any other
+  value is treated as ``LOCALHOST`` with a warning, as rcl does. The deprecated
+  ``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST`` when the range is unset.
+- ``ROS_STATIC_PEERS``: ``;``-separated addresses also contacted by unicast (with SUBNET
+  or LOCALHOST).
+- ``CYCLONEDDS_URI``: appended after the generated fragment, as rmw_cyclonedds does, so a
+  user's Cyclone configuration still applies.
+
+:func:`cyclone_config` builds the same XML fragment rmw_cyclonedds' ``check_create_domain``
+builds for these settings.
+
+>>> read_discovery({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '10.0.0.2;host-b'})
+DiscoveryOptions(range='LOCALHOST', static_peers=('10.0.0.2', 'host-b'))
+>>> print(cyclone_config(DiscoveryOptions('LOCALHOST', ('10.0.0.2',)), {}))
+<CycloneDDS><Domain><General><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto\
+</ParticipantIndex><MaxAutoParticipantIndex>32</MaxAutoParticipantIndex><Peers><Peer address="localhost"/>\
+<Peer address="10.0.0.2"/></Peers></Discovery></Domain></CycloneDDS>,
+>>> domain_id({'ROS_DOMAIN_ID': '7'})
+7
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from xml.sax.saxutils import quoteattr
+
+from ..errors import GraphError
+
+__all__ = ['MAX_DOMAIN_ID', 'RANGES', 'DiscoveryOptions', 'cyclone_config', 'domain_id', 'read_discovery']
+
+#: rcl refuses larger ids: the RTPS port formula overflows 16 bits beyond 232.
+MAX_DOMAIN_ID = 232
+RANGES = ('SUBNET', 'LOCALHOST', 'OFF', 'SYSTEM_DEFAULT')
+
+_log = logging.getLogger('touch_graph.dds')
+
+
+@dataclass(frozen=True)
+class DiscoveryOptions:
+    """rmw's ``rmw_discovery_options_t``: automatic discovery range and static peers."""
+
+    range: str = 'SUBNET'
+    static_peers: tuple[str, ...] = ()
+
+
+def domain_id(environ: Mapping[str, str] | None = None) -> int:
+    """``ROS_DOMAIN_ID`` as an int (0 when unset or empty).
+
+    Raises:
+        GraphError: when it is not an integer in 0-232.
+    """
+    env = os.environ if environ is None else environ
+    text = env.get('ROS_DOMAIN_ID', '').strip()
+    if not text:
+        return 0
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise GraphError(f'ROS_DOMAIN_ID must be an integer in 0-{MAX_DOMAIN_ID}, got {text!r}; unset it or use e.g. 0')
+    return int(text)
+
+
+def read_discovery(environ: Mapping[str, str] | None = None) -> DiscoveryOptions:
+    """The discovery options of ``ROS_AUTOMATIC_DISCOVERY_RANGE`` / ``ROS_STATIC_PEERS`` (rcl's rules)."""
+    env = os.environ if environ is None else environ
+    text = env.get('ROS_AUTOMATIC_DISCOVERY_RANGE', '')
+    if not text:
+        text = 'LOCALHOST' if env.get('ROS_LOCALHOST_ONLY', '') == '1' else 'SUBNET'
+    elif text not in RANGES:
+        _log.warning("Invalid value '%s' specified for 'ROS_AUTOMATIC_DISCOVERY_RANGE', assuming localhost only "
+                     '(expected one of %s)', text, ', '.join(RANGES))
+        text = 'LOCALHOST'
+    peers = tuple(p.strip() for p in env.get('ROS_STATIC_PEERS', '').split(';') if p.strip())
+    return DiscoveryOptions(text, peers)
+
+
+def cyclone_config(options: DiscoveryOptions, environ: Mapping[str, str] | None = None) -> str:
+    """The Cyclone configuration rmw_cyclonedds uses for ``options``, then ``$CYCLONEDDS_URI``.
+
+    With ``SYSTEM_DEFAULT`` or ``OFF`` static peers are ignored (with a warning), as there.
+    """
+    env = os.environ if environ is None else environ
+    localhost = options.range == 'LOCALHOST'
+    add_peers = options.range in ('SUBNET', 'LOCALHOST')
+    no_multicast = options.range in ('LOCALHOST', 'OFF')
+    if options.static_peers and not add_peers:
+        _log.warning('%d static peers were specified, but discovery is %s, so they are ignored',
+                     len(options.static_peers), options.range)
+    config = ''
+    if localhost or add_peers or no_multicast:
+        config = '<CycloneDDS><Domain>'
+        if no_multicast:
+            config += '<General><AllowMulticast>false</AllowMulticast></General>'
+        if options.range == 'OFF':
+            # A tag nobody else has: nothing is discovered (rmw_cyclonedds does the same).
+            config += f'<Discovery><ParticipantIndex>none</ParticipantIndex><Tag>ros_discovery_off_{os.getpid()}</Tag>'
+        else:
+            config += '<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32' \
+                      '</MaxAutoParticipantIndex>'
+        peers = (['localhost'] if localhost else []) + (list(options.static_peers) if add_peers else [])
+        if peers:
+            config += '<Peers>' + ''.join(f'<Peer address={quoteattr(p)}/>' for p in peers) + '</Peers>'
+        config += '</Discovery></Domain></CycloneDDS>,'
+    return config + env.get('CYCLONEDDS_URI', '')

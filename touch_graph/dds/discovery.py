@@ -1,0 +1,351 @@
+"""Graph discovery the ROS 2 way: ``ros_discovery_info`` out, builtin topics and peers' ``ros_discovery_info`` in.
+
+DDS knows participants and endpoints, not nodes. ROS 2 (rmw_dds_common) adds the nodes:
+every participant publishes ``rmw_dds_common/msg/ParticipantEntitiesInfo`` on the DDS
+topic ``ros_discovery_info`` (reliable, TRANSIENT_LOCAL, depth 1), listing its nodes and
+the GIDs of each node's readers and writers. ``ros2 node list`` on a ROS 2 machine reads
+exactly that, so ours lists our nodes there; and :class:`GraphDiscovery` reads the
+peers' messages together with DCPSParticipant / DCPSPublication / DCPSSubscription to
+give a :class:`~touch_graph.dds.graph.GraphView` with foreign ROS 2 nodes in it too.
+
+**GID layout.** A GID is the 16-byte DDS GUID of the entity. ROS 2 Humble sends it in a
+``char[24]`` array (zero padded), Iron and later in ``char[16]``; the two layouts do not
+decode as each other, which is one reason Humble and Jazzy graphs do not mix. The layout
+follows ``ROS_DISTRO`` (``humble`` and older: 24, anything else or unset: 16).
+
+Every participant of ours also publishes, on the hidden topic
+``/_social_touch/subscription_stats`` (``diagnostic_msgs/msg/DiagnosticArray``, one
+status per subscription, ``hardware_id`` = reader GID), how many samples each of its
+subscriptions received, dropped from a full queue and could not decode, so ``topic info
+-v`` can show them for any process of ours.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from cyclonedds._clayer import ddspy_take, ddspy_write
+from cyclonedds.builtin import (
+    BuiltinDataReader,
+    BuiltinTopicDcpsParticipant,
+    BuiltinTopicDcpsPublication,
+    BuiltinTopicDcpsSubscription,
+)
+from cyclonedds.core import InstanceState, Policy, Qos, ReadCondition, SampleState, ViewState
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from rosbags.typesys import Stores, get_typestore
+
+from .. import messages
+from ..runtime.qos import DurabilityPolicy, QoSProfile
+from .cdds import forget
+from .endpoints import pad4
+from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo
+from .idl import idl_struct
+from .names import ros_topic_name, ros_type_name
+from .qos import dds_qos, qos_to_dict
+
+if TYPE_CHECKING:
+    from .participant import DdsParticipant
+
+__all__ = ['DISCOVERY_TOPIC', 'STATS_TOPIC', 'EntitiesInfoCodec', 'GraphDiscovery', 'gid_size']
+
+DISCOVERY_TOPIC = 'ros_discovery_info'
+ENTITIES_INFO = 'rmw_dds_common/msg/ParticipantEntitiesInfo'
+STATS_TOPIC = '/_social_touch/subscription_stats'
+_DIAGNOSTICS = 'diagnostic_msgs/msg/DiagnosticArray'
+_ANY = SampleState.Any | ViewState.Any | InstanceState.Any
+_ALIVE = InstanceState.Alive
+_OLD_DISTROS = ('ardent', 'bouncy', 'crystal', 'dashing', 'eloquent', 'foxy', 'galactic', 'humble')
+
+
+def gid_size(environ: Mapping[str, str] | None = None) -> int:
+    """Bytes of a GID in ``ros_discovery_info``: 24 for ``ROS_DISTRO`` humble and older, else 16.
+
+    >>> gid_size({'ROS_DISTRO': 'humble'}), gid_size({'ROS_DISTRO': 'jazzy'}), gid_size({})
+    (24, 16, 16)
+    """
+    env = os.environ if environ is None else environ
+    return 24 if env.get('ROS_DISTRO', '').strip().lower() in _OLD_DISTROS else 16
+
+
+class EntitiesInfoCodec:
+    """``ParticipantEntitiesInfo`` to and from CDR, in the GID layout of a distribution.
+
+    >>> codec = EntitiesInfoCodec(16)
+    >>> data = codec.encode(bytes(16), [('/', 'talker', [bytes([1] * 16)], [])])
+    >>> codec.decode(data) == (bytes(16), [('/', 'talker', [bytes([1] * 16)], [])])
+    True
+    """
+
+    def __init__(self, size: int) -> None:
+        if size not in (16, 24):
+            raise ValueError(f'a GID has 16 (Iron and later) or 24 (Humble) bytes, not {size}')
+        self.size = size
+        self.store = get_typestore(Stores.ROS2_HUMBLE if size == 24 else Stores.LATEST)
+        self._gid = self.store.types['rmw_dds_common/msg/Gid']
+        self._node = self.store.types['rmw_dds_common/msg/NodeEntitiesInfo']
+        self._info = self.store.types[ENTITIES_INFO]
+
+    def _make_gid(self, guid: bytes) -> Any:
+        return self._gid(data=np.frombuffer(guid.ljust(self.size, b'\0')[:self.size], np.uint8).copy())
+
+    def encode(self, participant: bytes, nodes: list[tuple[str, str, list[bytes], list[bytes]]]) -> bytes:
+        """CDR of the participant's GID (a 16-byte GUID) and ``(namespace, name, reader GIDs, writer GIDs)``."""
+        info = self._info(gid=self._make_gid(participant), node_entities_info_seq=[
+            self._node(node_namespace=ns, node_name=name, reader_gid_seq=[self._make_gid(g) for g in readers],
+                       writer_gid_seq=[self._make_gid(g) for g in writers])
+            for ns, name, readers, writers in nodes])
+        return bytes(self.store.serialize_cdr(info, ENTITIES_INFO))
+
+    def decode(self, data: bytes) -> tuple[bytes, list[tuple[str, str, list[bytes], list[bytes]]]]:
+        """The participant GUID and its nodes; GIDs cut to the 16 bytes of a GUID. Raises on bad bytes."""
+        info = self.store.deserialize_cdr(data, ENTITIES_INFO)
+        nodes = [(n.node_namespace, n.node_name, [bytes(g.data[:16]) for g in n.reader_gid_seq],
+                  [bytes(g.data[:16]) for g in n.writer_gid_seq]) for n in info.node_entities_info_seq]
+        return bytes(info.gid.data[:16]), nodes
+
+
+class GraphDiscovery:
+    """The graph side of a :class:`~touch_graph.dds.participant.DdsParticipant` (runs in its receive thread)."""
+
+    def __init__(self, participant: DdsParticipant) -> None:
+        self.p = participant
+        self.codec = EntitiesInfoCodec(gid_size())
+        self._lock = threading.Condition()
+        self._participants: dict[bytes, str] = {}  # GUID -> enclave
+        self._endpoints: dict[bytes, dict] = {}  # GUID -> {'kind', 'topic', 'type', 'participant', 'qos', ...}
+        self._nodes_of: dict[bytes, list] = {}  # participant GUID -> its ros_discovery_info nodes
+        self._stats: dict[bytes, dict] = {}  # remote reader GUID -> its statistics
+        self.version = 0  # bumps on every change (tools wait on it)
+        self.undecodable_info = 0
+        self._dirty = True
+        self._last_stats: Any = None
+        p = participant
+        store = self.codec.store
+        info_topic = p.dds_topic(DISCOVERY_TOPIC, ENTITIES_INFO, store=store)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        info_hash = store.hash_rihs01(ENTITIES_INFO) if self.codec.size == 16 else ''
+        self._info_writer = DataWriter(p.dds_publisher, info_topic, dds_qos(latched, type_hash=info_hash))
+        reader_qos = Qos(Policy.History.KeepAll, base=dds_qos(latched, type_hash=info_hash))
+        self._info_reader = DataReader(p.dds_subscriber, info_topic, reader_qos)
+        stats_topic = p.topic(STATS_TOPIC, _DIAGNOSTICS)
+        stats_hash = p.type_hash(_DIAGNOSTICS)
+        self._stats_writer = DataWriter(p.dds_publisher, stats_topic, dds_qos(latched, type_hash=stats_hash))
+        self._stats_reader = DataReader(p.dds_subscriber, stats_topic, dds_qos(latched, type_hash=stats_hash))
+        self._builtin = {kind: BuiltinDataReader(p.participant, topic) for kind, topic in (
+            ('participant', BuiltinTopicDcpsParticipant), ('writer', BuiltinTopicDcpsPublication),
+            ('reader', BuiltinTopicDcpsSubscription))}
+        for entity in (self._info_writer, self._info_reader, self._stats_writer, self._stats_reader,
+                       *self._builtin.values()):
+            forget(entity)
+        self._attach(self._info_reader, self._take_info)
+        self._attach(self._stats_reader, self._take_stats)
+        for kind, reader in self._builtin.items():
+            self._attach(reader, lambda kind=kind, reader=reader: self._take_builtin(kind, reader))
+
+    def _attach(self, reader: Any, handler: Callable[[], None]) -> None:
+        condition = ReadCondition(reader, _ANY)
+        forget(condition)
+        self.p.attach(condition._ref, handler)
+
+    # ------------------------------------------------------------------ what we publish
+    def local_changed(self) -> None:
+        """The context's nodes or endpoints changed: republish ``ros_discovery_info`` (any thread)."""
+        self._dirty = True
+        self.p.call_soon(self._publish_info)
+
+    def _publish_info(self) -> None:
+        if not self._dirty or self.p.closed:
+            return
+        self._dirty = False
+        ddspy_write(self._info_writer._ref, pad4(self.codec.encode(self.p.gid, self.local_nodes())))
+        self._changed()
+
+    def local_nodes(self) -> list[tuple[str, str, list[bytes], list[bytes]]]:
+        """``(namespace, name, reader GIDs, writer GIDs)`` of the context's nodes."""
+        context = self.p.context
+        out = []
+        with context._lock:
+            for node in list(context.nodes):
+                readers = [s._dds.gid for s in list(node.subscriptions) if getattr(s, '_dds', None) is not None]
+                writers = [w._dds.gid for w in list(node.publishers) if getattr(w, '_dds', None) is not None]
+                out.append((node.get_namespace(), node.get_name(), readers, writers))
+        return out
+
+    def housekeeping(self) -> None:
+        """Take pending discovery samples; republish what changed: ``ros_discovery_info``, statistics."""
+        for kind, reader in self._builtin.items():
+            self._take_builtin(kind, reader)
+        self._publish_info()
+        stats = self.local_stats()
+        snapshot = sorted((gid, tuple(sorted(s.items()))) for gid, s in stats.items())
+        if snapshot != self._last_stats:
+            self._last_stats = snapshot
+            self._publish_stats(stats)
+
+    def local_stats(self) -> dict[bytes, dict[str, int]]:
+        """Reader GID -> ``{'received', 'dropped', 'undecodable'}`` of each subscription of ours."""
+        with self.p._lock:
+            readers = list(self.p.readers.values())
+        return {r.gid: {'received': r.subscription.received, 'dropped': r.subscription.dropped,
+                        'undecodable': r.undecodable} for r in readers}
+
+    def _publish_stats(self, stats: dict[bytes, dict[str, int]]) -> None:
+        status_cls = messages.get_message('diagnostic_msgs/msg/DiagnosticStatus')
+        value_cls = messages.get_message('diagnostic_msgs/msg/KeyValue')
+        statuses = [status_cls(name='subscription', hardware_id=gid.hex(),
+                               values=[value_cls(key=k, value=str(v)) for k, v in sorted(counts.items())])
+                    for gid, counts in sorted(stats.items())]
+        msg = messages.get_message(_DIAGNOSTICS)(status=statuses)
+        ddspy_write(self._stats_writer._ref, pad4(messages.serialize(msg)))
+
+    # ------------------------------------------------------------------ what we read
+    def _take_builtin(self, kind: str, reader: Any) -> None:
+        samples = reader.take(N=256)
+        if not samples:
+            return
+        with self._lock:
+            for s in samples:
+                key = s.key.bytes
+                alive = s.sample_info.instance_state == _ALIVE and s.sample_info.valid_data
+                if kind == 'participant':
+                    if alive:
+                        self._participants[key] = user_data_value(s.qos, 'enclave')
+                    else:
+                        self._participants.pop(key, None)
+                        self._nodes_of.pop(key, None)
+                elif alive:
+                    self._endpoints[key] = {
+                        'kind': kind, 'topic': s.topic_name, 'type': s.type_name,
+                        'participant': s.participant_key.bytes, 'qos': qos_to_dict(s.qos),
+                        'type_id': s.type_id, 'type_hash': user_data_value(s.qos, 'typehash')}
+                else:
+                    self._endpoints.pop(key, None)
+                    self._stats.pop(key, None)
+        self._changed()
+
+    def _take_info(self) -> None:
+        for data in self._take_data(self._info_reader):
+            try:
+                gid, nodes = self.codec.decode(data)
+            except Exception:  # another distribution's layout, garbage: counted, never fatal
+                self.undecodable_info += 1
+                continue
+            with self._lock:
+                self._nodes_of[gid] = nodes
+        self._changed()
+
+    def _take_stats(self) -> None:
+        for data in self._take_data(self._stats_reader):
+            try:
+                msg = messages.deserialize(data, _DIAGNOSTICS)
+                counts = {bytes.fromhex(s.hardware_id): {kv.key: int(kv.value) for kv in s.values} for s in msg.status}
+            except Exception:  # a foreign writer on our hidden topic: ignore its samples
+                continue
+            with self._lock:
+                self._stats.update(counts)
+        self._changed()
+
+    @staticmethod
+    def _take_data(reader: Any) -> list[bytes]:
+        samples = ddspy_take(reader._ref, _ANY, 256)
+        if not isinstance(samples, list):
+            return []
+        return [data for data, info in samples if info.valid_data]
+
+    def _changed(self) -> None:
+        with self._lock:
+            self.version += 1
+            self._lock.notify_all()
+
+    # ------------------------------------------------------------------ queries (any thread)
+    def wait_for_change(self, version: int, timeout_s: float) -> int:
+        """Wait until the graph changed after ``version`` (or ``timeout_s`` passed); the current version."""
+        deadline = time.monotonic() + timeout_s
+        with self._lock:
+            while self.version == version:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    break
+                self._lock.wait(left)
+            return self.version
+
+    def remote_participant_count(self) -> int:
+        """How many other participants are alive in the domain (cheaper than :meth:`view`)."""
+        with self._lock:
+            return sum(1 for gid in self._participants if gid != self.p.gid)
+
+    def view(self) -> GraphView:
+        """The graph as this participant sees it now (its own nodes included)."""
+        local_nodes = self.local_nodes()
+        local_stats = self.local_stats()
+        with self._lock:
+            participants = dict(self._participants)
+            endpoints = dict(self._endpoints)
+            nodes_of = {gid: list(nodes) for gid, nodes in self._nodes_of.items()}
+            stats = {**self._stats, **local_stats}
+        nodes_of[self.p.gid] = local_nodes
+        participants.setdefault(self.p.gid, self.p.enclave)
+        view = GraphView(participants={gid.hex(): {'enclave': enclave, 'local': gid == self.p.gid}
+                                       for gid, enclave in participants.items()})
+        owner: dict[bytes, str] = {}
+        for pgid, nodes in nodes_of.items():
+            if pgid not in participants:
+                continue
+            for ns, name, readers, writers in nodes:
+                fqn = ns.rstrip('/') + '/' + name
+                node = NodeInfo(fqn, pgid.hex(), participants[pgid])
+                for gid, into in [(g, node.subscriptions) for g in readers] + [(g, node.publishers) for g in writers]:
+                    endpoint = self._endpoint_info(gid, endpoints.get(gid), fqn, stats)
+                    if endpoint is not None:
+                        owner[gid] = fqn
+                        into.append(endpoint)
+                view.nodes.append(node)
+        for gid, entry in endpoints.items():
+            endpoint = self._endpoint_info(gid, entry, owner.get(gid, UNKNOWN_NODE), stats)
+            if endpoint is not None:
+                view.add_endpoint(endpoint, entry['kind'])
+        view.nodes.sort(key=lambda n: (n.name, n.participant))
+        return view
+
+    @staticmethod
+    def _endpoint_info(gid: bytes, entry: dict | None, node: str, stats: dict) -> EndpointInfo | None:
+        if entry is None:
+            return None
+        topic = ros_topic_name(entry['topic'])
+        if topic is None:
+            return None  # ros_discovery_info, services (part of the graph, not of the topic list)
+        return EndpointInfo(node, entry['participant'].hex(), topic, ros_type_name(entry['type']) or entry['type'],
+                            gid, entry['qos'], entry['type_hash'],
+                            stats.get(gid, {}) if entry['kind'] == 'reader' else {})
+
+    def foreign_types(self, ros_topic: str, our_type: str) -> list[str]:
+        """DDS type names (with their participant) of remote endpoints on ``ros_topic`` whose type is not ours."""
+        ours = idl_struct(our_type).__idl__.get_type_id()
+        dds_name = 'rt' + ros_topic
+        with self._lock:
+            found = {f"'{e['type']}' (participant {e['participant'].hex()})" for e in self._endpoints.values()
+                     if e['topic'] == dds_name and e['participant'] != self.p.gid
+                     and e['type_id'] is not None and e['type_id'] != ours}
+        return sorted(found)
+
+    def close(self) -> None:
+        with self._lock:
+            self._lock.notify_all()
+
+
+def user_data_value(qos: Any, wanted: str) -> str:
+    """``value`` of ``wanted=value;`` in an entity's user data (ROS 2 puts ``enclave=`` and ``typehash=`` there)."""
+    data = qos[Policy.Userdata] if qos is not None else None
+    text = data.data.decode(errors='replace') if data is not None else ''
+    for item in text.split(';'):
+        key, _, value = item.partition('=')
+        if key == wanted:
+            return value
+    return ''

@@ -1,0 +1,168 @@
+"""The DDS writer behind a runtime ``Publisher`` and the DDS reader behind a ``Subscription``.
+
+A writer serialises a message only when a remote reader is matched (or when the
+publisher is TRANSIENT_LOCAL: its DDS history must hold the last samples for readers
+that join later) and writes the CDR bytes as they are, padded with zeros to a multiple
+of four as rmw_cyclonedds pads them; the sample's source timestamp is the publishing
+context's ROS time (simulated time in a simulated graph, else the wall clock as in ROS 2).
+
+A reader is taken from by the executor of its subscription, in that executor's thread
+(:mod:`.waker`): each sample is decoded there (raw subscriptions get the bytes) and queued
+on the subscription. A sample that does not decode is counted and skipped, and reported
+once per writer with both type names.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+from cyclonedds._clayer import ddspy_take, ddspy_write_ts
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+
+from .. import messages
+from ..errors import MessageError
+from ..runtime.qos import DurabilityPolicy
+from .cdds import forget, matched_readers
+from .qos import dds_qos
+
+if TYPE_CHECKING:
+    from ..runtime.endpoints import Publisher, Subscription
+    from .participant import DdsParticipant
+
+__all__ = ['DdsReader', 'DdsWriter', 'pad4']
+
+#: Samples taken from a reader per call.
+TAKE_BATCH = 256
+_ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
+_RETCODE_TIMEOUT = -10
+
+
+def pad4(data: bytes) -> bytes:
+    """``data`` padded with zero bytes to a multiple of 4, as rmw_cyclonedds and cyclonedds pad a payload.
+
+    >>> pad4(b'\\x00\\x01\\x00\\x00ab')
+    b'\\x00\\x01\\x00\\x00ab\\x00\\x00'
+    """
+    extra = -len(data) % 4
+    return data + b'\0' * extra if extra else data
+
+
+def _make(entity_class: type, parent: Any, participant: DdsParticipant, endpoint: Any) -> Any:
+    """The DataWriter or DataReader of a runtime endpoint, on its ``rt/`` topic with ROS 2's QoS."""
+    type_name = endpoint._topic.type_name
+    topic = participant.topic(endpoint.topic_name, type_name)
+    entity = entity_class(parent, topic, dds_qos(endpoint.qos_profile, type_hash=participant.type_hash(type_name)))
+    forget(entity)  # deleted with the participant, or explicitly with its endpoint
+    return entity
+
+
+class DdsWriter:
+    """The DDS side of one runtime publisher.
+
+    Attributes:
+        written: samples handed to DDS.
+        skipped: publishes not serialised because no remote reader was matched.
+        failed: samples DDS refused or timed out on (a full KEEP_ALL history).
+    """
+
+    def __init__(self, participant: DdsParticipant, publisher: Publisher) -> None:
+        self.publisher = publisher
+        self.topic_name = publisher.topic_name
+        self.type_name = publisher._topic.type_name
+        self.writer = _make(DataWriter, participant.dds_publisher, participant, publisher)
+        self.ref = self.writer._ref
+        self.gid = self.writer.get_guid().bytes
+        self.latched = publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+        self._now_ns = publisher.node.context.now_ns
+        self.written = self.skipped = self.failed = 0
+
+    def matched(self) -> int:
+        """Remote readers matched (this process's own readers are ignored by DDS)."""
+        return matched_readers(self.ref)
+
+    def write(self, msg: Any, raw: bytes | None) -> None:
+        """Send ``msg`` (or its CDR bytes ``raw``) to the remote readers, if there are any."""
+        if not self.latched and matched_readers(self.ref) == 0:
+            self.skipped += 1
+            return
+        data = pad4(raw if raw is not None else messages.serialize(msg, self.type_name))
+        ret = ddspy_write_ts(self.ref, data, self._now_ns())
+        if ret < 0:
+            self.failed += 1
+            why = ('a reliable reader did not take a sample within the blocking time' if ret == _RETCODE_TIMEOUT
+                   else f'DDS refused a sample (error {ret}: CDR bytes that are no {self.type_name}?)')
+            self.publisher.node.get_logger().warn(f"'{self.topic_name}': {why}; dropped", throttle_duration_sec=5.0)
+        else:
+            self.written += 1
+
+
+class DdsReader:
+    """The DDS side of one runtime subscription.
+
+    Attributes:
+        received: samples taken from DDS.
+        undecodable: samples that did not decode as the subscription's type (skipped).
+    """
+
+    def __init__(self, participant: DdsParticipant, subscription: Subscription) -> None:
+        self.subscription = subscription
+        self.topic_name = subscription.topic_name
+        self.type_name = subscription._topic.type_name
+        self.reader = _make(DataReader, participant.dds_subscriber, participant, subscription)
+        self.condition = ReadCondition(self.reader, _ANY_STATE)
+        forget(self.condition)
+        self.condition_ref = self.condition._ref
+        self.ref = self.reader._ref
+        self.gid = self.reader.get_guid().bytes
+        self.received = 0
+        self.undecodable = 0
+        self.waker: Any = None  # the DdsWaker of the executor taking from this reader
+        self._reported: set[int] = set()
+
+    def drain(self) -> bool:
+        """Take everything DDS holds for this reader onto the subscription's queue; True if anything came."""
+        sub = self.subscription
+        raw, with_info = sub.raw, sub.with_info
+        took = False
+        while True:
+            samples = ddspy_take(self.ref, _ANY_STATE, TAKE_BATCH)
+            if not isinstance(samples, list) or not samples:
+                return took
+            now = time.time_ns() if with_info else 0
+            for data, info in samples:
+                if not info.valid_data:
+                    continue  # a writer went away (no data, only an instance state change)
+                self.received += 1
+                if raw:
+                    item: Any = data
+                else:
+                    try:
+                        item = messages.deserialize(data, self.type_name)
+                    except MessageError as err:
+                        self._undecodable(info.publication_handle, err)
+                        continue
+                if with_info:
+                    item = (item, {'source_timestamp': info.source_timestamp, 'received_timestamp': now})
+                sub._enqueue_local(item)
+                took = True
+            if len(samples) < TAKE_BATCH:
+                return took
+
+    def _undecodable(self, writer_handle: int, err: MessageError) -> None:
+        self.undecodable += 1
+        if writer_handle in self._reported:
+            return
+        self._reported.add(writer_handle)
+        theirs = 'an unknown type'
+        try:
+            endpoint = self.reader.get_matched_publication_data(writer_handle)
+            if endpoint is not None:
+                theirs = f"'{endpoint.type_name}' (writer {endpoint.key})"
+        except Exception:  # the writer may be gone already; the report still goes out
+            pass
+        self.subscription.node.get_logger().error(
+            f"'{self.topic_name}': a sample from a writer of {theirs} does not decode as "
+            f"'{self.type_name}' ({err}); skipped. Further ones from it are counted (social-touch topic info -v).")

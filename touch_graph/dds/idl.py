@@ -1,0 +1,98 @@
+"""DDS type descriptions of ROS 2 messages, generated from the ``.msg`` definitions.
+
+Cyclone DDS registers a topic's type with its XTypes description (TypeInformation and
+TypeMapping), and with that description it (a) checks that a remote endpoint's type is
+assignable to ours before matching it and (b) checks every received payload against the
+layout ("normalises" it) before handing it over. cyclonedds-python cannot register a type
+without that description, so leaving it out (as rmw_cyclonedds did up to Iron) is not an
+option here; instead the description says exactly what ROS 2's IDL says, the way
+rmw_cyclonedds builds it from the rosidl introspection since it started to register
+types: every struct ``@final`` and named ``pkg::msg::dds_::Name_``, ``byte`` and ``char``
+as ``uint8``, fixed arrays as arrays, ``T[<=N]`` as bounded sequences, ``string<=N`` as
+bounded strings, member names as in the ``.msg`` file.
+
+Only the description comes from here: payloads are written and read as the CDR bytes
+:mod:`touch_graph.messages` makes (XCDR1, little endian, 4-byte encapsulation header),
+never through cyclonedds' own Python serialiser. For a final type, XCDR1 and the classic
+CDR that ROS 2 puts on the wire are the same bytes.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from cyclonedds.idl import IdlStruct, make_idl_struct
+from cyclonedds.idl import types as t
+from rosbags.interfaces import Nodetype
+
+from ..errors import MessageError
+from .names import dds_type_name
+
+__all__ = ['idl_struct']
+
+_BASES: dict[str, Any] = {
+    'bool': bool, 'byte': t.uint8, 'char': t.uint8, 'uint8': t.uint8, 'int8': t.int8,
+    'int16': t.int16, 'uint16': t.uint16, 'int32': t.int32, 'uint32': t.uint32,
+    'int64': t.int64, 'uint64': t.uint64, 'float32': t.float32, 'float64': t.float64,
+}
+
+_lock = threading.Lock()
+_cache: dict[tuple[int, str], type[IdlStruct]] = {}
+
+
+def idl_struct(ros_type: str, store: Any = None) -> type[IdlStruct]:
+    """The cyclonedds ``IdlStruct`` class describing ``pkg/msg/Name`` (cached).
+
+    Args:
+        ros_type: a full type name known to ``store``.
+        store: a rosbags typestore (default :data:`touch_graph.messages.typestore`).
+
+    Raises:
+        MessageError: for a type the store does not know or a field DDS cannot describe.
+    """
+    if store is None:
+        from ..messages import typestore as store
+    key = (id(store), ros_type)
+    with _lock:
+        cls = _cache.get(key)
+        if cls is None:
+            cls = _cache[key] = _build(ros_type, store)
+        return cls
+
+
+def _build(ros_type: str, store: Any) -> type[IdlStruct]:
+    if ros_type not in store.fielddefs:
+        raise MessageError(f'no definition of {ros_type} to describe it to DDS')
+    _consts, fields = store.fielddefs[ros_type]
+    annotations = {name: _field_type(ros_type, name, desc, store) for name, desc in fields}
+    class_name = ros_type.rsplit('/', 1)[-1] + '_'
+    return make_idl_struct(class_name, dds_type_name(ros_type), annotations)
+
+
+def _field_type(owner: str, field: str, desc: tuple, store: Any) -> Any:
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        base, bound = detail
+        if base == 'string':
+            return t.bounded_str[bound] if bound else str
+        if base not in _BASES:
+            raise MessageError(f"field '{field}' of {owner}: type {base} cannot be described to DDS")
+        return _BASES[base]
+    if kind == Nodetype.NAME:
+        return _cached_nested(detail, store)
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        element, size = detail
+        item = _field_type(owner, field, element, store)
+        if kind == Nodetype.ARRAY:
+            return t.array[item, size]
+        return t.sequence[item, size] if size else t.sequence[item]
+    raise MessageError(f"field '{field}' of {owner}: unsupported descriptor {desc!r}")
+
+
+def _cached_nested(ros_type: str, store: Any) -> type[IdlStruct]:
+    key = (id(store), ros_type)
+    cls = _cache.get(key)  # the caller holds _lock
+    if cls is None:
+        cls = _cache[key] = _build(ros_type, store)
+    return cls

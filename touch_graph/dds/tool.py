@@ -1,0 +1,167 @@
+"""What the graph commands of ``social-touch`` (topic, node, record, play) share: a place in the DDS graph.
+
+:class:`GraphTool` gives a command its own wall-clock, networked context with a hidden
+node (``/_social_touch_<command>_<pid>``, hidden from ``node list`` as ros2cli's are),
+waits until discovery has settled, and turns the usual mistakes into clear errors: no
+graph in the domain, an unknown topic or node (with a did-you-mean).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ..errors import GraphError
+from ..yamlconf import did_you_mean
+from .cdds import wait_for_acks
+from .graph import GraphView, TopicInfo
+
+__all__ = ['GraphTool', 'NoGraphError']
+
+#: Discovery counts as settled when the graph has not changed for this long, s.
+SETTLE_S = 0.3
+
+
+class NoGraphError(GraphError):
+    """No other participant is in the domain."""
+
+
+class GraphTool:
+    """A command-line tool's place in the graph (a context manager).
+
+    Args:
+        name: the command (``topic_echo``); its node is ``/_social_touch_<name>_<pid>``.
+        discovery_timeout_s: how long to wait for discovery when nobody answers (wall time).
+    """
+
+    def __init__(self, name: str, *, discovery_timeout_s: float = 2.0) -> None:
+        from ..runtime import Context
+        self.name = re.sub(r'\W', '_', name)
+        self.discovery_timeout_s = discovery_timeout_s
+        self.context = Context('wall', network=True)
+        self.executor: Any = None
+        self.node: Any = None
+
+    def __enter__(self) -> GraphTool:
+        from ..runtime import Node, SingleThreadedExecutor
+        self.context.init([])
+        try:
+            self.executor = SingleThreadedExecutor(context=self.context)
+            self.node = Node(f'_social_touch_{self.name}_{os.getpid()}', context=self.context)
+            self.executor.add_node(self.node)
+            self.wait_for_discovery(self.discovery_timeout_s)
+        except BaseException:
+            self.context.try_shutdown()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.node is not None:
+            self.node.destroy_node()
+        if self.executor is not None:
+            self.executor.shutdown()
+        self.context.try_shutdown()
+
+    # ------------------------------------------------------------------ graph
+    @property
+    def discovery(self) -> Any:
+        return self.context.transport.graph
+
+    def graph(self) -> GraphView:
+        return self.discovery.view()
+
+    def wait_for_discovery(self, timeout_s: float) -> bool:
+        """Wait until the graph stops changing (others found) or ``timeout_s`` passes; True if anyone is there."""
+        start = time.monotonic()
+        version = self.discovery.version
+        last_change = start
+        while True:
+            now = time.monotonic()
+            if now - start >= timeout_s:
+                break
+            if self.discovery.remote_participant_count() and now - last_change >= SETTLE_S:
+                break
+            wait = min(SETTLE_S, timeout_s - (now - start))
+            new = self.discovery.wait_for_change(version, wait)
+            if new != version:
+                version, last_change = new, time.monotonic()
+        return self.discovery.remote_participant_count() > 0
+
+    def wait_until(self, predicate: Callable[[GraphView], bool], timeout_s: float) -> bool:
+        """Wait (wall time) until ``predicate(graph())`` holds; returns its last value."""
+        deadline = time.monotonic() + timeout_s
+        version = self.discovery.version
+        while True:
+            if predicate(self.graph()):
+                return True
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            version = self.discovery.wait_for_change(version, min(left, 0.25))
+
+    def no_graph_message(self) -> str:
+        transport = self.context.transport
+        return (f'no ROS 2 graph is running in DDS domain {transport.domain_id} (discovery range '
+                f'{transport.discovery_options.range}); start one with social-touch launch FILE (or a node with '
+                'ros2 run / its console script), or check ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE')
+
+    def require_graph(self) -> GraphView:
+        """The graph; NoGraphError when no other participant is in the domain."""
+        view = self.graph()
+        if not view.remote_participants():
+            raise NoGraphError(self.no_graph_message())
+        return view
+
+    def require_topic(self, topic: str, type_name: str | None = None, wait_s: float = 0.0) -> TopicInfo:
+        """The topic as the graph knows it, waiting up to ``wait_s`` for it to appear.
+
+        Raises:
+            NoGraphError: no graph running.
+            GraphError: the topic is unknown (with a did-you-mean), or carries several types.
+        """
+        view = self.require_graph()
+        if topic not in view.topics and wait_s > 0:
+            self.wait_until(lambda v: topic in v.topics, wait_s)
+            view = self.graph()
+        info = view.topics.get(topic)
+        if info is None:
+            if type_name:
+                return TopicInfo(topic, {type_name})
+            known = sorted(view.visible_topics())
+            raise GraphError(f"unknown topic '{topic}'{did_you_mean(topic, known)}; topics in the graph: "
+                             f'{", ".join(known) or "none"}')
+        if len(info.types) > 1 and not type_name:
+            raise GraphError(f"topic '{topic}' carries several types ({info.type_name}); name the one to use")
+        return info
+
+    # ------------------------------------------------------------------ spinning
+    def spin_until(self, predicate: Callable[[], bool], timeout_s: float | None, stop: Any = None,
+                   every: Callable[[], None] | None = None, every_s: float = 1.0) -> bool:
+        """Spin until ``predicate()``, a stop request or ``timeout_s`` (wall); call ``every()`` each ``every_s``."""
+        start = time.monotonic()
+        next_every = start + every_s
+        while not predicate():
+            if stop is not None and stop.requested:
+                return False
+            now = time.monotonic()
+            if timeout_s is not None and now - start >= timeout_s:
+                return predicate()
+            if every is not None and now >= next_every:
+                every()
+                next_every = now + every_s
+            self.executor.spin_once(0.05)
+        return True
+
+    def flush(self, publishers: list[Any], timeout_s: float = 2.0) -> bool:
+        """Wait until every reliable remote reader acknowledged what ``publishers`` wrote (before exiting)."""
+        deadline = time.monotonic() + timeout_s
+        acked = True
+        for pub in publishers:
+            dds = getattr(pub, '_dds', None)
+            if dds is not None:
+                left = max(0.0, deadline - time.monotonic())
+                acked = wait_for_acks(dds.ref, int(left * 1e9)) and acked
+        return acked
