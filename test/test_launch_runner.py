@@ -231,3 +231,27 @@ def test_runner_arguments_are_checked():
         runner.spin(1.0)
     with runner, pytest.raises(ValueError, match='duration must be >= 0'):
         runner.spin(-1.0)
+
+
+def test_a_misspelt_launch_parameter_is_a_warning_with_file_and_line_or_an_error_when_strict(tmp_path, capsys):
+    launch = tmp_path / 'typo.launch.yaml'
+    launch.write_text("""launch:
+- node:
+    pkg: social_touch
+    exec: bear_gestures
+    name: bear_gestures
+    namespace: bear
+    param:
+    - {name: treshold, value: 0.4}
+""")
+    plan = evaluate_launch(str(launch), {})
+    runner = LaunchRunner(plan.nodes, sim_time=True)
+    try:
+        runner.start()
+    finally:
+        runner.shutdown()
+    err = capsys.readouterr().err
+    assert f'{launch}:8' in err and "'treshold'" in err and 'did you mean' in err
+    strict = LaunchRunner(evaluate_launch(str(launch), {}).nodes, sim_time=True, strict_params=True)
+    with pytest.raises(LaunchError, match='treshold'):
+        strict.start()

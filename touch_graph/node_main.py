@@ -71,6 +71,7 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
     if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
         return _run_rclpy(node_class, args)
     from .runtime import SingleThreadedExecutor, get_default_context
+    from .runtime.override_check import check_overrides
 
     argv = list(sys.argv[1:] if args is None else args)
     context = get_default_context()
@@ -78,6 +79,7 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
     try:
         context.init(argv)
         node = node_class()
+        check_overrides([node], node.get_logger())  # a misspelt -p or params-file name: warn, file and line
     except SocialTouchError as err:
         sys.stderr.write(f'{prog}: error: {err}\n')
         context.try_shutdown()

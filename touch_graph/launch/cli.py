@@ -63,6 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='keep the graph in this process: do not join the DDS domain (other processes and '
                              'machines, social-touch topic echo and record, ROS 2 nodes do not see it)')
     parser.add_argument('--no-bridge', action='store_true', dest='no_network', help=argparse.SUPPRESS)
+    parser.add_argument('--strict-params', action='store_true',
+                        help='a parameter in the launch file or a parameter file that no node declares (a typo) '
+                             'stops the launch; by default it is a warning naming file, line and the nearest '
+                             'declared name (ROS 2 itself accepts undeclared overrides silently)')
     parser.add_argument('--rate', type=_positive_rate, metavar='R',
                         help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
                              'as possible)')
@@ -151,7 +155,8 @@ def run(args: argparse.Namespace) -> int:
     if not plan.nodes:
         print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
         return 0
-    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, network=not args.no_network)
+    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, network=not args.no_network,
+                          strict_params=args.strict_params)
     try:
         runner.start()
         names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)

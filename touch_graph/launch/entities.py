@@ -276,7 +276,7 @@ class _Evaluator:
             for child in decl.children:
                 out += self.params(child, full + '.')
             return out
-        return [ParamValue(full, _param_value(decl, full, self))]
+        return [ParamValue(full, _param_value(decl, full, self), decl.where)]
 
 
 def _show(template: Template) -> str:

@@ -142,13 +142,15 @@ class LaunchRunner:
         network: join the DDS domain, so other processes and machines see the graph (``social-touch
             topic echo``, ``record``, ROS 2 nodes); None leaves it to the context (a wall clock joins,
             a simulated one does not).
+        strict_params: a parameter in the launch file or a parameter file that no node declares (a
+            typo) is an error instead of a warning.
 
     Use as a context manager, or call :meth:`start`, :meth:`spin` and :meth:`shutdown`.
     """
 
     def __init__(self, specs: Iterable[NodeSpec], *, registry: Registry | None = None,
                  runtime: types.ModuleType | Any = None, sim_time: bool = False, rate: float | None = None,
-                 network: bool | None = None) -> None:
+                 network: bool | None = None, strict_params: bool = False) -> None:
         if rate is not None and not sim_time:
             raise ValueError('rate applies to simulated time only; pass sim_time=True as well')
         if rate is not None and not (rate > 0):  # also rejects NaN
@@ -162,6 +164,7 @@ class LaunchRunner:
         self.executor: Any = None
         self.nodes: list[Any] = []
         self.network = network
+        self.strict_params = strict_params
         self._stop = threading.Event()
         self._signals = 0
 
@@ -182,6 +185,7 @@ class LaunchRunner:
         try:
             for spec, cls in zip(self.specs, classes, strict=True):
                 self.nodes.append(self._create(spec, cls))
+            self._check_parameters()
             self.executor = self.runtime.SingleThreadedExecutor(context=self.context)
             for node in self.nodes:
                 self.executor.add_node(node)
@@ -195,7 +199,12 @@ class LaunchRunner:
 
     def _create(self, spec: NodeSpec, cls: type) -> Any:
         try:
-            overrides = [self.runtime.Parameter(p.name, value=p.value) for p in spec.parameter_values()]
+            overrides = []
+            for value in spec.parameter_values():
+                param = self.runtime.Parameter(value.name, value=value.value)
+                if value.where is not None:
+                    param.source = value.where  # where the launch file wrote it, for errors and warnings
+                overrides.append(param)
             return cls(context=self.context, cli_args=spec.cli_args(), parameter_overrides=overrides)
         except SocialTouchError as err:
             who = spec.full_name or f'{spec.pkg}/{spec.exec}'
@@ -203,6 +212,16 @@ class LaunchRunner:
         except Exception as err:  # a bug in the node: keep the exception, say which launch entry it was
             err.add_note(f'while starting {spec.pkg}/{spec.exec} from {spec.where}')
             raise
+
+    def _check_parameters(self) -> None:
+        """Warn about (``strict_params``: refuse) launch or file parameters that no node declares."""
+        from ..runtime.logging import get_logger
+        from ..runtime.override_check import check_overrides
+        ours = [node for node in self.nodes if hasattr(node, 'override_origins')]  # not under real rclpy
+        try:
+            check_overrides(ours, get_logger('launch'), strict=self.strict_params)
+        except SocialTouchError as err:
+            raise LaunchError(str(err)) from err
 
     def request_stop(self) -> None:
         """Ask :meth:`spin` to return after the current callback (safe from a signal handler or thread)."""

@@ -11,6 +11,7 @@ import re
 import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from .substitutions import Location
 
@@ -29,10 +30,12 @@ ParamData = bool | int | float | str | tuple[bool, ...] | tuple[int, ...] | tupl
 
 @dataclass(frozen=True)
 class ParamValue:
-    """A parameter given in the launch file: dotted ``name`` and a ROS parameter value."""
+    """A parameter given in the launch file: dotted ``name``, a ROS parameter value, and where it
+    was written (``file:line``, for errors and for the check of parameters no node declares)."""
 
     name: str
     value: ParamData
+    where: Any = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)

@@ -97,7 +97,9 @@ class Node:
                 self._overrides[name] = (value.value, value)
                 self._override_keys[name] = key
         for param in parameter_overrides or []:
-            self._overrides[param.name] = (param.value, ParameterSource('parameter_overrides'))
+            # A launch file's param carries where it was written (file:line) in `source`.
+            source = getattr(param, 'source', None) or ParameterSource('parameter_overrides')
+            self._overrides[param.name] = (param.value, source)
             self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
         self._set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]] = []
