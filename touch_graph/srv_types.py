@@ -182,12 +182,17 @@ def service_type_of(srv_type: Any) -> str:
 
 
 def service_definition(name: str) -> str:
-    """The ``.srv`` text of a service type, as ``ros2 interface show`` prints it."""
+    """The ``.srv`` text of a service type, as ``ros2 interface show`` prints it.
+
+    Raises:
+        MessageError: for an unknown type (with the known ones).
+    """
     full = normalize_service_name(name)
-    own = _own_services()
-    if full in own:
-        return own[full]
-    if full in STANDARD_SERVICES:
-        return STANDARD_SERVICES[full]
-    get_service(full)  # raises with the known ones
-    return ''
+    get_service(full)  # raises for an unknown one
+    texts = {**STANDARD_SERVICES, **_own_services()}
+    if full in texts:
+        return texts[full]
+    from .messages import typestore  # registered by other means: rebuilt from its halves
+    halves = [typestore.generate_msgdef(f'{full}_{part}', ros_version=2)[0].split('\n' + '=' * 80)[0]
+              for part in ('Request', 'Response')]
+    return '---\n'.join(halves)

@@ -30,7 +30,7 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from cyclonedds._clayer import ddspy_take, ddspy_write_ts
-from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+from cyclonedds.core import InstanceState, Policy, Qos, ReadCondition, SampleState, ViewState
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
@@ -94,7 +94,9 @@ class _Pair:
         self.node = entity.node
         csid = format_csid(participant.gid, next(participant.csids))
         self.csid = csid
-        qos = dds_qos(entity.qos_profile, user_data=f'{role}={csid};')
+        # ROS 2 names no fields of the request header, so a peer that describes its types may name them otherwise
+        qos = Qos(Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True),
+                  base=dds_qos(entity.qos_profile, user_data=f'{role}={csid};'))
         self.read_topic, self.read_type = read_topic, read_type
         self.write_topic, self.write_type = write_topic, write_type
         read_struct = idl_service_struct(read_type)

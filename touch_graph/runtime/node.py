@@ -127,7 +127,6 @@ class Node(NodeParameters):
         if enable_rosout:
             self._logger.set_sink(self._publish_rosout)
         self.declare_parameter('use_sim_time', False)
-        self.add_on_set_parameters_callback(self._refuse_sim_time_change)
         if automatically_declare_parameters_from_overrides:
             for name, (value, _) in list(self._overrides.items()):
                 if name not in self._parameters:
@@ -394,10 +393,3 @@ class Node(NodeParameters):
             pass
         finally:
             _rosout_guard.busy = False
-
-    def _refuse_sim_time_change(self, params: list[Parameter]) -> SetParametersResult:
-        for param in params:
-            if param.name == 'use_sim_time' and param.value != self.get_parameter('use_sim_time').value:
-                return SetParametersResult(False, "the clock is the context's: start the graph with --sim-time "
-                                                  '(social-touch launch) instead of switching use_sim_time')
-        return SetParametersResult(True, '')

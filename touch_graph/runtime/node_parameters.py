@@ -165,6 +165,9 @@ class NodeParameters:
             return param, ''
         if descriptor.read_only:
             return None, f"parameter '{name}' cannot be set because it is read-only"
+        if name == 'use_sim_time' and param.value != self._parameters[name].value:
+            return None, ("the clock is the context's: start the graph with --sim-time (social-touch launch) "
+                          'instead of switching use_sim_time')
         if param.type_ == ParameterType.NOT_SET:
             if descriptor.type != ParameterType.NOT_SET:
                 return None, f"cannot undeclare statically typed parameter '{name}'"
