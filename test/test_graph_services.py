@@ -207,3 +207,15 @@ def test_future_api_as_rclpy():
     cancelled = runtime.Future()
     cancelled.cancel()
     assert cancelled.done() and cancelled.cancelled() and cancelled.result() is None
+
+
+def test_a_full_request_queue_drops_the_oldest_and_tells_its_caller(graph):
+    context, executor = graph
+    _, service, _ = _server(context, executor)  # nobody spins it yet
+    client = Node('caller', context=context).create_client(SetBool, 'switch')
+    futures = [client.call_async(SetBool.Request(data=True)) for _ in range(12)]
+    assert service.dropped == 2 and len(service._queue) == 10  # keep last 10, as the services QoS says
+    for dropped in futures[:2]:
+        assert isinstance(dropped.exception(), ServiceCallError) and 'dropped the request' in str(dropped.exception())
+    executor.spin_until(lambda: all(f.done() for f in futures), 5)
+    assert all(f.result().success for f in futures[2:])

@@ -185,7 +185,7 @@ def _run(args: argparse.Namespace, together: list, alone: list) -> int:
     """Start the in-process nodes, then the node processes; spin and watch until the end; stop everything."""
     from ..node_main import StopSignals
     from .processes import POLL_S, ProcessSupervisor
-    supervisor = ProcessSupervisor(alone) if alone else None
+    supervisor = ProcessSupervisor(alone, strict_params=args.strict_params) if alone else None
     runner = None
     if together:
         runner = LaunchRunner(together, sim_time=args.sim_time, rate=args.rate,

@@ -1,4 +1,6 @@
-"""A launched node in a process of its own: ``python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID``.
+"""A launched node in a process of its own, started by the launcher.
+
+``python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params]``.
 
 The launcher (:mod:`.processes`) starts one of these per node that runs alone. It builds the
 node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
@@ -35,15 +37,17 @@ def die_with_parent(parent_pid: int) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    strict = '--strict-params' in argv
+    argv = [a for a in argv if a != '--strict-params']
     if len(argv) != 2:
-        sys.stderr.write('usage: python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID (the launcher '
-                         'starts it)\n')
+        sys.stderr.write('usage: python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params] '
+                         '(the launcher starts it)\n')
         return 2
     die_with_parent(int(argv[1]))
     from .runner import LaunchRunner
     from .specs import spec_from_json
     spec = spec_from_json(argv[0])
-    runner = LaunchRunner([spec], network=True)
+    runner = LaunchRunner([spec], network=True, strict_params=strict)
     try:
         runner.start()
     except SocialTouchError as err:

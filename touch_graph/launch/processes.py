@@ -78,8 +78,9 @@ class NodeProcess:
     def running(self) -> bool:
         return self.proc is not None and self.proc.poll() is None
 
-    def command(self) -> list[str]:
-        return [sys.executable, '-m', 'touch_graph.launch.node_process', spec_to_json(self.spec), str(os.getpid())]
+    def command(self, strict_params: bool = False) -> list[str]:
+        return [sys.executable, '-m', 'touch_graph.launch.node_process', spec_to_json(self.spec), str(os.getpid()),
+                *(['--strict-params'] if strict_params else [])]
 
 
 class ProcessSupervisor:
@@ -89,15 +90,17 @@ class ProcessSupervisor:
         specs: the nodes to run alone.
         stream: where reports and the processes' prefixed output go (default stderr).
         env: the processes' environment (default this process's).
+        strict_params: a parameter no node declares stops that node (``launch --strict-params``).
     """
 
     def __init__(self, specs: list[NodeSpec], stream: TextIO | None = None,
-                 env: dict[str, str] | None = None) -> None:
+                 env: dict[str, str] | None = None, strict_params: bool = False) -> None:
         counter = itertools.count(1)
         self.processes = [NodeProcess(spec, f'{spec.name or spec.exec}-{next(counter)}',
                                       spec.process or ProcessOptions()) for spec in specs]
         self.stream = stream
         self.env = env
+        self.strict_params = strict_params
         self.stopping = False
         self.died = 0  # exits with a non-zero code while the launch ran
         self._lock = threading.Lock()
@@ -108,7 +111,7 @@ class ProcessSupervisor:
             self._spawn(process)
 
     def _spawn(self, process: NodeProcess) -> None:
-        command = process.command()
+        command = process.command(self.strict_params)
         process.proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                         bufsize=1, start_new_session=True, env=self.env)
         process.started_at = time.monotonic()

@@ -102,6 +102,15 @@ class Service(QueuedEntity):
         reply.send(response)
         self.replied += 1
 
+    def _enqueue_local(self, item: tuple[Any, Any]) -> None:
+        queue = self._queue
+        if len(queue) == queue.maxlen:  # keep last N, as the DDS reader does; the dropped caller learns it
+            _, reply = queue.popleft()
+            self.dropped += 1
+            reply.fail(ServiceCallError(f"service '{self.srv_name}' dropped the request: {queue.maxlen} newer "
+                                        'ones were waiting (its node is busy or not spinning)'))
+        super()._enqueue_local(item)
+
     def _fail_queued(self, why: str) -> None:
         """Fail the requests still queued (the service is going away)."""
         while self._queue:
