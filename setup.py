@@ -45,6 +45,7 @@ setup(
         (f'share/{PACKAGE}/config', glob('config/*.yaml') + glob('config/*.npz') + glob('config/*.md')),
         (f'share/{PACKAGE}/config/scenes', glob('config/scenes/*.yaml')),
         (f'share/{PACKAGE}/msg', glob('msg/*.msg')),
+        (f'share/{PACKAGE}/srv', glob('srv/*.srv')),
     ],
     # Bounds are the versions CI tests: the lower ones through constraints/lowest.txt, the upper
     # ones by a plain install (the newest each bound allows). Widen a bound only after testing it.

@@ -164,6 +164,7 @@ RECORDING_SCENE = textwrap.dedent('''
         pub.publish(String(data=f'm{count[0]}')); count[0] += 1
     talker.create_timer(0.005, tick)
     recorder = RecorderNode(context=ctx, parameter_overrides=[Parameter('output', value=sys.argv[1]),
+                                                              Parameter('topics', value=['/chatter']),
                                                               Parameter('flush_period', value=0.2)])
     executor = SingleThreadedExecutor(context=ctx)
     executor.add_node(talker); executor.add_node(recorder)

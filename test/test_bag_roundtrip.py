@@ -71,7 +71,8 @@ def recorded(tmp_path):
     ctx = sim_context(1_700_000_000.0)
     talker = Talker(context=ctx)
     crasher = Crasher(context=ctx)
-    recorder = RecorderNode(context=ctx, parameter_overrides=[Parameter('output', value=str(tmp_path / 'scene'))])
+    recorder = RecorderNode(context=ctx, parameter_overrides=[Parameter('output', value=str(tmp_path / 'scene')),
+                                                              Parameter('topics', value=['/skin/frame', '/chatter'])])
     executor = SingleThreadedExecutor(context=ctx)
     for node in (talker, crasher, recorder):
         executor.add_node(node)

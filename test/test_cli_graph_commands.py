@@ -74,10 +74,11 @@ def graph_env(domain):
             'PYTHONPATH': str(REPO)}
 
 
-def running_graph():
-    """A node process (run_node) publishing in a DDS domain of its own; yields a directory for scripts."""
+def running_graph(script=GRAPH, commands=GRAPH_COMMANDS, ready=lambda graph: '/patch/frame' in graph.topics):
+    """A node process (run_node of ``script``) in a DDS domain of its own, the CLI's ``commands`` registered
+    for the test, until ``ready(graph view)``; yields a directory for scripts."""
     path = Path(tempfile.mkdtemp(prefix='stc', dir='/tmp'))
-    (path / 'graph.py').write_text(GRAPH)
+    (path / 'graph.py').write_text(script)
     (path / 'cli.py').write_text(CLI)
     with allocate_domain() as domain:
         env = graph_env(domain)
@@ -86,14 +87,14 @@ def running_graph():
             patch.setenv(key, env[key])
         for key in ('ROS_STATIC_PEERS', 'CYCLONEDDS_URI', 'ROS_DISTRO'):
             patch.delenv(key, raising=False)
-        patch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **GRAPH_COMMANDS})
+        patch.setattr(cli_main, 'COMMANDS', {**cli_main.COMMANDS, **commands})
         proc = subprocess.Popen([sys.executable, str(path / 'graph.py')], cwd=REPO, stderr=subprocess.DEVNULL,
                                 env=env)
         try:
-            def ready():
+            def is_ready():
                 with GraphTool('probe', discovery_timeout_s=1.0) as tool:
-                    return '/patch/frame' in tool.graph().topics
-            wait_until(ready, what='the graph process')
+                    return ready(tool.graph())
+            wait_until(is_ready, what='the graph process')
             yield path
         finally:
             proc.send_signal(signal.SIGTERM)
@@ -124,11 +125,13 @@ def test_no_graph_is_a_clear_error(capsys, monkeypatch, dds_domain):
 
 def test_topic_list_and_info(graph, capsys):
     code, out, _ = cli(capsys, 'topic', 'list')
-    assert code == 0 and out.split() == ['/chatter', '/cmd', '/cmd_echo', '/patch/frame']
+    # as ros2 topic list shows them: every node publishes /parameter_events and /rosout
+    assert code == 0 and out.split() == ['/chatter', '/cmd', '/cmd_echo', '/parameter_events', '/patch/frame',
+                                         '/rosout']
     _, out, _ = cli(capsys, 'topic', 'list', '-t')
     assert '/patch/frame [social_touch_msgs/msg/PatchFrame]' in out.splitlines()
     _, out, _ = cli(capsys, 'topic', 'list', '-c')
-    assert out.strip() == '4'
+    assert out.strip() == '6'
     _, out, _ = cli(capsys, 'topic', 'info', '/chatter')
     assert out.splitlines() == ['Type: std_msgs/msg/String', 'Publisher count: 1', 'Subscription count: 0']
     _, out, _ = cli(capsys, 'topic', 'info', '/cmd', '-v')
@@ -148,9 +151,17 @@ def test_node_list_and_info(graph, capsys):
     _, out, _ = cli(capsys, 'node', 'list', '-a')
     assert any(name.startswith('/_social_touch_node_list_') for name in out.split())  # the command's own node
     _, out, _ = cli(capsys, 'node', 'info', '/demo_talker')
-    assert out.splitlines() == ['/demo_talker', '  Subscribers:', '    /cmd: std_msgs/msg/String', '  Publishers:',
-                                '    /chatter: std_msgs/msg/String', '    /cmd_echo: std_msgs/msg/String',
-                                '    /patch/frame: social_touch_msgs/msg/PatchFrame']
+    parameter_services = [f'    /demo_talker/{name}: rcl_interfaces/srv/{srv}' for name, srv in (
+        ('describe_parameters', 'DescribeParameters'), ('get_parameter_types', 'GetParameterTypes'),
+        ('get_parameters', 'GetParameters'), ('list_parameters', 'ListParameters'),
+        ('set_parameters', 'SetParameters'), ('set_parameters_atomically', 'SetParametersAtomically'))]
+    assert out.splitlines() == [
+        '/demo_talker', '  Subscribers:', '    /cmd: std_msgs/msg/String', '  Publishers:',
+        '    /chatter: std_msgs/msg/String', '    /cmd_echo: std_msgs/msg/String',
+        '    /parameter_events: rcl_interfaces/msg/ParameterEvent',
+        '    /patch/frame: social_touch_msgs/msg/PatchFrame',
+        '    /rosout: rcl_interfaces/msg/Log', '  Service Servers:', *parameter_services, '  Service Clients:', '',
+        '  Action Servers:', '', '  Action Clients:', '']  # as ros2 node info prints empty sections
     code, _, err = cli(capsys, 'node', 'info', '/demo_talkr')
     assert code == 1 and "did you mean '/demo_talker'" in err
 

@@ -88,7 +88,8 @@ def test_record_all_for_a_duration_then_bag_info(graph, tmp_path, capsys):
     code, out, _ = cli(capsys, 'bag', 'info', str(bag))
     assert code == 0 and 'Storage id:        mcap' in out
     topics = {line.split('Topic: ')[1].split(' |')[0] for line in out.splitlines() if 'Topic: ' in line}
-    assert topics == {'/chatter', '/patch/frame', '/cmd_echo'}  # every published topic; /cmd has no publisher
+    # every published topic, /rosout and /parameter_events too (as ros2 bag record -a); /cmd has no publisher
+    assert topics == {'/chatter', '/patch/frame', '/cmd_echo', '/parameter_events', '/rosout'}
     code, _, err = cli(capsys, 'record', '-o', str(tmp_path / 'x'))
     assert code == 1 and '-a/--all' in err
 

@@ -95,9 +95,10 @@ def test_ros_discovery_info_is_what_ros2_reads(dds_domain):
                 if sample.valid_data:
                     info = store.deserialize_cdr(data, 'rmw_dds_common/msg/ParticipantEntitiesInfo')
                     latest[bytes(info.gid.data)] = info
-            return any(n.node_name == 'haptics' and len(n.writer_gid_seq) == 1
+            # its publisher, /parameter_events, /rosout and the six parameter services' reply writers
+            return any(n.node_name == 'haptics' and len(n.writer_gid_seq) == 9 and len(n.reader_gid_seq) == 7
                        for info in latest.values() for n in info.node_entities_info_seq)
-        wait_until(read, 10, "our node with its writer in ros_discovery_info")
+        wait_until(read, 10, "our node with its endpoints in ros_discovery_info")
         info = next(i for i in latest.values() if any(n.node_name == 'haptics' for n in i.node_entities_info_seq))
         assert bytes(info.gid.data) == graph.context.transport.gid  # the participant's GUID, 16 bytes (Iron+)
         entry = next(n for n in info.node_entities_info_seq if n.node_name == 'haptics')
@@ -107,12 +108,24 @@ def test_ros_discovery_info_is_what_ros2_reads(dds_domain):
         def seen():
             for sample in publications.take(N=100) + subscriptions.take(N=100):
                 endpoints[sample.key.bytes] = (sample.topic_name, sample.type_name)
-            return bytes(entry.writer_gid_seq[0].data) in endpoints and bytes(entry.reader_gid_seq[0].data) in endpoints
+            gids = [bytes(g.data) for g in (*entry.writer_gid_seq, *entry.reader_gid_seq)]
+            return all(gid in endpoints for gid in gids)
         wait_until(seen, 10, 'the node\'s endpoints in DCPSPublication/DCPSSubscription')
-        assert endpoints[bytes(entry.writer_gid_seq[0].data)] == ('rt/touch/haptic_command',
-                                                                 'social_touch_msgs::msg::dds_::HapticCommand_')
-        assert endpoints[bytes(entry.reader_gid_seq[0].data)] == ('rt/skin/frame',
-                                                                 'social_touch_msgs::msg::dds_::SkinFrame_')
+        writers = {endpoints[bytes(g.data)] for g in entry.writer_gid_seq}
+        readers = {endpoints[bytes(g.data)] for g in entry.reader_gid_seq}
+        services = ('describe_parameters', 'get_parameters', 'get_parameter_types', 'list_parameters',
+                    'set_parameters', 'set_parameters_atomically')
+        srv_type = {'describe_parameters': 'DescribeParameters', 'get_parameters': 'GetParameters',
+                    'get_parameter_types': 'GetParameterTypes', 'list_parameters': 'ListParameters',
+                    'set_parameters': 'SetParameters', 'set_parameters_atomically': 'SetParametersAtomically'}
+        assert writers == {('rt/touch/haptic_command', 'social_touch_msgs::msg::dds_::HapticCommand_'),
+                           ('rt/parameter_events', 'rcl_interfaces::msg::dds_::ParameterEvent_'),
+                           ('rt/rosout', 'rcl_interfaces::msg::dds_::Log_'),
+                           *((f'rr/skin/haptics/{s}Reply', f'rcl_interfaces::srv::dds_::{srv_type[s]}_Response_')
+                             for s in services)}
+        assert readers == {('rt/skin/frame', 'social_touch_msgs::msg::dds_::SkinFrame_'),
+                           *((f'rq/skin/haptics/{s}Request', f'rcl_interfaces::srv::dds_::{srv_type[s]}_Request_')
+                             for s in services)}
     finally:
         delete_entity(reader_side)
         graph.close()

@@ -8,7 +8,8 @@ import importlib
 import pytest
 
 MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', 'touch_graph.yamlconf',
-           'social_touch_msgs.msg']
+           'social_touch_msgs.msg', 'touch_graph.srv_types', 'touch_graph.runtime.parameter_messages',
+           'touch_graph.runtime.parameter_service', 'touch_graph.dds.services']
 
 
 @pytest.mark.parametrize('name', MODULES)

@@ -116,7 +116,7 @@ def test_a_timed_run_on_simulated_time(capsys, monkeypatch, share):
     monkeypatch.setattr(runner_module, 'entry_point_registry', lambda: REGISTRY)
     assert cli.run(parse('social_touch', 'demo.launch.yaml', 'period:=0.5', '--sim-time', '--duration', '2')) == 0
     err = capsys.readouterr().err
-    assert '[launch] 2 node(s) running: /teddy/bear/driver, /teddy/listener' in err
+    assert '[launch] 2 node(s) running in this process: /teddy/bear/driver, /teddy/listener' in err
     assert '[launch] all nodes stopped' in err
 
 

@@ -98,8 +98,15 @@ def test_an_empty_launch_list_is_fine(tmp_path):
         - node:
             pkg: social_touch
             exec: bear_driver
-            respawn: 'true'
-        """, 5, ["attribute 'respawn' of 'node' is not supported", 'runs every node in this process']),
+            launch-prefix: gdb -ex run --args
+        """, 5, ["attribute 'launch-prefix' of 'node' is not supported", 'runs from its class']),
+    ("""\
+        launch:
+        - node:
+            pkg: social_touch
+            exec: bear_driver
+            respawn: [true]
+        """, 5, ["'respawn' of 'node' must be a bool; got [True]"]),
     ("""\
         launch:
         - node:

@@ -164,7 +164,8 @@ def test_the_launch_file_prints_gestures_and_panel_contact(capsys):
                               '--no-bridge'])
     assert launch_cli.run(args) == 0
     captured = capsys.readouterr()
-    assert '3 node(s) running: /patch/patch_gestures, /touch_monitor, /patch/patch_driver' in captured.err
+    assert ('3 node(s) running in this process: '
+            '/patch/patch_gestures, /touch_monitor, /patch/patch_driver') in captured.err
     lines = captured.out.splitlines()
     assert any(' patch ' in line and 'push (p = ' in line for line in lines), captured.out
     assert any('someone is handling the robot' in line for line in lines), captured.out

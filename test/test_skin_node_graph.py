@@ -171,7 +171,8 @@ def test_the_launch_file_prints_the_commands_as_they_happen(capsys):
                               '--no-bridge'])
     assert launch_cli.run(args) == 0
     captured = capsys.readouterr()
-    assert '3 node(s) running: /skin/haptic_commands, /touch_monitor, /skin/skin_driver' in captured.err
+    assert ('3 node(s) running in this process: '
+            '/skin/haptic_commands, /touch_monitor, /skin/skin_driver') in captured.err
     assert 'SYNTHETIC' in captured.err   # the node says where its codebook comes from
     lines = [line for line in captured.out.splitlines() if ' skin ' in line]
     expected = [e.label for e in load_scene(PEOPLE_YAML).gestures()]

@@ -12,13 +12,18 @@ calibrated message in :meth:`SerialDriverNode.handle_frame`. This base
 - publishes a ``DriverStatus`` on ``~/status`` and a ``diagnostic_msgs/DiagnosticArray`` on
   ``/diagnostics`` every ``status_period_s`` (frames, dropped bytes, checksum errors,
   sequence gaps, reconnects, rate), the latter for rqt_robot_monitor and aggregators.
+
+Parameters set while it runs (``ros2 param set``, ``social-touch param set``): those in
+:attr:`SerialDriverNode.live_parameters` take effect at once; every other one is read when
+the driver starts (the port, the timers, the calibration), so a change is refused with that
+reason instead of being accepted and ignored.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from touch_graph.compat import USING_ROS, Node, ParameterDescriptor, get_message
+from touch_graph.compat import USING_ROS, Node, ParameterDescriptor, SetParametersResult, get_message
 
 from .serial_driver import DecodedFrame, DriverError, SerialDriver
 
@@ -44,6 +49,8 @@ class SerialDriverNode(Node):
     sensor = 'sensor'
     default_port = 'loop://'
     frame_rate_hz = 10.0
+    #: Parameters the driver applies at once when set; the others are read at start.
+    live_parameters = frozenset({'frame_id', 'reconnect_period_s'})
 
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
@@ -76,6 +83,7 @@ class SerialDriverNode(Node):
         self._try_open()
         self.create_timer(1.0 / poll_rate, self._poll)
         self.create_timer(status_period, self._publish_status)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
 
     # ------------------------------------------------------------------ for subclasses
     def make_driver(self, port: str, clock: Any) -> SerialDriver:
@@ -90,6 +98,23 @@ class SerialDriverNode(Node):
         return get_message('std_msgs/msg/Header')(stamp=self.get_clock().now().to_msg(), frame_id=self.frame_id)
 
     # ------------------------------------------------------------------ internals
+    def _on_set_parameters(self, params: list[Any]) -> Any:
+        """Apply :attr:`live_parameters` at once; refuse the ones read at start (use_sim_time is the runtime's)."""
+        for param in params:
+            if param.name == 'use_sim_time':
+                continue
+            if param.name not in self.live_parameters:
+                return SetParametersResult(successful=False, reason=f"'{param.name}' is read when the driver "
+                                           'starts; relaunch the node to change it')
+            if param.name == 'reconnect_period_s' and not param.value > 0:
+                return SetParametersResult(successful=False, reason='reconnect_period_s must be > 0 s')
+        for param in params:
+            if param.name == 'frame_id':
+                self.frame_id = param.value
+            elif param.name == 'reconnect_period_s':
+                self.reconnect_period_s = param.value
+        return SetParametersResult(successful=True)
+
     def _clock_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 

@@ -10,6 +10,7 @@ them for the demo and for a person watching a robot:
 
 Only topics whose messages arrive are printed, so the same node serves any scene. Time is
 seconds since the node started, on the graph's clock (simulated time in a simulated scene).
+``show_subtypes`` (print every touch subtype change too) can be switched while it runs.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from __future__ import annotations
 import sys
 from typing import Any, TextIO
 
-from touch_graph.compat import Node, get_message, sensor_data_qos
+from touch_graph.compat import Node, SetParametersResult, get_message, sensor_data_qos
 
 __all__ = ['TouchMonitorNode', 'main']
 
@@ -43,6 +44,13 @@ class TouchMonitorNode(Node):
         self.create_subscription(GestureEvent, '/touch/gesture', self._on_gesture, 50)
         self.create_subscription(HapticCommand, '/touch/haptic_command', self._on_command, 50)
         self.create_subscription(PanelContact, '/patch/panels', self._on_panels, sensor_data_qos(50))
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+    def _on_set_parameters(self, params: list[Any]) -> Any:
+        for param in params:
+            if param.name == 'show_subtypes':
+                self.show_subtypes = bool(param.value)
+        return SetParametersResult(successful=True)
 
     def _say(self, source: str, text: str) -> None:
         seconds = (self.get_clock().now().nanoseconds - self._start_ns) * 1e-9

@@ -5,10 +5,10 @@
     from touch_graph.compat import Node, QoSProfile, get_message, rclpy
 
 On a ROS 2 machine (``import rclpy`` works and ``SOCIAL_TOUCH_SHIM`` is not ``1``) these are
-rclpy's own, and ``get_message('social_touch_msgs/msg/SkinFrame')`` returns the class
-generated from the interface package ``social-touch export-interfaces`` writes. Everywhere
-else they come from :mod:`touch_graph.runtime` and :mod:`touch_graph.messages`, built
-from the same ``.msg`` files.
+rclpy's own, and ``get_message('social_touch_msgs/msg/SkinFrame')`` (``get_service('std_srvs/srv/Trigger')``)
+returns the class generated from the interface package ``social-touch export-interfaces``
+writes. Everywhere else they come from :mod:`touch_graph.runtime`, :mod:`touch_graph.messages`
+and :mod:`touch_graph.srv_types`, built from the same ``.msg`` and ``.srv`` files.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 
 __all__ = [
     'USING_ROS', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile', 'SetParametersResult',
-    'Time', 'get_message', 'qos_profile_sensor_data', 'rclpy', 'sensor_data_qos', 'stamp_now',
+    'Time', 'get_message', 'get_service', 'qos_profile_sensor_data', 'rclpy', 'sensor_data_qos', 'stamp_now',
 ]
 
 
@@ -43,10 +43,15 @@ if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
     from rclpy.qos import QoSProfile, qos_profile_sensor_data
     from rclpy.time import Time
     from rosidl_runtime_py.utilities import get_message as _ros_get_message
+    from rosidl_runtime_py.utilities import get_service as _ros_get_service
 
     def get_message(typename: str) -> type:
         """The generated class of ``pkg/msg/Type``."""
         return _ros_get_message(typename if typename.count('/') == 2 else typename.replace('/', '/msg/'))
+
+    def get_service(typename: str) -> type:
+        """The generated class of ``pkg/srv/Type`` (with ``Request`` and ``Response``)."""
+        return _ros_get_service(typename if typename.count('/') == 2 else typename.replace('/', '/srv/'))
 else:
     from . import runtime as rclpy
     from .messages import get_message
@@ -60,6 +65,7 @@ else:
         Time,
         qos_profile_sensor_data,
     )
+    from .srv_types import get_service
 
 
 def sensor_data_qos(depth: int = 5) -> Any:

@@ -50,3 +50,7 @@ class LaunchError(ConfigError):
 
 class BagError(SocialTouchError):
     """A rosbag2 cannot be written or read."""
+
+
+class ServiceCallError(GraphError):
+    """A service call got no response: no server, the server vanished, or it was destroyed mid-call."""

@@ -79,6 +79,8 @@ def _build_typestore():
         except (TypesysError, Exception) as err:  # the parser raises several kinds
             raise MessageError(f'{path}: cannot parse message definition: {err}') from err
     store.register(types)
+    from .srv_types import service_types  # requests and responses: after the messages they use
+    store.register(service_types())
     return store
 
 
@@ -135,9 +137,9 @@ class Message:
     __hash__ = None  # mutable, like rclpy messages
 
     def __repr__(self) -> str:
-        pkg, _, name = self.__msgtype__.split('/')
+        pkg, kind, name = self.__msgtype__.split('/')
         body = ', '.join(f'{f}={getattr(self, f)!r}' for f in self._fields)
-        return f'{pkg}.msg.{name}({body})'
+        return f'{pkg}.{kind}.{name}({body})'
 
 
 def _values_equal(a: Any, b: Any) -> bool:
@@ -313,10 +315,10 @@ def _make_class(typename: str) -> type[Message]:
     env['_reject'] = _reject
     exec(src, env)  # source built from parsed field names only
 
-    pkg, _, short = typename.split('/')
+    pkg, kind, short = typename.split('/')
     attrs: dict[str, Any] = {
         '__slots__': names, '__msgtype__': typename, '_fields': names, '_field_types': type_strs,
-        '__init__': env['__init__'], '__module__': f'{pkg}.msg', '__qualname__': short,
+        '__init__': env['__init__'], '__module__': f'{pkg}.{kind}', '__qualname__': short,
     }
     for cname, _ctype, cvalue in consts:
         attrs[cname] = cvalue

@@ -13,7 +13,8 @@ A ``GestureEvent`` carries the frame's header (its stamp is the frame's), the cl
 posterior, all classes' posteriors, and ``latency_s``: the stamp of this frame minus the stamp
 of the first frame with contact in the window.
 
-Parameters (read once at start):
+Parameters (read once at start, except the event rule's ``threshold``, ``hold_s`` and ``release``,
+which a parameter set applies at once, e.g. ``social-touch param set /patch/patch_gestures threshold 0.95``):
 
 - ``model``: the ``.npz`` model file (default: the package's ``config/patch_gestures.npz``,
   trained on simulated people, SYNTHETIC; see ``config/patch_gestures.md``). A missing or
@@ -38,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
+from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 
 from .classifier import EventDetector
@@ -108,9 +109,12 @@ class PatchGesturesNode(Node):
             f'{det.release:g}')
 
     # ------------------------------------------------------------------ parameters
+    #: Parameters applied at once when set: the event rule. The others are read at start (read-only).
+    LIVE_PARAMETERS = ('threshold', 'hold_s', 'release')
+
     def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(description=description,
-                                                                         read_only=True)).value
+        return self.declare_parameter(name, default, ParameterDescriptor(
+            description=description, read_only=name not in self.LIVE_PARAMETERS)).value
 
     def _bad(self, name: str, value: Any, expected: str) -> ParameterError:
         return ParameterError(f"parameter '{name}' of {self.get_fully_qualified_name()} must be {expected}; "
@@ -144,24 +148,48 @@ class PatchGesturesNode(Node):
         threshold = self._param('threshold', float(m.classifier.threshold),
                                 'posterior a class must reach for an event (sympartner2018 6.3: 0.99); default '
                                 'from the model file')
-        if not (0.0 < threshold <= 1.0):
-            raise self._bad('threshold', threshold, 'a posterior in (0, 1] (the paper uses 0.99)')
         hold_s = self._param('hold_s', m.hold / m.rate_hz, 'time the class must stay above the threshold before '
                                                            'the event, s (one frame = the paper rule); default '
                                                            'from the model file')
-        if not (hold_s >= 0 and math.isfinite(hold_s)):
-            raise self._bad('hold_s', hold_s, f'a number of seconds >= 0 (one frame is {1 / m.rate_hz:g} s)')
         release = self._param('release', float(min(m.release, threshold)),
                               'posterior below which the current class is forgotten; default from the model file')
-        if not (0.0 <= release <= threshold):
-            raise self._bad('release', release, f'in [0, threshold = {threshold:g}]')
+        self.detector = self._event_detector(threshold, hold_s, release)
         max_gap_s = self._param('max_gap_s', m.window / m.rate_hz,
                                 'frames further apart than this (s) start a new window (default: the window length)')
         if not (max_gap_s > 0 and math.isfinite(max_gap_s)):
             raise self._bad('max_gap_s', max_gap_s, 'a positive number of seconds')
         self.max_gap_ns = round(max_gap_s * _NS)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+    def _event_detector(self, threshold: float, hold_s: float, release: float) -> EventDetector:
+        """The event rule for these values; ParameterError says which one is wrong."""
+        m = self.model
+        if not (0.0 < threshold <= 1.0):
+            raise self._bad('threshold', threshold, 'a posterior in (0, 1] (the paper uses 0.99)')
+        if not (hold_s >= 0 and math.isfinite(hold_s)):
+            raise self._bad('hold_s', hold_s, f'a number of seconds >= 0 (one frame is {1 / m.rate_hz:g} s)')
+        if not (0.0 <= release <= threshold):
+            raise self._bad('release', release, f'in [0, threshold = {threshold:g}]')
         hold = max(1, round(hold_s * m.rate_hz))
-        self.detector = EventDetector(m.classes, threshold=threshold, release=release, rate_hz=m.rate_hz, hold=hold)
+        return EventDetector(m.classes, threshold=threshold, release=release, rate_hz=m.rate_hz, hold=hold)
+
+    def _on_set_parameters(self, params: list[Any]) -> Any:
+        """A new threshold, hold or release applies from the next frame; the class being reported is kept (no
+        second event for it), the hold count starts again."""
+        values = {name: self.get_parameter(name).value for name in self.LIVE_PARAMETERS}
+        values.update({p.name: p.value for p in params if p.name in values})
+        if values == {name: self.get_parameter(name).value for name in self.LIVE_PARAMETERS}:
+            return SetParametersResult(successful=True)
+        try:
+            detector = self._event_detector(values['threshold'], values['hold_s'], values['release'])
+        except ParameterError as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        old = self.detector
+        detector.current, detector.frame, detector.events = old.current, old.frame, old.events
+        self.detector = detector
+        self.get_logger().info(f'event rule now: threshold {detector.threshold:g}, hold {detector.hold} frames, '
+                               f'release {detector.release:g}')
+        return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------ frames
     def _skip(self, reason: str, detail: str) -> None:

@@ -18,7 +18,8 @@ Everything else (screened out, rejected, a codebook gesture without a command) i
 debug level and counted in :attr:`HapticCommandsNode.outcomes`; nothing is published. Bad
 frames (wrong size, NaN) are counted in ``stream.skipped`` and skipped.
 
-Parameters (read once at start):
+Parameters (read once at start, except rejection and screening: ``max_distance``, ``auto_scale``,
+``auto_quantile``, ``min_margin`` and ``min_extent_mm`` apply from the next gesture when set):
 
 - ``codebook``: the ``.npz`` codebook (default: the package's ``config/skin_codebook.npz``,
   recorded from simulated performers, SYNTHETIC: ``config/skin_codebook.md``);
@@ -36,13 +37,14 @@ Parameters (read once at start):
 
 from __future__ import annotations
 
+import copy
 import inspect
 import math
 from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
+from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
 
 from .base import Match, TemplateRecogniser
@@ -130,6 +132,7 @@ class HapticCommandsNode(Node):
         self.last_match: Match | None = None
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
+        self.add_on_set_parameters_callback(self._on_set_parameters)
         classes = [str(c) for c in self.recogniser.classes_]
         unmapped = [c for c in classes if c not in self.commands.commands]
         origin = self.recogniser.description_ or 'a codebook without a description'
@@ -139,9 +142,12 @@ class HapticCommandsNode(Node):
             + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
 
     # ------------------------------------------------------------------ parameters
+    #: Parameters applied at once when set: rejection and screening. The others are read at start (read-only).
+    LIVE_PARAMETERS = (*_REJECTION, 'min_extent_mm')
+
     def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(description=description,
-                                                                         read_only=True)).value
+        return self.declare_parameter(name, default, ParameterDescriptor(
+            description=description, read_only=name not in self.LIVE_PARAMETERS)).value
 
     def _bad(self, name: str, value: Any, expected: str) -> ParameterError:
         return ParameterError(f"parameter '{name}' of {self._fqn} must be {expected}; got {value!r}")
@@ -177,8 +183,7 @@ class HapticCommandsNode(Node):
 
     def _configure_rejection(self) -> None:
         """Rejection parameters default to the codebook's; other values recompute its class thresholds."""
-        model = self.recogniser
-        stored = model.get_params()
+        stored = self.recogniser.get_params()
         md = stored['max_distance']
         stored_md = -1.0 if md == 'auto' else math.inf if md is None else float(md)
         given = {
@@ -191,19 +196,41 @@ class HapticCommandsNode(Node):
                                       'no command when the runner-up class is closer than (1 + min_margin) x '
                                       'the best distance'),
         }
+        self.recogniser = self._with_rejection(self.recogniser, given)
+
+    def _with_rejection(self, model: TemplateRecogniser, given: dict[str, float]) -> TemplateRecogniser:
+        """``model``, or a copy with these rejection values and its class thresholds recomputed."""
         value = given['max_distance']
         if not (value == -1.0 or value >= 0):   # NaN fails too
             raise self._bad('max_distance', value, '-1 (per-class, from the codebook), a distance >= 0 or .inf')
         new = {**given, 'max_distance': 'auto' if value == -1.0 else None if math.isinf(value) else value}
+        stored = model.get_params()
         if all(new[k] == stored[k] for k in _REJECTION):
-            return  # the file's thresholds hold
+            return model  # the thresholds in force hold
+        model = copy.deepcopy(model)  # the one in use stays whole if these values are refused
         try:
             model.set_params(**new)
             model.set_codebook(model.templates_, model.classes_[model.template_labels_])
         except ValueError as err:
             raise ParameterError(f'rejection parameters of {self._fqn}: {err}') from err
-        self.get_logger().info(f'rejection {new} (the codebook has {({k: stored[k] for k in _REJECTION})}): class '
-                               f'thresholds recomputed')
+        self.get_logger().info(f'rejection {new} (was {({k: stored[k] for k in _REJECTION})}): class thresholds '
+                               'recomputed')
+        return model
+
+    def _on_set_parameters(self, params: list[Any]) -> Any:
+        """Rejection and ``min_extent_mm`` apply from the next gesture; the others are read at start (read-only)."""
+        values = {name: self.get_parameter(name).value for name in self.LIVE_PARAMETERS}
+        values.update({p.name: p.value for p in params if p.name in values})
+        extent = values.pop('min_extent_mm')
+        if not (math.isfinite(extent) and extent >= 0):
+            return SetParametersResult(successful=False, reason=str(self._bad('min_extent_mm', extent,
+                                                                                'a size >= 0 mm')))
+        try:
+            recogniser = self._with_rejection(self.recogniser, values)
+        except ParameterError as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        self.recogniser, self.min_extent_mm = recogniser, extent
+        return SetParametersResult(successful=True)
 
     def _make_stream(self) -> SkinFrameStream:
         seg = {name: self._param(name, default, f'{_SEGMENTER_DOC[name]} (see GestureSegmenter)')

@@ -15,12 +15,12 @@ from typing import Any
 
 from ..errors import BagError, GraphError, MessageError
 from ..messages import get_message
-from ..runtime import Node, ParameterDescriptor, ParameterType, QoSProfile
+from ..runtime import Node, ParameterType, QoSProfile
 from .player import BagPlayer, BagTopic
+from .recorder_node import read_at_start
 
 __all__ = ['PlayerNode', 'main']
 
-_STRINGS = ParameterDescriptor(type=ParameterType.STRING_ARRAY)
 
 
 class PlayerNode(Node):
@@ -38,18 +38,18 @@ class PlayerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('player', **kwargs)
-        path = self.declare_parameter('bag', '').value
+        path = read_at_start(self, 'bag', '').value
         if not path:
             raise BagError(f"{self.get_fully_qualified_name()}: parameter 'bag' is required (the bag to play)")
-        rate = self.declare_parameter('rate', 1.0).value
-        self.fast = self.declare_parameter('fast', False).value
-        fast_period = self.declare_parameter('fast_period', 0.0002).value
-        self.loop = self.declare_parameter('loop', False).value
-        topics = list(self.declare_parameter('topics', None, _STRINGS).value or [])
-        offset = self.declare_parameter('start_offset', 0.0).value
-        self.wait_s = self.declare_parameter('wait_for_subscribers', 0.0).value
-        check = self.declare_parameter('check_definitions', True).value
-        autostart = self.declare_parameter('autostart', True).value
+        rate = read_at_start(self, 'rate', 1.0).value
+        self.fast = read_at_start(self, 'fast', False).value
+        fast_period = read_at_start(self, 'fast_period', 0.0002).value
+        self.loop = read_at_start(self, 'loop', False).value
+        topics = list(read_at_start(self, 'topics', None, ParameterType.STRING_ARRAY).value or [])
+        offset = read_at_start(self, 'start_offset', 0.0).value
+        self.wait_s = read_at_start(self, 'wait_for_subscribers', 0.0).value
+        check = read_at_start(self, 'check_definitions', True).value
+        autostart = read_at_start(self, 'autostart', True).value
         if not fast_period > 0:
             raise ValueError(f"parameter 'fast_period' must be > 0 s, got {fast_period}")
         self.player = BagPlayer(path, topics=topics or None, rate=rate, start_offset_s=offset,

@@ -20,14 +20,18 @@ from ..errors import BagError
 from ..runtime import Node, ParameterDescriptor, ParameterType, QoSProfile
 from .recorder import BagRecorder
 
-__all__ = ['RecorderNode', 'default_bag_name', 'main']
+__all__ = ['RecorderNode', 'default_bag_name', 'main', 'read_at_start']
 
-_STRINGS = ParameterDescriptor(type=ParameterType.STRING_ARRAY)
 
 
 def default_bag_name() -> str:
     """``rosbag2_YYYY_MM_DD-HH_MM_SS``, the name ``ros2 bag record`` picks."""
     return time.strftime('rosbag2_%Y_%m_%d-%H_%M_%S')
+
+
+def read_at_start(node: Node, name: str, default: Any, type_: ParameterType | None = None) -> Any:
+    """Declare a parameter the node reads once at start: read-only, so a later set is refused, not ignored."""
+    return node.declare_parameter(name, default, ParameterDescriptor(type=int(type_ or 0), read_only=True))
 
 
 class RecorderNode(Node):
@@ -40,9 +44,9 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('recorder', **kwargs)
-        output = self.declare_parameter('output', '').value or default_bag_name()
-        self.wanted: list[str] = list(self.declare_parameter('topics', None, _STRINGS).value or [])
-        flush_period = self.declare_parameter('flush_period', 1.0).value
+        output = read_at_start(self, 'output', '').value or default_bag_name()
+        self.wanted: list[str] = list(read_at_start(self, 'topics', None, ParameterType.STRING_ARRAY).value or [])
+        flush_period = read_at_start(self, 'flush_period', 1.0).value
         if not flush_period > 0:
             raise ValueError(f"parameter 'flush_period' of {self.get_fully_qualified_name()} must be > 0 s, "
                              f'got {flush_period}')

@@ -1,8 +1,9 @@
 """``social-touch export-interfaces DIR``: the ``social_touch_msgs`` interface package for ROS 2.
 
-ROS 2 cannot generate messages inside an ament_python package, so the same ``.msg`` files
-go into an ament_cmake package of their own; built in a robot's workspace, it gives the
-classes the nodes use under real rclpy, with the type names bags recorded here carry.
+ROS 2 cannot generate messages inside an ament_python package, so the same ``.msg`` and
+``.srv`` files go into an ament_cmake package of their own; built in a robot's workspace, it
+gives the classes the nodes use under real rclpy, with the type names bags recorded here
+carry and services use on the wire.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from pathlib import Path
 from ..errors import ConfigError
 from ..messages import msg_files
 from ..paths import INTERFACE_PACKAGE
+from ..srv_types import srv_files
 
 PACKAGE_XML = """\
 <?xml version="1.0"?>
@@ -58,7 +60,7 @@ _TYPE_REF = re.compile(r'^\s*([A-Za-z][A-Za-z0-9_]*)/([A-Za-z][A-Za-z0-9_]*)', r
 
 
 def message_dependencies(files: list[Path]) -> list[str]:
-    """Packages the ``.msg`` files refer to (``std_msgs/Header`` -> ``std_msgs``), sorted."""
+    """Packages the ``.msg`` and ``.srv`` files refer to (``std_msgs/Header`` -> ``std_msgs``), sorted."""
     deps = set()
     for path in files:
         for line in path.read_text(encoding='utf-8').splitlines():
@@ -74,15 +76,19 @@ def export_interfaces(out_dir: Path, version: str = '0.1.0', force: bool = False
     if package_dir.exists() and any(package_dir.iterdir()) and not force:
         raise ConfigError(f'{package_dir} exists and is not empty; pass --force to overwrite it')
     files = msg_files()
-    deps = message_dependencies(files)
-    (package_dir / 'msg').mkdir(parents=True, exist_ok=True)
-    for path in files:
-        shutil.copyfile(path, package_dir / 'msg' / path.name)
+    services = srv_files()
+    deps = message_dependencies(files + services)
+    for kind, paths in (('msg', files), ('srv', services)):
+        if paths:
+            (package_dir / kind).mkdir(parents=True, exist_ok=True)
+        for path in paths:
+            shutil.copyfile(path, package_dir / kind / path.name)
     (package_dir / 'package.xml').write_text(PACKAGE_XML.format(
         name=INTERFACE_PACKAGE, version=version, depends=''.join(f'  <depend>{d}</depend>\n' for d in deps)))
     (package_dir / 'CMakeLists.txt').write_text(CMAKELISTS.format(
         name=INTERFACE_PACKAGE, find_packages=''.join(f'find_package({d} REQUIRED)\n' for d in deps),
-        files='\n'.join(f'  "msg/{p.name}"' for p in files), dependencies=' '.join(deps)))
+        files='\n'.join([*(f'  "msg/{p.name}"' for p in files), *(f'  "srv/{p.name}"' for p in services)]),
+        dependencies=' '.join(deps)))
     return package_dir
 
 
@@ -94,5 +100,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     package_dir = export_interfaces(args.dir, force=args.force)
-    print(f'wrote {package_dir} ({len(msg_files())} messages); build it with colcon in your ROS 2 workspace')
+    print(f'wrote {package_dir} ({len(msg_files())} messages, {len(srv_files())} services); build it with colcon in '
+          'your ROS 2 workspace')
     return 0

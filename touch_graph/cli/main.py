@@ -31,6 +31,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     'bench': ('touch_graph.cli.bench', 'measure speed: runtime, drivers, recognisers'),
     'view': ('touch_view.cli', 'serve a live web page of what the robot feels (the running graph)'),
     'foxglove': ('touch_view.foxglove_cli', 'serve every topic of the running graph to Foxglove (WebSocket)'),
+    # services and parameters of the running graph (issue 9)
+    'service': ('touch_graph.cli.service', 'services of the running graph: list, type, find, call'),
+    'param': ('touch_graph.cli.param', 'parameters of running nodes: list, get, set, describe, dump, load, delete'),
 }
 
 EPILOG = """\

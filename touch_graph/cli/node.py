@@ -1,8 +1,8 @@
 """``social-touch node list | info NODE``, as ``ros2 node`` prints them: every node of the DDS domain.
 
 Nodes come from ``ros_discovery_info`` (ours and any ROS 2 node's); endpoints from DDS
-discovery. Hidden nodes (a name starting with ``_``, such as these commands' own) are
-listed with ``-a``.
+discovery: publishers, subscriptions, service servers and clients (``rq/``/``rr/`` topics).
+Hidden nodes (a name starting with ``_``, such as these commands' own) are listed with ``-a``.
 """
 
 from __future__ import annotations
@@ -53,8 +53,20 @@ def _info(view: Any, args: argparse.Namespace) -> int:
               f'(participants {", ".join(n.participant for n in found)}); showing all.')
     for node in found:
         print(node.name)
-        for title, endpoints in (('Subscribers', node.subscriptions), ('Publishers', node.publishers)):
+        sections = (('Subscribers', _names_and_types((ep.topic, ep.type_name) for ep in node.subscriptions)),
+                    ('Publishers', _names_and_types((ep.topic, ep.type_name) for ep in node.publishers)),
+                    ('Service Servers', _names_and_types(node.services.items())),
+                    ('Service Clients', _names_and_types(node.clients.items())),
+                    ('Action Servers', []), ('Action Clients', []))
+        for title, lines in sections:
             print(f'  {title}:')
-            for ep in sorted(endpoints, key=lambda e: e.topic):
-                print(f'    {ep.topic}: {ep.type_name}')
+            print(*lines, sep='\n')  # an empty section is an empty line, as ros2 node info prints it
     return 0
+
+
+def _names_and_types(pairs: Any) -> list[str]:
+    """``    name: type1, type2`` lines, sorted by name."""
+    types: dict[str, set[str]] = {}
+    for name, type_name in pairs:
+        types.setdefault(name, set()).add(type_name)
+    return [f'    {name}: {", ".join(sorted(t))}' for name, t in sorted(types.items())]

@@ -45,9 +45,9 @@ from .. import messages
 from ..runtime.qos import DurabilityPolicy, QoSProfile
 from .cdds import forget
 from .endpoints import pad4
-from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo
-from .idl import idl_struct
-from .names import ros_topic_name, ros_type_name
+from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo, ServiceEndpoint
+from .idl import idl_service_struct, idl_struct
+from .names import ros_service_name, ros_topic_name, ros_type_name
 from .qos import dds_qos, qos_to_dict
 
 if TYPE_CHECKING:
@@ -175,6 +175,9 @@ class GraphDiscovery:
             for node in list(context.nodes):
                 readers = [s._dds.gid for s in list(node.subscriptions) if getattr(s, '_dds', None) is not None]
                 writers = [w._dds.gid for w in list(node.publishers) if getattr(w, '_dds', None) is not None]
+                for pair in [e._dds for e in (*node.services, *node.clients) if e._dds is not None]:
+                    readers.append(pair.reader_gid)
+                    writers.append(pair.writer_gid)
                 out.append((node.get_namespace(), node.get_name(), readers, writers))
         return out
 
@@ -223,7 +226,7 @@ class GraphDiscovery:
                 elif alive:
                     self._endpoints[key] = {
                         'kind': kind, 'topic': s.topic_name, 'type': s.type_name,
-                        'participant': s.participant_key.bytes, 'qos': qos_to_dict(s.qos),
+                        'participant': s.participant_key.bytes, 'qos': qos_to_dict(s.qos), 'qos_raw': s.qos,
                         'type_id': s.type_id, 'type_hash': user_data_value(s.qos, 'typehash')}
                 else:
                     self._endpoints.pop(key, None)
@@ -302,15 +305,23 @@ class GraphDiscovery:
                 fqn = ns.rstrip('/') + '/' + name
                 node = NodeInfo(fqn, pgid.hex(), participants[pgid])
                 for gid, into in [(g, node.subscriptions) for g in readers] + [(g, node.publishers) for g in writers]:
-                    endpoint = self._endpoint_info(gid, endpoints.get(gid), fqn, stats)
+                    entry = endpoints.get(gid)
+                    endpoint = self._endpoint_info(gid, entry, fqn, stats)
                     if endpoint is not None:
                         owner[gid] = fqn
                         into.append(endpoint)
+                    elif entry is not None:
+                        owner[gid] = fqn
+                        node.add_service_endpoint(service_endpoint(gid, entry, fqn))
                 view.nodes.append(node)
         for gid, entry in endpoints.items():
             endpoint = self._endpoint_info(gid, entry, owner.get(gid, UNKNOWN_NODE), stats)
             if endpoint is not None:
                 view.add_endpoint(endpoint, entry['kind'])
+            else:
+                service = service_endpoint(gid, entry, owner.get(gid, UNKNOWN_NODE))
+                if service is not None:
+                    view.add_service_endpoint(service)
         view.nodes.sort(key=lambda n: (n.name, n.participant))
         return view
 
@@ -320,15 +331,16 @@ class GraphDiscovery:
             return None
         topic = ros_topic_name(entry['topic'])
         if topic is None:
-            return None  # ros_discovery_info, services (part of the graph, not of the topic list)
+            return None  # ros_discovery_info, services (see service_endpoint)
         return EndpointInfo(node, entry['participant'].hex(), topic, ros_type_name(entry['type']) or entry['type'],
                             gid, entry['qos'], entry['type_hash'],
                             stats.get(gid, {}) if entry['kind'] == 'reader' else {})
 
-    def foreign_types(self, ros_topic: str, our_type: str) -> list[str]:
-        """DDS type names (with their participant) of remote endpoints on ``ros_topic`` whose type is not ours."""
-        ours = idl_struct(our_type).__idl__.get_type_id()
-        dds_name = 'rt' + ros_topic
+    def foreign_types(self, dds_name: str, our_type: str) -> list[str]:
+        """DDS type names (with their participant) of remote endpoints on DDS topic ``dds_name`` whose type is
+        not ours (``our_type``: a message, or a service's request or response)."""
+        struct = idl_service_struct(our_type) if '/srv/' in our_type else idl_struct(our_type)
+        ours = struct.__idl__.get_type_id()
         with self._lock:
             found = {f"'{e['type']}' (participant {e['participant'].hex()})" for e in self._endpoints.values()
                      if e['topic'] == dds_name and e['participant'] != self.p.gid
@@ -338,6 +350,26 @@ class GraphDiscovery:
     def close(self) -> None:
         with self._lock:
             self._lock.notify_all()
+
+
+def service_endpoint(gid: bytes, entry: dict | None, node: str) -> ServiceEndpoint | None:
+    """The service side of a discovered reader or writer on an ``rq/``/``rr/`` topic (None for any other).
+
+    A reader of requests or a writer of replies belongs to a server, the opposite pair to a client.
+    """
+    if entry is None:
+        return None
+    found = ros_service_name(entry['topic'])
+    if found is None:
+        return None
+    name, kind = found
+    server = (kind == 'request') == (entry['kind'] == 'reader')
+    ros_type = ros_type_name(entry['type']) or entry['type']
+    for suffix in ('_Request', '_Response'):
+        if ros_type.endswith(suffix):
+            ros_type = ros_type[:-len(suffix)]
+    return ServiceEndpoint(node, entry['participant'].hex(), name, ros_type, 'server' if server else 'client', gid,
+                           entry['kind'], user_data_value(entry.get('qos_raw'), 'serviceid' if server else 'clientid'))
 
 
 def user_data_value(qos: Any, wanted: str) -> str:

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ..runtime.endpoints import Publisher, Subscription
     from .participant import DdsParticipant
 
-__all__ = ['DdsReader', 'DdsWriter', 'pad4']
+__all__ = ['DdsReader', 'DdsWriter', 'pad4', 'writer_type']
 
 #: Samples taken from a reader per call.
 TAKE_BATCH = 256
@@ -70,6 +70,7 @@ class DdsWriter:
 
     def __init__(self, participant: DdsParticipant, publisher: Publisher) -> None:
         self.publisher = publisher
+        self.node = publisher.node
         self.topic_name = publisher.topic_name
         self.type_name = publisher._topic.type_name
         self.writer = _make(DataWriter, participant.dds_publisher, participant, publisher)
@@ -109,6 +110,7 @@ class DdsReader:
 
     def __init__(self, participant: DdsParticipant, subscription: Subscription) -> None:
         self.subscription = subscription
+        self.node = subscription.node
         self.topic_name = subscription.topic_name
         self.type_name = subscription._topic.type_name
         self.reader = _make(DataReader, participant.dds_subscriber, participant, subscription)
@@ -156,13 +158,16 @@ class DdsReader:
         if writer_handle in self._reported:
             return
         self._reported.add(writer_handle)
-        theirs = 'an unknown type'
-        try:
-            endpoint = self.reader.get_matched_publication_data(writer_handle)
-            if endpoint is not None:
-                theirs = f"'{endpoint.type_name}' (writer {endpoint.key})"
-        except Exception:  # the writer may be gone already; the report still goes out
-            pass
         self.subscription.node.get_logger().error(
-            f"'{self.topic_name}': a sample from a writer of {theirs} does not decode as "
-            f"'{self.type_name}' ({err}); skipped. Further ones from it are counted (social-touch topic info -v).")
+            f"'{self.topic_name}': a sample from a writer of {writer_type(self.reader, writer_handle)} does not "
+            f"decode as '{self.type_name}' ({err}); skipped. Further ones from it are counted (social-touch topic "
+            'info -v).')
+
+
+def writer_type(reader: Any, writer_handle: int) -> str:
+    """``'type' (writer GUID)`` of a writer matched with ``reader``, for reports ('an unknown type' if gone)."""
+    try:
+        endpoint = reader.get_matched_publication_data(writer_handle)
+    except Exception:  # the writer may be gone already; the report still goes out
+        endpoint = None
+    return f"'{endpoint.type_name}' (writer {endpoint.key})" if endpoint is not None else 'an unknown type'

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ['UNKNOWN_NODE', 'EndpointInfo', 'GraphView', 'NodeInfo', 'TopicInfo', 'format_gid', 'is_hidden']
+__all__ = ['UNKNOWN_NODE', 'EndpointInfo', 'GraphView', 'NodeInfo', 'ServiceEndpoint', 'ServiceInfo', 'TopicInfo',
+           'format_gid', 'is_hidden']
 
 #: How rmw_dds_common names the owner of an endpoint no node claims.
 UNKNOWN_NODE = '/_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_'
@@ -56,19 +57,61 @@ class EndpointInfo:
     stats: dict = field(default_factory=dict, compare=False, hash=False)
 
 
+@dataclass(frozen=True)
+class ServiceEndpoint:
+    """One DDS reader or writer of a service server or client somewhere in the graph.
+
+    Attributes:
+        role: ``'server'`` or ``'client'``; ``kind``: ``'reader'`` or ``'writer'``.
+        csid: the ``serviceid``/``clientid`` the endpoint announces ('' if none), pairing its reader and writer.
+    """
+
+    node: str
+    participant: str
+    service: str
+    type_name: str
+    role: str
+    gid: bytes = b''
+    kind: str = 'reader'
+    csid: str = ''
+
+
+@dataclass
+class ServiceInfo:
+    """A service seen anywhere in the graph: its types, and the nodes serving and calling it."""
+
+    name: str
+    types: set[str] = field(default_factory=set)
+    servers: set[str] = field(default_factory=set)
+    clients: set[str] = field(default_factory=set)
+
+    @property
+    def type_name(self) -> str:
+        return ' | '.join(sorted(self.types))
+
+
 @dataclass
 class NodeInfo:
-    """A node of some participant: fully qualified name and endpoints."""
+    """A node of some participant: fully qualified name and endpoints.
+
+    Attributes:
+        services, clients: service name -> type of the services it serves and calls.
+    """
 
     name: str
     participant: str
     enclave: str = '/'
     publishers: list[EndpointInfo] = field(default_factory=list)
     subscriptions: list[EndpointInfo] = field(default_factory=list)
+    services: dict[str, str] = field(default_factory=dict)
+    clients: dict[str, str] = field(default_factory=dict)
 
     @property
     def hidden(self) -> bool:
         return self.name.rsplit('/', 1)[-1].startswith('_')
+
+    def add_service_endpoint(self, endpoint: ServiceEndpoint) -> None:
+        (self.services if endpoint.role == 'server' else self.clients)[endpoint.service] = endpoint.type_name
 
 
 @dataclass
@@ -97,6 +140,18 @@ class GraphView:
     participants: dict[str, dict] = field(default_factory=dict)
     nodes: list[NodeInfo] = field(default_factory=list)
     topics: dict[str, TopicInfo] = field(default_factory=dict)
+    services: dict[str, ServiceInfo] = field(default_factory=dict)
+
+    def add_service_endpoint(self, endpoint: ServiceEndpoint) -> None:
+        info = self.services.get(endpoint.service)
+        if info is None:
+            info = self.services[endpoint.service] = ServiceInfo(endpoint.service)
+        info.types.add(endpoint.type_name)
+        (info.servers if endpoint.role == 'server' else info.clients).add(endpoint.node)
+
+    def visible_services(self, include_hidden: bool = False) -> dict[str, ServiceInfo]:
+        """Services by name (``ros2 service list``: servers' and clients' alike), hidden ones on request."""
+        return {name: s for name, s in sorted(self.services.items()) if include_hidden or not is_hidden(name)}
 
     def add_endpoint(self, endpoint: EndpointInfo, kind: str) -> None:
         info = self.topics.get(endpoint.topic)

@@ -29,7 +29,11 @@ from rosbags.interfaces import Nodetype
 from ..errors import MessageError
 from .names import dds_type_name
 
-__all__ = ['idl_struct']
+__all__ = ['REQUEST_HEADER_FIELDS', 'idl_service_struct', 'idl_struct']
+
+#: The request header rmw_cyclonedds writes before a request's or a reply's fields (``cdds_request_header_t``):
+#: the client's id (its request writer's instance handle) and the request's sequence number.
+REQUEST_HEADER_FIELDS = (('request_guid', t.uint64), ('request_seq', t.int64))
 
 _BASES: dict[str, Any] = {
     'bool': bool, 'byte': t.uint8, 'char': t.uint8, 'uint8': t.uint8, 'int8': t.int8,
@@ -58,6 +62,34 @@ def idl_struct(ros_type: str, store: Any = None) -> type[IdlStruct]:
         cls = _cache.get(key)
         if cls is None:
             cls = _cache[key] = _build(ros_type, store)
+        return cls
+
+
+def idl_service_struct(ros_type: str, store: Any = None) -> type[IdlStruct]:
+    """The ``IdlStruct`` of a request or reply on the wire: the request header, then ``ros_type``'s fields.
+
+    ``ros_type`` is ``pkg/srv/Name_Request`` or ``pkg/srv/Name_Response``; the DDS type name is
+    ROS 2's (``pkg::srv::dds_::Name_Request_``). Cyclone checks every received payload against
+    this description, so it must hold the 16 header bytes rmw_cyclonedds puts first. ROS 2 up to
+    Kilted announces no type information for services, so peers match it by name.
+    """
+    if store is None:
+        from ..messages import typestore as store
+    key = (id(store), 'header+' + ros_type)
+    with _lock:
+        cls = _cache.get(key)
+        if cls is None:
+            if ros_type not in store.fielddefs:
+                raise MessageError(f'no definition of {ros_type} to describe it to DDS')
+            fields = store.fielddefs[ros_type][1]
+            clash = {name for name, _ in fields} & {name for name, _ in REQUEST_HEADER_FIELDS}
+            if clash:
+                raise MessageError(f'{ros_type} has a field named {sorted(clash)[0]!r}, which the request header '
+                                   'uses on DDS; rename it')
+            annotations = dict(REQUEST_HEADER_FIELDS)
+            annotations.update({name: _field_type(ros_type, name, desc, store) for name, desc in fields})
+            cls = _cache[key] = make_idl_struct(ros_type.rsplit('/', 1)[-1] + '_', dds_type_name(ros_type),
+                                                annotations)
         return cls
 
 

@@ -53,7 +53,7 @@ from .config import domain_id as env_domain_id
 from .domain import acquire_domain, release_domain
 from .endpoints import DdsReader, DdsWriter
 from .idl import idl_struct
-from .names import dds_topic_name
+from .names import dds_topic_name, ros_topic_name
 from .qos import POLICY_NAMES, TYPE_CONSISTENCY_POLICY
 
 __all__ = ['DdsParticipant']
@@ -100,6 +100,9 @@ class DdsParticipant:
         self._hashes: dict[str, str] = {}
         self.writers: dict[int, DdsWriter] = {}  # id(runtime Publisher) -> writer
         self.readers: dict[int, DdsReader] = {}  # id(runtime Subscription) -> reader
+        self.services: dict[int, Any] = {}  # id(runtime Service) -> DdsService
+        self.clients: dict[int, Any] = {}  # id(runtime Client) -> DdsClient
+        self.csids = itertools.count(1)  # client/service ids, as rmw_cyclonedds counts them per participant
         self._keys = itertools.count(1)
         self._handlers: dict[int, Callable[[], None]] = {}
         self._pending: deque[Callable[[], None]] = deque()
@@ -116,11 +119,13 @@ class DdsParticipant:
         """The DDS topic ``rt/<ros_name>`` with ``type_name``'s DDS type (one per name)."""
         return self.dds_topic(dds_topic_name(ros_name), type_name)
 
-    def dds_topic(self, dds_name: str, type_name: str, store: Any = None) -> DdsTopic:
+    def dds_topic(self, dds_name: str, type_name: str, store: Any = None, *, struct: Any = None) -> DdsTopic:
+        """The DDS topic ``dds_name`` (one per name) of ``type_name``, or of ``struct`` (a service's wire type)."""
         with self._lock:
             topic = self._topics.get(dds_name)
             if topic is None:
-                topic = self._topics[dds_name] = DdsTopic(self.participant, dds_name, idl_struct(type_name, store))
+                topic = self._topics[dds_name] = DdsTopic(self.participant, dds_name,
+                                                          struct or idl_struct(type_name, store))
                 forget(topic)
             return topic
 
@@ -167,6 +172,10 @@ class DdsParticipant:
                 self._add_reader(endpoint)
             elif event == 'subscription_removed':
                 self._remove_reader(endpoint)
+            elif event in ('service_added', 'client_added'):
+                self._add_pair(endpoint, event == 'service_added')
+            elif event in ('service_removed', 'client_removed'):
+                self._remove_pair(endpoint, event == 'service_removed')
         finally:
             self.graph.local_changed()
 
@@ -210,6 +219,31 @@ class DdsParticipant:
                 reader.waker.detach(reader)
             delete_entity(reader.ref)
 
+    def _add_pair(self, entity: Any, is_service: bool) -> None:
+        from .services import DdsClient, DdsService
+        try:
+            pair = (DdsService if is_service else DdsClient)(self, entity)
+        except Exception as err:  # the node goes on in process; say why others will not see it
+            what = 'service' if is_service else 'client of'
+            entity.node.get_logger().error(f"{what} '{entity.srv_name}' is not on the network: {err}")
+            return
+        with self._lock:
+            (self.services if is_service else self.clients)[id(entity)] = pair
+        entity._dds = pair
+        executor = entity._executor
+        if executor is not None:
+            executor._attach_reader(pair)
+
+    def _remove_pair(self, entity: Any, is_service: bool) -> None:
+        with self._lock:
+            pair = (self.services if is_service else self.clients).pop(id(entity), None)
+        entity._dds = None
+        if pair is not None:
+            if pair.waker is not None:
+                pair.waker.detach(pair)
+            delete_entity(pair.reader)
+            delete_entity(pair.writer)
+
     def make_waker(self) -> Any:
         """A :class:`~touch_graph.dds.waker.DdsWaker` for an executor of this context."""
         from .waker import DdsWaker
@@ -247,40 +281,50 @@ class DdsParticipant:
                 _log.exception('DDS receive thread: %s failed: %s', getattr(fn, '__qualname__', fn), err)
 
     def housekeeping(self) -> None:
-        """Report new incompatible QoS (as rclcpp's default event handlers word it); refresh the graph."""
+        """Report new incompatible QoS (as rclcpp's default event handlers word it); refresh the graph;
+        fail service calls whose server left."""
         self.graph.housekeeping()
         with self._lock:
             writers = list(self.writers.values())
             readers = list(self.readers.values())
-        for writer in writers:
-            status = writer.writer.get_offered_incompatible_qos_status()
+            pairs = [*self.services.values(), *self.clients.values()]
+            clients = list(self.clients.values())
+        checks = [(w, w.writer, True, dds_topic_name(w.topic_name), w.type_name) for w in writers]
+        checks += [(r, r.reader, False, dds_topic_name(r.topic_name), r.type_name) for r in readers]
+        checks += [(pair, *check) for pair in pairs for check in pair.qos_checks()]
+        for owner, entity, is_writer, dds_name, type_name in checks:
+            try:
+                status = (entity.get_offered_incompatible_qos_status() if is_writer
+                          else entity.get_requested_incompatible_qos_status())
+            except Exception:  # deleted by its node in the meantime
+                continue
             if status.total_count_change:
-                self._incompatible.append([writer, status.total_count_change, int(status.last_policy_id), 0])
-        for reader in readers:
-            status = reader.reader.get_requested_incompatible_qos_status()
-            if status.total_count_change:
-                self._incompatible.append([reader, status.total_count_change, int(status.last_policy_id), 0])
+                self._incompatible.append([owner, is_writer, dds_name, type_name, status.total_count_change,
+                                           int(status.last_policy_id), 0])
         self._incompatible = [item for item in self._incompatible if not self._report_incompatible(item)]
+        for client in clients:
+            client.check_server()
 
     def _report_incompatible(self, item: list) -> bool:
-        """Log one ``[endpoint, change, policy, tries]``; False: try again later (foreign type not discovered yet)."""
-        endpoint, change, policy, tries = item
-        is_writer = isinstance(endpoint, DdsWriter)
+        """Log one ``[owner, is writer, DDS topic, type, change, policy, tries]``; False: try again later
+        (the foreign type is not discovered yet)."""
+        owner, is_writer, dds_name, type_name, change, policy, tries = item
         other, verb = ('subscription', 'requesting') if is_writer else ('publisher', 'offering')
         outcome = 'No messages will be sent to it.' if is_writer else 'No messages will be received from it.'
-        logger = (endpoint.publisher if is_writer else endpoint.subscription).node.get_logger()
+        logger = owner.node.get_logger()
+        shown = ros_topic_name(dds_name) or dds_name
         if policy == TYPE_CONSISTENCY_POLICY:
-            theirs = self.graph.foreign_types(endpoint.topic_name, endpoint.type_name)
+            theirs = self.graph.foreign_types(dds_name, type_name)
             if not theirs and tries < TYPE_REPORT_TRIES:
-                item[3] += 1
+                item[6] += 1
                 return False
-            logger.warn(f"New {other} discovered on topic '{endpoint.topic_name}', {verb} an incompatible type: "
+            logger.warn(f"New {other} discovered on topic '{shown}', {verb} an incompatible type: "
                         f"{', '.join(theirs) or 'another layout'} does not match ours, "
-                        f"'{endpoint.type_name}'. {outcome}")
+                        f"'{type_name}'. {outcome}")
         else:
-            logger.warn(f"New {other} discovered on topic '{endpoint.topic_name}', {verb} incompatible QoS. "
+            logger.warn(f"New {other} discovered on topic '{shown}', {verb} incompatible QoS. "
                         f"{outcome} Last incompatible policy: {POLICY_NAMES.get(policy, str(policy))}")
-        endpoint.incompatible = getattr(endpoint, 'incompatible', 0) + int(change)
+        owner.incompatible = getattr(owner, 'incompatible', 0) + int(change)
         return True
 
     # ------------------------------------------------------------------ lifecycle
@@ -298,6 +342,9 @@ class DdsParticipant:
             self.writers.pop(pub_id).publisher._dds = None
         for sub_id in list(self.readers):
             self.readers.pop(sub_id).subscription._dds = None
+        for table in (self.services, self.clients):
+            for key in list(table):
+                table.pop(key).entity._dds = None
         with contextlib.suppress(Exception):
             self.graph.close()
         delete_entity(self.participant)

@@ -44,11 +44,12 @@ POLICY_NAMES = {
 TYPE_CONSISTENCY_POLICY = 24
 
 
-def dds_qos(profile: QoSProfile, *, type_hash: str = '') -> Qos:
+def dds_qos(profile: QoSProfile, *, type_hash: str = '', user_data: str = '') -> Qos:
     """The DDS QoS of a reader or writer with ROS 2 QoS ``profile``.
 
     Args:
         type_hash: the type's ``RIHS01_...`` hash, announced in the user data ('' for none).
+        user_data: user data to announce instead (``clientid=...;`` of a service client, as rmw_cyclonedds).
     """
     if profile.history == HistoryPolicy.KEEP_ALL:
         history: Any = Policy.History.KeepAll
@@ -71,7 +72,9 @@ def dds_qos(profile: QoSProfile, *, type_hash: str = '') -> Qos:
                                               max_samples_per_instance=-1)]
     else:
         policies.append(Policy.Durability.Volatile)
-    if type_hash:
+    if user_data:
+        policies.append(Policy.Userdata(data=user_data.encode()))
+    elif type_hash:
         policies.append(Policy.Userdata(data=f'typehash={type_hash};'.encode()))
     return Qos(*policies)
 

@@ -1,9 +1,11 @@
-"""What the graph commands of ``social-touch`` (topic, node, record, play) share: a place in the DDS graph.
+"""What the graph commands of ``social-touch`` (topic, node, param, service, record, play) share: a place in the
+DDS graph.
 
 :class:`GraphTool` gives a command its own wall-clock, networked context with a hidden
 node (``/_social_touch_<command>_<pid>``, hidden from ``node list`` as ros2cli's are),
 waits until discovery has settled, and turns the usual mistakes into clear errors: no
-graph in the domain, an unknown topic or node (with a did-you-mean).
+graph in the domain, an unknown topic or node (with a did-you-mean), a service that is not
+there or does not answer (:meth:`GraphTool.call`).
 """
 
 from __future__ import annotations
@@ -44,13 +46,16 @@ class GraphTool:
         self.context = Context('wall', network=True)
         self.executor: Any = None
         self.node: Any = None
+        self._clients: dict[tuple[str, int], Any] = {}
 
     def __enter__(self) -> GraphTool:
         from ..runtime import Node, SingleThreadedExecutor
         self.context.init([])
         try:
             self.executor = SingleThreadedExecutor(context=self.context)
-            self.node = Node(f'_social_touch_{self.name}_{os.getpid()}', context=self.context)
+            # ros2cli's nodes serve no parameters and log nowhere but the console; neither do these
+            self.node = Node(f'_social_touch_{self.name}_{os.getpid()}', context=self.context,
+                             start_parameter_services=False, enable_rosout=False)
             self.executor.add_node(self.node)
             self.wait_for_discovery(self.discovery_timeout_s)
         except BaseException:
@@ -136,6 +141,45 @@ class GraphTool:
         if len(info.types) > 1 and not type_name:
             raise GraphError(f"topic '{topic}' carries several types ({info.type_name}); name the one to use")
         return info
+
+    def require_node(self, name: str, include_hidden: bool = False, wait_s: float = 1.0) -> str:
+        """The fully qualified name of a node of the graph (``name`` may lack the leading '/').
+
+        Raises:
+            NoGraphError: no graph running.
+            GraphError: no such node (with a did-you-mean and the nodes there are).
+        """
+        full = name if name.startswith('/') else '/' + name
+        view = self.require_graph()
+        if not view.find_nodes(full) and wait_s > 0:
+            self.wait_until(lambda v: bool(v.find_nodes(full)), wait_s)
+            view = self.graph()
+        if not view.find_nodes(full):
+            known = sorted(n.name for n in view.visible_nodes(include_hidden))
+            raise GraphError(f"node '{full}' not found{did_you_mean(full, known)}; nodes: {', '.join(known) or 'none'}")
+        return full
+
+    def call(self, srv_type: Any, service: str, request: Any, timeout_s: float) -> Any:
+        """Call ``service`` and return the response, waiting at most ``timeout_s`` for the server and again
+        for the response (wall time).
+
+        Raises:
+            GraphError: no server within the timeout (naming the service and how to look for it), no
+                response within it, or the server left mid-call (ServiceCallError).
+        """
+        client = self._clients.get((service, id(srv_type)))
+        if client is None:
+            client = self._clients[(service, id(srv_type))] = self.node.create_client(srv_type, service)
+        if not client.wait_for_service(timeout_s):
+            raise GraphError(f"service '{service}' is not available (waited {timeout_s:g} s); see social-touch "
+                             'service list, or wait longer with --timeout')
+        future = client.call_async(request)
+        self.executor.spin_until_future_complete(future, timeout_s)
+        if not future.done():
+            client.remove_pending_request(future)
+            raise GraphError(f"service '{service}' did not answer within {timeout_s:g} s (is its node's executor "
+                             'busy or stuck?); try again with a longer --timeout')
+        return future.result()
 
     # ------------------------------------------------------------------ spinning
     def spin_until(self, predicate: Callable[[], bool], timeout_s: float | None, stop: Any = None,

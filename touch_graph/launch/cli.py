@@ -1,4 +1,13 @@
-"""``social-touch launch FILE [name:=value ...]``: start a scene's nodes in this process.
+"""``social-touch launch FILE [name:=value ...]``: start a scene's nodes, in this process or in processes of their own.
+
+By default every node runs in this process (as in a ROS 2 component container): messages
+between them stay in memory, nothing is serialised. ``--processes`` runs each node in a
+process of its own, as ``ros2 launch`` runs ``node`` entries, and a node with a process
+attribute in the launch file (``respawn``, ``respawn_delay``, ``respawn_max_retries``,
+``sigterm_timeout``, ``sigkill_timeout``) always does: those processes and this one meet on
+the DDS domain. A node process that dies is reported with its exit code and, with
+``respawn: true``, restarted (:mod:`touch_graph.launch.processes`); Ctrl-C stops every
+process and waits for each.
 
 The graph joins the DDS domain (``ROS_DOMAIN_ID``; ``--no-network`` keeps it in the
 process), also with ``--sim-time``: other processes and ROS 2 machines see its nodes
@@ -14,6 +23,7 @@ Examples::
     social-touch launch social_touch demo.launch.yaml --show-args
     social-touch launch social_touch demo.launch.yaml --print-description
     social-touch launch launch/demo.launch.yaml --sim-time --rate 10 --duration 5
+    social-touch launch launch/bear.launch.yaml --processes
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from pathlib import Path
 
 from ..errors import ConfigError, LaunchError
@@ -67,6 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='a parameter in the launch file or a parameter file that no node declares (a typo) '
                              'stops the launch; by default it is a warning naming file, line and the nearest '
                              'declared name (ROS 2 itself accepts undeclared overrides silently)')
+    parser.add_argument('--processes', action='store_true',
+                        help='run every node in a process of its own (connected over DDS), as ros2 launch does; by '
+                             'default only nodes with a process attribute (respawn...) do')
     parser.add_argument('--rate', type=_positive_rate, metavar='R',
                         help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
                              'as possible)')
@@ -155,14 +169,50 @@ def run(args: argparse.Namespace) -> int:
     if not plan.nodes:
         print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
         return 0
-    runner = LaunchRunner(plan.nodes, sim_time=args.sim_time, rate=args.rate, network=not args.no_network,
-                          strict_params=args.strict_params)
+    alone = [spec for spec in plan.nodes if args.processes or spec.process is not None]
+    together = [spec for spec in plan.nodes if not (args.processes or spec.process is not None)]
+    if alone and args.sim_time:
+        raise LaunchError(f'{len(alone)} node(s) run in processes of their own (--processes, or a process attribute '
+                          'such as respawn), and a simulated clock cannot be shared between processes: drop '
+                          '--sim-time, or run every node in this process')
+    if alone and args.no_network:
+        raise LaunchError('nodes in processes of their own talk over DDS: --no-network cannot go with --processes '
+                          'or process attributes (respawn...)')
+    return _run(args, together, alone)
+
+
+def _run(args: argparse.Namespace, together: list, alone: list) -> int:
+    """Start the in-process nodes, then the node processes; spin and watch until the end; stop everything."""
+    from ..node_main import StopSignals
+    from .processes import POLL_S, ProcessSupervisor
+    supervisor = ProcessSupervisor(alone, strict_params=args.strict_params) if alone else None
+    runner = None
+    if together:
+        runner = LaunchRunner(together, sim_time=args.sim_time, rate=args.rate,
+                              network=True if alone else not args.no_network, strict_params=args.strict_params)
     try:
-        runner.start()
-        names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)
-        print(f'[launch] {len(runner.nodes)} node(s) running: {names}', file=sys.stderr)
-        runner.spin(args.duration)
+        if runner is not None:
+            runner.start()
+            names = ', '.join(node.get_fully_qualified_name() for node in runner.nodes)
+            print(f'[launch] {len(runner.nodes)} node(s) running in this process: {names}', file=sys.stderr)
+        if supervisor is not None:
+            supervisor.start()
+        if runner is not None:
+            runner.spin(args.duration, every_slice=supervisor.poll if supervisor is not None else None)
+        else:
+            end = None if args.duration is None else time.monotonic() + args.duration
+            with StopSignals() as stop:
+                while not stop.requested and supervisor.active() and (end is None or time.monotonic() < end):
+                    supervisor.poll()
+                    stop.event.wait(POLL_S)
+            if not supervisor.active():
+                print('[launch] every node process has exited', file=sys.stderr)
     finally:
-        runner.shutdown()
+        try:
+            if supervisor is not None:
+                supervisor.stop()
+        finally:
+            if runner is not None:
+                runner.shutdown()
     print('[launch] all nodes stopped', file=sys.stderr)
-    return 0
+    return 1 if supervisor is not None and supervisor.died else 0

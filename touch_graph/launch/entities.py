@@ -48,6 +48,7 @@ from .specs import (
     ParamData,
     ParamFile,
     ParamValue,
+    ProcessOptions,
     prefix_namespace,
 )
 from .substitutions import Location, Scope, Template, Text, evaluate, evaluate_condition, literal_text
@@ -232,13 +233,33 @@ class _Evaluator:
             params += self.params(decl, '')
         spec = NodeSpec(pkg, exec_, name, namespace, tuple(params), tuple(self.remap(r) for r in action.remaps),
                         where.path, where.line, self.split(action.args, 'args', where),
-                        self.split(action.ros_args, 'ros_args', where), action.output)
+                        self.split(action.ros_args, 'ros_args', where), action.output,
+                        self.process(action.process) if action.process else None)
         if spec.full_name is not None:
             for other in self.nodes:
                 if other.full_name == spec.full_name:
                     raise where.error(f'two nodes named {spec.full_name} (the other at {other.where}); give one '
                                       "a different 'name' or 'namespace'")
         return spec
+
+    def process(self, attributes: tuple[tuple[str, Any, Location], ...]) -> ProcessOptions:
+        """The process options of a node's ``respawn``, ``respawn_delay``... (as ros2 launch reads them)."""
+        values: dict[str, Any] = {}
+        for key, raw, where in attributes:
+            value = raw if isinstance(raw, (bool, int, float)) else _from_yaml(self.text(raw, where))
+            if key == 'respawn':
+                if isinstance(value, str) and value.lower() in ('true', 'false'):
+                    value = value.lower() == 'true'
+                if not isinstance(value, bool):
+                    raise where.error(f"'respawn' of 'node' must be true or false; got {value!r}")
+            elif key == 'respawn_max_retries':
+                if isinstance(value, bool) or not isinstance(value, int) or value < -1:
+                    raise where.error(f"'respawn_max_retries' of 'node' must be an integer >= -1 (-1: no limit); "
+                                      f'got {value!r}')
+            elif isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value < 1e6:
+                raise where.error(f"'{key}' of 'node' must be a number of seconds >= 0; got {value!r}")
+            values[key] = float(value) if key.endswith(('_delay', '_timeout')) else value
+        return ProcessOptions(**values)
 
     def split(self, template: Template | None, what: str, where: Location) -> tuple[str, ...]:
         if template is None:

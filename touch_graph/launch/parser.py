@@ -19,10 +19,12 @@ file runs with ``ros2 launch``::
             remap:
             - {from: frame, to: /bear/frame}
 
-Supported elements and attributes are listed in :data:`ELEMENTS`. Anything else, including
-real ROS 2 elements that make no sense in one process (``executable``, ``timer``,
-``respawn``...), is a :class:`~touch_graph.errors.LaunchError` naming the file, the line, what
-was found and what is supported, never silently ignored. Every string is parsed as a
+Supported elements and attributes are listed in :data:`ELEMENTS`; a node's process
+attributes (:data:`PROCESS_ATTRIBUTES`: ``respawn``, ``respawn_delay``...) make it a process of
+its own. Anything else, including real ROS 2 elements the launcher does not run
+(``executable``, ``timer``, ``composable_node_container``...), is a
+:class:`~touch_graph.errors.LaunchError` naming the file, the line, what was found and what is
+supported, never silently ignored. Every string is parsed as a
 substitution template here, so a typo in ``$(...)`` is reported before anything runs.
 """
 
@@ -37,8 +39,9 @@ from ..yamlconf import YamlDict, YamlList, did_you_mean, load_yaml
 from .substitutions import Location, Template, TemplateSyntaxError, literal_text, parse_template
 
 __all__ = [
-    'ELEMENTS', 'PARAM_TYPES', 'Action', 'ArgAction', 'Condition', 'GroupAction', 'IncludeAction', 'LaunchFile',
-    'LetAction', 'NodeAction', 'ParamDecl', 'PushNamespaceAction', 'RemapDecl', 'Str', 'parse_launch_file',
+    'ELEMENTS', 'PARAM_TYPES', 'PROCESS_ATTRIBUTES', 'Action', 'ArgAction', 'Condition', 'GroupAction',
+    'IncludeAction', 'LaunchFile', 'LetAction', 'NodeAction', 'ParamDecl', 'PushNamespaceAction', 'RemapDecl', 'Str',
+    'parse_launch_file',
 ]
 
 _CONDITION = ('if', 'unless')
@@ -51,16 +54,18 @@ ELEMENTS: dict[str, tuple[str, ...]] = {
     'group': ('scoped', 'forwarding', 'keep', 'children', *_CONDITION),
     'push_ros_namespace': ('namespace', *_CONDITION),
     'push-ros-namespace': ('namespace', *_CONDITION),
-    'node': ('pkg', 'exec', 'name', 'namespace', 'param', 'remap', 'args', 'ros_args', 'output', *_CONDITION),
+    'node': ('pkg', 'exec', 'name', 'namespace', 'param', 'remap', 'args', 'ros_args', 'output',
+             'respawn', 'respawn_delay', 'respawn_max_retries', 'sigterm_timeout', 'sigkill_timeout', *_CONDITION),
 }
+#: Attributes of a ``node`` that make it a process of its own (ros2 launch's process attributes).
+PROCESS_ATTRIBUTES = ('respawn', 'respawn_delay', 'respawn_max_retries', 'sigterm_timeout', 'sigkill_timeout')
 #: ROS 2 launch elements and node attributes that exist but that one in-process graph cannot honour.
 _ROS_ONLY_ELEMENTS = ('executable', 'timer', 'set_env', 'set-env', 'unset_env', 'unset-env', 'append_env',
                       'set_parameter', 'set-parameter', 'set_parameters_from_file', 'set_remap', 'set-remap',
                       'log', 'for', 'node_container', 'composable_node_container', 'load_composable_node',
                       'lifecycle_node', 'set_use_sim_time', 'set_ros_log_dir', 'shutdown')
-_ROS_ONLY_NODE_ATTRIBUTES = ('exec_name', 'node-name', 'cwd', 'env', 'shell', 'respawn', 'respawn_delay',
-                             'respawn_max_retries', 'launch-prefix', 'launch_prefix', 'emulate_tty',
-                             'sigterm_timeout', 'sigkill_timeout', 'additional_env', 'on_exit', 'to_cloud')
+_ROS_ONLY_NODE_ATTRIBUTES = ('exec_name', 'node-name', 'cwd', 'env', 'shell', 'launch-prefix', 'launch_prefix',
+                             'emulate_tty', 'additional_env', 'on_exit', 'to_cloud')
 #: ``param`` ``type`` identifiers of launch_ros (launch/frontend/type_utils.py).
 PARAM_TYPES = ('str', 'bool', 'int', 'float', 'list_of_str', 'list_of_bool', 'list_of_int', 'list_of_float', 'yaml')
 _OUTPUTS = ('screen', 'log', 'both')
@@ -173,6 +178,8 @@ class NodeAction:
     output: str
     where: Location
     condition: Condition = Condition()
+    #: process attributes as written: a YAML bool or number, or a template (``$(var respawn)``)
+    process: tuple[tuple[str, Any, Location], ...] = ()
 
 
 Action = ArgAction | LetAction | IncludeAction | GroupAction | PushNamespaceAction | NodeAction
@@ -237,8 +244,9 @@ def _check_attributes(attrs: YamlDict, element: str, path: str, allowed: tuple[s
             continue
         where = _where(attrs, key, path)
         if element == 'node' and key in _ROS_ONLY_NODE_ATTRIBUTES:
-            raise where.error(f"attribute '{key}' of 'node' is not supported: the in-process launcher runs every "
-                              f'node in this process, not as a program; remove it. Supported: {", ".join(allowed)}')
+            raise where.error(f"attribute '{key}' of 'node' is not supported: a node runs from its class (in the "
+                              f'launcher or in a process of its own), not as a program; remove it. Supported: '
+                              f'{", ".join(allowed)}')
         raise where.error(f"unknown attribute '{key}' of '{element}'{did_you_mean(key, allowed)}; "
                           f'supported: {", ".join(allowed)}')
 
@@ -368,12 +376,23 @@ def _parse_node(attrs: YamlDict, path: str, where: Location) -> NodeAction:
             remaps.append(RemapDecl(_attr(item, 'from', 'remap', path, required=True),  # type: ignore[arg-type]
                                     _attr(item, 'to', 'remap', path, required=True),  # type: ignore[arg-type]
                                     Location(path, item.line)))
+    process = []
+    for key in PROCESS_ATTRIBUTES:
+        if key in attrs:
+            value = attrs[key]
+            here = _where(attrs, key, path)
+            if isinstance(value, str):
+                value = _template(value, f"'{key}' of 'node'", here)
+            elif not isinstance(value, (bool, int, float)):
+                raise here.error(f"'{key}' of 'node' must be a {'bool' if key == 'respawn' else 'number'}; "
+                                 f'got {value!r}')
+            process.append((key, value, here))
     return NodeAction(
         pkg=_attr(attrs, 'pkg', 'node', path, required=True), exec=_attr(attrs, 'exec', 'node', path, required=True),
         name=_attr(attrs, 'name', 'node', path), namespace=_attr(attrs, 'namespace', 'node', path),
         params=params, remaps=tuple(remaps), args=_attr(attrs, 'args', 'node', path),
         ros_args=_attr(attrs, 'ros_args', 'node', path), output=output, where=where,
-        condition=_condition(attrs, 'node', path))  # type: ignore[arg-type]
+        condition=_condition(attrs, 'node', path), process=tuple(process))  # type: ignore[arg-type]
 
 
 def _parse_group(element: Any, path: str, where: Location) -> GroupAction:

@@ -29,7 +29,7 @@ import math
 import signal
 import threading
 import types
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -227,11 +227,13 @@ class LaunchRunner:
         """Ask :meth:`spin` to return after the current callback (safe from a signal handler or thread)."""
         self._stop.set()
 
-    def spin(self, duration: float | None = None, *, handle_signals: bool = True) -> None:
+    def spin(self, duration: float | None = None, *, handle_signals: bool = True,
+             every_slice: Callable[[], None] | None = None) -> None:
         """Run the graph until a stop request, the context's shutdown or ``duration`` seconds of ROS time.
 
         With ``handle_signals`` (and in the main thread), SIGINT/SIGTERM request a stop while
-        spinning; the previous handlers come back afterwards.
+        spinning; the previous handlers come back afterwards. ``every_slice()`` runs between
+        slices of :data:`SLICE_S` (the launcher watches its node processes there).
         """
         if self.executor is None:
             raise LaunchError('spin() before start(): call start() first (or use the runner as a context manager)')
@@ -248,6 +250,8 @@ class LaunchRunner:
                 # Spin in short slices of ROS time so a stop request is seen between callbacks.
                 slice_end = now + round(SLICE_S * 1e9)
                 self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+                if every_slice is not None:
+                    every_slice()
         except external_shutdown:  # another thread shut the context down: a normal end
             pass
         finally:

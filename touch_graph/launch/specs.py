@@ -7,9 +7,10 @@ turns each :class:`NodeSpec` into rclpy-style constructor arguments.
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,7 @@ from .substitutions import Location
 
 __all__ = [
     'NAMESPACE_PATTERN', 'NODE_NAME_PATTERN', 'TOPIC_PATTERN', 'DeclaredArgument', 'LaunchPlan', 'NodeSpec',
-    'ParamData', 'ParamFile', 'ParamValue', 'prefix_namespace',
+    'ParamData', 'ParamFile', 'ParamValue', 'ProcessOptions', 'prefix_namespace', 'spec_from_json', 'spec_to_json',
 ]
 
 _TOKEN = r'[A-Za-z_][A-Za-z0-9_]*'
@@ -46,6 +47,26 @@ class ParamFile:
 
 
 @dataclass(frozen=True)
+class ProcessOptions:
+    """How a node that runs as a process of its own is run, with ros2 launch's attribute names and defaults.
+
+    Attributes:
+        respawn: restart the process when it exits (not when the launch stops it).
+        respawn_delay: seconds before a restart (a process that keeps dying soon after starting
+            waits longer each time: see :mod:`touch_graph.launch.processes`).
+        respawn_max_retries: restarts at most this many times (-1: no limit).
+        sigterm_timeout, sigkill_timeout: at shutdown, seconds after SIGINT before SIGTERM, and
+            after SIGTERM before SIGKILL.
+    """
+
+    respawn: bool = False
+    respawn_delay: float = 0.0
+    respawn_max_retries: int = -1
+    sigterm_timeout: float = 5.0
+    sigkill_timeout: float = 5.0
+
+
+@dataclass(frozen=True)
 class NodeSpec:
     """A node to start, fully resolved.
 
@@ -59,6 +80,8 @@ class NodeSpec:
         args: extra command-line arguments (``args``), before ``--ros-args``.
         ros_args: extra ROS arguments (``ros_args``), after the generated ones.
         output: ``screen``/``log``/``both``; in-process, every node logs through the runtime's logger.
+        process: how to run the node as a process of its own, when the launch file gave a process
+            attribute (``respawn``...); None: it joins the launcher's process unless ``--processes``.
     """
 
     pkg: str
@@ -72,6 +95,7 @@ class NodeSpec:
     args: tuple[str, ...] = ()
     ros_args: tuple[str, ...] = ()
     output: str = 'screen'
+    process: ProcessOptions | None = None
 
     @property
     def where(self) -> Location:
@@ -119,6 +143,11 @@ class NodeSpec:
             lines.append(f'    args: {shlex.join(self.args)}')
         if self.ros_args:
             lines.append(f'    ros_args: {shlex.join(self.ros_args)}')
+        if self.process is not None:
+            p = self.process
+            respawn = f'respawn after {p.respawn_delay:g} s' + (f', at most {p.respawn_max_retries} times'
+                                                                if p.respawn_max_retries >= 0 else '')
+            lines.append(f'    own process{", " + respawn if p.respawn else ""}')
         return '\n'.join(lines)
 
 
@@ -178,3 +207,29 @@ def prefix_namespace(base: str | None, namespace: str | None) -> str | None:
     if combined != '/':
         combined = combined.rstrip('/') or '/'
     return combined if combined.startswith('/') else '/' + combined
+
+
+def spec_to_json(spec: NodeSpec) -> str:
+    """A node spec as JSON, for the process that runs it (:func:`spec_from_json` reads it back)."""
+    params = [{'from': str(p.path)} if isinstance(p, ParamFile) else
+              {'name': p.name, 'value': list(p.value) if isinstance(p.value, tuple) else p.value,
+               'where': [p.where.path, p.where.line] if p.where is not None else None} for p in spec.params]
+    data = asdict(replace(spec, params=()))
+    data['params'] = params
+    return json.dumps(data)
+
+
+def spec_from_json(text: str) -> NodeSpec:
+    """The node spec :func:`spec_to_json` wrote."""
+    data = json.loads(text)
+    params: list[ParamValue | ParamFile] = []
+    for p in data.pop('params'):
+        if 'from' in p:
+            params.append(ParamFile(Path(p['from'])))
+        else:
+            value = tuple(p['value']) if isinstance(p['value'], list) else p['value']
+            params.append(ParamValue(p['name'], value, Location(*p['where']) if p['where'] else None))
+    process = data.pop('process')
+    return NodeSpec(**{**data, 'params': tuple(params), 'remaps': tuple(tuple(r) for r in data['remaps']),
+                       'args': tuple(data['args']), 'ros_args': tuple(data['ros_args']),
+                       'process': ProcessOptions(**process) if process is not None else None})

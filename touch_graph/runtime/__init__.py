@@ -33,18 +33,23 @@ from .qos import (
     HistoryPolicy,
     QoSProfile,
     ReliabilityPolicy,
+    qos_profile_parameter_events,
     qos_profile_sensor_data,
+    qos_profile_services_default,
     qos_profile_system_default,
 )
+from .services import Client, Service
+from .task import Future
 
 __all__ = [
-    'Clock', 'ClockType', 'Context', 'DurabilityPolicy', 'Duration', 'Executor', 'ExternalShutdownException',
-    'FloatingPointRange', 'HistoryPolicy', 'IntegerRange', 'LoggingSeverity', 'MultiThreadedExecutor', 'Node',
-    'Parameter', 'ParameterDescriptor', 'ParameterNotDeclaredException', 'ParameterType', 'Publisher',
-    'QoSProfile', 'ReliabilityPolicy', 'SetParametersResult', 'SimTimeSource', 'SingleThreadedExecutor',
-    'Subscription', 'Time', 'Timer', 'WallTimeSource', 'create_node', 'get_default_context',
-    'get_global_executor', 'get_logger', 'init', 'ok', 'qos_profile_sensor_data', 'qos_profile_system_default',
-    'reset_default_context', 'shutdown', 'spin', 'spin_once', 'try_shutdown',
+    'Client', 'Clock', 'ClockType', 'Context', 'DurabilityPolicy', 'Duration', 'Executor',
+    'ExternalShutdownException', 'FloatingPointRange', 'Future', 'HistoryPolicy', 'IntegerRange', 'LoggingSeverity',
+    'MultiThreadedExecutor', 'Node', 'Parameter', 'ParameterDescriptor', 'ParameterNotDeclaredException',
+    'ParameterType', 'Publisher', 'QoSProfile', 'ReliabilityPolicy', 'Service', 'SetParametersResult',
+    'SimTimeSource', 'SingleThreadedExecutor', 'Subscription', 'Time', 'Timer', 'WallTimeSource', 'create_node',
+    'get_default_context', 'get_global_executor', 'get_logger', 'init', 'ok', 'qos_profile_parameter_events',
+    'qos_profile_sensor_data', 'qos_profile_services_default', 'qos_profile_system_default',
+    'reset_default_context', 'shutdown', 'spin', 'spin_once', 'spin_until_future_complete', 'try_shutdown',
 ]
 
 _global_executor: Executor | None = None
@@ -99,3 +104,11 @@ def spin_once(node: Node, *, executor: Executor | None = None, timeout_sec: floa
     executor = executor or get_global_executor()
     executor.add_node(node)
     executor.spin_once(timeout_sec)
+
+
+def spin_until_future_complete(node: Node, future: Future, executor: Executor | None = None,
+                               timeout_sec: float | None = None) -> None:
+    """Spin ``node`` until ``future`` is done or ``timeout_sec`` (wall time) passes, as rclpy's."""
+    executor = executor or get_global_executor()
+    executor.add_node(node)
+    executor.spin_until_future_complete(future, timeout_sec)

@@ -92,6 +92,7 @@ class Context:
         self._lock = threading.RLock()
         self.topics: dict[str, Topic] = {}
         self.nodes: list[Node] = []
+        self._services: dict[str, list[Any]] = {}  # name -> servers in this context, first one answers
         self.global_args = RosArgs()
         self.callback_errors = 0
         self._shutdown_callbacks: list[Callable[[], None]] = []
@@ -171,6 +172,20 @@ class Context:
         elif topic.msg_type is not msg_type:
             raise GraphError(f"{who}: topic '{name}': two different classes claim {type_name}")
         return topic
+
+    def _add_service(self, service: Any, who: str) -> None:
+        servers = self._services.setdefault(service.srv_name, [])
+        if servers and servers[0].service_type != service.service_type:
+            raise GraphError(f"{who}: service '{service.srv_name}' is already served as {servers[0].service_type} by "
+                             f'{servers[0].node.get_fully_qualified_name()}, not {service.service_type}; remap one')
+        servers.append(service)
+
+    def _remove_service(self, service: Any) -> None:
+        servers = self._services.get(service.srv_name, [])
+        if service in servers:
+            servers.remove(service)
+        if not servers:
+            self._services.pop(service.srv_name, None)
 
     def _drop_topic_if_unused(self, topic: Topic) -> None:
         if topic.endpoint_count() == 0 and self.topics.get(topic.name) is topic:

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from .executors import Executor
     from .node import Node
 
-__all__ = ['Publisher', 'Subscription', 'Timer']
+__all__ = ['Publisher', 'QueuedEntity', 'Subscription', 'Timer']
 
 _get_ident = threading.get_ident
 # Timers due at the same instant run in the order they were created (deterministic scenes).
@@ -107,39 +107,32 @@ class Publisher:
         return self.node.destroy_publisher(self)
 
 
-class Subscription:
-    """``node.create_subscription(MsgType, 'topic', callback, qos)``.
+class QueuedEntity:
+    """What an executor runs: a bounded queue of items and a handler for each (subscriptions, services, clients).
+
+    Items are queued by the thread that spins the entity's executor; another thread hands
+    them over through the executor's inbox. The executor calls ``_handler(*item)`` when
+    ``_packs`` (the item is already an argument tuple), else ``_handler(item)``; ``_what``
+    names the entity in error reports.
 
     Attributes:
-        received: messages queued for this subscription since it was made.
-        dropped: messages dropped because the queue was full (KEEP_LAST depth reached).
+        received: items queued since the entity was made.
+        dropped: items dropped because the queue was full (KEEP_LAST depth reached).
     """
 
-    def __init__(self, node: Node, topic: Topic, callback: Callable[[Any], None], qos: QoSProfile,
-                 raw: bool = False, ignore_local_publications: bool = False) -> None:
+    _handler: Callable[..., Any]
+    _packs = False
+    _what = ''
+
+    def __init__(self, node: Node, qos: QoSProfile) -> None:
         self.node = node
-        # rclcpp's option: skip messages published by this subscription's own node (bridges use it).
-        self.ignore_local_publications = ignore_local_publications
-        self.msg_type = topic.msg_type
-        self.callback = callback
         self.qos_profile = qos
-        self.raw = raw
-        self._topic = topic
         self._queue: deque = deque(maxlen=qos.queue_bound)
         self._ready = False
         self.received = 0
         self.dropped = 0
         self._executor: Executor | None = None
-        self.with_info = _takes_message_info(callback)
-        self._dds: Any = None  # the DDS reader, on a networked context
-
-    @property
-    def topic_name(self) -> str:
-        return self._topic.name
-
-    @property
-    def topic(self) -> str:
-        return self._topic.name
+        self._dds: Any = None  # the DDS side, on a networked context
 
     def _enqueue(self, item: Any) -> None:
         executor = self._executor
@@ -161,13 +154,44 @@ class Subscription:
                 executor._ready.append(self)
 
     def _take(self) -> Any:
-        """Pop the oldest message; keep the executor's ready list in step."""
+        """Pop the oldest item; keep the executor's ready list in step."""
         item = self._queue.popleft()
         if self._queue:
             self._executor._ready.append(self)
         else:
             self._ready = False
         return item
+
+
+class Subscription(QueuedEntity):
+    """``node.create_subscription(MsgType, 'topic', callback, qos)``.
+
+    Attributes:
+        received: messages queued for this subscription since it was made.
+        dropped: messages dropped because the queue was full (KEEP_LAST depth reached).
+    """
+
+    def __init__(self, node: Node, topic: Topic, callback: Callable[[Any], None], qos: QoSProfile,
+                 raw: bool = False, ignore_local_publications: bool = False) -> None:
+        super().__init__(node, qos)
+        # rclcpp's option: skip messages published by this subscription's own node (bridges use it).
+        self.ignore_local_publications = ignore_local_publications
+        self.msg_type = topic.msg_type
+        self.callback = callback
+        self.raw = raw
+        self._topic = topic
+        self.with_info = _takes_message_info(callback)
+        self._handler = callback
+        self._packs = self.with_info  # a (msg, info) item is the argument tuple
+        self._what = f"subscription to '{topic.name}'"
+
+    @property
+    def topic_name(self) -> str:
+        return self._topic.name
+
+    @property
+    def topic(self) -> str:
+        return self._topic.name
 
     def destroy(self) -> bool:
         return self.node.destroy_subscription(self)

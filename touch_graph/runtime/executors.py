@@ -13,6 +13,7 @@ from __future__ import annotations
 import heapq
 import math
 import threading
+import time
 import traceback
 from collections import deque
 from collections.abc import Callable
@@ -39,6 +40,8 @@ class Executor:
         self._wake: Any = threading.Event()
         self._dds_waker: Any = None  # replaces _wake on a networked context (touch_graph.dds.waker)
         self._thread_id: int | None = None
+        self._spinning_in: int | None = None  # the thread inside a spin method now, if any
+        self._spin_lock = threading.RLock()
         self._shutdown = False
         self.callbacks_run = 0
 
@@ -52,13 +55,13 @@ class Executor:
             raise GraphError(f'node {node.get_fully_qualified_name()} belongs to another context')
         self._nodes.append(node)
         node.executor = self
-        for sub in node.subscriptions:
-            sub._executor = self
-            if sub._queue and not sub._ready:
-                sub._ready = True
-                self._ready.append(sub)
-            if sub._dds is not None:
-                self._attach_reader(sub._dds)
+        for entity in node._waitables():
+            entity._executor = self
+            if entity._queue and not entity._ready:
+                entity._ready = True
+                self._ready.append(entity)
+            if entity._dds is not None:
+                self._attach_reader(entity._dds)
         for timer in node.timers:
             timer._executor = self
             self._schedule(timer)
@@ -91,10 +94,10 @@ class Executor:
                 waker.set()
             self._wake = waker
             for node in self._nodes:
-                for sub in node.subscriptions:
-                    if sub._dds is not None and sub._dds.waker is None:
-                        sub._dds.waker = waker
-                        waker.attach(sub._dds)
+                for entity in node._waitables():
+                    if entity._dds is not None and entity._dds.waker is None:
+                        entity._dds.waker = waker
+                        waker.attach(entity._dds)
         return self._dds_waker
 
     def remove_node(self, node: Node) -> None:
@@ -102,10 +105,10 @@ class Executor:
             return
         self._nodes.remove(node)
         node.executor = None
-        for sub in node.subscriptions:
-            sub._executor = None
-            sub._ready = False
-            reader = sub._dds
+        for entity in node._waitables():
+            entity._executor = None
+            entity._ready = False
+            reader = entity._dds
             if reader is not None and reader.waker is not None and reader.waker is self._dds_waker:
                 reader.waker.detach(reader)
                 reader.waker = None
@@ -131,14 +134,34 @@ class Executor:
             heapq.heappush(self._timers, (timer._deadline_ns, timer._order, timer._generation, timer))
 
     # ------------------------------------------------------------------ spinning
+    # Every public spin method holds the spin lock and records its thread, so a blocking
+    # service call knows whether some thread spins this executor (it then waits), none does
+    # (it spins it itself) or its own thread does (waiting would never end).
+    def _begin(self) -> int | None:
+        self._spin_lock.acquire()
+        outer, self._spinning_in = self._spinning_in, threading.get_ident()
+        return outer
+
+    def _end(self, outer: int | None) -> None:
+        self._spinning_in = outer
+        self._spin_lock.release()
+
     def spin_once(self, timeout_sec: float | None = None) -> None:
         """Run at most one callback, waiting up to ``timeout_sec`` for one (None: forever)."""
-        self._run_one(None if timeout_sec is None else max(0.0, timeout_sec), until_ns=None)
+        outer = self._begin()
+        try:
+            self._run_one(None if timeout_sec is None else max(0.0, timeout_sec), until_ns=None)
+        finally:
+            self._end(outer)
 
     def spin(self) -> None:
         """Run callbacks until the context shuts down (or :meth:`shutdown`)."""
-        while self.context.ok() and not self._shutdown:
-            self._run_one(0.5, until_ns=None)
+        outer = self._begin()
+        try:
+            while self.context.ok() and not self._shutdown:
+                self._run_one(0.5, until_ns=None)
+        finally:
+            self._end(outer)
 
     def spin_for(self, seconds: float) -> None:
         """Run callbacks for ``seconds`` of ROS time (simulated or real), then return."""
@@ -146,22 +169,47 @@ class Executor:
         self.spin_until_time(end)
 
     def spin_until_time(self, end_ns: int) -> None:
-        while self.context.ok() and not self._shutdown and self.context.now_ns() < end_ns:
-            self._run_one(None, until_ns=end_ns)
-        # Work due exactly at the end still runs, so a scene of N periods sees N frames.
-        while self.context.ok() and not self._shutdown and self._run_ready_work():
-            pass
+        outer = self._begin()
+        try:
+            while self.context.ok() and not self._shutdown and self.context.now_ns() < end_ns:
+                self._run_one(None, until_ns=end_ns)
+            # Work due exactly at the end still runs, so a scene of N periods sees N frames.
+            while self.context.ok() and not self._shutdown and self._run_ready_work():
+                pass
+        finally:
+            self._end(outer)
 
     def spin_until(self, predicate: Callable[[], bool], timeout_sec: float | None = None) -> bool:
         """Spin until ``predicate()`` is true (returns True) or ``timeout_sec`` of ROS time pass."""
         end = None if timeout_sec is None else self.context.now_ns() + int(timeout_sec * 1e9)
-        while self.context.ok() and not self._shutdown:
-            if predicate():
-                return True
-            if end is not None and self.context.now_ns() >= end:
-                return predicate()
-            self._run_one(None if end is not None else 0.5, until_ns=end)
+        outer = self._begin()
+        try:
+            while self.context.ok() and not self._shutdown:
+                if predicate():
+                    return True
+                if end is not None and self.context.now_ns() >= end:
+                    return predicate()
+                self._run_one(None if end is not None else 0.5, until_ns=end)
+        finally:
+            self._end(outer)
         return predicate()
+
+    def spin_until_future_complete(self, future: Any, timeout_sec: float | None = None) -> None:
+        """Spin until ``future`` is done or ``timeout_sec`` seconds of wall time pass (rclpy's semantics)."""
+        deadline = None if timeout_sec is None else time.monotonic() + max(0.0, timeout_sec)
+        outer = self._begin()
+        try:
+            while self.context.ok() and not self._shutdown and not future.done():
+                left = 0.1 if deadline is None else deadline - time.monotonic()
+                if left <= 0:
+                    return
+                self._run_one(min(left, 0.1), until_ns=None)
+        finally:
+            self._end(outer)
+
+    def spinning_thread(self) -> int | None:
+        """The ident of the thread spinning this executor now (None: nobody)."""
+        return self._spinning_in
 
     def shutdown(self, timeout_sec: float | None = None) -> bool:
         self._shutdown = True
@@ -198,8 +246,7 @@ class Executor:
                 sub._ready = False
                 return True
             item = sub._take()
-            self._guarded(sub.callback, item if sub.with_info else (item,), sub.node,
-                          f"subscription to '{sub.topic_name}'")
+            self._guarded(sub._handler, item if sub._packs else (item,), sub.node, sub._what)
             return True
         return False
 

@@ -56,6 +56,7 @@ class RcutilsLogger:
         self._clock_ns = clock_ns or time.time_ns
         self._stream = stream
         self._level = LoggingSeverity.UNSET
+        self._sink: Callable[..., None] | None = None  # (severity, name, text, file, function, line): /rosout
         self._seen_once: set[tuple[str, int]] = set()
         self._last_emit: dict[tuple[str, int], int] = {}
         self.counts = {severity: 0 for severity in LoggingSeverity}
@@ -63,7 +64,12 @@ class RcutilsLogger:
     def get_child(self, name: str) -> RcutilsLogger:
         child = RcutilsLogger(f'{self.name}.{name}' if self.name else name, self._clock_ns, self._stream)
         child._level = self._level
+        child._sink = self._sink
         return child
+
+    def set_sink(self, sink: Callable[..., None] | None) -> None:
+        """Also hand each emitted line to ``sink(severity, name, text, file, function, line)`` (a node's /rosout)."""
+        self._sink = sink
 
     def set_level(self, level: LoggingSeverity | str) -> None:
         self._level = parse_level(level)
@@ -103,6 +109,9 @@ class RcutilsLogger:
         with _stream_lock:
             stream.write(line)
             stream.flush()
+        if self._sink is not None:
+            self._sink(severity, self.name, str(message), frame.f_code.co_filename, frame.f_code.co_name,
+                       frame.f_lineno)
         return True
 
     def debug(self, message: object, **kwargs: object) -> bool:

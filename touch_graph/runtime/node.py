@@ -11,10 +11,12 @@ from :mod:`touch_graph.compat`). Node classes that a launch file can start take
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from typing import Any
 
-from ..errors import GraphError, ParameterError
+from ..errors import GraphError
+from ..messages import get_message
 from .clock import Clock, ClockType
 from .context import Context, get_default_context
 from .endpoints import Publisher, Subscription, Timer
@@ -27,24 +29,37 @@ from .names import (
     normalize_namespace,
     validate_node_name,
 )
+from .node_parameters import NodeParameters
 from .parameters import (
     Parameter,
     ParameterDescriptor,
-    ParameterNotDeclaredException,
     ParameterSource,
-    ParameterType,
     SetParametersResult,
-    check_ranges,
-    coerce_to_type,
     parse_ros_args,
 )
-from .qos import DurabilityPolicy, QoSProfile, qos_profile_from
+from .qos import (
+    DurabilityPolicy,
+    QoSProfile,
+    qos_profile_from,
+    qos_profile_parameter_events,
+    qos_profile_rosout_default,
+    qos_profile_services_default,
+)
+from .services import Client, Service
 
 __all__ = ['Node']
 
+_rosout_guard = threading.local()
+_Log = get_message('rcl_interfaces/msg/Log')
+_ParameterEvent = get_message('rcl_interfaces/msg/ParameterEvent')
 
-class Node:
-    """A node of the in-process graph (rclpy.node.Node)."""
+
+class Node(NodeParameters):
+    """A node of the graph (rclpy.node.Node): endpoints, timers, services, parameters, logger, clock.
+
+    Like rclpy's, a node publishes ``/parameter_events`` and (``enable_rosout``) its log lines
+    on ``/rosout``, and serves the parameter services (``start_parameter_services``).
+    """
 
     def __init__(self, node_name: str, *, context: Context | None = None, cli_args: list[str] | None = None,
                  namespace: str | None = None, use_global_arguments: bool = True, enable_rosout: bool = True,
@@ -81,6 +96,8 @@ class Node:
         self._clock = Clock(self.context.time_source, ClockType.ROS_TIME)
         self.publishers: list[Publisher] = []
         self.subscriptions: list[Subscription] = []
+        self.services: list[Service] = []
+        self.clients: list[Client] = []
         self.timers: list[Timer] = []
         self.executor = None
         self.callback_errors = 0
@@ -103,11 +120,21 @@ class Node:
             self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
         self._set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]] = []
+        self._parameter_lock = threading.RLock()
+        self._parameter_events = self.create_publisher(_ParameterEvent, '/parameter_events',
+                                                       qos_profile_parameter_events)
+        self._rosout = self.create_publisher(_Log, '/rosout', qos_profile_rosout_default) if enable_rosout else None
+        if enable_rosout:
+            self._logger.set_sink(self._publish_rosout)
         self.declare_parameter('use_sim_time', False)
         if automatically_declare_parameters_from_overrides:
             for name, (value, _) in list(self._overrides.items()):
                 if name not in self._parameters:
                     self.declare_parameter(name, value)
+        self._parameter_service = None
+        if start_parameter_services:
+            from .parameter_service import ParameterService
+            self._parameter_service = ParameterService(self)
 
         with self.context._lock:
             self.context.nodes.append(self)
@@ -196,6 +223,67 @@ class Node:
             self.executor._schedule(timer)
         return timer
 
+    def create_service(self, srv_type: Any, srv_name: str, callback: Callable[[Any, Any], Any], *,
+                       qos_profile: QoSProfile = qos_profile_services_default, **_ignored: Any) -> Service:
+        """A server of ``srv_type`` on ``srv_name`` (expanded and remapped); ``callback(request, response)``
+        runs in the executor and returns the response."""
+        self._check_alive()
+        if not callable(callback):
+            raise TypeError(f'service callback must be callable, got {callback!r}')
+        name = self.resolve_service_name(srv_name)
+        service = Service(self, srv_type, name, callback, qos_profile_from(qos_profile))
+        with self.context._lock:
+            self.context._add_service(service, f'service of {self._fqn}')
+            self.services.append(service)
+            if self.executor is not None:
+                service._executor = self.executor
+        self.context._notify('service_added', service)
+        return service
+
+    def create_client(self, srv_type: Any, srv_name: str, *,
+                      qos_profile: QoSProfile = qos_profile_services_default, **_ignored: Any) -> Client:
+        """A client of ``srv_type`` on ``srv_name`` (expanded and remapped)."""
+        self._check_alive()
+        client = Client(self, srv_type, self.resolve_service_name(srv_name), qos_profile_from(qos_profile))
+        with self.context._lock:
+            self.clients.append(client)
+            if self.executor is not None:
+                client._executor = self.executor
+        self.context._notify('client_added', client)
+        return client
+
+    def resolve_service_name(self, service: str, *, only_expand: bool = False) -> str:
+        """Service names expand and remap as topic names do (rcl)."""
+        return self.resolve_topic_name(service, only_expand=only_expand)
+
+    def destroy_service(self, service: Service) -> bool:
+        if service not in self.services:
+            return False
+        with self.context._lock:
+            self.services.remove(service)
+            self.context._remove_service(service)
+            service._destroyed = True
+        service._fail_queued('was destroyed')
+        service._executor = None
+        self.context._notify('service_removed', service)
+        return True
+
+    def destroy_client(self, client: Client) -> bool:
+        if client not in self.clients:
+            return False
+        with self.context._lock:
+            self.clients.remove(client)
+            client._destroyed = True
+        client._queue.clear()
+        client._executor = None
+        client._fail_pending('the client was destroyed')
+        self.context._notify('client_removed', client)
+        return True
+
+    def _waitables(self) -> list[Any]:
+        """Everything of this node an executor takes work from: subscriptions, services, clients."""
+        return [*self.subscriptions, *self.services, *self.clients]
+
     def destroy_publisher(self, publisher: Publisher) -> bool:
         if publisher not in self.publishers:
             return False
@@ -237,6 +325,10 @@ class Node:
             self.destroy_publisher(pub)
         for sub in list(self.subscriptions):
             self.destroy_subscription(sub)
+        for service in list(self.services):
+            self.destroy_service(service)
+        for client in list(self.clients):
+            self.destroy_client(client)
         for timer in list(self.timers):
             self.destroy_timer(timer)
         if self.executor is not None:
@@ -287,130 +379,17 @@ class Node:
         topic = self.context.topics.get(name)
         return len(getattr(topic, kind)) if topic else 0
 
-    # ------------------------------------------------------------------ parameters
-    def declare_parameter(self, name: str, value: Any = None, descriptor: ParameterDescriptor | None = None,
-                          ignore_override: bool = False) -> Parameter:
-        """Declare ``name`` with default ``value``; an override (file, launch, -p) of the same
-        type replaces the default. Raises ParameterError on a type mismatch or a value
-        outside the descriptor's ranges, naming where the value came from."""
-        if name in self._parameters:
-            raise ParameterError(f"parameter '{name}' of {self._fqn} is already declared")
-        descriptor = descriptor or ParameterDescriptor()
-        declared_type = ParameterType(descriptor.type) if descriptor.type else Parameter(name, value=value).type_
-        source = None
-        if name in self._overrides and not ignore_override:
-            value, source = self._overrides[name]
-            if not descriptor.dynamic_typing:
-                value = coerce_to_type(name, value, declared_type, self._fqn, source)
-        problem = check_ranges(name, value, descriptor, self._fqn)
-        if problem:
-            raise ParameterError(f'{source}: {problem}' if source else problem)
-        if value is None:
-            param = Parameter(name, declared_type, None)
-        elif descriptor.dynamic_typing or declared_type == ParameterType.NOT_SET:
-            param = Parameter(name, value=value)
-        else:
-            param = Parameter(name, declared_type, value)  # an empty list takes the declared type
-        if descriptor.dynamic_typing:
-            declared_type = ParameterType.NOT_SET
-        descriptor.name = name
-        descriptor.type = int(declared_type)
-        self._parameters[name] = param
-        self._descriptors[name] = descriptor
-        return param
-
-    def declare_parameters(self, namespace: str, parameters: list[tuple],
-                           ignore_override: bool = False) -> list[Parameter]:
-        out = []
-        for entry in parameters:
-            name = f'{namespace}.{entry[0]}' if namespace else entry[0]
-            value = entry[1] if len(entry) > 1 else None
-            descriptor = entry[2] if len(entry) > 2 else None
-            out.append(self.declare_parameter(name, value, descriptor, ignore_override))
-        return out
-
-    def undeclare_parameter(self, name: str) -> None:
-        self._require(name)
-        del self._parameters[name]
-        del self._descriptors[name]
-
-    def has_parameter(self, name: str) -> bool:
-        return name in self._parameters
-
-    def _require(self, name: str) -> Parameter:
-        param = self._parameters.get(name)
-        if param is None:
-            if self._allow_undeclared:
-                return Parameter(name, ParameterType.NOT_SET, None)
-            raise ParameterNotDeclaredException(f"parameter '{name}' of {self._fqn} is not declared; declared: "
-                                                f'{", ".join(sorted(self._parameters))}')
-        return param
-
-    def override_origins(self) -> list[tuple[str, Any, str, bool]]:
-        """``(name, source, node key, declared)`` of every override given to this node: where it was
-        written, which parameter-file key brought it, and whether the node declared it (an
-        undeclared one is a misspelt parameter or one meant for another node; a node that
-        allows undeclared parameters takes them all)."""
-        return [(name, source, self._override_keys.get(name, self._fqn),
-                 self._allow_undeclared or name in self._parameters)
-                for name, (_, source) in self._overrides.items()]
-
-    def get_parameter(self, name: str) -> Parameter:
-        return self._require(name)
-
-    def get_parameters(self, names: list[str]) -> list[Parameter]:
-        return [self._require(n) for n in names]
-
-    def get_parameter_or(self, name: str, alternative_value: Parameter | None = None) -> Parameter:
-        return self._parameters.get(name, alternative_value or Parameter(name, ParameterType.NOT_SET, None))
-
-    def get_parameters_by_prefix(self, prefix: str) -> dict[str, Parameter]:
-        start = prefix + '.' if prefix else ''
-        return {n[len(start):]: p for n, p in self._parameters.items() if n.startswith(start)}
-
-    def describe_parameter(self, name: str) -> ParameterDescriptor:
-        self._require(name)
-        return self._descriptors[name]
-
-    def add_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], SetParametersResult]) -> None:
-        self._set_callbacks.insert(0, callback)
-
-    def remove_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], SetParametersResult]) -> None:
-        self._set_callbacks.remove(callback)
-
-    def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
-        """Set each parameter on its own (rclpy semantics); results say why one was refused."""
-        return [self._set_atomically([p]) for p in parameter_list]
-
-    def set_parameters_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
-        return self._set_atomically(parameter_list)
-
-    def _set_atomically(self, parameter_list: list[Parameter]) -> SetParametersResult:
-        checked = []
-        for param in parameter_list:
-            if param.name not in self._parameters:
-                if not self._allow_undeclared:
-                    return SetParametersResult(False, f"parameter '{param.name}' is not declared")
-                self._descriptors[param.name] = ParameterDescriptor(name=param.name, type=int(param.type_))
-                checked.append(param)
-                continue
-            descriptor = self._descriptors[param.name]
-            if descriptor.read_only:
-                return SetParametersResult(False, f"parameter '{param.name}' is read-only")
-            value = param.value
-            if descriptor.type:
-                try:
-                    value = coerce_to_type(param.name, value, ParameterType(descriptor.type), self._fqn, None)
-                except ParameterError as err:
-                    return SetParametersResult(False, str(err))
-            problem = check_ranges(param.name, value, descriptor, self._fqn)
-            if problem:
-                return SetParametersResult(False, problem)
-            checked.append(Parameter(param.name, value=value) if value is not None else param)
-        for callback in self._set_callbacks:
-            result = callback(checked)
-            if not result.successful:
-                return result
-        for param in checked:
-            self._parameters[param.name] = param
-        return SetParametersResult(True, '')
+    # ------------------------------------------------------------------ rosout
+    def _publish_rosout(self, severity: int, name: str, message: str, file: str, function: str, line: int) -> None:
+        """Publish a log line on ``/rosout`` (``rcl_interfaces/Log``), as rcl's rosout handler does."""
+        publisher = self._rosout
+        if publisher is None or publisher._destroyed or getattr(_rosout_guard, 'busy', False):
+            return
+        _rosout_guard.busy = True  # a log line written while publishing one is not published again
+        try:
+            publisher.publish(_Log(stamp=self._clock.now().to_msg(), level=int(severity), name=name, msg=message,
+                                   file=file, function=function, line=max(0, int(line))))
+        except Exception:  # a log line that cannot go to /rosout still went to the console
+            pass
+        finally:
+            _rosout_guard.busy = False

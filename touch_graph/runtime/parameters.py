@@ -102,6 +102,22 @@ class Parameter:
     def __repr__(self) -> str:
         return f'Parameter({self.name!r}, {self.type_.name}, {self.value!r})'
 
+    def get_parameter_value(self) -> Any:
+        """The ``rcl_interfaces/ParameterValue`` message (rclpy's name)."""
+        from .parameter_messages import parameter_value
+        return parameter_value(self)
+
+    def to_parameter_msg(self) -> Any:
+        """The ``rcl_interfaces/Parameter`` message (rclpy's name)."""
+        from .parameter_messages import parameter_msg
+        return parameter_msg(self)
+
+    @classmethod
+    def from_parameter_msg(cls, msg: Any) -> Parameter:
+        """A parameter from an ``rcl_interfaces/Parameter`` message (rclpy's name)."""
+        from .parameter_messages import parameter_from_msg
+        return parameter_from_msg(msg)
+
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Parameter) and (self.name, self.type_, self.value) == (
             other.name, other.type_, other.value)

@@ -13,7 +13,8 @@ from enum import IntEnum
 
 __all__ = [
     'DurabilityPolicy', 'HistoryPolicy', 'QoSDurabilityPolicy', 'QoSHistoryPolicy', 'QoSProfile',
-    'QoSReliabilityPolicy', 'ReliabilityPolicy', 'qos_profile_from', 'qos_profile_sensor_data',
+    'QoSReliabilityPolicy', 'ReliabilityPolicy', 'qos_profile_from', 'qos_profile_parameter_events',
+    'qos_profile_rosout_default', 'qos_profile_sensor_data', 'qos_profile_services_default',
     'qos_profile_system_default',
 ]
 
@@ -66,6 +67,13 @@ class QoSProfile:
 
 qos_profile_sensor_data = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
 qos_profile_system_default = QoSProfile(depth=10)
+#: rmw's ``rmw_qos_profile_services_default``: reliable, volatile, keep last 10.
+qos_profile_services_default = QoSProfile(depth=10)
+#: rmw's ``rmw_qos_profile_parameter_events``: reliable, volatile, keep last 1000.
+qos_profile_parameter_events = QoSProfile(depth=1000)
+#: rcl's ``rcl_qos_profile_rosout_default``: reliable, transient local, keep last 1000 (its 10 s
+#: lifespan is not modelled: late joiners get the last 1000 lines).
+qos_profile_rosout_default = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def qos_profile_from(qos: QoSProfile | int) -> QoSProfile:

@@ -1,0 +1,118 @@
+"""``social-touch service list | type | find | call``, as ``ros2 service`` prints them: every service of the domain.
+
+Services come from DDS discovery (``rq/<name>Request`` and ``rr/<name>Reply`` topics), so
+a ROS 2 node's services are listed and callable as ours are; like ``ros2 service list``,
+a service with only clients is listed too. Examples::
+
+    social-touch service list -t
+    social-touch service call /bear/bear_gestures/get_parameters rcl_interfaces/srv/GetParameters "{names: [threshold]}"
+    social-touch service find std_srvs/srv/Trigger
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import yaml
+
+from ..errors import GraphError, MessageError
+
+__all__ = ['add_arguments', 'positive_number', 'run']
+
+
+def positive_number(text: str) -> float:
+    """argparse type: a number > 0 (seconds, a rate)."""
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f'expected a number > 0, got {text!r}')
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest='action', required=True, metavar='ACTION')
+    p = sub.add_parser('list', help='services of the running graph')
+    p.add_argument('-t', '--show-types', action='store_true', help='also show each service type')
+    p.add_argument('-c', '--count-services', action='store_true', help='print only the number of services')
+    p.add_argument('--include-hidden-services', action='store_true', help='include hidden services (a name part '
+                                                                          'starting with _)')
+    p = sub.add_parser('type', help="a service's type")
+    p.add_argument('service_name', help='e.g. /bear/bear_gestures/list_parameters')
+    p.add_argument('--include-hidden-services', action='store_true', help='consider hidden services as well')
+    p = sub.add_parser('find', help='services of a type')
+    p.add_argument('service_type', help='e.g. rcl_interfaces/srv/ListParameters')
+    p.add_argument('-c', '--count-services', action='store_true', help='print only the number of services')
+    p.add_argument('--include-hidden-services', action='store_true', help='consider hidden services as well')
+    p = sub.add_parser('call', help='call a service and print the response')
+    p.add_argument('service_name', help="e.g. '/robot/set_mode'")
+    p.add_argument('service_type', help="e.g. 'std_srvs/srv/SetBool' (or std_srvs/SetBool)")
+    p.add_argument('values', nargs='?', default='{}',
+                   help="the request's fields in YAML, e.g. '{data: true}' (default: all fields at their defaults)")
+    p.add_argument('-r', '--rate', type=positive_number, metavar='N',
+                   help='repeat the call N times a second (Ctrl-C stops)')
+    p.add_argument('--timeout', type=positive_number, default=5.0, metavar='S',
+                   help='wait at most S seconds for the service to appear, and again for each response (default 5)')
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.action == 'call':
+        return _call(args)
+    from ..dds.tool import GraphTool
+    with GraphTool(f'service_{args.action}') as tool:
+        view = tool.require_graph()
+        services = view.visible_services(args.include_hidden_services)
+        if args.action == 'list':
+            if args.count_services:
+                print(len(services))
+                return 0
+            for name, info in services.items():
+                print(f'{name} [{", ".join(sorted(info.types))}]' if args.show_types else name)
+            return 0
+        if args.action == 'type':
+            info = services.get(args.service_name)
+            if info is None:
+                from ..yamlconf import did_you_mean
+                raise GraphError(f"unknown service '{args.service_name}'{did_you_mean(args.service_name, services)}"
+                                 '; social-touch service list shows them')
+            for type_name in sorted(info.types):
+                print(type_name)
+            return 0
+        wanted = _normalized_type(args.service_type)
+        found = [name for name, info in services.items() if wanted in info.types]
+        for line in [len(found)] if args.count_services else found:
+            print(line)
+        return 0
+
+
+def _normalized_type(name: str) -> str:
+    from ..srv_types import normalize_service_name
+    return normalize_service_name(name)
+
+
+def _call(args: argparse.Namespace) -> int:
+    from .. import messages
+    from ..dds.tool import GraphTool
+    from ..node_main import StopSignals
+    from ..srv_types import get_service
+    srv_type = get_service(args.service_type)
+    try:
+        values = yaml.safe_load(args.values)
+    except yaml.YAMLError as err:
+        raise GraphError(f'the request values are not YAML ({err}); write them as "{{field: value}}"') from err
+    try:
+        request = messages.from_dict(srv_type.Request.__msgtype__, values if values is not None else {})
+    except MessageError as err:
+        raise GraphError(f'Failed to populate field: {err}') from err
+    with GraphTool('service_call') as tool, StopSignals(tool.executor.wake) as stop:
+        tool.require_graph()
+        while True:
+            print(f'requester: making request: {request!r}\n')
+            started = time.monotonic()
+            response = tool.call(srv_type, args.service_name, request, args.timeout)
+            print(f'response:\n{response!r}\n', flush=True)
+            if args.rate is None or stop.requested:
+                return 0
+            period = 1.0 / args.rate
+            stop.event.wait(max(0.0, started + period - time.monotonic()))
+            if stop.requested:
+                return 0

@@ -1,0 +1,66 @@
+"""A launched node in a process of its own, started by the launcher.
+
+``python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params]``.
+
+The launcher (:mod:`.processes`) starts one of these per node that runs alone. It builds the
+node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
+:class:`~.runner.LaunchRunner` of one node, on the DDS domain), spins it until SIGINT or
+SIGTERM, and exits with 0 after a clean stop or 1 when the node cannot start (the error on
+stderr). It also dies with the launcher: Linux sends it SIGTERM when the launcher's process
+ends, however that happens (``prctl(PR_SET_PDEATHSIG)``), so no node outlives its launch.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+
+from ..errors import SocialTouchError
+
+__all__ = ['main']
+
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Ask Linux for SIGTERM when the parent dies; exit now if it already has (the race before the call)."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):  # not Linux: the launcher's shutdown still stops it
+        pass
+    if os.getppid() != parent_pid:
+        sys.exit(1)
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    strict = '--strict-params' in argv
+    argv = [a for a in argv if a != '--strict-params']
+    if len(argv) != 2:
+        sys.stderr.write('usage: python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params] '
+                         '(the launcher starts it)\n')
+        return 2
+    die_with_parent(int(argv[1]))
+    from .runner import LaunchRunner
+    from .specs import spec_from_json
+    spec = spec_from_json(argv[0])
+    runner = LaunchRunner([spec], network=True, strict_params=strict)
+    try:
+        runner.start()
+    except SocialTouchError as err:
+        sys.stderr.write(f'error: {err}\n')
+        return 1
+    try:
+        runner.spin()
+    except KeyboardInterrupt:  # a second signal: stop now
+        pass
+    finally:
+        runner.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

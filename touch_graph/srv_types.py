@@ -1,0 +1,198 @@
+"""Service types: ``.srv`` files read by the rosbags type system, and service classes with rclpy's shape.
+
+A ``.srv`` file is a request and a response ``.msg`` separated by a ``---`` line. rosbags
+parses ``.msg`` text only, so each half is registered as a message type of its own,
+``pkg/srv/Name_Request`` and ``pkg/srv/Name_Response``, the names rosidl gives them (and
+whose DDS names are ``pkg::srv::dds_::Name_Request_``). An empty half gets the
+``uint8 structure_needs_at_least_one_member`` field rosidl adds, so its CDR bytes are
+ROS 2's. A bare type name inside a ``.srv`` refers to a message of the same package, as
+in rosidl.
+
+Services come from two places: this package's ``srv/`` directory (``social_touch_msgs``,
+exported with the interface package) and :data:`STANDARD_SERVICES`, the ROS 2 services the
+runtime uses (``rcl_interfaces`` parameter services, ``std_srvs``), whose rosidl definitions
+rosbags' type store does not carry. Their fields are ROS 2's (rcl_interfaces and std_srvs
+as in Humble to Rolling); comments are left out.
+
+>>> cls = get_service('std_srvs/srv/SetBool')
+>>> cls.Request(data=True).data, cls.Response().success
+(True, False)
+>>> cls.__srvtype__, cls.Request.__msgtype__
+('std_srvs/srv/SetBool', 'std_srvs/srv/SetBool_Request')
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from pathlib import Path
+from typing import Any
+
+from rosbags.typesys import get_types_from_msg
+
+from .errors import MessageError
+from .paths import INTERFACE_PACKAGE, share_file
+
+__all__ = ['STANDARD_SERVICES', 'ServiceType', 'get_service', 'parse_srv', 'service_definition', 'service_names',
+           'srv_files']
+
+#: ROS 2 services the runtime serves or calls, ``pkg/srv/Name`` -> ``.srv`` text.
+STANDARD_SERVICES: dict[str, str] = {
+    'rcl_interfaces/srv/DescribeParameters': 'string[] names\n---\nParameterDescriptor[] descriptors\n',
+    'rcl_interfaces/srv/GetParameters': 'string[] names\n---\nParameterValue[] values\n',
+    'rcl_interfaces/srv/GetParameterTypes': 'string[] names\n---\nuint8[] types\n',
+    'rcl_interfaces/srv/ListParameters': ('uint64 DEPTH_RECURSIVE=0\nstring[] prefixes\nuint64 depth\n---\n'
+                                          'ListParametersResult result\n'),
+    'rcl_interfaces/srv/SetParameters': 'Parameter[] parameters\n---\nSetParametersResult[] results\n',
+    'rcl_interfaces/srv/SetParametersAtomically': 'Parameter[] parameters\n---\nSetParametersResult result\n',
+    'std_srvs/srv/Empty': '---\n',
+    'std_srvs/srv/Trigger': '---\nbool success\nstring message\n',
+    'std_srvs/srv/SetBool': 'bool data\n---\nbool success\nstring message\n',
+}
+
+_SEPARATOR = re.compile(r'^---\s*$', re.MULTILINE)
+#: What rosidl puts in an empty structure, so that it has a size.
+_PLACEHOLDER = 'uint8 structure_needs_at_least_one_member\n'
+
+
+def srv_files() -> list[Path]:
+    """The package's ``.srv`` files, sorted by name (none when the directory is missing)."""
+    directory = share_file('srv')
+    return sorted(directory.glob('*.srv')) if directory.is_dir() else []
+
+
+def _own_services() -> dict[str, str]:
+    return {f'{INTERFACE_PACKAGE}/srv/{p.stem}': p.read_text(encoding='utf-8') for p in srv_files()}
+
+
+def service_names() -> list[str]:
+    """This package's service types, e.g. ``social_touch_msgs/srv/X``."""
+    return sorted(_own_services())
+
+
+def _has_fields(text: str) -> bool:
+    return any(line.split('#')[0].strip() and '=' not in line.split('#')[0] for line in text.splitlines())
+
+
+def parse_srv(text: str, name: str) -> dict[str, Any]:
+    """rosbags type definitions of ``pkg/srv/Name``'s request and response (for ``store.register``).
+
+    Raises:
+        MessageError: when the text is not a ``.srv`` (no single ``---`` line) or a half does not parse.
+    """
+    pkg, kind, short = name.split('/')
+    if kind != 'srv':
+        raise MessageError(f"expected a service type name 'pkg/srv/Name', got {name!r}")
+    halves = _SEPARATOR.split(text)
+    if len(halves) != 2:
+        raise MessageError(f'{name}: a .srv holds a request and a response separated by one line "---"; '
+                           f'found {len(halves) - 1} such lines')
+    out: dict[str, Any] = {}
+    for part, body in zip(('Request', 'Response'), halves, strict=True):
+        if not _has_fields(body):
+            body = body + '\n' + _PLACEHOLDER
+        # Parsed as a message of the package, so bare type names resolve to pkg/msg/...; then renamed.
+        as_msg = f'{pkg}/msg/{short}_{part}'
+        try:
+            types = get_types_from_msg(body, as_msg)
+        except Exception as err:  # the parser raises several kinds
+            raise MessageError(f'{name}: cannot parse the {part.lower()}: {err}') from err
+        out[f'{pkg}/srv/{short}_{part}'] = types.pop(as_msg)
+        out.update(types)
+    return out
+
+
+def service_types() -> dict[str, Any]:
+    """Definitions of every known service's request and response (standard and this package's)."""
+    out: dict[str, Any] = {}
+    for name, text in {**STANDARD_SERVICES, **_own_services()}.items():
+        out.update(parse_srv(text, name))
+    return out
+
+
+class ServiceType:
+    """Base of service classes: ``Srv.Request`` and ``Srv.Response`` message classes, as rclpy's generated ones.
+
+    Attributes:
+        __srvtype__: the full type name, ``pkg/srv/Name``.
+    """
+
+    __srvtype__: str = ''
+    Request: type
+    Response: type
+
+
+_lock = threading.Lock()
+_classes: dict[str, type[ServiceType]] = {}
+
+
+def normalize_service_name(name: str) -> str:
+    """``pkg/srv/T`` or ``pkg/T`` -> ``pkg/srv/T``.
+
+    >>> normalize_service_name('std_srvs/Trigger')
+    'std_srvs/srv/Trigger'
+    """
+    parts = name.strip().split('/')
+    if len(parts) == 2:
+        parts = [parts[0], 'srv', parts[1]]
+    if len(parts) != 3 or parts[1] != 'srv' or not all(parts):
+        raise MessageError(f"expected a service type 'pkg/srv/Name' (e.g. std_srvs/srv/Trigger), got {name!r}")
+    return '/'.join(parts)
+
+
+def get_service(name: str) -> type[ServiceType]:
+    """The service class of ``pkg/srv/Name`` (also ``pkg/Name``), with ``Request`` and ``Response``.
+
+    Raises:
+        MessageError: for a type that is not known (with the known ones).
+    """
+    from .messages import get_message, typestore
+    full = normalize_service_name(name)
+    with _lock:
+        cls = _classes.get(full)
+        if cls is not None:
+            return cls
+    if f'{full}_Request' not in typestore.fielddefs:
+        from .yamlconf import did_you_mean
+        known = sorted(n[:-len('_Request')] for n in typestore.fielddefs if n.endswith('_Request') and '/srv/' in n)
+        raise MessageError(f"unknown service type '{name}'{did_you_mean(full, known)}; known: {', '.join(known)}")
+    request, response = get_message(f'{full}_Request'), get_message(f'{full}_Response')
+    pkg, _, short = full.split('/')
+    cls = type(short, (ServiceType,), {'__srvtype__': full, 'Request': request, 'Response': response,
+                                       '__module__': f'{pkg}.srv', '__qualname__': short})
+    with _lock:
+        return _classes.setdefault(full, cls)
+
+
+def service_type_of(srv_type: Any) -> str:
+    """The ``pkg/srv/Name`` of a service class (ours or rclpy's generated one).
+
+    Raises:
+        TypeError: for something that is not a service class.
+    """
+    name = getattr(srv_type, '__srvtype__', None)
+    if name:
+        return name
+    request = getattr(srv_type, 'Request', None)
+    msgtype = getattr(request, '__msgtype__', '')
+    if msgtype.endswith('_Request'):
+        return msgtype[:-len('_Request')]
+    raise TypeError(f'{srv_type!r} is not a service type (a class with Request and Response, e.g. '
+                    "get_service('std_srvs/srv/Trigger'))")
+
+
+def service_definition(name: str) -> str:
+    """The ``.srv`` text of a service type, as ``ros2 interface show`` prints it.
+
+    Raises:
+        MessageError: for an unknown type (with the known ones).
+    """
+    full = normalize_service_name(name)
+    get_service(full)  # raises for an unknown one
+    texts = {**STANDARD_SERVICES, **_own_services()}
+    if full in texts:
+        return texts[full]
+    from .messages import typestore  # registered by other means: rebuilt from its halves
+    halves = [typestore.generate_msgdef(f'{full}_{part}', ros_version=2)[0].split('\n' + '=' * 80)[0]
+              for part in ('Request', 'Response')]
+    return '---\n'.join(halves)
