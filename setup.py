@@ -30,8 +30,10 @@ setup(
     description='Touch perception for a social robot: drivers and gesture recognisers as a ROS 2 node graph',
     license='Apache-2.0',
     python_requires='>=3.10',
-    packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
-                                    'touch_gestures', 'touch_gestures.*']),
+    # Three layers, one distribution: the runtime (touch_graph, touch_driver, touch_gestures), the
+    # simulation (touch_sim: the demo runs on it) and the lab (touch_lab).
+    packages=find_packages(include=[f'{top}{sub}' for top in ('touch_graph', 'touch_driver', 'touch_gestures',
+                                                               'touch_sim', 'touch_lab') for sub in ('', '.*')]),
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),

@@ -15,10 +15,19 @@ import numpy as np
 import pytest
 
 import touch_gestures.bear.graph_chain as graph_chain_module
-from touch_driver import virtual_port
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.bear.node import BearDriverNode
-from touch_driver.scenes import (
+from touch_gestures.bear.chain import DriverChain
+from touch_gestures.bear.graph_chain import GraphChain
+from touch_gestures.bear.node import BearGesturesNode
+from touch_gestures.bear.symbolic import END, START
+from touch_graph.errors import ConfigError
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.bear import cli
+from touch_sim import virtual_port
+from touch_sim.bear.people import BearScene
+from touch_sim.scenes import (
     BearScript,
     BearTouch,
     load_stimulus,
@@ -26,16 +35,7 @@ from touch_driver.scenes import (
     registered_stimuli,
     unregister_stimulus,
 )
-from touch_driver.virtual_port import forget_devices
-from touch_gestures.bear import cli
-from touch_gestures.bear.chain import DriverChain
-from touch_gestures.bear.graph_chain import GraphChain
-from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.scene import BearScene
-from touch_gestures.bear.symbolic import END, START
-from touch_graph.errors import ConfigError
-from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.virtual_port import forget_devices
 
 ROOT = Path(__file__).resolve().parents[1]
 BODY = BodyMap.default()
@@ -152,11 +152,11 @@ def test_the_people_scene_file_makes_a_labelled_synthetic_scene() -> None:
 
 
 @pytest.mark.parametrize('body, message', [
-    ('generator: os:system\n', "generator must be 'module:function' in touch_gestures or touch_driver"),
-    ('generator: touch_gestures.bear.scene:make_scen\n', "cannot find generator"),
-    ('generator: touch_gestures.bear.scene:make_scene\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
-    ('generator: touch_gestures.bear.scene:make_scene\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
-    ('generator: touch_gestures.bear.scene:make_scene\ntouches: []\n', 'not both'),
+    ('generator: os:system\n', "generator must be 'module:function' in touch_sim"),
+    ('generator: touch_sim.bear.people:make_scen\n', "cannot find generator"),
+    ('generator: touch_sim.bear.people:make_scene\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
+    ('generator: touch_sim.bear.people:make_scene\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
+    ('generator: touch_sim.bear.people:make_scene\ntouches: []\n', 'not both'),
     ('options: {n_people: 2}\ntouches: []\n', "'options' are the keyword arguments of a 'generator'"),
 ])
 def test_a_bad_generated_scene_gives_one_clear_error_with_file_and_line(tmp_path: Path, body: str, message: str):

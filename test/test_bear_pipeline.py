@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap
-from touch_driver.scenes import BearScript, BearTouch
 from touch_gestures.bear.chain import DriverChain, LevelModelChain
 from touch_gestures.bear.pipeline import BearRecognizer
 from touch_gestures.bear.subtype_labels import subtype_index
+from touch_sim.scenes import BearScript, BearTouch
 
 BODY = BodyMap.default()
 HUG = ['side_left_upper', 'side_right_upper', 'back_upper', 'back_middle', 'chest_left', 'chest_right']

@@ -14,9 +14,9 @@ import serial
 from touch_driver.driver_node import SerialDriverNode
 from touch_driver.framing import encode_frame
 from touch_driver.serial_driver import DriverError, PortDisconnected, SerialDriver
-from touch_driver.virtual_port import VirtualSerial, device_state, forget_devices
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, SingleThreadedExecutor
+from touch_sim.virtual_port import VirtualSerial, device_state, forget_devices
 
 TOY_ID = 0x7F
 Status = get_message('DriverStatus')

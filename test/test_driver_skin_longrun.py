@@ -12,11 +12,11 @@ import serial
 import touch_driver  # noqa: F401  (registers the skinsim:// URL handler)
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
 from touch_driver.skin.calibration_config import SkinCalibrationConfig
-from touch_driver.skin.contact import FingerContactModel
-from touch_driver.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
 from touch_driver.skin.protocol import SkinStreamDecoder
-from touch_driver.skin.stimuli import StaticPress, Timeline
-from touch_driver.virtual_port import forget_devices
+from touch_sim.skin.contact import FingerContactModel
+from touch_sim.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
+from touch_sim.skin.stimuli import StaticPress, Timeline
+from touch_sim.virtual_port import forget_devices
 
 pytestmark = pytest.mark.slow
 RATE = 150

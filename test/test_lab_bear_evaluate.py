@@ -8,12 +8,12 @@ import json
 import numpy as np
 import pytest
 
-from touch_gestures.bear import cli
-from touch_gestures.bear.bench import bench_cycle
-from touch_gestures.bear.evaluate import EvalConfig, evaluate, score_subtypes, score_symbolic
-from touch_gestures.bear.report import alias_table, rates_md
-from touch_gestures.bear.scene import BearScene, Contact, Label
 from touch_gestures.bear.symbolic import START, GestureLibrary, SymbolicEvent
+from touch_lab.bear import cli
+from touch_lab.bear.bench import bench_cycle
+from touch_lab.bear.evaluate import EvalConfig, evaluate, score_subtypes, score_symbolic
+from touch_lab.bear.report import alias_table, rates_md
+from touch_sim.bear.people import BearScene, Contact, Label
 
 TINY = dict(n_people=1, train_people=2, subtype_reps=1, gesture_reps=2, seed=3)
 

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from touch_driver.skin.bench import bench_decode_calibrate, main
+from touch_lab.bench.skin_driver import bench_decode_calibrate, main
 
 
 def test_bench_reports_the_shared_keys():

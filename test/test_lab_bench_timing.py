@@ -4,7 +4,7 @@ import gc
 
 import pytest
 
-from touch_graph.benchmarking import gc_paused
+from touch_lab.bench.timing import gc_paused
 
 
 def test_gc_is_paused_inside_and_restored_after_even_on_error():

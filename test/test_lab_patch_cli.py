@@ -1,4 +1,4 @@
-"""``social-touch train patch`` / ``eval patch`` (run here through touch_gestures.patch.cli.main)."""
+"""``social-touch train patch`` / ``eval patch`` (run here through touch_lab.patch.cli.main)."""
 
 import argparse
 import json
@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from touch_gestures.patch.cli import add_eval_arguments, add_train_arguments, main
 from touch_gestures.patch.model_io import load_model
-from touch_gestures.patch.scene import simulate_people
 from touch_gestures.patch.sensor_chain import render_scene
+from touch_lab.patch.cli import add_eval_arguments, add_train_arguments, main
+from touch_sim.patch.people import simulate_people
 
 
 @pytest.fixture(scope='module')

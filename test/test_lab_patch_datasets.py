@@ -6,16 +6,16 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import Writer
 
-from touch_gestures.patch import datasets as datasets_module
-from touch_gestures.patch.datasets import (
+from touch_graph.errors import ConfigError
+from touch_graph.messages import get_message, serialize, typestore
+from touch_lab.patch import datasets as datasets_module
+from touch_lab.patch.datasets import (
     DatasetError,
     activation_from_raw,
     parse_grid,
     read_bag_manifest,
     read_cost_csv,
 )
-from touch_graph.errors import ConfigError
-from touch_graph.messages import get_message, serialize, typestore
 
 
 def write_csv(path, rows, n_ch=4):

@@ -1,7 +1,7 @@
 """The patch demo: gestures and panel contact reported frame by frame as they happen (SYNTHETIC)."""
 
-from touch_gestures.patch.demo import main, play, train_simulated
-from touch_gestures.patch.scene import demo_scene
+from touch_lab.patch.demo import main, play, train_simulated
+from touch_sim.patch.people import demo_scene
 
 
 def test_demo_reports_gestures_and_handling(capsys):

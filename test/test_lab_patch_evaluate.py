@@ -6,10 +6,12 @@ import json
 import numpy as np
 import pytest
 
-from touch_gestures.patch import evaluate as evaluate_module
 from touch_gestures.patch.classifier import NOT_RECOGNISED, Detection, PatchGestureClassifier
-from touch_gestures.patch.datasets import Session
-from touch_gestures.patch.evaluate import (
+from touch_gestures.patch.features import WindowFeatures, window_features
+from touch_gestures.patch.sensor_chain import render_session
+from touch_lab.patch import evaluate as evaluate_module
+from touch_lab.patch.datasets import Session
+from touch_lab.patch.evaluate import (
     Metrics,
     leave_one_subject_out,
     onset_ages,
@@ -17,9 +19,7 @@ from touch_gestures.patch.evaluate import (
     score,
     segment_events,
 )
-from touch_gestures.patch.features import WindowFeatures, window_features
-from touch_gestures.patch.scene import simulate_people
-from touch_gestures.patch.sensor_chain import render_session
+from touch_sim.patch.people import simulate_people
 
 CLASSES = ('push', 'slap', 'stroke', 'tickle')
 
@@ -146,7 +146,7 @@ def test_doctests():
 
 
 def test_bench_frame_reports_its_figures():
-    from touch_gestures.patch.bench import bench_frame
+    from touch_lab.patch.bench import bench_frame
     result = bench_frame(window=20, n_components=2, repeats=1, frames=200, chain='simple', sklearn_frames=20)
     for key in ('us_per_frame', 'us_per_frame_contact', 'us_features', 'us_posterior', 'us_sklearn_score_samples',
                 'speedup', 'goal_us'):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from touch_gestures.skin.errors import TraceFormatError
-from touch_gestures.skin.traces import TraceSample, read_traces, write_traces
+from touch_lab.skin.datasets import TraceSample, read_traces, write_traces
 
 HEADER = 'subject,variant,gesture,sample,stroke,x,y,t_ms\n'
 

@@ -11,13 +11,13 @@ import json
 import numpy as np
 import pytest
 
-from touch_gestures.skin.bench import bench_recognition
-from touch_gestures.skin.cli import main as eval_main
-from touch_gestures.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
 from touch_gestures.skin.registry import make_recogniser
-from touch_gestures.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
-from touch_gestures.skin.synthetic import synthetic_traces
-from touch_gestures.skin.traces import TraceSample, write_traces
+from touch_lab.skin.bench import bench_recognition
+from touch_lab.skin.cli import main as eval_main
+from touch_lab.skin.datasets import TraceSample, write_traces
+from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
+from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
+from touch_sim.skin.synthetic import synthetic_traces
 
 SHAPES = ('line_right', 'line_left', 'diagonal_down')
 

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from touch_gestures.patch.evaluate import segment_events
-from touch_gestures.patch.scene import make_people, simulate_session
 from touch_gestures.patch.sensor_chain import driver_available, render_scene, render_session
+from touch_lab.patch.evaluate import segment_events
+from touch_sim.patch.people import make_people, simulate_session
 
 pytestmark = pytest.mark.skipif(not driver_available(), reason='touch_driver.patch device/calibration missing')
 

@@ -16,11 +16,11 @@ from touch_driver.patch.calibration import load_outline
 from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
 from touch_gestures.patch.model_io import PatchModel, load_model, save_model
 from touch_gestures.patch.node import PatchGesturesNode, default_model_path
-from touch_gestures.patch.scene import make_people, simulate_session
 from touch_gestures.patch.sensor_chain import render_scene
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.patch.people import make_people, simulate_session
 
 PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
 GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')

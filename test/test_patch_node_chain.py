@@ -6,13 +6,13 @@ import doctest
 import numpy as np
 import pytest
 
-from touch_driver import virtual_port
-from touch_driver.scenes import registered_stimuli
 from touch_gestures.patch import graph_chain as graph_chain_module
-from touch_gestures.patch.cli import _add_source_arguments, load_sessions
 from touch_gestures.patch.graph_chain import PatchGraphChain, render_graph
-from touch_gestures.patch.scene import make_people, simulate_session
 from touch_gestures.patch.sensor_chain import render_scene, render_session
+from touch_lab.patch.cli import _add_source_arguments, load_sessions
+from touch_sim import virtual_port
+from touch_sim.patch.people import make_people, simulate_session
+from touch_sim.scenes import registered_stimuli
 
 
 @pytest.fixture(scope='module')
@@ -83,7 +83,7 @@ def test_eval_sessions_through_the_graph_are_labelled(monkeypatch):
     parser = argparse.ArgumentParser()
     _add_source_arguments(parser)
     args = parser.parse_args(['--simulate', '2', '--events', '1', '--chain', 'graph', '--seed', '3'])
-    from touch_gestures.patch import scene as scene_module
+    from touch_sim.patch import people as scene_module
     short = scene_module.simulate_people
 
     def fewer(n_people, events_per_session, seed):  # two gestures keep the test short

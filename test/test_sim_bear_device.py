@@ -10,10 +10,10 @@ from serial.serialutil import SerialException
 import touch_driver  # noqa: F401  (registers the URL handlers)
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.bear.calibration import FAULT_DEAD, FAULT_SATURATED, BearCalibrator
-from touch_driver.bear.device import BearDevice
 from touch_driver.bear.protocol import BearDecoder
-from touch_driver.scenes import BearScript, BearTouch, IdleBear, register_stimulus, unregister_stimulus
-from touch_driver.virtual_port import forget_devices
+from touch_sim.bear.device import BearDevice
+from touch_sim.scenes import BearScript, BearTouch, IdleBear, register_stimulus, unregister_stimulus
+from touch_sim.virtual_port import forget_devices
 
 BODY = BodyMap.default()
 FITTED = BODY.fitted_mask()

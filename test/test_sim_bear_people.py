@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap
-from touch_driver.scenes import BearStimulus
-from touch_gestures.bear.scene import PERFORMANCES, SUBTYPE_STATS, Person, make_scene
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.bear.symbolic import GestureLibrary
+from touch_sim.bear.people import PERFORMANCES, SUBTYPE_STATS, Person, make_scene
+from touch_sim.scenes import BearStimulus
 
 BODY = BodyMap.default()
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap
-from touch_driver.scenes import (
+from touch_graph.errors import ConfigError
+from touch_sim.scenes import (
     BearScript,
     BearStimulus,
     BearTouch,
@@ -20,7 +21,6 @@ from touch_driver.scenes import (
     registered_stimuli,
     unregister_stimulus,
 )
-from touch_graph.errors import ConfigError
 
 BODY = BodyMap.default()
 

@@ -9,10 +9,10 @@ from serial.serialutil import SerialException
 
 import touch_driver  # noqa: F401  (registers the URL handlers)
 from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator, load_outline
-from touch_driver.patch.device import PatchDevice
 from touch_driver.patch.protocol import PATCH_FRAME_ID, PATCH_SCAN_ID, PatchDecoder
-from touch_driver.scenes import IdlePatch, PanelTouch, PatchScript, PatchTouch, register_stimulus, unregister_stimulus
-from touch_driver.virtual_port import forget_devices
+from touch_sim.patch.device import PatchDevice
+from touch_sim.scenes import IdlePatch, PanelTouch, PatchScript, PatchTouch, register_stimulus, unregister_stimulus
+from touch_sim.virtual_port import forget_devices
 
 OUTLINE = load_outline()
 CLEAN = dict(noise=0.0, drift_counts=0.0, crosstalk=0.0, creep=0.0, panel_noise=0.0, panel_drift=0.0)

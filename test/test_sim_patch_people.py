@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from touch_driver.scenes import PatchStimulus
-from touch_gestures.patch.scene import (
+from touch_sim.patch.people import (
     GESTURES,
     GRAB_PANELS,
     PatchScene,
@@ -14,6 +13,7 @@ from touch_gestures.patch.scene import (
     simulate_people,
     simulate_session,
 )
+from touch_sim.scenes import PatchStimulus
 
 
 @pytest.fixture(scope='module')

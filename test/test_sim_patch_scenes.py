@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from touch_driver.scenes import PanelTouch, PatchScript, PatchStimulus, PatchTouch, load_stimulus
 from touch_graph.errors import ConfigError
+from touch_sim.scenes import PanelTouch, PatchScript, PatchStimulus, PatchTouch, load_stimulus
 
 
 def test_pressure_blob_moves_and_adds_up() -> None:

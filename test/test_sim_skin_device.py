@@ -10,12 +10,12 @@ import serial
 
 import touch_driver  # noqa: F401  (registers the skinsim:// URL handler)
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
-from touch_driver.skin.contact import Contact, FingerContactModel, HysteresisPlay, SkinStimulus
-from touch_driver.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
 from touch_driver.skin.protocol import MODULE_TAXELS, SkinStreamDecoder, decode_payload
-from touch_driver.skin.stimuli import LineStroke, NoTouch, StaticPress, Timeline, envelope, load_scene
-from touch_driver.virtual_port import forget_devices
 from touch_graph.errors import ConfigError
+from touch_sim.skin.contact import Contact, FingerContactModel, HysteresisPlay, SkinStimulus
+from touch_sim.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
+from touch_sim.skin.stimuli import LineStroke, NoTouch, StaticPress, Timeline, envelope, load_scene
+from touch_sim.virtual_port import forget_devices
 
 
 @pytest.fixture(autouse=True)

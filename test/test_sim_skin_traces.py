@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from touch_driver.skin.calibration import calibrate_frames
-from touch_driver.skin.traces import TraceStimulus, render_frames
+from touch_sim.skin.traces import TraceStimulus, render_frames
 
 PITCH = 47 / 12
 

@@ -103,7 +103,9 @@ def test_two_fingers_are_flagged_one_finger_with_holes_is_not():
 
 
 def test_two_fingers_through_the_virtual_skin():
-    from touch_driver.skin import StaticPress, Timeline, calibrate_frames, render_frames
+    from touch_driver.skin.calibration import calibrate_frames
+    from touch_sim.skin.device import render_frames
+    from touch_sim.skin.stimuli import StaticPress, Timeline
 
     scene = Timeline([StaticPress(12.0, 23.0, 1.5, at_s=0.4, for_s=0.6),
                       StaticPress(35.0, 23.0, 1.5, at_s=0.4, for_s=0.6)])

@@ -3,5 +3,5 @@
 import serial
 
 # Make bearsim://, patchsim:// and skinsim:// URLs resolvable by serial.serial_for_url.
-if 'touch_driver.urlhandlers' not in serial.protocol_handler_packages:
-    serial.protocol_handler_packages.append('touch_driver.urlhandlers')
+if 'touch_sim.urlhandlers' not in serial.protocol_handler_packages:
+    serial.protocol_handler_packages.append('touch_sim.urlhandlers')

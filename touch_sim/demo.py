@@ -14,9 +14,9 @@ import argparse
 import math
 import sys
 
-from ..errors import LaunchError
-from ..launch import LaunchRunner, evaluate_launch
-from ..paths import share_file
+from touch_graph.errors import LaunchError
+from touch_graph.launch import LaunchRunner, evaluate_launch
+from touch_graph.paths import share_file
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     rate = math.inf if args.fast else args.rate
     if not rate > 0:
         raise LaunchError(f'--rate must be > 0, got {args.rate}')
-    from ..launch.cli import parse_launch_arguments
+    from touch_graph.launch.cli import parse_launch_arguments
     plan = evaluate_launch(share_file('launch', 'demo.launch.yaml'), parse_launch_arguments(args.arguments))
     print(f'social_touch demo: {len(plan.nodes)} nodes, {args.duration:g} s of a simulated scene '
           f'({"as fast as possible" if args.fast else f"{rate:g}x real time"}); all sensor data is synthetic.',

@@ -1,7 +1,7 @@
 """Stimuli that drive the virtual bear and patch: who touches which sensors, how and when.
 
 A *stimulus* is what a scene does to a sensor, as a function of time; the virtual devices
-(:mod:`touch_driver.bear.device`, :mod:`touch_driver.patch.device`) sample it at frame time
+(:mod:`touch_sim.bear.device`, :mod:`touch_sim.patch.device`) sample it at frame time
 and add the sensor physics (noise, drift, saturation, cross-talk). Scene generators in
 ``touch_gestures/`` implement the protocols below; this module also gives a small
 scripted stimulus, a timeline of touches that can be written in YAML, for tests and demos.
@@ -27,7 +27,7 @@ or a generated scene: ``generator`` names a function of this project (``module:f
 ``touch_gestures`` or ``touch_driver``) that returns the stimulus, called with ``options``::
 
     sensor: bear
-    generator: touch_gestures.bear.scene:make_scene
+    generator: touch_sim.bear.people:make_scene
     options: {n_people: 2, seed: 7, gestures: [hug, head_pat]}
 
 Envelopes (``u`` = seconds since the touch started, each also ramped in and out over ``ramp_s``):
@@ -352,7 +352,7 @@ def _pair(item: YamlDict, key: str, what: str) -> tuple[float, float]:
 
 
 #: Packages whose functions a scene file may name as its ``generator`` (a config file imports no other code).
-GENERATOR_PACKAGES = ('touch_gestures.', 'touch_driver.')
+GENERATOR_PACKAGES = ('touch_sim.',)
 
 
 def generated_stimulus(doc: YamlDict, what: str, is_stimulus: Callable[[Any], bool], example: str,
@@ -411,7 +411,7 @@ def _load_yaml_script(path: Path, sensor: str | None, body_map: Any) -> Any:
             raise doc.error(f"a scene has a generator or a timeline, not both: remove '{scripted[0]}'", scripted[0])
         want = BearStimulus if kind == 'bear' else PatchStimulus
         return generated_stimulus(doc, f'{kind} scene', lambda s: isinstance(s, want),
-                                  'touch_gestures.bear.scene:make_scene', body_map)
+                                  'touch_sim.bear.people:make_scene', body_map)
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if kind == 'bear':

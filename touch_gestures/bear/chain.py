@@ -1,6 +1,6 @@
 """Sensor chains: from a stimulus to calibrated levels, one scan cycle at a time.
 
-:class:`DriverChain` is the real sensor chain without the graph: stimulus -> ``touch_driver.bear.device.
+:class:`DriverChain` is the real sensor chain without the graph: stimulus -> ``touch_sim.bear.device.
 BearDevice`` (wire bytes, with the device's sensor model: noise, drift, per-channel scan timing)
 -> ``touch_driver.bear.protocol.BearDecoder`` (framing + payload decode, counts bad bytes) ->
 ``touch_driver.bear.calibration.BearCalibrator`` (levels 0..1, fault flags). :class:`LevelModelChain`
@@ -10,7 +10,7 @@ calibrator through the ``bear_driver`` node of a simulated-time graph.
 
 All yield :class:`Cycle` objects: the scan time, (64,) float32 levels and (64,) bool fault flags.
 
->>> from touch_driver.scenes import BearScript, BearTouch
+>>> from touch_sim.scenes import BearScript, BearTouch
 >>> chain = LevelModelChain(BearScript([BearTouch(channels=(3,), start=0.0, duration=5.0, level=0.8)]),
 ...                         rate_hz=2.0, noise=0.0)
 >>> [(c.t, round(float(c.levels[3]), 2)) for c in chain.cycles(1.5)]
@@ -87,8 +87,8 @@ class DriverChain:
     def __init__(self, stimulus, rate_hz: float = REAL_RATE_HZ, seed: int = 0, device_options: dict | None = None,
                  calibrator_options: dict | None = None) -> None:
         from touch_driver.bear.calibration import BearCalibrator
-        from touch_driver.bear.device import BearDevice
         from touch_driver.bear.protocol import BearDecoder
+        from touch_sim.bear.device import BearDevice
 
         self.rate_hz = float(rate_hz)
         self.device = BearDevice(stimulus, rate_hz=rate_hz, seed=seed, **(device_options or {}))

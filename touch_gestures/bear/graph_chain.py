@@ -2,7 +2,7 @@
 
 :class:`GraphChain` yields the same :class:`~.chain.Cycle` objects as :class:`~.chain.DriverChain`,
 but they come out of the real node graph: the stimulus is registered
-(``touch_driver.scenes.register_stimulus``), a ``BearDriverNode`` reads
+(``touch_sim.scenes.register_stimulus``), a ``BearDriverNode`` reads
 ``bearsim://<unique>?scene=<name>&rate=..&seed=..`` in a simulated-time ``Context('sim')`` (as fast
 as the work allows, deterministic), and every ``BearFrame`` on ``/bear/frame`` becomes one cycle.
 
@@ -14,7 +14,7 @@ which the driver's poll timer read the frame, relative to the driver's start. Th
 ``poll_rate_hz`` (twice the scan rate by default), so a cycle's time is its scan time plus 0 to one
 poll period: the latency the robot has too.
 
->>> from touch_driver.scenes import BearScript, BearTouch
+>>> from touch_sim.scenes import BearScript, BearTouch
 >>> from touch_gestures.bear.chain import DriverChain
 >>> script = BearScript([BearTouch(channels=(1,), start=6.0, duration=2.0)])
 >>> graph = list(GraphChain(script, rate_hz=2.0, seed=1).cycles(9.0))
@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from touch_driver.virtual_port import forget_device
+from touch_sim.virtual_port import forget_device
 
 from .chain import REAL_RATE_HZ, Cycle
 
@@ -116,9 +116,9 @@ class GraphChain:
         frame ``i`` (scan time ``i / rate``) is yielded when ``i / rate < duration_s``; frames lost on the
         (virtual) wire are skipped. ``Cycle.t`` is the frame's header stamp relative to the driver's start."""
         from touch_driver.bear.node import BearDriverNode
-        from touch_driver.scenes import register_stimulus, unregister_stimulus
         from touch_graph.messages import get_message
         from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+        from touch_sim.scenes import register_stimulus, unregister_stimulus
 
         n_frames = int(np.ceil(duration_s * self.rate_hz - 1e-9))
         name = f'graphchain-{next(_counter)}-{id(self):x}'
@@ -180,8 +180,9 @@ def bench_chains(duration_s: float = 120.0, rate_hz: float = REAL_RATE_HZ, repea
     """
     import time
 
+    from touch_sim.bear.people import make_scene
+
     from .chain import DriverChain
-    from .scene import make_scene
 
     scene = make_scene(n_people=1, seed=seed, subtype_reps=1, gesture_reps=1)
     scan = 'sequential' if rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel'

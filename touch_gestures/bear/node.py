@@ -209,7 +209,7 @@ class BearGesturesNode(Node):
         path = Path(p['subtype_model']) if explicit else default_model_path()
         if not path.is_file():
             self.get_logger().warning(f'no trained subtype model at {path}; using the paper rule (knight2009 V.D) '
-                                      'instead. Train one: python -m touch_gestures.bear.train --out '
+                                      'instead. Train one: python -m touch_lab.bear.train --out '
                                       'config/bear_subtype_model.npz')
             return rule
         fqn = self.get_fully_qualified_name()
@@ -224,7 +224,7 @@ class BearGesturesNode(Node):
                        f"{p['rate_hz']} Hz with {p['buffer_len']} cycles (its features differ)")
             if explicit:
                 raise ParameterError(f"parameter 'subtype_model' of {fqn}: {problem}; retrain: python -m "
-                                     f"touch_gestures.bear.train --rate {p['rate_hz']} --buffer {p['buffer_len']} "
+                                     f"touch_lab.bear.train --rate {p['rate_hz']} --buffer {p['buffer_len']} "
                                      '--out FILE')
             self.get_logger().warning(f'{problem}; using the paper rule (knight2009 V.D) instead')
             return rule

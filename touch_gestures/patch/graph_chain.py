@@ -1,7 +1,7 @@
 """The sensor chain as the robot runs it: a virtual patch, the ``patch_driver`` node and ``/patch/frame``.
 
 :class:`PatchGraphChain` gives the frames of a simulated scene as they come out of the real node
-graph (SYNTHETIC data): the stimulus is registered (``touch_driver.scenes.register_stimulus``), a
+graph (SYNTHETIC data): the stimulus is registered (``touch_sim.scenes.register_stimulus``), a
 ``PatchDriverNode`` reads ``patchsim://<unique>?scene=<name>&seed=..`` in a simulated-time
 ``Context('sim')`` (as fast as the work allows, deterministic), and every ``PatchFrame`` on
 ``/patch/frame`` becomes one :class:`GraphFrame`, with the panel contact of the ``PanelContact``
@@ -15,7 +15,7 @@ contact agree frame for frame (``test/test_patch_node_chain.py``). Only time dif
 stamp is the graph time at which the driver's poll timer (200 Hz by default) read the scan that
 completed it, so 0 to 5 ms after that scan: the latency the robot has too.
 
->>> from touch_gestures.patch.scene import make_people, simulate_session
+>>> from touch_sim.patch.people import make_people, simulate_session
 >>> from touch_gestures.patch.sensor_chain import render_scene
 >>> slap = simulate_session(make_people(1)[0], 'slap', n_events=1, seed=2, lead_s=(1.0, 1.0), pause_s=(4.0, 4.0))
 >>> graph, driver = render_graph(slap, seed=4), render_scene(slap, seed=4, chain='driver')
@@ -33,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from touch_driver.virtual_port import forget_device
+from touch_sim.patch.people import N_PANELS
+from touch_sim.virtual_port import forget_device
 
-from .scene import N_PANELS
 from .sensor_chain import ChainOutput
 
 __all__ = ['GraphFrame', 'PatchGraphChain', 'render_graph']
@@ -71,7 +71,7 @@ class PatchGraphChain:
         stimulus: a ``PatchStimulus`` (``pressure(t)``, ``panels(t)``), e.g. a :class:`~.scene.PatchScene`.
         seed: the device's seed (the URL's ``seed``): sensor constants and noise.
         url_options: more ``patchsim://`` options (``noise``, ``drift``, ``dead``, ``garbage``, ...; see
-            ``touch_driver.urlhandlers.protocol_patchsim``), values as strings.
+            ``touch_sim.urlhandlers.protocol_patchsim``), values as strings.
         driver_parameters: ``patch_driver`` parameters (``gain``, ``tau``, ``k``, ``poll_rate_hz``, ...).
 
     Attributes:
@@ -103,9 +103,9 @@ class PatchGraphChain:
         """The 20 Hz frames completed by the scans of device time [0, ``duration_s``), as the driver
         chain renders them (frames lost on the virtual wire are missing, not padded)."""
         from touch_driver.patch.node import PatchDriverNode
-        from touch_driver.scenes import register_stimulus, unregister_stimulus
         from touch_graph.messages import get_message
         from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+        from touch_sim.scenes import register_stimulus, unregister_stimulus
 
         if not (duration_s >= 0 and math.isfinite(duration_s)):
             raise ValueError(f'duration_s must be a finite number of seconds >= 0; got {duration_s}')
@@ -194,7 +194,7 @@ def render_graph(scene: Any, seed: int = 0, **chain_options: Any) -> ChainOutput
 
 
 def _device(name: str) -> Any:
-    from touch_driver import virtual_port
+    from touch_sim import virtual_port
     return virtual_port.device_state(name)
 
 

@@ -2,7 +2,7 @@
 
 The evaluation must see what the robot would: stimulus -> virtual device (wire bytes) ->
 frame decoder -> calibration (eq. 1-2) -> activation maps. :func:`render_session` does that
-with the driver's classes (``touch_driver.patch.device.PatchDevice``,
+with the driver's classes (``touch_sim.patch.device.PatchDevice``,
 ``touch_driver.patch.protocol.PatchDecoder``, ``touch_driver.patch.calibration.PatchCalibrator``
 and ``PanelCalibrator``) when they are installed (``chain='driver'``), and otherwise with a
 stand-in (``chain='simple'``): the 100 Hz scans averaged five at a time to 20 Hz
@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .datasets import Session
-from .scene import N_PANELS, PatchScene
+from touch_lab.patch.datasets import Session
+from touch_sim.patch.people import N_PANELS, PatchScene
 
 __all__ = ['ChainOutput', 'driver_available', 'render_scene', 'render_session']
 
@@ -59,7 +59,7 @@ class ChainOutput:
 def driver_available() -> bool:
     """True when the driver's device and calibration modules can be imported."""
     try:
-        importlib.import_module('touch_driver.patch.device')
+        importlib.import_module('touch_sim.patch.device')
         importlib.import_module('touch_driver.patch.calibration')
     except ImportError:
         return False
@@ -106,8 +106,8 @@ def _render_simple(scene: PatchScene, seed: int, k: float, full_scale: float, no
 
 def _render_driver(scene: PatchScene, seed: int, panel_every_scan: bool = True) -> ChainOutput:
     from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator
-    from touch_driver.patch.device import PatchDevice
     from touch_driver.patch.protocol import PatchDecoder
+    from touch_sim.patch.device import PatchDevice
 
     device = PatchDevice(scene, seed=seed)              # raw 100 Hz scans on the wire (id 0x51)
     decoder = PatchDecoder()

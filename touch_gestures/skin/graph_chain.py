@@ -58,11 +58,11 @@ def graph_gestures(stimulus: Any, duration_s: float | None = None, seed: int = 0
     Raises:
         ValueError: a bad duration, or the driver cannot open the virtual skin.
     """
-    from touch_driver.skin import device
     from touch_driver.skin.node import SkinDriverNode
-    from touch_driver.virtual_port import forget_device
     from touch_graph.messages import get_message
     from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+    from touch_sim.skin import device
+    from touch_sim.virtual_port import forget_device
 
     if duration_s is None:
         duration_s = float(getattr(stimulus, 'duration_s', math.nan))

@@ -15,20 +15,20 @@ from ..errors import SocialTouchError
 
 # name -> (module, one-line help). The module defines add_arguments(parser) and run(args).
 COMMANDS: dict[str, tuple[str, str]] = {
-    'demo': ('touch_graph.cli.demo', 'the demo scene on virtual sensors, printing what the robot perceives'),
+    'demo': ('touch_sim.demo', 'the demo scene on virtual sensors, printing what the robot perceives'),
     'launch': ('touch_graph.launch.cli', 'start a scene: a ROS 2 YAML launch file, in this process'),
     'topic': ('touch_graph.cli.topic', 'topics of the running graph: list, echo, hz, info, pub'),
     'node': ('touch_graph.cli.node', 'nodes of the running graph: list, info'),
     'record': ('touch_graph.cli.record', 'record topics of the running graph to a rosbag2 (MCAP)'),
     'play': ('touch_graph.cli.play', 'replay a rosbag2 into the running graph with its recorded timing'),
     'bag': ('touch_graph.cli.bag', 'bag info, bag reindex (recover a bag whose recorder died)'),
-    'eval': ('touch_graph.cli.evaluate', 'evaluate recognisers on simulated people or recorded data'),
-    'train': ('touch_graph.cli.train', 'train a recogniser (patch gestures) from recordings or simulated people'),
-    'codebook': ('touch_graph.cli.codebook', 'record a haptic-command codebook from the skin (live or simulated)'),
+    'eval': ('touch_lab.cli.evaluate', 'evaluate recognisers on simulated people or recorded data'),
+    'train': ('touch_lab.cli.train', 'train a recogniser (patch gestures) from recordings or simulated people'),
+    'codebook': ('touch_lab.cli.codebook', 'record a haptic-command codebook from the skin (live or simulated)'),
     'interface': ('touch_graph.cli.interface', 'list message types or show one (like ros2 interface)'),
     'export-interfaces': ('touch_graph.cli.export_interfaces',
                           'write the social_touch_msgs ament_cmake package for a ROS 2 workspace'),
-    'bench': ('touch_graph.cli.bench', 'measure speed: runtime, drivers, recognisers'),
+    'bench': ('touch_lab.cli.bench', 'measure speed: runtime, drivers, recognisers'),
 }
 
 EPILOG = """\

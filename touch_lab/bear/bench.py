@@ -6,7 +6,7 @@ one ``step`` (ring buffer push, all twelve features of 64 channels, subtype clas
 fitted sensors, change events, symbolic filters and priority logic, named outputs); the figure is the
 median over repeats. Goal (issue 4): at most 200 us per cycle on one core.
 
-    python -m touch_gestures.bear.bench            # prints one JSON object
+    python -m touch_lab.bear.bench            # prints one JSON object
 
 Timings are measured here and reported; tests never assert them.
 """
@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from .chain import REAL_RATE_HZ, LevelModelChain
-from .evaluate import collect_training_rows, run_scene
-from .pipeline import BearRecognizer
-from .scene import make_scene
-from .subtype_model import SubtypeClassifier
+from touch_gestures.bear.chain import REAL_RATE_HZ, LevelModelChain
+from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.subtype_model import SubtypeClassifier
+from touch_lab.bear.evaluate import collect_training_rows, run_scene
+from touch_sim.bear.people import make_scene
 
 __all__ = ['GOAL_US_PER_CYCLE', 'bench_cycle']
 

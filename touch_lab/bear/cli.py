@@ -3,8 +3,8 @@
 The lead wires this into the ``social-touch`` CLI::
 
     sub = subparsers.add_parser('bear', help=DESCRIPTION)
-    touch_gestures.bear.cli.add_arguments(sub)
-    sub.set_defaults(func=touch_gestures.bear.cli.run)
+    touch_lab.bear.cli.add_arguments(sub)
+    sub.set_defaults(func=touch_lab.bear.cli.run)
 
 Text report by default; ``--json`` prints one JSON object (at least ``subtype_accuracy``,
 ``symbolic_accuracy``, ``median_detection_latency_s``, ``us_per_cycle``). Progress goes to stderr.
@@ -18,8 +18,8 @@ import json
 import math
 import sys
 
-from .evaluate import CHAINS, EvalConfig, evaluate, stderr_progress
-from .subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_lab.bear.evaluate import CHAINS, EvalConfig, evaluate, stderr_progress
 
 __all__ = ['DESCRIPTION', 'add_arguments', 'format_text', 'run']
 
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Stand-alone entry point: ``python -m touch_gestures.bear.cli``."""
+    """Stand-alone entry point: ``python -m touch_lab.bear.cli``."""
     parser = argparse.ArgumentParser(prog='social-touch eval bear', description=DESCRIPTION)
     add_arguments(parser)
     return run(parser.parse_args(argv))

@@ -42,14 +42,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .chain import REAL_RATE_HZ, DriverChain, LevelModelChain
-from .gate import NoTouchGate
-from .pipeline import BearRecognizer
-from .scene import BearScene, make_scene
-from .sensor_level import ACTIVATION_THRESHOLD
-from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
-from .subtype_model import SubtypeClassifier
-from .symbolic import START, GestureLibrary
+from touch_gestures.bear.chain import REAL_RATE_HZ, DriverChain, LevelModelChain
+from touch_gestures.bear.gate import NoTouchGate
+from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
+from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
+from touch_gestures.bear.subtype_model import SubtypeClassifier
+from touch_gestures.bear.symbolic import START, GestureLibrary
+from touch_sim.bear.people import BearScene, make_scene
 
 __all__ = ['CHAINS', 'EvalConfig', 'SceneRun', 'chain_counters', 'collect_training_rows', 'evaluate', 'make_chain',
            'run_scene', 'score_subtypes', 'score_symbolic', 'train_subtype_model']
@@ -102,7 +102,7 @@ def make_chain(stimulus, config: EvalConfig, seed: int):
         # rates need the Midplanes read in parallel (8 x 5 ms = 40 ms, the ideal 25 Hz).
         options.setdefault('scan', 'sequential' if config.rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel')
         if config.chain == 'graph':
-            from .graph_chain import GraphChain
+            from touch_gestures.bear.graph_chain import GraphChain
             return GraphChain(stimulus, config.rate_hz, seed=seed, device_options=options)
         return DriverChain(stimulus, config.rate_hz, seed=seed, device_options=options)
     if config.chain == 'level':

@@ -1,7 +1,7 @@
 """Regenerate docs/bear-evaluation.md and docs/bear-rates.md from measurements (synthetic people).
 
-    python -m touch_gestures.bear.report                 # full report, several minutes on one core
-    python -m touch_gestures.bear.report --quick         # fewer people and configurations, for a look
+    python -m touch_lab.bear.report                 # full report, several minutes on one core
+    python -m touch_lab.bear.report --quick         # fewer people and configurations, for a look
 
 Everything measured here runs through the real chain (``BearDevice`` -> ``BearDecoder`` ->
 ``BearCalibrator`` -> recognisers) on simulated people; every table says so.
@@ -16,8 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench import bench_cycle
-from .evaluate import (
+from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.subtype import PaperRuleClassifier
+from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.bear.subtype_model import SubtypeClassifier
+from touch_gestures.bear.symbolic import GestureLibrary
+from touch_lab.bear.bench import bench_cycle
+from touch_lab.bear.evaluate import (
     EvalConfig,
     collect_training_rows,
     evaluate,
@@ -26,12 +31,7 @@ from .evaluate import (
     score_symbolic,
     stderr_progress,
 )
-from .pipeline import BearRecognizer
-from .scene import BearScene, Contact, make_scene
-from .subtype import PaperRuleClassifier
-from .subtype_labels import TOUCH_SUBTYPES
-from .subtype_model import SubtypeClassifier
-from .symbolic import GestureLibrary
+from touch_sim.bear.people import BearScene, Contact, make_scene
 
 __all__ = ['alias_table', 'compare_models', 'gap_sweep', 'main', 'speed_error_table']
 
@@ -258,7 +258,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         f"**{bench['us_per_cycle']:.0f} us per cycle** with the trained model, {bench['us_per_cycle_rule']:.0f} us "
         f"with the rule, {bench['us_features']:.0f} us for buffer + features alone (all 56 sensors, 12 features, "
         f"one core; goal {bench['goal_us']:.0f} us). Machines are shared: rerun "
-        '`python -m touch_gestures.bear.bench` to measure on yours.',
+        '`python -m touch_lab.bear.bench` to measure on yours.',
         '',
         '## Speed against error: scan rate and buffer length',
         '',
@@ -367,14 +367,14 @@ def rates_md(sweep: list[dict], aliases: list[dict], command: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_gestures.bear.report', description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.report', description=__doc__.split('\n')[0])
     parser.add_argument('--out-dir', default=None, help='where to write the two .md files (default: docs/ of the '
                         'source tree)')
     parser.add_argument('--quick', action='store_true', help='fewer people and configurations (a preview)')
     parser.add_argument('--seed', type=int, default=0)
     args = parser.parse_args(argv)
     out_dir = Path(args.out_dir) if args.out_dir else Path(__file__).resolve().parents[2] / 'docs'
-    command = 'python -m touch_gestures.bear.report' + (' --quick' if args.quick else '')
+    command = 'python -m touch_lab.bear.report' + (' --quick' if args.quick else '')
     say = stderr_progress
     people = 3 if args.quick else 6
     config = EvalConfig(n_people=people, train_people=people + 2, seed=args.seed)

@@ -1,6 +1,6 @@
 """Train the eight-subtype model on simulated people and write it as .npz (no pickle).
 
-    python -m touch_gestures.bear.train --out bear_subtype_model.npz [--rate 3.4] [--buffer 20] [--people 8]
+    python -m touch_lab.bear.train --out bear_subtype_model.npz [--rate 3.4] [--buffer 20] [--people 8]
 
 The model is tied to the scan rate and buffer length it was trained at (its features are); both are
 stored in the file (``trained_rate_hz_`` and ``trained_buffer_len_`` after ``SubtypeClassifier.load``),
@@ -14,13 +14,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .evaluate import EvalConfig, stderr_progress, train_subtype_model
+from touch_lab.bear.evaluate import EvalConfig, stderr_progress, train_subtype_model
 
 __all__ = ['main']
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_gestures.bear.train', description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.train', description=__doc__.split('\n')[0])
     parser.add_argument('--out', required=True, help='the .npz file to write')
     parser.add_argument('--rate', type=float, default=3.4, help='scan rate, Hz (3.4)')
     parser.add_argument('--buffer', type=int, default=20, help='cycles per sensor buffer (20)')

@@ -6,7 +6,7 @@ one frame at a time through :class:`~touch_driver.bear.protocol.BearDecoder` and
 the figure is the median over repeats of the time per frame. The goal (issue 3) is at most
 1 % of the frame period on one core: 400 us at the ideal 25 Hz, 2.9 ms at the real 3.4 Hz.
 
-Run: ``python -m touch_driver.bear.bench [--json] [--repeats N] [--frames N]``.
+Run: ``python -m touch_lab.bench.bear_driver [--json] [--repeats N] [--frames N]``.
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ import sys
 import time
 
 from touch_driver.bear.calibration import BearCalibrator
-from touch_driver.bear.device import BearDevice
 from touch_driver.bear.protocol import BearDecoder
-from touch_driver.scenes import BearScript, BearTouch
-from touch_graph.benchmarking import gc_paused
+from touch_lab.bench.timing import gc_paused
+from touch_sim.bear.device import BearDevice
+from touch_sim.scenes import BearScript, BearTouch
 
 __all__ = ['bench_decode_calibrate', 'main']
 

@@ -7,9 +7,9 @@ three so their ratios to the frame period come from the same machine at the same
 
 from __future__ import annotations
 
-from .bear.bench import bench_decode_calibrate as bench_bear
-from .patch.bench import bench_decode_calibrate as bench_patch
-from .skin.bench import bench_decode_calibrate as bench_skin
+from touch_lab.bench.bear_driver import bench_decode_calibrate as bench_bear
+from touch_lab.bench.patch_driver import bench_decode_calibrate as bench_patch
+from touch_lab.bench.skin_driver import bench_decode_calibrate as bench_skin
 
 __all__ = ['bench_drivers']
 

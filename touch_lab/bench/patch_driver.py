@@ -11,7 +11,7 @@ and the panel contact detector. Two firmware modes:
 
 Each repeat times the whole set; figures are medians over repeats of the time per frame.
 
-Run: ``python -m touch_driver.patch.bench [--json] [--repeats N] [--frames N]``.
+Run: ``python -m touch_lab.bench.patch_driver [--json] [--repeats N] [--frames N]``.
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ import sys
 import time
 
 from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator
-from touch_driver.patch.device import PatchDevice
 from touch_driver.patch.protocol import PatchDecoder
-from touch_driver.scenes import PanelTouch, PatchScript, PatchTouch
-from touch_graph.benchmarking import gc_paused
+from touch_lab.bench.timing import gc_paused
+from touch_sim.patch.device import PatchDevice
+from touch_sim.scenes import PanelTouch, PatchScript, PatchTouch
 
 __all__ = ['bench_decode_calibrate', 'main']
 

@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from .messages import deserialize, get_message, serialize
-from .runtime import Context, Node, SingleThreadedExecutor
+from touch_graph.messages import deserialize, get_message, serialize
+from touch_graph.runtime import Context, Node, SingleThreadedExecutor
 
 
 def _frame():

@@ -2,7 +2,7 @@
 
 Goal (issue 3): at most 1 % of the frame period on one core, i.e. 66.7 us per frame at 150 Hz.
 ``social-touch bench drivers --json`` reports :func:`bench_decode_calibrate`; run it alone with
-``python -m touch_driver.skin.bench [--json]``.
+``python -m touch_lab.bench.skin_driver [--json]``.
 
 The input is synthetic: frames rendered by the simulator for a scene with a press, a traced line and
 untouched skin, pre-encoded to wire bytes, so the timing covers the decoder (resync, CRC, reorder)
@@ -18,12 +18,11 @@ import statistics
 import sys
 import time
 
-from touch_graph.benchmarking import gc_paused
-
-from .calibration import SkinCalibrationConfig, SkinCalibrator
-from .device import render_frames
-from .protocol import FRAME_PERIOD_S, SkinStreamDecoder, encode_skin_frame
-from .stimuli import LineStroke, StaticPress, Timeline
+from touch_driver.skin.calibration import SkinCalibrationConfig, SkinCalibrator
+from touch_driver.skin.protocol import FRAME_PERIOD_S, SkinStreamDecoder, encode_skin_frame
+from touch_lab.bench.timing import gc_paused
+from touch_sim.skin.device import render_frames
+from touch_sim.skin.stimuli import LineStroke, StaticPress, Timeline
 
 __all__ = ['bench_decode_calibrate', 'main']
 

@@ -14,12 +14,12 @@ import platform
 
 # target -> (module, function); each function takes repeats= and returns a dict.
 TARGETS = {
-    'runtime': ('touch_graph.bench_runtime', 'bench_runtime'),
-    'drivers': ('touch_driver.bench', 'bench_drivers'),
+    'runtime': ('touch_lab.bench.runtime', 'bench_runtime'),
+    'drivers': ('touch_lab.bench.drivers', 'bench_drivers'),
     'bridge': ('touch_graph.bridge.bench', 'bench_bridge'),
-    'bear': ('touch_gestures.bear.bench', 'bench_cycle'),
-    'patch': ('touch_gestures.patch.bench', 'bench_frame'),
-    'skin': ('touch_gestures.skin.bench', 'bench_recognition'),
+    'bear': ('touch_lab.bear.bench', 'bench_cycle'),
+    'patch': ('touch_lab.patch.bench', 'bench_frame'),
+    'skin': ('touch_lab.skin.bench', 'bench_recognition'),
 }
 
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from .dispatch import add_target_arguments, run_target
+from touch_lab.cli.targets import add_target_arguments, run_target
 
 TARGETS = {
-    'record': ('touch_gestures.skin.record_cli', 'add_arguments', 'run'),
+    'record': ('touch_lab.skin.record_cli', 'add_arguments', 'run'),
 }
 
 

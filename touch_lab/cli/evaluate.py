@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 
-from .dispatch import add_target_arguments, run_target
+from touch_lab.cli.targets import add_target_arguments, run_target
 
 TARGETS = {
-    'bear': ('touch_gestures.bear.cli', 'add_arguments', 'run'),
-    'patch': ('touch_gestures.patch.cli', 'add_eval_arguments', 'run_eval'),
-    'skin': ('touch_gestures.skin.cli', 'add_eval_arguments', 'run_eval'),
+    'bear': ('touch_lab.bear.cli', 'add_arguments', 'run'),
+    'patch': ('touch_lab.patch.cli', 'add_eval_arguments', 'run_eval'),
+    'skin': ('touch_lab.skin.cli', 'add_eval_arguments', 'run_eval'),
 }
 
 

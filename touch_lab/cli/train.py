@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from .dispatch import add_target_arguments, run_target
+from touch_lab.cli.targets import add_target_arguments, run_target
 
 TARGETS = {
-    'patch': ('touch_gestures.patch.cli', 'add_train_arguments', 'run_train'),
+    'patch': ('touch_lab.patch.cli', 'add_train_arguments', 'run_train'),
 }
 
 

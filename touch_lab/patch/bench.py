@@ -17,7 +17,7 @@ the cost (message fields, stamps, publishing).
 decoder and calibrators called directly) and the graph chain (the same through the
 ``patch_driver`` node in simulated time): what ``--chain graph`` costs an evaluation.
 
-Run: ``python -m touch_gestures.patch.bench [--json] [--repeats N] [--node | --chains]``.
+Run: ``python -m touch_lab.patch.bench [--json] [--repeats N] [--node | --chains]``.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ import time
 
 import numpy as np
 
-from .classifier import EventDetector, PatchGestureClassifier
-from .features import WindowFeatures, window_features
-from .scene import demo_scene, simulate_people
-from .sensor_chain import FRAME_RATE_HZ, render_scene
+from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
+from touch_gestures.patch.features import WindowFeatures, window_features
+from touch_gestures.patch.sensor_chain import FRAME_RATE_HZ, render_scene
+from touch_sim.patch.people import demo_scene, simulate_people
 
 __all__ = ['GOAL_US', 'bench_chains', 'bench_frame', 'bench_node', 'main']
 
@@ -145,10 +145,9 @@ def bench_node(repeats: int = 7, frames: int = 2000, seed: int = 0, model: str |
         dict with ``us_node`` (callback per frame), ``us_recogniser`` (features + direct posterior +
         event rule on the same frames), ``node_overhead`` (ratio), ``events``, ``frames`` and ``synthetic``.
     """
+    from touch_gestures.patch.node import PatchGesturesNode
     from touch_graph.messages import get_message
     from touch_graph.runtime import Context, Node, Parameter
-
-    from .node import PatchGesturesNode
     patch_frame, header_type = get_message('social_touch_msgs/msg/PatchFrame'), get_message('std_msgs/msg/Header')
     time_type = get_message('builtin_interfaces/msg/Time')
     acts = render_scene(demo_scene(seed=seed + 1, n_events=max(4, frames // 160)), seed=seed + 1).activations

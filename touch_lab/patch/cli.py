@@ -11,7 +11,7 @@ model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a gri
 components, threshold and hold, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
 one JSON object). Progress goes to stderr.
 
-Also runnable as ``python -m touch_gestures.patch.cli {train,eval} ...``.
+Also runnable as ``python -m touch_lab.patch.cli {train,eval} ...``.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import sys
 
 import numpy as np
 
-from .datasets import Session, parse_grid, read_bag_manifest, read_cost_csv
+from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv
 
 __all__ = ['add_eval_arguments', 'add_train_arguments', 'load_sessions', 'main', 'run_eval', 'run_train']
 
@@ -92,8 +92,8 @@ def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
     if args.bags:
         say(f'reading bags listed in {args.bags}')
         return read_bag_manifest(args.bags, grid=args.grid or (16, 16))
-    from .scene import simulate_people
-    from .sensor_chain import render_session
+    from touch_gestures.patch.sensor_chain import render_session
+    from touch_sim.patch.people import simulate_people
     if args.simulate < 2:
         raise SystemExit('--simulate needs at least 2 people (leave-one-subject-out)')
     out = []
@@ -118,9 +118,9 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_train(args: argparse.Namespace) -> int:
     """Fit on every frame of every session and write the model file; returns the exit code."""
-    from .classifier import PatchGestureClassifier
-    from .features import window_features
-    from .model_io import PatchModel, save_model
+    from touch_gestures.patch.classifier import PatchGestureClassifier
+    from touch_gestures.patch.features import window_features
+    from touch_gestures.patch.model_io import PatchModel, save_model
 
     say = _progress(args)
     sessions = load_sessions(args, say)
@@ -192,7 +192,7 @@ def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_eval(args: argparse.Namespace) -> int:
     """Leave-one-subject-out evaluation with grid search; prints a report or JSON."""
-    from .evaluate import leave_one_subject_out
+    from touch_lab.patch.evaluate import leave_one_subject_out
 
     say = _progress(args)
     sessions = load_sessions(args, say)
@@ -265,8 +265,8 @@ def _matrix(title: str, table: dict) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_gestures.patch.cli {train,eval} ...``."""
-    parser = argparse.ArgumentParser(prog='touch_gestures.patch.cli', description=__doc__.split('\n')[0])
+    """``python -m touch_lab.patch.cli {train,eval} ...``."""
+    parser = argparse.ArgumentParser(prog='touch_lab.patch.cli', description=__doc__.split('\n')[0])
     sub = parser.add_subparsers(dest='command', required=True)
     add_train_arguments(sub.add_parser('train', help='fit and write a model file'))
     add_eval_arguments(sub.add_parser('eval', help='leave-one-subject-out evaluation'))

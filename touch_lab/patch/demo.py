@@ -3,7 +3,7 @@
 The recogniser without the graph, frame by frame (SYNTHETIC data); the same on the node graph
 is ``social-touch launch launch/patch.launch.yaml --sim-time --rate 10 --duration 60``::
 
-    python -m touch_gestures.patch.demo [--model FILE.npz] [--seed N] [--events N]
+    python -m touch_lab.patch.demo [--model FILE.npz] [--seed N] [--events N]
 
 Without ``--model`` a model is trained first on simulated people (other seeds than the
 scene's). Each line is what the robot would publish at that moment: a gesture event
@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .classifier import PatchGestureClassifier
-from .features import window_features
-from .model_io import PatchModel, load_model
-from .scene import PatchScene, demo_scene, simulate_people
-from .sensor_chain import FRAME_RATE_HZ, render_scene
+from touch_gestures.patch.classifier import PatchGestureClassifier
+from touch_gestures.patch.features import window_features
+from touch_gestures.patch.model_io import PatchModel, load_model
+from touch_gestures.patch.sensor_chain import FRAME_RATE_HZ, render_scene
+from touch_sim.patch.people import PatchScene, demo_scene, simulate_people
 
 __all__ = ['DemoLine', 'main', 'play', 'train_simulated']
 

@@ -36,9 +36,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .classifier import NOT_RECOGNISED, EventDetector, PatchGestureClassifier, decide
-from .datasets import Session
-from .features import ACTIVE_MARGIN, WindowFeatures, window_features
+from touch_gestures.patch.classifier import NOT_RECOGNISED, EventDetector, PatchGestureClassifier, decide
+from touch_gestures.patch.features import ACTIVE_MARGIN, WindowFeatures, window_features
+from touch_lab.patch.datasets import Session
 
 __all__ = ['EvaluationResult', 'GridPoint', 'Metrics', 'leave_one_subject_out', 'onset_ages', 'run_detector',
            'score', 'segment_events', 'session_truth']

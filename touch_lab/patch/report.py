@@ -2,12 +2,12 @@
 
 Regenerate with::
 
-    python -m touch_gestures.patch.report            # about 10 minutes on one core
-    python -m touch_gestures.patch.report --quick    # fewer settings, for a look
+    python -m touch_lab.patch.report            # about 10 minutes on one core
+    python -m touch_lab.patch.report --quick    # fewer settings, for a look
 
-Simulated people (touch_gestures.patch.scene) are rendered through the sensor chain
+Simulated people (touch_sim.patch.people) are rendered through the sensor chain
 (touch_gestures.patch.sensor_chain: the driver's virtual patch, decoder and calibration
-when installed), then evaluated leave-one-subject-out (touch_gestures.patch.evaluate):
+when installed), then evaluated leave-one-subject-out (touch_lab.patch.evaluate):
 first a grid search over components, threshold and hold as the paper does, then the
 speed-against-error table over window length and components at the paper's threshold.
 """
@@ -20,15 +20,15 @@ import platform
 import sys
 from pathlib import Path
 
-from .bench import bench_frame
-from .cli import _matrix
-from .evaluate import leave_one_subject_out
-from .scene import simulate_people
-from .sensor_chain import render_session
+from touch_gestures.patch.sensor_chain import render_session
+from touch_lab.patch.bench import bench_frame
+from touch_lab.patch.cli import _matrix
+from touch_lab.patch.evaluate import leave_one_subject_out
+from touch_sim.patch.people import simulate_people
 
 __all__ = ['main', 'write_report']
 
-COMMAND = 'python -m touch_gestures.patch.report'
+COMMAND = 'python -m touch_lab.patch.report'
 
 
 def _sessions(people: int, events: int, seed: int, chain: str, say) -> list:
@@ -131,7 +131,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
                      f'{_pct(d["miss_rate"])} | {d["median_detection_latency_s"]:.2f} | {us:.1f} |')
     lines += [
         '',
-        '## Per-frame cost (`social-touch bench patch`, `python -m touch_gestures.patch.bench`)',
+        '## Per-frame cost (`social-touch bench patch`, `python -m touch_lab.patch.bench`)',
         '',
         f'Window 60 frames, 5 components, 4 classes, frames of a simulated mixed scene '
         f'({_pct(bench["active_fraction"])} with contact): **{bench["us_per_frame"]:.1f} us per frame** '

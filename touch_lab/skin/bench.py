@@ -5,13 +5,13 @@ Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, o
 The paper's C++ took 50 us (map-based) and 80 us (centroid-based) for 5 gestures
 (cirillo2017 3.3, i7 at 2.8 GHz).
 
-The gestures are synthetic (:func:`~touch_gestures.skin.synthetic.synthetic_traces`, 16 shapes
+The gestures are synthetic (:func:`~touch_sim.skin.synthetic.synthetic_traces`, 16 shapes
 by simulated performers, contact points at 150 Hz as the skin gives them), so the figure
 does not depend on a data file. Each recogniser is timed over ``queries`` gestures,
 ``repeats`` times; the median of the repeats is reported, with its ratio to the goal and to
 the centroid method, measured in the same run::
 
-    python -m touch_gestures.skin.bench [--json] [--templates 30] [--recognisers trace,centroid]
+    python -m touch_lab.skin.bench [--json] [--templates 30] [--recognisers trace,centroid]
 """
 
 from __future__ import annotations
@@ -24,11 +24,10 @@ import time
 
 import numpy as np
 
-from touch_graph.benchmarking import gc_paused
-
-from .gesture import TouchGesture
-from .registry import RECOGNISERS, make_recogniser
-from .synthetic import SHAPES, synthetic_traces
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
+from touch_lab.bench.timing import gc_paused
+from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
 __all__ = ['GOAL_US', 'bench_recognition', 'main', 'synthetic_codebook']
 
@@ -85,7 +84,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_gestures.skin.bench', description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.bench', description=__doc__.split('\n')[0])
     parser.add_argument('--json', action='store_true')
     parser.add_argument('--gestures', type=int, default=16)
     parser.add_argument('--templates', type=int, default=30, help='templates per gesture')

@@ -25,13 +25,12 @@ import sys
 import time
 from typing import Any
 
+from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
 from touch_graph.errors import SocialTouchError
-
-from .evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
-from .registry import RECOGNISERS, make_recogniser
-from .render import RenderSettings, default_cache_dir, render_samples
-from .synthetic import random_touches
-from .traces import read_traces
+from touch_lab.skin.datasets import read_traces
+from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.synthetic import random_touches
 
 __all__ = ['add_eval_arguments', 'evaluate_file', 'format_text', 'json_safe', 'main', 'run_eval']
 
@@ -202,7 +201,7 @@ def json_safe(value: Any) -> Any:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_gestures.skin.cli --traces FILE ...`` (the same as ``social-touch eval skin``)."""
+    """``python -m touch_lab.skin.cli --traces FILE ...`` (the same as ``social-touch eval skin``)."""
     parser = argparse.ArgumentParser(prog='social-touch eval skin', description=__doc__.split('\n')[0])
     add_eval_arguments(parser)
     return run_eval(parser.parse_args(argv))

@@ -35,7 +35,7 @@ from typing import IO
 
 import numpy as np
 
-from .errors import TraceFormatError
+from touch_gestures.skin.errors import TraceFormatError
 
 __all__ = ['COLUMNS', 'TraceSample', 'TraceSet', 'read_traces', 'write_traces']
 

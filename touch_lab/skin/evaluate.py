@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .base import TemplateRecogniser
-from .render import RenderedSample
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_sim.skin.render import RenderedSample
 
 __all__ = ['REJECTED', 'SEGMENTATION', 'RecogniserResult', 'choose_codebook', 'leave_one_subject_out']
 
@@ -137,7 +137,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
     """Evaluate every recogniser of ``factories`` (name -> a new unfitted recogniser).
 
     Args:
-        rendered: samples through the skin (:func:`~touch_gestures.skin.render.render_samples`).
+        rendered: samples through the skin (:func:`~touch_sim.skin.render.render_samples`).
         templates_per_gesture: codebook size per gesture per fold (None: every training sample).
         seed: seeds the choice of templates.
         random_rendered: touches that are no gesture, for the random-touch acceptance.

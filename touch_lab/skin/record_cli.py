@@ -38,12 +38,11 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from touch_gestures.skin.codebook import CodebookRecorder, save_codebook
+from touch_gestures.skin.frames import SkinFrameStream
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 from touch_graph.errors import SocialTouchError
-
-from .codebook import CodebookRecorder, save_codebook
-from .frames import SkinFrameStream
-from .gesture import TouchGesture
-from .registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 
 __all__ = ['LiveSession', 'add_arguments', 'main', 'partial_path', 'record_simulated', 'run']
 
@@ -91,8 +90,8 @@ def _gesture_names(args: argparse.Namespace) -> list[str]:
         if not names:
             raise ValueError('--gestures needs at least one name')
         return names
-    from .commands import load_command_map
-    from .node import default_commands_path
+    from touch_gestures.skin.commands import load_command_map
+    from touch_gestures.skin.node import default_commands_path
     return list(load_command_map(args.commands or default_commands_path()).commands)
 
 
@@ -113,9 +112,9 @@ def record_simulated(gestures: Sequence[str], repetitions: int, performers: int,
     Raises:
         ValueError: unknown shape names, bad counts, or too few usable traces for some gesture.
     """
-    from .graph_chain import graph_gestures
-    from .scene import traced_scene
-    from .synthetic import SHAPES, synthetic_traces
+    from touch_gestures.skin.graph_chain import graph_gestures
+    from touch_sim.skin.people import traced_scene
+    from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
     unknown = [g for g in gestures if g not in SHAPES]
     if unknown:
@@ -267,7 +266,7 @@ def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
 # ----------------------------------------------------------------------------- entry point
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``social-touch codebook record``; returns the exit status."""
-    from .recording import load_recording, save_recording
+    from touch_lab.skin.recording import load_recording, save_recording
 
     try:
         make_recogniser(args.recogniser)
@@ -283,7 +282,7 @@ def run(args: argparse.Namespace) -> int:
             recorder, counts = record_simulated(recorder.gestures, recorder.repetitions, args.simulate, args.seed,
                                                 recorder=recorder)
             _say(f'[codebook record] {dict(counts)}')
-            description = (f'SYNTHETIC: {args.simulate} simulated performers (touch_gestures.skin.synthetic, seed '
+            description = (f'SYNTHETIC: {args.simulate} simulated performers (touch_sim.skin.synthetic, seed '
                            f'{args.seed}) traced through the virtual skin, skin_driver and the segmenter, '
                            f'{recorder.repetitions} repetitions per gesture')
             complete = True
@@ -313,7 +312,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_gestures.skin.record_cli ...`` (the same as ``social-touch codebook record``)."""
+    """``python -m touch_lab.skin.record_cli ...`` (the same as ``social-touch codebook record``)."""
     parser = argparse.ArgumentParser(prog='social-touch codebook record', description=__doc__.split('\n')[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)

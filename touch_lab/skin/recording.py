@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .codebook import CodebookRecorder
-from .errors import CodebookError
-from .gesture import GRID, TouchGesture
+from touch_gestures.skin.codebook import CodebookRecorder
+from touch_gestures.skin.errors import CodebookError
+from touch_gestures.skin.gesture import GRID, TouchGesture
 
 __all__ = ['FORMAT', 'load_recording', 'save_recording']
 

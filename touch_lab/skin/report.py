@@ -1,11 +1,11 @@
 """Write ``docs/skin-evaluation.md``: the measurements behind the choice of recogniser.
 
-    python -m touch_gestures.skin.report --traces ../shared/data/unistroke_dev.csv.gz
+    python -m touch_lab.skin.report --traces ../shared/data/unistroke_dev.csv.gz
 
 regenerates the whole file (about 15 minutes on one core; rendered traces are cached):
 
 1. every recogniser, leave-one-subject-out on the traces through the virtual skin, with the
-   same figure before the sensor (:func:`touch_gestures.skin.cli.evaluate_file`);
+   same figure before the sensor (:func:`touch_lab.skin.cli.evaluate_file`);
 2. speed against error over resample length and codebook size (trace and centroid);
 3. generalisation to other gesture sets and other people: synthetic performers tracing the
    gestures of cirillo2017 Fig. 7-8 and the digits, under harder conditions;
@@ -20,18 +20,18 @@ import sys
 import time
 from pathlib import Path
 
-from .base import TemplateRecogniser
-from .bench import bench_recognition
-from .cli import evaluate_file
-from .evaluate import leave_one_subject_out
-from .registry import PAPER, PEERS, RECOGNISERS, make_recogniser
-from .render import RenderSettings, default_cache_dir, render_samples
-from .synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
-from .traces import read_traces
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.registry import PAPER, PEERS, RECOGNISERS, make_recogniser
+from touch_lab.skin.bench import bench_recognition
+from touch_lab.skin.cli import evaluate_file
+from touch_lab.skin.datasets import read_traces
+from touch_lab.skin.evaluate import leave_one_subject_out
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
 
 __all__ = ['main', 'write_report']
 
-COMMAND = 'python -m touch_gestures.skin.report --traces ../shared/data/unistroke_dev.csv.gz'
+COMMAND = 'python -m touch_lab.skin.report --traces ../shared/data/unistroke_dev.csv.gz'
 CONDITIONS = {
     'default': {}, 'shaky (x3 wobble and tremor)': {'shake': 3.0}, 'slow (x0.4)': {'speed': 0.4},
     'fast (x2.5)': {'speed': 2.5}, 'hesitant (x10 pauses)': {'pauses': 10.0},
@@ -188,7 +188,7 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
         'Through the skin, leave-one-subject-out, nearest class (no rejection); us per recognition is the median '
         'of one `predict` during the evaluation (16 gestures x m templates).', '', *speed, '',
         '## 3. Other gesture sets and other people (synthetic)', '',
-        'Synthetic performers (`touch_gestures.skin.synthetic`: 6 people x 8 repetitions, each with their own size, '
+        'Synthetic performers (`touch_sim.skin.synthetic`: 6 people x 8 repetitions, each with their own size, '
         'position, slant, proportions, speed, corner style and shake) trace the gestures of cirillo2017 Fig. 7-8 '
         '(lines and diagonals in both directions) and the digits through the virtual skin; leave-one-performer-out, '
         'codebook = the other performers, nearest class, accuracy %.', '', *general, '',
@@ -197,7 +197,7 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
         'synthetic. The default rule is auto_scale 2.0, min_margin 0.1.', '',
         *rejection, '',
         '## 5. Speed benchmark', '',
-        f"`python -m touch_gestures.skin.bench`: {bench['gestures']} gestures x {bench['templates_per_gesture']} "
+        f"`python -m touch_lab.skin.bench`: {bench['gestures']} gestures x {bench['templates_per_gesture']} "
         f"templates (synthetic), median of {bench['repeats']} runs of {bench['queries']} recognitions; "
         f"goal {bench['goal_us']:.0f} us.", '', '| recogniser | us per recognition | x goal | x centroid |',
         '|---|---|---|---|',
@@ -212,7 +212,7 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_gestures.skin.report', description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.report', description=__doc__.split('\n')[0])
     parser.add_argument('--traces', required=True)
     parser.add_argument('--out', default='docs/skin-evaluation.md')
     parser.add_argument('--quick', action='store_true', help='smaller sweeps (smoke test)')

@@ -1,6 +1,6 @@
 """How the skin node does on simulated sessions, and what a frame costs it (SYNTHETIC data).
 
-    python -m touch_gestures.skin.session_eval [--seeds 1-20] [--codebook FILE] [--bench]
+    python -m touch_lab.skin.session_eval [--seeds 1-20] [--codebook FILE] [--bench]
 
 :func:`evaluate_sessions` draws one :func:`~.scene.people_scene` per seed (the options of
 ``config/scenes/skin_people.yaml`` unless given), plays it on the virtual skin read by the
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .scene import SkinScene, people_scene
+from touch_sim.skin.people import SkinScene, people_scene
 
 __all__ = ['SCENE_OPTIONS', 'bench_frames', 'evaluate_sessions', 'main', 'run_session']
 
@@ -42,13 +42,12 @@ def run_session(scene: SkinScene, seed: int = 0, frames: list | None = None, **n
     Returns: the node (its counters) and the commands as (scene time s, HapticCommand);
     with ``frames`` a list, the ``SkinFrame`` messages are appended to it too.
     """
-    from touch_driver.skin.device import register_stimulus
     from touch_driver.skin.node import SkinDriverNode
-    from touch_driver.virtual_port import forget_device
+    from touch_gestures.skin.node import HapticCommandsNode
     from touch_graph.messages import get_message
     from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
-
-    from .node import HapticCommandsNode
+    from touch_sim.skin.device import register_stimulus
+    from touch_sim.virtual_port import forget_device
 
     name = f'skin-session-{seed}-{id(scene):x}'
     register_stimulus(name, scene)
@@ -121,9 +120,8 @@ def evaluate_sessions(seeds: list[int], codebook: str = '', **scene_options: Any
 def bench_frames(seed: int = 1, repeat: int = 7) -> dict[str, float]:
     """Median wall time (us) of the node's frame callback over a simulated session's frames, for
     frames with and without contact (recognition runs on the frame that ends a gesture)."""
+    from touch_gestures.skin.node import HapticCommandsNode
     from touch_graph.runtime import Context
-
-    from .node import HapticCommandsNode
 
     frames: list[Any] = []
     run_session(people_scene(seed=seed, **SCENE_OPTIONS), seed=seed, frames=frames)
@@ -162,7 +160,7 @@ def _seeds(text: str) -> list[int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_gestures.skin.session_eval', description=__doc__.split(
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.session_eval', description=__doc__.split(
         '\n')[0])
     parser.add_argument('--seeds', default='1-20', help="sessions to simulate, e.g. '1-20' (default)")
     parser.add_argument('--codebook', default='', help="codebook .npz (default: the package's)")

@@ -1,7 +1,7 @@
 """Virtual Sensate Bear: a stimulus in, the bytes the Somatic board would send out (synthetic).
 
-:class:`BearDevice` implements the :class:`~touch_driver.virtual_port.DeviceModel` protocol:
-at frame time it samples a :class:`~touch_driver.scenes.BearStimulus` (proximity 0..1 per
+:class:`BearDevice` implements the :class:`~touch_sim.virtual_port.DeviceModel` protocol:
+at frame time it samples a :class:`~touch_sim.scenes.BearStimulus` (proximity 0..1 per
 channel), applies the sensor model below and encodes a scan frame (id 0x42) with a
 sequence counter. ``serial.serial_for_url('bearsim://NAME?scene=...')`` wraps it in a port.
 
@@ -40,8 +40,8 @@ import numpy as np
 
 from touch_driver.bear.body_map import INPUTS_PER_MIDPLANE, N_CHANNELS, BodyMap
 from touch_driver.bear.protocol import ADC_MAX, encode_scan
-from touch_driver.scenes import BearStimulus
 from touch_graph.yamlconf import did_you_mean
+from touch_sim.scenes import BearStimulus
 
 __all__ = ['FAULT_KINDS', 'BearDevice']
 
@@ -49,7 +49,7 @@ FAULT_KINDS = ('dead', 'saturated', 'stuck')
 
 
 class BearDevice:
-    """Simulated Somatic board (a :class:`~touch_driver.virtual_port.DeviceModel`).
+    """Simulated Somatic board (a :class:`~touch_sim.virtual_port.DeviceModel`).
 
     Args:
         stimulus: what touches the bear (``proximity(t) -> (64,) float32 in [0, 1]``).

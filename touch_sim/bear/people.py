@@ -13,7 +13,7 @@ contact on a sensor also has a chance to *stray* to a neighbouring sensor outsid
 locational filter (``stray_prob``, a per-person trait); a second attempt "with explanation" (Table
 III's column) strays four times less.
 
-:class:`BearScene` implements ``touch_driver.scenes.BearStimulus`` (``proximity(t) -> (64,)
+:class:`BearScene` implements ``touch_sim.scenes.BearStimulus`` (``proximity(t) -> (64,)
 float32 in [0, 1]``) and carries the ground truth as :class:`Label` rows. Everything here is
 synthetic data; reports built on it must say so.
 
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
 __all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'BearScene', 'Contact', 'GesturePerformance', 'Label', 'Person',
            'SubtypeStats', 'make_scene']
@@ -264,7 +264,7 @@ class Person:
 class BearScene:
     """A scripted scene: contacts (the stimulus) plus ground-truth labels. Synthetic data.
 
-    Implements ``touch_driver.scenes.BearStimulus``: :meth:`proximity`.
+    Implements ``touch_sim.scenes.BearStimulus``: :meth:`proximity`.
 
     Args:
         contacts: every contact of the scene.

@@ -1,6 +1,6 @@
 """Virtual textile patch and capacitive panels: a stimulus in, the firmware's bytes out (synthetic).
 
-:class:`PatchDevice` implements the :class:`~touch_driver.virtual_port.DeviceModel` protocol.
+:class:`PatchDevice` implements the :class:`~touch_sim.virtual_port.DeviceModel` protocol.
 By default it streams every raw 100 Hz scan (frame id 0x51), so the paper's moving average
 and 5:1 sub-sampling run in our calibration code; ``mode='averaged'`` makes it behave like
 the paper's firmware and send 20 Hz frames (id 0x50) that average the last 5 scans.
@@ -41,8 +41,8 @@ import numpy as np
 
 from touch_driver.patch.calibration import load_outline
 from touch_driver.patch.protocol import ADC_MAX, GRID, N_PANELS, encode_scan
-from touch_driver.scenes import PatchStimulus
 from touch_graph.yamlconf import did_you_mean
+from touch_sim.scenes import PatchStimulus
 
 __all__ = ['FAULT_KINDS', 'MODES', 'PatchDevice']
 

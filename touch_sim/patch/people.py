@@ -1,6 +1,6 @@
 """Simulated people touching the textile patch: stroke, tickle, push, slap (SYNTHETIC data).
 
-A :class:`PatchScene` implements ``touch_driver.scenes.PatchStimulus``: ``pressure(t)`` is a
+A :class:`PatchScene` implements ``touch_sim.scenes.PatchStimulus``: ``pressure(t)`` is a
 (16, 16) float32 map of pressure per cell in N/cm^2 and ``panels(t)`` an (11,) float32 hand
 proximity per capacitive panel in [0, 1] (1 = full contact). It also carries the ground
 truth: every gesture event (:class:`TouchEvent`) and panel contact. Everything is drawn from
@@ -133,7 +133,7 @@ class _PanelHold:
 class PatchScene:
     """A scripted patch scene: tracks, panel holds and ground truth (SYNTHETIC).
 
-    Implements ``touch_driver.scenes.PatchStimulus``.
+    Implements ``touch_sim.scenes.PatchStimulus``.
     """
 
     duration_s: float
@@ -411,7 +411,7 @@ def people_scene(n_people: int = 2, seed: int = 0, gestures: tuple[str, ...] = G
                  grab_prob: float = 0.25, grab_s: tuple[float, float] = (0.5, 2.0)) -> PatchScene:
     """Simulated people taking turns at the patch, for a launch file's scene (SYNTHETIC).
 
-    A ``generator`` of ``touch_driver.scenes`` (``config/scenes/patch_people.yaml``): each of
+    A ``generator`` of ``touch_sim.scenes`` (``config/scenes/patch_people.yaml``): each of
     ``n_people`` performs every gesture of ``gestures`` ``events_per_gesture`` times, then the
     next person comes. After a gesture someone sometimes grabs the robot's shell without
     touching the patch (a panel contact only, "being handled").

@@ -2,7 +2,7 @@
 
 A stimulus (anything with ``contacts(t) -> list[Contact]``) says where fingers touch at time ``t``;
 :class:`FingerContactModel` turns the contacts of one frame into the deformation signal of each
-taxel. :class:`~touch_driver.skin.device.SkinDevice` adds the electronics (baseline, drift, noise,
+taxel. :class:`~touch_sim.skin.device.SkinDevice` adds the electronics (baseline, drift, noise,
 16-bit saturation, faults) and the wire format. The model is as simple as the recognisers and the
 calibration tests need; every constant is a parameter.
 
@@ -48,7 +48,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .protocol import MODULE_TAXELS, N_TAXELS, TAXEL_PITCH_MM, TAXEL_XY_MM
+from touch_driver.skin.protocol import MODULE_TAXELS, N_TAXELS, TAXEL_PITCH_MM, TAXEL_XY_MM
 
 __all__ = ['Contact', 'FingerContactModel', 'HysteresisPlay', 'SkinStimulus']
 

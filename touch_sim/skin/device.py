@@ -1,9 +1,9 @@
 """Virtual optoelectronic skin: a stimulus in, the bytes the hardware would send out.
 
-:class:`SkinDevice` implements :class:`touch_driver.virtual_port.DeviceModel` (``frame_period``,
+:class:`SkinDevice` implements :class:`touch_sim.virtual_port.DeviceModel` (``frame_period``,
 ``frame_bytes(index, t)``) for the ``skinsim://`` URL handler, and :func:`render_frames` runs the same
 model without a port. Per frame it asks the stimulus for the contacts at ``t``, turns them into taxel
-signals with :class:`~touch_driver.skin.contact.FingerContactModel` (load spreading, shear,
+signals with :class:`~touch_sim.skin.contact.FingerContactModel` (load spreading, shear,
 hysteresis, repeatability, cross-talk) and adds the electronics:
 
 - **baseline** per taxel: ``baseline_counts`` + N(0, ``baseline_spread_counts``) (LED/PT pairs differ);
@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from .contact import FingerContactModel, HysteresisPlay, SkinStimulus
-from .protocol import FRAME_RATE_HZ, N_TAXELS, encode_skin_frame
-from .stimuli import NoTouch
+from touch_driver.skin.protocol import FRAME_RATE_HZ, N_TAXELS, encode_skin_frame
+from touch_sim.skin.contact import FingerContactModel, HysteresisPlay, SkinStimulus
+from touch_sim.skin.stimuli import NoTouch
 
 __all__ = ['SkinDevice', 'forget_stimuli', 'register_stimulus', 'registered_stimulus', 'render_frames',
            'unregister_stimulus']

@@ -2,7 +2,7 @@
 
 A :class:`SkinScene` is a sequence of touches that do not overlap in time, each a skin
 stimulus of :mod:`touch_driver.skin` (``contacts(t)``), with its ground truth as a
-:class:`SceneEvent`. It implements ``touch_driver.skin.contact.SkinStimulus``, so the
+:class:`SceneEvent`. It implements ``touch_sim.skin.contact.SkinStimulus``, so the
 virtual skin plays it (``skinsim://NAME?scene=...``, a registered stimulus or a YAML scene
 naming :func:`people_scene` as its ``generator``). Finding the touch at ``t`` is a
 bisection, so a scene of hundreds of touches (a simulated codebook recording) costs no
@@ -31,9 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from .gesture import ACTIVE_MM
-from .synthetic import SHAPES, random_touches, synthetic_traces
-from .traces import TraceSample
+from touch_gestures.skin.gesture import ACTIVE_MM
+from touch_lab.skin.datasets import TraceSample
+from touch_sim.skin.synthetic import SHAPES, random_touches, synthetic_traces
 
 __all__ = ['KINDS', 'SceneEvent', 'SkinScene', 'people_scene', 'traced_scene']
 
@@ -115,7 +115,7 @@ class SkinScene:
 def _trace_part(sample: TraceSample, at_s: float, kind: str, person: str, force_n: float = _FORCE_N
                 ) -> tuple[Any, SceneEvent]:
     """A trace sample in mm (x, y on the skin, t_ms) traced from ``at_s``, strokes as in the sample."""
-    from touch_driver.skin.traces import TraceStimulus
+    from touch_sim.skin.traces import TraceStimulus
 
     t0 = float(sample.t_ms.min())
     strokes = []
@@ -134,7 +134,7 @@ _RANDOM_NAMES = ('scribble', 'zigzag', 'dab')   # random_touches draws these in 
 
 def _press_part(rng: np.random.Generator, at_s: float, for_s: float, kind: str = 'press'
                 ) -> tuple[Any, SceneEvent]:
-    from touch_driver.skin.stimuli import StaticPress
+    from touch_sim.skin.stimuli import StaticPress
 
     x, y = rng.uniform(8.0, ACTIVE_MM - 8.0, 2)
     press = StaticPress(float(x), float(y), float(rng.uniform(0.8, 3.0)), at_s=at_s, for_s=for_s, ramp_s=_RAMP_S)
@@ -144,7 +144,7 @@ def _press_part(rng: np.random.Generator, at_s: float, for_s: float, kind: str =
 
 def _two_finger_part(rng: np.random.Generator, at_s: float) -> tuple[Any, SceneEvent]:
     """Two fingertips 20 mm apart stroking 25 mm side by side (a line traced with two fingers)."""
-    from touch_driver.skin.stimuli import LineStroke, Timeline
+    from touch_sim.skin.stimuli import LineStroke, Timeline
 
     for_s = float(rng.uniform(0.5, 1.2))
     start = float(rng.uniform(6.0, ACTIVE_MM - 31.0))   # along the stroke, mm
@@ -183,7 +183,7 @@ def traced_scene(samples: Sequence[TraceSample], lead_s: float = 1.0, pause_s: t
     traced one after the other, each a ``'gesture'`` event labelled with its sample's gesture and
     performer; for a simulated codebook recording.
 
-    >>> from touch_gestures.skin.synthetic import synthetic_traces
+    >>> from touch_sim.skin.synthetic import synthetic_traces
     >>> scene = traced_scene(synthetic_traces(['line_right', 'one'], performers=1, repetitions=2))
     >>> [e.label for e in scene.events], scene.events[0].person
     (['line_right', 'line_right', 'one', 'one'], 'synthetic0')

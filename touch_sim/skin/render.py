@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .gesture import GRID, TouchGesture, ideal_frame
-from .segmentation import GestureSegmenter
-from .traces import TraceSample
+from touch_gestures.skin.gesture import GRID, TouchGesture, ideal_frame
+from touch_gestures.skin.segmentation import GestureSegmenter
+from touch_lab.skin.datasets import TraceSample
 
 __all__ = ['RenderSettings', 'RenderedSample', 'default_cache_dir', 'render_sample', 'render_samples']
 
@@ -85,7 +85,7 @@ class RenderedSample:
 
 
 def _stimulus(sample: TraceSample, settings: RenderSettings):
-    from touch_driver.skin.traces import TraceStimulus
+    from touch_sim.skin.traces import TraceStimulus
 
     if settings.placement == 'fit':
         return TraceStimulus.from_points(sample.x, sample.y, sample.t_ms, sample.stroke, force_n=settings.force_n,
@@ -104,8 +104,8 @@ def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings
                   ) -> list[TouchGesture]:
     """The gestures the segmenter cuts from one sample traced across the skin (module doc)."""
     from touch_driver.skin.calibration import SkinCalibrator
-    from touch_driver.skin.device import render_frames
     from touch_driver.skin.protocol import FRAME_RATE_HZ, SkinStreamDecoder, encode_skin_frame
+    from touch_sim.skin.device import render_frames
 
     stim = _stimulus(sample, settings)
     seg = settings.segmenter()

@@ -1,6 +1,6 @@
 """Scripted skin stimuli for tests and demos: no touch, a static press, a straight line, a timeline.
 
-Every stimulus implements :class:`~touch_driver.skin.contact.SkinStimulus` (``contacts(t)``) and has
+Every stimulus implements :class:`~touch_sim.skin.contact.SkinStimulus` (``contacts(t)``) and has
 ``duration_s``. Forces ramp linearly over ``ramp_s`` before the touch starts and after it ends
 (touch-down and lift), with the finger still at its first and last point meanwhile.
 
@@ -14,17 +14,17 @@ A timeline is also a YAML scene, read with :func:`load_scene`::
       - trace: {points: [[0, 0, 0], [10, 0, 200], [10, 10, 400]], at_s: 5.0}
 
 or a generated scene: ``generator`` names a function of this project (``module:function`` in
-``touch_gestures`` or ``touch_driver``, as for the bear and patch scenes of :mod:`touch_driver.scenes`)
+``touch_gestures`` or ``touch_driver``, as for the bear and patch scenes of :mod:`touch_sim.scenes`)
 that returns the stimulus, called with ``options``::
 
     skin_scene: 1
-    generator: touch_gestures.skin.scene:people_scene
+    generator: touch_sim.skin.people:people_scene
     options: {n_people: 2, seed: 7}
 
 ``at_s`` is when full force is reached (the touch-down ramp comes before it) and ``for_s`` how
 long it lasts. ``press`` and ``line`` also take ``radius_mm`` and ``ramp_s``; ``trace`` takes
 ``force_n``, ``radius_mm``, ``ramp_s``, ``margin_mm``, ``time_scale`` and ``stroke`` (one id per
-point) as :meth:`~touch_driver.skin.traces.TraceStimulus.from_points` does (points are x, y in
+point) as :meth:`~touch_sim.skin.traces.TraceStimulus.from_points` does (points are x, y in
 screen pixels and t in ms; the bounding box is scaled onto the active area).
 """
 
@@ -39,8 +39,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
-
-from .contact import Contact, SkinStimulus
+from touch_sim.skin.contact import Contact, SkinStimulus
 
 __all__ = ['SCENE_FORMAT_VERSION', 'LineStroke', 'NoTouch', 'StaticPress', 'Timeline', 'envelope', 'load_scene',
            'scene_from_mapping']
@@ -203,7 +202,7 @@ def _event(node: Any, where: Any, index: int) -> SkinStimulus:
             return StaticPress(**kw)
         if kind == 'line':
             return LineStroke(_pair(params, 'from_mm', what), _pair(params, 'to_mm', what), **kw)
-        from .traces import TraceStimulus  # traces imports this module
+        from touch_sim.skin.traces import TraceStimulus  # traces imports this module
         points = np.asarray(params['points'], dtype=np.float64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f'points must be a list of [x, y, t_ms]; got shape {points.shape}')
@@ -231,9 +230,9 @@ def scene_from_mapping(doc: Any) -> SkinStimulus:
         scripted = [k for k in ('events', 'duration_s') if k in doc]
         if scripted:
             raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
-        from touch_driver.scenes import generated_stimulus  # one rule for every sensor's scenes
+        from touch_sim.scenes import generated_stimulus  # one rule for every sensor's scenes
         return generated_stimulus(doc, 'skin scene', lambda s: callable(getattr(s, 'contacts', None)),
-                                  'touch_gestures.skin.scene:people_scene')
+                                  'touch_sim.skin.people:people_scene')
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if 'events' not in doc:

@@ -14,7 +14,7 @@
 - **strokes**: several strokes (``stroke`` ids) are traced in time order; the finger lifts between
   them (ramp down, ramp up; ramps shorten to fit a short gap). Overlapping strokes are an error.
 
-:func:`render_frames` (from :mod:`~touch_driver.skin.device`) turns the stimulus into raw frames
+:func:`render_frames` (from :mod:`~touch_sim.skin.device`) turns the stimulus into raw frames
 with the same device model as the ``skinsim://`` URL handler, without a serial port::
 
     stim = TraceStimulus.from_points(x, y, t_ms)
@@ -29,9 +29,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .contact import Contact
-from .device import render_frames
-from .protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
+from touch_driver.skin.protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
+from touch_sim.skin.contact import Contact
+from touch_sim.skin.device import render_frames
 
 __all__ = ['TraceStimulus', 'render_frames']
 

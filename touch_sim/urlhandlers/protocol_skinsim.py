@@ -3,7 +3,7 @@
 Options (all optional)::
 
     scene=NAME_OR_PATH   a stimulus registered with touch_driver.skin.register_stimulus, or a YAML
-                         scene file (touch_driver.skin.stimuli); default: nobody touches the skin
+                         scene file (touch_sim.skin.stimuli); default: nobody touches the skin
     noise=COUNTS         Gaussian noise, ADC counts (default 25)
     drift=COUNTS         common-mode baseline drift amplitude (default 600)
     taxel_drift=COUNTS   per-taxel drift amplitude bound (default 100)
@@ -12,7 +12,7 @@ Options (all optional)::
     saturated=I,J,...    taxels stuck at 65535
     seed=N               seeds the device model and the port's fault injection
 
-plus the port faults of :mod:`touch_driver.virtual_port` (garbage, corrupt, drop, unplug_at,
+plus the port faults of :mod:`touch_sim.virtual_port` (garbage, corrupt, drop, unplug_at,
 replug_at, buffer_s). Example: ``skinsim://demo?scene=press.yaml&garbage=0.01&dead=17&seed=3``.
 """
 
@@ -23,10 +23,9 @@ from typing import Any
 
 from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import did_you_mean
-
-from ..skin.device import SkinDevice, registered_stimulus
-from ..skin.stimuli import load_scene
-from ..virtual_port import VirtualSerial
+from touch_sim.skin.device import SkinDevice, registered_stimulus
+from touch_sim.skin.stimuli import load_scene
+from touch_sim.virtual_port import VirtualSerial
 
 __all__ = ['Serial']
 
