@@ -24,6 +24,43 @@ NODES: dict[str, tuple[str, str]] = {
     'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
 }
 
+# Plug-in points, importlib.metadata entry point groups. A package registers what it brings here; the
+# runtime finds it by group, so it never names (or imports) a module of the simulation or the lab.
+ENTRY_POINT_GROUPS: dict[str, list[str]] = {
+    # `social-touch NAME`: a module (or object) with add_arguments(parser) and run(args) (touch_graph.cli.main).
+    'social_touch.commands': [
+        'launch = touch_graph.launch.cli', 'topic = touch_graph.cli.topic', 'node = touch_graph.cli.node',
+        'record = touch_graph.cli.record', 'play = touch_graph.cli.play', 'bag = touch_graph.cli.bag',
+        'interface = touch_graph.cli.interface', 'export-interfaces = touch_graph.cli.export_interfaces',
+        'demo = touch_sim.demo',
+        'eval = touch_lab.cli.targets:EVAL', 'train = touch_lab.cli.targets:TRAIN',
+        'codebook = touch_lab.cli.targets:CODEBOOK', 'report = touch_lab.cli.targets:REPORT',
+        'bench = touch_lab.cli.bench', 'lines = touch_lab.lines',
+    ],
+    # Targets of the lab's commands (touch_lab.cli.targets): add_arguments(parser), run(args), HELP.
+    'social_touch.eval': ['bear = touch_lab.bear.cli', 'patch = touch_lab.patch.cli:EVAL', 'skin = touch_lab.skin.cli',
+                          'skin-sessions = touch_lab.skin.session_eval'],
+    'social_touch.train': ['bear = touch_lab.bear.train', 'patch = touch_lab.patch.cli:TRAIN'],
+    'social_touch.codebook': ['record = touch_lab.skin.record_cli'],
+    'social_touch.report': ['bear = touch_lab.bear.report', 'patch = touch_lab.patch.report',
+                            'skin = touch_lab.skin.report'],
+    # `social-touch bench NAME`: a function bench(repeats=N) -> dict.
+    'social_touch.bench': [
+        'runtime = touch_lab.bench.runtime:bench_runtime', 'drivers = touch_lab.bench.drivers:bench_drivers',
+        'bridge = touch_graph.bridge.bench:bench_bridge', 'bear = touch_lab.bear.bench:bench_cycle',
+        'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
+        'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
+    ],
+    # `generator: NAME` in a scene file (touch_sim.scenes): a function returning a stimulus.
+    'social_touch.scene_generators': ['bear_people = touch_sim.bear.people:make_scene',
+                                      'patch_people = touch_sim.patch.people:people_scene',
+                                      'skin_people = touch_sim.skin.people:people_scene'],
+    # URL scheme -> the package of its pyserial handler (protocol_<scheme>.py), added to
+    # serial.protocol_handler_packages by the drivers when a port uses the scheme (touch_driver.ports).
+    'social_touch.serial_url_handlers': ['bearsim = touch_sim.urlhandlers', 'patchsim = touch_sim.urlhandlers',
+                                         'skinsim = touch_sim.urlhandlers'],
+}
+
 setup(
     name=PACKAGE,
     version='0.1.0',
@@ -66,5 +103,6 @@ setup(
         ],
         # exec name -> node class, for in-process launch.
         'social_touch.nodes': [f'{name} = {module}:{cls}' for name, (module, cls) in NODES.items()],
+        **ENTRY_POINT_GROUPS,
     },
 )

@@ -281,7 +281,7 @@ def test_the_shipped_model_file_is_small_pickle_free_and_trained_at_the_real_rat
     model = SubtypeClassifier.load(path)
     assert (model.trained_rate_hz_, model.trained_buffer_len_) == (3.4, 20) and len(model.classes_) == 9
     notes = path.with_suffix('.md').read_text()
-    assert 'synthetic' in notes.lower() and 'python -m touch_lab.bear.train' in notes
+    assert 'synthetic' in notes.lower() and 'social-touch train bear' in notes
 
 
 def test_gate_doctest() -> None:

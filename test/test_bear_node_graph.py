@@ -152,11 +152,12 @@ def test_the_people_scene_file_makes_a_labelled_synthetic_scene() -> None:
 
 
 @pytest.mark.parametrize('body, message', [
-    ('generator: os:system\n', "generator must be 'module:function' in touch_sim"),
-    ('generator: touch_sim.bear.people:make_scen\n', "cannot find generator"),
-    ('generator: touch_sim.bear.people:make_scene\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
-    ('generator: touch_sim.bear.people:make_scene\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
-    ('generator: touch_sim.bear.people:make_scene\ntouches: []\n', 'not both'),
+    ('generator: os:system\n', "no scene generator 'os:system'"),
+    ('generator: touch_sim.bear.people:make_scene\n', "no scene generator 'touch_sim.bear.people:make_scene'"),
+    ('generator: bear_peple\n', "did you mean 'bear_people'"),
+    ('generator: bear_people\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
+    ('generator: bear_people\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
+    ('generator: bear_people\ntouches: []\n', 'not both'),
     ('options: {n_people: 2}\ntouches: []\n', "'options' are the keyword arguments of a 'generator'"),
 ])
 def test_a_bad_generated_scene_gives_one_clear_error_with_file_and_line(tmp_path: Path, body: str, message: str):

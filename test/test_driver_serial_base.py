@@ -191,3 +191,32 @@ def test_driver_node_starts_without_its_device_and_connects_when_it_appears():
     executor.spin_for(2.0)
     assert node.values and statuses[-1].connected
     ctx.shutdown()
+
+
+def test_a_simulator_url_without_the_simulator_is_a_clear_error_at_once(monkeypatch):
+    """A robot installed without touch_sim: a bearsim:// port says what is missing, the node does not start."""
+    from touch_driver.bear.node import BearDriverNode
+    from touch_driver.serial_driver import PortURLError, url_handler_packages
+    from touch_graph.runtime import Parameter
+    assert url_handler_packages()['bearsim'] == 'touch_sim.urlhandlers'
+    for name in [m for m in sys.modules if m == 'touch_sim' or m.startswith('touch_sim.')]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, 'touch_sim', None)  # import touch_sim raises ImportError
+    monkeypatch.setattr(serial, 'protocol_handler_packages',
+                        [p for p in serial.protocol_handler_packages if not p.startswith('touch_sim')])
+    with pytest.raises(PortURLError, match=r"'bearsim://' is a virtual device of the 'touch_sim' package"):
+        SerialDriver('bearsim://x', payload_sizes={TOY_ID: 4}, decode=lambda f: f.payload)
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(PortURLError, match='pip install social_touch'):
+            BearDriverNode(context=ctx, parameter_overrides=[Parameter('port', value='bearsim://x')])
+    finally:
+        ctx.shutdown()
+    SerialDriver('loop://', payload_sizes={TOY_ID: 4}, decode=lambda f: f.payload)  # pyserial's own: no lookup
+
+
+def test_importing_touch_sim_makes_its_urls_open_with_serial_for_url():
+    import touch_sim  # noqa: F401
+    port = serial.serial_for_url('skinsim://url-check', do_not_open=True)
+    assert type(port).__module__ == 'touch_sim.urlhandlers.protocol_skinsim'

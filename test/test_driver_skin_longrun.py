@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import serial
 
-import touch_driver  # noqa: F401  (registers the skinsim:// URL handler)
+import touch_sim  # noqa: F401  (registers the skinsim:// URL handler)
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
 from touch_driver.skin.calibration_config import SkinCalibrationConfig
 from touch_driver.skin.protocol import SkinStreamDecoder

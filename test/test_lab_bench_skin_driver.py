@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from touch_lab.bench.skin_driver import bench_decode_calibrate, main
+from touch_graph.cli.main import main as social_touch
+from touch_lab.bench.skin_driver import bench_decode_calibrate
 
 
 def test_bench_reports_the_shared_keys():
@@ -21,5 +22,5 @@ def test_bench_reports_the_shared_keys():
 
 
 def test_bench_cli_prints_json(capsys):
-    assert main(['--json', '--repeats', '1', '--frames', '12']) == 0
-    assert json.loads(capsys.readouterr().out)['frames'] == 12
+    assert social_touch(['bench', 'drivers', '--json', '--repeats', '1']) == 0
+    assert json.loads(capsys.readouterr().out)['skin']['frames'] == 600

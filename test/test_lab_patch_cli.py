@@ -1,4 +1,4 @@
-"""``social-touch train patch`` / ``eval patch`` (run here through touch_lab.patch.cli.main)."""
+"""``social-touch train patch`` / ``eval patch``, through the ``social-touch`` CLI."""
 
 import argparse
 import json
@@ -8,8 +8,14 @@ import pytest
 
 from touch_gestures.patch.model_io import load_model
 from touch_gestures.patch.sensor_chain import render_scene
-from touch_lab.patch.cli import add_eval_arguments, add_train_arguments, main
+from touch_graph.cli.main import main as social_touch
+from touch_lab.patch.cli import add_eval_arguments, add_train_arguments
 from touch_sim.patch.people import simulate_people
+
+
+def main(argv):
+    """``social-touch train|eval patch ARGS``."""
+    return social_touch([argv[0], 'patch', *argv[1:]])
 
 
 @pytest.fixture(scope='module')
@@ -66,7 +72,7 @@ def test_errors_are_clear(tmp_path, capsys):
     bad = tmp_path / 'bad.csv'
     bad.write_text('subject,variant,gesture,frame,ch1\n')
     assert main(['train', '--csv', str(bad), '--grid', '2x2', '--rate', '20', '-o', str(tmp_path / 'm.npz')]) == 1
-    assert 'channel columns' in capsys.readouterr().err
+    assert 'social-touch train: error:' in (err := capsys.readouterr().err) and 'channel columns' in err
     with pytest.raises(SystemExit):
         main(['eval', '--simulate', '2', '--components', 'three'])
     with pytest.raises(SystemExit, match='at least 2 people'):

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from touch_gestures.skin.registry import make_recogniser
+from touch_graph.cli.main import main as social_touch
 from touch_lab.skin.bench import bench_recognition
-from touch_lab.skin.cli import main as eval_main
 from touch_lab.skin.datasets import TraceSample, write_traces
 from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
 from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
@@ -120,8 +120,8 @@ def test_cli_json_on_a_pixel_trace_file(tmp_path, capsys, small_set):
                           stroke=s.stroke) for s in small_set]
     path = tmp_path / 'traces.csv.gz'
     write_traces(path, pixels)
-    code = eval_main(['--traces', str(path), '--json', '--recognisers', 'centroid,trace', '--no-cache',
-                      '--random-touches', '6', '--templates-per-gesture', '2'])
+    code = social_touch(['eval', 'skin', '--traces', str(path), '--json', '--recognisers', 'centroid,trace',
+                         '--no-cache', '--random-touches', '6', '--templates-per-gesture', '2'])
     out = capsys.readouterr()
     assert code == 0 and '[eval skin]' in out.err
     report = json.loads(out.out)
@@ -132,11 +132,11 @@ def test_cli_json_on_a_pixel_trace_file(tmp_path, capsys, small_set):
 
 
 def test_cli_errors_are_clear(tmp_path, capsys):
-    assert eval_main(['--traces', str(tmp_path / 'missing.csv')]) == 2
+    assert social_touch(['eval', 'skin', '--traces', str(tmp_path / 'missing.csv')]) == 2
     assert 'file not found' in capsys.readouterr().err
     path = tmp_path / 't.csv'
     path.write_text('subject,variant,gesture,sample,stroke,x,y,t_ms\n1,a,b,0,0,0,0,0\n')
-    assert eval_main(['--traces', str(path), '--recognisers', 'centriod']) == 2
+    assert social_touch(['eval', 'skin', '--traces', str(path), '--recognisers', 'centriod']) == 2
     assert "did you mean 'centroid'" in capsys.readouterr().err
 
 

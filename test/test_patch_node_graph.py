@@ -141,7 +141,7 @@ def test_the_people_scene_loads_from_yaml_through_the_generator_hook():
 ])
 def test_a_bad_people_scene_is_an_error_at_its_line(tmp_path, options, fragment):
     path = tmp_path / 'people.yaml'
-    path.write_text('sensor: patch\ngenerator: touch_sim.patch.people:people_scene\noptions:\n'
+    path.write_text('sensor: patch\ngenerator: patch_people\noptions:\n'
                     f'  seed: 2\n  {options}\n')
     with pytest.raises(ConfigError) as info:
         load_stimulus(path, sensor='patch')

@@ -7,7 +7,7 @@ import pytest
 import serial
 from serial.serialutil import SerialException
 
-import touch_driver  # noqa: F401  (registers the URL handlers)
+import touch_sim  # noqa: F401  (registers the URL handlers)
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.bear.calibration import FAULT_DEAD, FAULT_SATURATED, BearCalibrator
 from touch_driver.bear.protocol import BearDecoder

@@ -7,7 +7,7 @@ import pytest
 import serial
 from serial.serialutil import SerialException
 
-import touch_driver  # noqa: F401  (registers the URL handlers)
+import touch_sim  # noqa: F401  (registers the URL handlers)
 from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator, load_outline
 from touch_driver.patch.protocol import PATCH_FRAME_ID, PATCH_SCAN_ID, PatchDecoder
 from touch_sim.patch.device import PatchDevice

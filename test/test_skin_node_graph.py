@@ -136,14 +136,14 @@ def test_the_people_scene_fires_the_commands_of_its_gestures_only():
 
 
 @pytest.mark.parametrize('text, fragment', [
-    ('generator: touch_sim.skin.people:people_scene\noptions:\n  n_peeple: 2\n',
+    ('generator: skin_people\noptions:\n  n_peeple: 2\n',
      "takes no option 'n_peeple' (did you mean 'n_people'?)"),
-    ('generator: touch_sim.skin.people:people_scene\noptions:\n  gestures: [lien_right]\n',
+    ('generator: skin_people\noptions:\n  gestures: [lien_right]\n',
      'rejected the options: gestures must be some of'),
-    ('generator: os:system\n', "generator must be 'module:function' in touch_sim"),
-    ('generator: touch_sim.skin.people:people_scene\nevents: []\n', 'a generator or events, not both'),
+    ('generator: os:system\n', "no scene generator 'os:system'"),
+    ('generator: skin_people\nevents: []\n', 'a generator or events, not both'),
     ('options: {seed: 1}\nevents: []\n', "'options' are the keyword arguments of a 'generator'"),
-    ('duration_s: 3\n', "needs 'events: [...]' or 'generator: module:function'"),
+    ('duration_s: 3\n', "needs 'events: [...]' or 'generator: NAME'"),
 ])
 def test_a_bad_generated_scene_is_an_error_at_its_line(tmp_path, text, fragment):
     path = tmp_path / 'scene.yaml'

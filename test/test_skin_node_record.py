@@ -195,8 +195,9 @@ class LiveGraph:
         self.lines: list[str] = []
         env = {**os.environ, 'SOCIAL_TOUCH_GRAPH_DIR': str(graph_dir), 'PYTHONPATH': str(REPO)}
         env.pop('ROS_DOMAIN_ID', None)
-        self.proc = subprocess.Popen([sys.executable, '-m', 'touch_lab.skin.record_cli', '--wait', '0.2', *argv],
-                                     cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        command = [sys.executable, '-m', 'touch_graph.cli.main', 'codebook', 'record', '--wait', '0.2', *argv]
+        self.proc = subprocess.Popen(command, cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True)
         threading.Thread(target=self._read, daemon=True).start()
         self.driver = None
 

@@ -14,15 +14,26 @@ protocol function. It has no graph code: the driver nodes wrap it.
 Bad bytes never raise: they are counted in :attr:`stats`. A port that fails (unplugged,
 removed) raises :class:`PortDisconnected` from ``read_frame``/``poll``; ``open()`` again
 reconnects, and ``close()`` is safe to call twice.
+
+URL schemes beyond pyserial's own (the virtual sensors ``bearsim://``, ``patchsim://``,
+``skinsim://`` of the simulation package) are found through the ``social_touch.serial_url_handlers``
+entry point group, ``scheme = package`` (the package holding ``protocol_<scheme>.py``): the driver
+adds that package to ``serial.protocol_handler_packages`` when a port uses the scheme, so the
+runtime imports no simulator until a URL asks for one, and says which package is missing when
+it cannot be imported (:class:`PortURLError`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import importlib
 import time
+import urllib.parse
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from importlib.metadata import entry_points
 from typing import Any
 
 import serial
@@ -31,7 +42,11 @@ from touch_graph.errors import SocialTouchError
 
 from .framing import DecoderStats, Frame, FrameDecoder
 
-__all__ = ['DecodedFrame', 'DriverError', 'PortDisconnected', 'SerialDriver']
+__all__ = ['URL_HANDLER_GROUP', 'DecodedFrame', 'DriverError', 'PortDisconnected', 'PortURLError', 'SerialDriver',
+           'prepare_port_url', 'url_handler_packages']
+
+#: Entry point group of pyserial URL handlers: ``scheme = package`` (setup.py).
+URL_HANDLER_GROUP = 'social_touch.serial_url_handlers'
 
 
 class DriverError(SocialTouchError):
@@ -40,6 +55,41 @@ class DriverError(SocialTouchError):
 
 class PortDisconnected(DriverError):
     """The port went away while open (cable pulled, device reset)."""
+
+
+class PortURLError(DriverError, ValueError):
+    """A port URL that can never open here: its scheme's handler package cannot be imported."""
+
+
+@functools.cache
+def url_handler_packages() -> dict[str, str]:
+    """``scheme -> package`` of the URL handlers installed through :data:`URL_HANDLER_GROUP`."""
+    return {ep.name: ep.value for ep in entry_points(group=URL_HANDLER_GROUP)}
+
+
+def prepare_port_url(port: str) -> None:
+    """Make ``port`` openable by ``serial.serial_for_url`` when its scheme is one of the installed handlers.
+
+    Device paths and pyserial's own URLs pass through untouched.
+
+    Raises:
+        PortURLError: the scheme's handler package (e.g. ``touch_sim.urlhandlers`` for
+            ``bearsim://``) cannot be imported.
+    """
+    scheme = urllib.parse.urlsplit(port).scheme if '://' in port else ''
+    package = url_handler_packages().get(scheme)
+    if package is None:
+        return
+    try:
+        importlib.import_module(package)
+    except ImportError as err:
+        top = package.split('.')[0]
+        raise PortURLError(
+            f"{port}: '{scheme}://' is a virtual device of the '{top}' package, which cannot be imported here "
+            f'({err}). Install social_touch with its simulator (pip install social_touch), or point the '
+            'driver at a real port (e.g. /dev/ttyACM0)') from err
+    if package not in serial.protocol_handler_packages:
+        serial.protocol_handler_packages.append(package)
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +119,7 @@ class SerialDriver:
                  baudrate: int = 115200, clock: Callable[[], float] | None = None, max_pending: int = 1024) -> None:
         if not isinstance(port, str) or not port:
             raise ValueError(f'port must be a device path or URL, got {port!r}')
+        prepare_port_url(port)
         self.port = port
         self.baudrate = baudrate
         self._decode = decode

@@ -23,11 +23,12 @@ and (``sensor: patch``; cells are (row, col), fractional allowed)::
     panels:
       - {panels: [0, 1], start: 6.0, duration: 2.0, level: 1.0}
 
-or a generated scene: ``generator`` names a function of this project (``module:function`` in
-``touch_gestures`` or ``touch_driver``) that returns the stimulus, called with ``options``::
+or a generated scene: ``generator`` names a scene generator registered in the
+``social_touch.scene_generators`` entry point group (:data:`GENERATOR_GROUP`), a function that
+returns the stimulus, called with ``options``::
 
     sensor: bear
-    generator: touch_sim.bear.people:make_scene
+    generator: bear_people
     options: {n_people: 2, seed: 7, gestures: [hug, head_pat]}
 
 Envelopes (``u`` = seconds since the touch started, each also ramped in and out over ``ramp_s``):
@@ -351,30 +352,38 @@ def _pair(item: YamlDict, key: str, what: str) -> tuple[float, float]:
     return float(value[0]), float(value[1])
 
 
-#: Packages whose functions a scene file may name as its ``generator`` (a config file imports no other code).
-GENERATOR_PACKAGES = ('touch_sim.',)
+#: The entry point group of scene generators: ``name = module:function`` (setup.py). A scene file
+#: names a generator, never a module: a config file imports no code of its own choosing.
+GENERATOR_GROUP = 'social_touch.scene_generators'
+
+
+def scene_generators() -> dict[str, Any]:
+    """``name -> entry point`` of every installed scene generator."""
+    from importlib.metadata import entry_points
+    return {ep.name: ep for ep in entry_points(group=GENERATOR_GROUP)}
 
 
 def generated_stimulus(doc: YamlDict, what: str, is_stimulus: Callable[[Any], bool], example: str,
                        body_map: Any = None) -> Any:
     """The stimulus returned by the scene's ``generator`` called with its ``options`` (lists become tuples).
 
-    Shared by every sensor's scene files. ``generator`` is ``module:function`` inside
-    :data:`GENERATOR_PACKAGES` (a scene file cannot import arbitrary code); unknown options,
-    options the function rejects and a result that ``is_stimulus`` refuses are ConfigErrors
-    naming the file and line. A ``body_map`` is passed to functions that take one.
+    Shared by every sensor's scene files. ``generator`` is the name of a function registered in
+    the :data:`GENERATOR_GROUP` entry point group (``bear_people``, ``patch_people``, ``skin_people``);
+    unknown names, unknown options, options the function rejects and a result that ``is_stimulus``
+    refuses are ConfigErrors naming the file and line. A ``body_map`` is passed to functions that
+    take one.
     """
-    import importlib
     import inspect
     spec = typed(doc, 'generator', str, what)
-    module_name, _, func_name = spec.partition(':')
-    if not func_name or not module_name.startswith(GENERATOR_PACKAGES):
-        raise doc.error(f"generator must be 'module:function' in {' or '.join(p[:-1] for p in GENERATOR_PACKAGES)}, "
-                        f'e.g. {example}; got {spec!r}', 'generator')
+    generators = scene_generators()
+    if spec not in generators:
+        known = sorted(generators)
+        raise doc.error(f'no scene generator {spec!r}{did_you_mean(spec, known)}; installed: '
+                        f'{", ".join(known) or "none (is the package installed?)"}, e.g. {example}', 'generator')
     try:
-        func = getattr(importlib.import_module(module_name), func_name)
+        func = generators[spec].load()
     except (ImportError, AttributeError) as err:
-        raise doc.error(f'cannot find generator {spec!r}: {err}', 'generator') from None
+        raise doc.error(f'cannot load generator {spec!r} ({generators[spec].value}): {err}', 'generator') from None
     options = doc.get('options', YamlDict())
     if not isinstance(options, YamlDict):
         raise doc.error(f'options must be a mapping of keyword arguments of {spec}', 'options')
@@ -411,7 +420,7 @@ def _load_yaml_script(path: Path, sensor: str | None, body_map: Any) -> Any:
             raise doc.error(f"a scene has a generator or a timeline, not both: remove '{scripted[0]}'", scripted[0])
         want = BearStimulus if kind == 'bear' else PatchStimulus
         return generated_stimulus(doc, f'{kind} scene', lambda s: isinstance(s, want),
-                                  'touch_sim.bear.people:make_scene', body_map)
+                                  'bear_people', body_map)
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if kind == 'bear':

@@ -198,11 +198,3 @@ def bench_chains(duration_s: float = 120.0, rate_hz: float = REAL_RATE_HZ, repea
     return {'rate_hz': rate_hz, 'cycles': n, 'repeats': repeats, 'graph_us_per_cycle': round(graph, 1),
             'driver_us_per_cycle': round(driver, 1), 'graph_over_driver': round(graph / driver, 2),
             'data': 'synthetic scene (simulated people)'}
-
-
-if __name__ == '__main__':
-    import json
-    import sys
-
-    print(json.dumps([bench_chains(rate_hz=rate) for rate in (REAL_RATE_HZ, 25.0)]))
-    sys.exit(0)

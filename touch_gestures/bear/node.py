@@ -209,7 +209,7 @@ class BearGesturesNode(Node):
         path = Path(p['subtype_model']) if explicit else default_model_path()
         if not path.is_file():
             self.get_logger().warning(f'no trained subtype model at {path}; using the paper rule (knight2009 V.D) '
-                                      'instead. Train one: python -m touch_lab.bear.train --out '
+                                      'instead. Train one: social-touch train bear --out '
                                       'config/bear_subtype_model.npz')
             return rule
         fqn = self.get_fully_qualified_name()

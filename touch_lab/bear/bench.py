@@ -6,14 +6,13 @@ one ``step`` (ring buffer push, all twelve features of 64 channels, subtype clas
 fitted sensors, change events, symbolic filters and priority logic, named outputs); the figure is the
 median over repeats. Goal (issue 4): at most 200 us per cycle on one core.
 
-    python -m touch_lab.bear.bench            # prints one JSON object
+    social-touch bench bear --json
 
 Timings are measured here and reported; tests never assert them.
 """
 
 from __future__ import annotations
 
-import json
 import time
 
 import numpy as np
@@ -103,7 +102,3 @@ def bench_cycle(buffer_len: int = 20, rate_hz: float = REAL_RATE_HZ, repeats: in
         'within_goal': us <= GOAL_US_PER_CYCLE,
         'data': 'synthetic scene levels',
     }
-
-
-if __name__ == '__main__':
-    print(json.dumps(bench_cycle(), indent=2))

@@ -1,11 +1,5 @@
 """``social-touch eval bear``: run simulated people through the whole bear chain and score the recognisers.
 
-The lead wires this into the ``social-touch`` CLI::
-
-    sub = subparsers.add_parser('bear', help=DESCRIPTION)
-    touch_lab.bear.cli.add_arguments(sub)
-    sub.set_defaults(func=touch_lab.bear.cli.run)
-
 Text report by default; ``--json`` prints one JSON object (at least ``subtype_accuracy``,
 ``symbolic_accuracy``, ``median_detection_latency_s``, ``us_per_cycle``). Progress goes to stderr.
 All data is synthetic (simulated people), and both outputs say so.
@@ -21,14 +15,14 @@ import sys
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_lab.bear.evaluate import CHAINS, EvalConfig, evaluate, stderr_progress
 
-__all__ = ['DESCRIPTION', 'add_arguments', 'format_text', 'run']
+__all__ = ['HELP', 'add_arguments', 'format_text', 'run']
 
-DESCRIPTION = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
+HELP = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
 #: The graph gives the driver chain's figures within noise (docs/bear-evaluation.md) and is the robot's path.
 DEFAULT_CHAIN = 'graph'
 
 
-def _positive_float(text: str) -> float:
+def positive_float(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -38,7 +32,7 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -51,14 +45,14 @@ def _positive_int(text: str) -> int:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval bear``."""
     parser.add_argument('--json', action='store_true', help='print one JSON object instead of the text report')
-    parser.add_argument('--people', type=_positive_int, default=6, help='simulated people in the test scene (6)')
-    parser.add_argument('--train-people', type=_positive_int, default=8,
+    parser.add_argument('--people', type=positive_int, default=6, help='simulated people in the test scene (6)')
+    parser.add_argument('--train-people', type=positive_int, default=8,
                         help='other simulated people the subtype model is trained on (8)')
     parser.add_argument('--seed', type=int, default=0, help='scene seed; the training scene uses seed + 1000 (0)')
-    parser.add_argument('--rate', type=_positive_float, default=3.4,
+    parser.add_argument('--rate', type=positive_float, default=3.4,
                         help='scan rate, Hz: 3.4 is the real bear (knight2009 VI.B), 25 the ideal (3.4)')
-    parser.add_argument('--buffer', type=_positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
-    parser.add_argument('--reps', type=_positive_int, default=2,
+    parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
+    parser.add_argument('--reps', type=positive_int, default=2,
                         help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
     parser.add_argument('--chain', choices=CHAINS, default=DEFAULT_CHAIN,
                         help="'graph': virtual bear -> bear_driver node -> /bear/frame in simulated time; 'driver': "
@@ -143,13 +137,3 @@ def run(args: argparse.Namespace) -> int:
         print(format_text(result))
     return 0
 
-
-def main(argv: list[str] | None = None) -> int:
-    """Stand-alone entry point: ``python -m touch_lab.bear.cli``."""
-    parser = argparse.ArgumentParser(prog='social-touch eval bear', description=DESCRIPTION)
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,7 +1,7 @@
 """Regenerate docs/bear-evaluation.md and docs/bear-rates.md from measurements (synthetic people).
 
-    python -m touch_lab.bear.report                 # full report, several minutes on one core
-    python -m touch_lab.bear.report --quick         # fewer people and configurations, for a look
+    social-touch report bear                 # full report, several minutes on one core
+    social-touch report bear --quick         # fewer people and configurations, for a look
 
 Everything measured here runs through the real chain (``BearDevice`` -> ``BearDecoder`` ->
 ``BearCalibrator`` -> recognisers) on simulated people; every table says so.
@@ -10,7 +10,6 @@ Everything measured here runs through the real chain (``BearDevice`` -> ``BearDe
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -33,7 +32,9 @@ from touch_lab.bear.evaluate import (
 )
 from touch_sim.bear.people import BearScene, Contact, make_scene
 
-__all__ = ['alias_table', 'compare_models', 'gap_sweep', 'main', 'speed_error_table']
+__all__ = ['HELP', 'add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'run', 'speed_error_table']
+
+HELP = 'regenerate docs/bear-evaluation.md and docs/bear-rates.md (simulated people; about 15 minutes)'
 
 SYNTHETIC = ('All figures: **synthetic** data (simulated people drawn from knight2009 Table II statistics, '
              'through the virtual device, decoder and calibrator), not recordings of real people.')
@@ -258,7 +259,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         f"**{bench['us_per_cycle']:.0f} us per cycle** with the trained model, {bench['us_per_cycle_rule']:.0f} us "
         f"with the rule, {bench['us_features']:.0f} us for buffer + features alone (all 56 sensors, 12 features, "
         f"one core; goal {bench['goal_us']:.0f} us). Machines are shared: rerun "
-        '`python -m touch_lab.bear.bench` to measure on yours.',
+        '`social-touch bench bear` to measure on yours.',
         '',
         '## Speed against error: scan rate and buffer length',
         '',
@@ -366,15 +367,18 @@ def rates_md(sweep: list[dict], aliases: list[dict], command: str) -> str:
                               recall='\n'.join(recall))
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.report', description=__doc__.split('\n')[0])
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch report bear``."""
     parser.add_argument('--out-dir', default=None, help='where to write the two .md files (default: docs/ of the '
                         'source tree)')
     parser.add_argument('--quick', action='store_true', help='fewer people and configurations (a preview)')
     parser.add_argument('--seed', type=int, default=0)
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure everything and write docs/bear-evaluation.md and docs/bear-rates.md (about 15 minutes)."""
     out_dir = Path(args.out_dir) if args.out_dir else Path(__file__).resolve().parents[2] / 'docs'
-    command = 'python -m touch_lab.bear.report' + (' --quick' if args.quick else '')
+    command = 'social-touch report bear' + (' --quick' if args.quick else '')
     say = stderr_progress
     people = 3 if args.quick else 6
     config = EvalConfig(n_people=people, train_people=people + 2, seed=args.seed)
@@ -399,6 +403,3 @@ def main(argv: list[str] | None = None) -> int:
     say(f'wrote {out_dir / "bear-evaluation.md"} and {out_dir / "bear-rates.md"}')
     return 0
 
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -6,15 +6,11 @@ one frame at a time through :class:`~touch_driver.bear.protocol.BearDecoder` and
 the figure is the median over repeats of the time per frame. The goal (issue 3) is at most
 1 % of the frame period on one core: 400 us at the ideal 25 Hz, 2.9 ms at the real 3.4 Hz.
 
-Run: ``python -m touch_lab.bench.bear_driver [--json] [--repeats N] [--frames N]``.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 import time
 
 from touch_driver.bear.calibration import BearCalibrator
@@ -23,7 +19,7 @@ from touch_lab.bench.timing import gc_paused
 from touch_sim.bear.device import BearDevice
 from touch_sim.scenes import BearScript, BearTouch
 
-__all__ = ['bench_decode_calibrate', 'main']
+__all__ = ['bench_decode_calibrate']
 
 GOAL_FRACTION = 0.01
 REAL_RATE_HZ = 3.4
@@ -79,24 +75,3 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 300, seed: int = 0) -
         'repeats': repeats, 'frames': frames,
     }
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--repeats', type=int, default=7)
-    parser.add_argument('--frames', type=int, default=300)
-    args = parser.parse_args(argv)
-    result = bench_decode_calibrate(repeats=args.repeats, frames=args.frames)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"bear: decode + calibrate {result['us_per_frame']:.1f} us/scan "
-              f"(decode {result['decode_us']:.1f}, calibrate {result['calibrate_us']:.1f}); "
-              f"{100 * result['ratio']:.3f} % of the 25 Hz period, {100 * result['ratio_real']:.4f} % at 3.4 Hz "
-              f"(goal <= {100 * GOAL_FRACTION:.0f} %: {'met' if result['meets_goal'] else 'NOT met'}); "
-              'synthetic frames')
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

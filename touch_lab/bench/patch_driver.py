@@ -11,15 +11,11 @@ and the panel contact detector. Two firmware modes:
 
 Each repeat times the whole set; figures are medians over repeats of the time per frame.
 
-Run: ``python -m touch_lab.bench.patch_driver [--json] [--repeats N] [--frames N]``.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 import time
 
 from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator
@@ -28,7 +24,7 @@ from touch_lab.bench.timing import gc_paused
 from touch_sim.patch.device import PatchDevice
 from touch_sim.scenes import PanelTouch, PatchScript, PatchTouch
 
-__all__ = ['bench_decode_calibrate', 'main']
+__all__ = ['bench_decode_calibrate']
 
 GOAL_FRACTION = 0.01
 
@@ -76,23 +72,3 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 500, seed: int = 0) -
                repeats=repeats, frames=frames)
     return out
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--repeats', type=int, default=7)
-    parser.add_argument('--frames', type=int, default=500)
-    args = parser.parse_args(argv)
-    result = bench_decode_calibrate(repeats=args.repeats, frames=args.frames)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"patch: raw 100 Hz scans {result['us_per_frame']:.1f} us/scan ({100 * result['ratio']:.2f} % of 10 ms); "
-              f"20 Hz averaged frames {result['us_per_frame_averaged']:.1f} us/frame "
-              f"({100 * result['ratio_averaged']:.3f} % of 50 ms); goal <= {100 * GOAL_FRACTION:.0f} %: "
-              f"{'met' if result['meets_goal'] else 'NOT met'}; synthetic frames")
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

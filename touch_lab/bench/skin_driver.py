@@ -1,8 +1,7 @@
 """Benchmark of the skin driver's per-frame work: stream decode + calibration.
 
 Goal (issue 3): at most 1 % of the frame period on one core, i.e. 66.7 us per frame at 150 Hz.
-``social-touch bench drivers --json`` reports :func:`bench_decode_calibrate`; run it alone with
-``python -m touch_lab.bench.skin_driver [--json]``.
+``social-touch bench drivers --json`` reports :func:`bench_decode_calibrate`.
 
 The input is synthetic: frames rendered by the simulator for a scene with a press, a traced line and
 untouched skin, pre-encoded to wire bytes, so the timing covers the decoder (resync, CRC, reorder)
@@ -12,10 +11,7 @@ The dictionary has the same keys as the bear and patch benchmarks.
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 import time
 
 from touch_driver.skin.calibration import SkinCalibrationConfig, SkinCalibrator
@@ -24,7 +20,7 @@ from touch_lab.bench.timing import gc_paused
 from touch_sim.skin.device import render_frames
 from touch_sim.skin.stimuli import LineStroke, StaticPress, Timeline
 
-__all__ = ['bench_decode_calibrate', 'main']
+__all__ = ['bench_decode_calibrate']
 
 GOAL_RATIO = 0.01  # issue 3: at most 1 % of the frame period
 
@@ -84,23 +80,3 @@ def bench_decode_calibrate(repeats: int = 7, frames: int = 600, seed: int = 0,
         'repeats': repeats, 'frames': frames,
     }
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--repeats', type=int, default=7)
-    parser.add_argument('--frames', type=int, default=600)
-    args = parser.parse_args(argv)
-    result = bench_decode_calibrate(repeats=args.repeats, frames=args.frames)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"skin: decode + calibrate {result['us_per_frame']:.1f} us/frame "
-              f"(decode {result['decode_us']:.1f}, calibrate {result['calibrate_us']:.1f}); "
-              f"{100 * result['ratio']:.2f} % of the 150 Hz period "
-              f"(goal <= {100 * GOAL_RATIO:.0f} %: {'met' if result['meets_goal'] else 'NOT met'}); synthetic frames")
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -17,14 +17,11 @@ the cost (message fields, stamps, publishing).
 decoder and calibrators called directly) and the graph chain (the same through the
 ``patch_driver`` node in simulated time): what ``--chain graph`` costs an evaluation.
 
-Run: ``python -m touch_lab.patch.bench [--json] [--repeats N] [--node | --chains]``.
 """
 
 from __future__ import annotations
 
-import argparse
 import gc
-import json
 import statistics
 import time
 
@@ -35,7 +32,7 @@ from touch_gestures.patch.features import WindowFeatures, window_features
 from touch_gestures.patch.sensor_chain import FRAME_RATE_HZ, render_scene
 from touch_sim.patch.people import demo_scene, simulate_people
 
-__all__ = ['GOAL_US', 'bench_chains', 'bench_frame', 'bench_node', 'main']
+__all__ = ['GOAL_US', 'bench_chains', 'bench_frame', 'bench_node']
 
 #: Goal of issue 5: features and posterior within 50 us per frame.
 GOAL_US = 50.0
@@ -210,31 +207,3 @@ def bench_chains(repeats: int = 3, seed: int = 0) -> dict:
             'identical': bool(np.array_equal(outputs['driver'], outputs['graph'])),
             'scene_s': scene.duration_s, 'repeats': repeats, 'synthetic': True}
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description='Per-frame cost of the patch gesture recogniser.')
-    parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--repeats', type=int, default=7, help='timed runs (median reported)')
-    parser.add_argument('--window', type=int, default=60, help='window, frames (paper: 60)')
-    parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
-    which = parser.add_mutually_exclusive_group()
-    which.add_argument('--node', action='store_true',
-                       help="time the patch_gestures node's frame callback against the bare recogniser instead")
-    which.add_argument('--chains', action='store_true', help='time the driver and graph sensor chains instead')
-    args = parser.parse_args(argv)
-    if args.node:
-        result = bench_node(repeats=args.repeats)
-    elif args.chains:
-        result = bench_chains(repeats=min(args.repeats, 3))
-    else:
-        result = bench_frame(window=args.window, n_components=args.components, repeats=args.repeats)
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        for key, value in result.items():
-            print(f'{key:<26} {value:.2f}' if isinstance(value, float) else f'{key:<26} {value}')
-    return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

@@ -10,8 +10,6 @@ Sources (one of):
 model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a grid search over
 components, threshold and hold, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
 one JSON object). Progress goes to stderr.
-
-Also runnable as ``python -m touch_lab.patch.cli {train,eval} ...``.
 """
 
 from __future__ import annotations
@@ -23,9 +21,10 @@ import sys
 
 import numpy as np
 
+from touch_lab.cli.targets import Target
 from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv
 
-__all__ = ['add_eval_arguments', 'add_train_arguments', 'load_sessions', 'main', 'run_eval', 'run_train']
+__all__ = ['EVAL', 'TRAIN', 'add_eval_arguments', 'add_train_arguments', 'load_sessions', 'run_eval', 'run_train']
 
 
 def _progress(args: argparse.Namespace):
@@ -264,20 +263,8 @@ def _matrix(title: str, table: dict) -> list[str]:
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_lab.patch.cli {train,eval} ...``."""
-    parser = argparse.ArgumentParser(prog='touch_lab.patch.cli', description=__doc__.split('\n')[0])
-    sub = parser.add_subparsers(dest='command', required=True)
-    add_train_arguments(sub.add_parser('train', help='fit and write a model file'))
-    add_eval_arguments(sub.add_parser('eval', help='leave-one-subject-out evaluation'))
-    args = parser.parse_args(argv)
-    from touch_graph.errors import SocialTouchError
-    try:
-        return run_train(args) if args.command == 'train' else run_eval(args)
-    except SocialTouchError as err:
-        print(f'patch {args.command}: error: {err}', file=sys.stderr)
-        return 1
 
-
-if __name__ == '__main__':
-    raise SystemExit(main())
+TRAIN = Target('train the patch gesture model (Gaussian mixtures) from a CSV, bags or simulated people',
+               add_train_arguments, run_train, __doc__)
+EVAL = Target('evaluate the patch gesture recogniser leave-one-subject-out (Fig. 6 of sympartner2018)',
+              add_eval_arguments, run_eval, __doc__)

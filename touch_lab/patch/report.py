@@ -2,8 +2,8 @@
 
 Regenerate with::
 
-    python -m touch_lab.patch.report            # about 10 minutes on one core
-    python -m touch_lab.patch.report --quick    # fewer settings, for a look
+    social-touch report patch            # about 10 minutes on one core
+    social-touch report patch --quick    # fewer settings, for a look
 
 Simulated people (touch_sim.patch.people) are rendered through the sensor chain
 (touch_gestures.patch.sensor_chain: the driver's virtual patch, decoder and calibration
@@ -26,9 +26,11 @@ from touch_lab.patch.cli import _matrix
 from touch_lab.patch.evaluate import leave_one_subject_out
 from touch_sim.patch.people import simulate_people
 
-__all__ = ['main', 'write_report']
+__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
-COMMAND = 'python -m touch_lab.patch.report'
+HELP = 'regenerate docs/patch-evaluation.md (simulated people; about 10 minutes)'
+
+COMMAND = 'social-touch report patch'
 
 
 def _sessions(people: int, events: int, seed: int, chain: str, say) -> list:
@@ -131,7 +133,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
                      f'{_pct(d["miss_rate"])} | {d["median_detection_latency_s"]:.2f} | {us:.1f} |')
     lines += [
         '',
-        '## Per-frame cost (`social-touch bench patch`, `python -m touch_lab.patch.bench`)',
+        '## Per-frame cost (`social-touch bench patch`)',
         '',
         f'Window 60 frames, 5 components, 4 classes, frames of a simulated mixed scene '
         f'({_pct(bench["active_fraction"])} with contact): **{bench["us_per_frame"]:.1f} us per frame** '
@@ -146,20 +148,19 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
                                      d['median_detection_latency_s'], us) for w, n, d, us in rows], 'bench': bench}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch report patch``."""
     parser.add_argument('--output', default='docs/patch-evaluation.md', help='Markdown file to write')
     parser.add_argument('--people', type=int, default=8, help='simulated people (default 8, as the paper)')
     parser.add_argument('--events', type=int, default=6, help='events per session (default 6)')
     parser.add_argument('--seed', type=int, default=2026, help='seed of the simulated people (default 2026)')
     parser.add_argument('--chain', choices=('auto', 'driver', 'simple'), default='auto', help='sensor chain')
     parser.add_argument('--quick', action='store_true', help='fewer people and settings')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and write docs/patch-evaluation.md (about 10 minutes)."""
     write_report(args.output, args.people, args.events, args.seed, args.chain, quick=args.quick,
                  say=lambda m: print(f'[report] {m}', file=sys.stderr, flush=True))
     print(f'wrote {args.output}', file=sys.stderr)
     return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

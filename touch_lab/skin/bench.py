@@ -9,17 +9,12 @@ The gestures are synthetic (:func:`~touch_sim.skin.synthetic.synthetic_traces`, 
 by simulated performers, contact points at 150 Hz as the skin gives them), so the figure
 does not depend on a data file. Each recogniser is timed over ``queries`` gestures,
 ``repeats`` times; the median of the repeats is reported, with its ratio to the goal and to
-the centroid method, measured in the same run::
-
-    python -m touch_lab.skin.bench [--json] [--templates 30] [--recognisers trace,centroid]
+the centroid method, measured in the same run: ``social-touch bench skin [--json]``.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
-import sys
 import time
 
 import numpy as np
@@ -29,7 +24,7 @@ from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
 from touch_lab.bench.timing import gc_paused
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
-__all__ = ['GOAL_US', 'bench_recognition', 'main', 'synthetic_codebook']
+__all__ = ['GOAL_US', 'bench_recognition', 'synthetic_codebook']
 
 GOAL_US = 50.0
 
@@ -82,26 +77,3 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
             r['ratio_to_centroid'] = r['us_per_recognition'] / base
     return out
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.bench', description=__doc__.split('\n')[0])
-    parser.add_argument('--json', action='store_true')
-    parser.add_argument('--gestures', type=int, default=16)
-    parser.add_argument('--templates', type=int, default=30, help='templates per gesture')
-    parser.add_argument('--recognisers', default=','.join(RECOGNISERS))
-    parser.add_argument('--repeats', type=int, default=7)
-    args = parser.parse_args(argv)
-    result = bench_recognition([n for n in args.recognisers.split(',') if n], args.gestures, args.templates,
-                               repeats=args.repeats)
-    if args.json:
-        print(json.dumps(result, indent=1))
-    else:
-        print(f"us per recognition, {args.gestures} gestures x {args.templates} templates (synthetic), "
-              f"median of {args.repeats}; goal {GOAL_US:.0f} us")
-        for name, r in result['recognisers'].items():
-            print(f"  {name:12s} {r['us_per_recognition']:10.1f} us  x{r['ratio_to_goal']:.2f} of goal")
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -32,10 +32,12 @@ from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, le
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
-__all__ = ['add_eval_arguments', 'evaluate_file', 'format_text', 'json_safe', 'main', 'run_eval']
+__all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
+
+HELP = 'evaluate the skin recognisers on real traces through the virtual skin, leave-one-subject-out'
 
 
-def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the options of ``social-touch eval skin`` to ``parser``."""
     parser.add_argument('--traces', required=True, help='trace CSV (.csv or .csv.gz): '
                         'subject,variant,gesture,sample,stroke,x,y,t_ms')
@@ -166,7 +168,7 @@ def _confusion_lines(confusion: dict[str, dict[str, int]]) -> list[str]:
     return out
 
 
-def run_eval(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     """Entry point of ``social-touch eval skin``; returns the exit status."""
     names = [n.strip() for n in str(args.recognisers).split(',') if n.strip()]
     if args.limit is not None and args.limit < 1:
@@ -199,13 +201,3 @@ def json_safe(value: Any) -> Any:
         return None
     return value
 
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_lab.skin.cli --traces FILE ...`` (the same as ``social-touch eval skin``)."""
-    parser = argparse.ArgumentParser(prog='social-touch eval skin', description=__doc__.split('\n')[0])
-    add_eval_arguments(parser)
-    return run_eval(parser.parse_args(argv))
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -44,7 +44,9 @@ from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 from touch_graph.errors import SocialTouchError
 
-__all__ = ['LiveSession', 'add_arguments', 'main', 'partial_path', 'record_simulated', 'run']
+__all__ = ['HELP', 'LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
+
+HELP = 'record m repetitions of each gesture from the skin (live, or --simulate) into a codebook'
 
 _HELP_KEYS = "u + Enter: undo the last one, s + Enter: skip this gesture, q + Enter: stop (Ctrl-C too)"
 
@@ -310,14 +312,3 @@ def run(args: argparse.Namespace) -> int:
          f'({args.recogniser}){left_out}')
     return 0
 
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_lab.skin.record_cli ...`` (the same as ``social-touch codebook record``)."""
-    parser = argparse.ArgumentParser(prog='social-touch codebook record', description=__doc__.split('\n')[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,6 +1,6 @@
 """Write ``docs/skin-evaluation.md``: the measurements behind the choice of recogniser.
 
-    python -m touch_lab.skin.report --traces ../shared/data/unistroke_dev.csv.gz
+    social-touch report skin --traces ../shared/data/unistroke_dev.csv.gz
 
 regenerates the whole file (about 15 minutes on one core; rendered traces are cached):
 
@@ -29,9 +29,11 @@ from touch_lab.skin.evaluate import leave_one_subject_out
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
 
-__all__ = ['main', 'write_report']
+__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
-COMMAND = 'python -m touch_lab.skin.report --traces ../shared/data/unistroke_dev.csv.gz'
+HELP = 'regenerate docs/skin-evaluation.md from real traces through the virtual skin (about 15 minutes)'
+
+COMMAND = 'social-touch report skin --traces ../shared/data/unistroke_dev.csv.gz'
 CONDITIONS = {
     'default': {}, 'shaky (x3 wobble and tremor)': {'shake': 3.0}, 'slow (x0.4)': {'speed': 0.4},
     'fast (x2.5)': {'speed': 2.5}, 'hesitant (x10 pauses)': {'pauses': 10.0},
@@ -197,7 +199,7 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
         'synthetic. The default rule is auto_scale 2.0, min_margin 0.1.', '',
         *rejection, '',
         '## 5. Speed benchmark', '',
-        f"`python -m touch_lab.skin.bench`: {bench['gestures']} gestures x {bench['templates_per_gesture']} "
+        f"`social-touch bench skin`: {bench['gestures']} gestures x {bench['templates_per_gesture']} "
         f"templates (synthetic), median of {bench['repeats']} runs of {bench['queries']} recognitions; "
         f"goal {bench['goal_us']:.0f} us.", '', '| recogniser | us per recognition | x goal | x centroid |',
         '|---|---|---|---|',
@@ -211,15 +213,14 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
     return path
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.report', description=__doc__.split('\n')[0])
-    parser.add_argument('--traces', required=True)
-    parser.add_argument('--out', default='docs/skin-evaluation.md')
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch report skin``."""
+    parser.add_argument('--traces', required=True, help='$1 unistroke logs (CSV, e.g. unistroke_dev.csv.gz)')
+    parser.add_argument('--out', default='docs/skin-evaluation.md', help='Markdown file to write')
     parser.add_argument('--quick', action='store_true', help='smaller sweeps (smoke test)')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and write docs/skin-evaluation.md (about 15 minutes)."""
     write_report(args.traces, args.out, args.quick)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

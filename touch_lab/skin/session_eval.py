@@ -1,6 +1,7 @@
 """How the skin node does on simulated sessions, and what a frame costs it (SYNTHETIC data).
 
-    python -m touch_lab.skin.session_eval [--seeds 1-20] [--codebook FILE] [--bench]
+    social-touch eval skin-sessions [--seeds 1-20] [--codebook FILE]
+    social-touch bench skin-node
 
 :func:`evaluate_sessions` draws one :func:`~.scene.people_scene` per seed (the options of
 ``config/scenes/skin_people.yaml`` unless given), plays it on the virtual skin read by the
@@ -15,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import time
 from collections import Counter
 from typing import Any
@@ -24,7 +24,10 @@ import numpy as np
 
 from touch_sim.skin.people import SkinScene, people_scene
 
-__all__ = ['SCENE_OPTIONS', 'bench_frames', 'evaluate_sessions', 'main', 'run_session']
+__all__ = ['HELP', 'SCENE_OPTIONS', 'add_arguments', 'bench_frames', 'bench_node', 'evaluate_sessions', 'run',
+           'run_session']
+
+HELP = 'how the skin nodes do on simulated sessions of people (SYNTHETIC): right, wrong, missed, false commands'
 
 _NS = 1_000_000_000
 #: The options of config/scenes/skin_people.yaml but the seed.
@@ -159,13 +162,15 @@ def _seeds(text: str) -> list[int]:
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.session_eval', description=__doc__.split(
-        '\n')[0])
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch eval skin-sessions``."""
     parser.add_argument('--seeds', default='1-20', help="sessions to simulate, e.g. '1-20' (default)")
     parser.add_argument('--codebook', default='', help="codebook .npz (default: the package's)")
-    parser.add_argument('--bench', action='store_true', help='also time the frame callback')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Evaluate and print the tally (SYNTHETIC)."""
     r = evaluate_sessions(_seeds(args.seeds), args.codebook)
     print(f"SYNTHETIC: {r['sessions']} simulated sessions (people_scene, seeds {args.seeds}) through skin_driver + "
           f"haptic_commands:\n  gestures {r['gestures']}: right {r['right']}, wrong {r['wrong']}, missed "
@@ -173,13 +178,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{r['false_by_kind'] or ''}\n  node outcomes {r['node_outcomes']}")
     for g, c in r['per_gesture'].items():
         print(f'  {g:15s} {c}')
-    if args.bench:
-        b = bench_frames()
-        print(f"frame callback, median of 7 runs over {b['frames']} frames: {b['us_median_contact_frame']:.1f} us "
-              f"with contact, {b['us_median_untouched_frame']:.1f} us without, {b['us_mean_frame']:.1f} us mean "
-              f"(budget at 150 Hz: {b['budget_us_at_150hz']:.0f} us)")
     return 0
 
 
-if __name__ == '__main__':
-    sys.exit(main())
+def bench_node(repeats: int = 7) -> dict[str, float]:
+    """``social-touch bench skin-node``: :func:`bench_frames` over ``repeats`` runs."""
+    return {**bench_frames(repeat=repeats), 'synthetic': True}

@@ -13,12 +13,12 @@ A timeline is also a YAML scene, read with :func:`load_scene`::
       - line: {from_mm: [6, 6], to_mm: [41, 41], at_s: 3.5, for_s: 1.0, force_n: 1.5}
       - trace: {points: [[0, 0, 0], [10, 0, 200], [10, 10, 400]], at_s: 5.0}
 
-or a generated scene: ``generator`` names a function of this project (``module:function`` in
-``touch_gestures`` or ``touch_driver``, as for the bear and patch scenes of :mod:`touch_sim.scenes`)
-that returns the stimulus, called with ``options``::
+or a generated scene: ``generator`` names a scene generator registered in the
+``social_touch.scene_generators`` entry point group, as for the bear and patch scenes of
+:mod:`touch_sim.scenes`, a function that returns the stimulus, called with ``options``::
 
     skin_scene: 1
-    generator: touch_sim.skin.people:people_scene
+    generator: skin_people
     options: {n_people: 2, seed: 7}
 
 ``at_s`` is when full force is reached (the touch-down ramp comes before it) and ``for_s`` how
@@ -232,11 +232,11 @@ def scene_from_mapping(doc: Any) -> SkinStimulus:
             raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
         from touch_sim.scenes import generated_stimulus  # one rule for every sensor's scenes
         return generated_stimulus(doc, 'skin scene', lambda s: callable(getattr(s, 'contacts', None)),
-                                  'touch_sim.skin.people:people_scene')
+                                  'skin_people')
     if 'options' in doc:
         raise doc.error("'options' are the keyword arguments of a 'generator'; this scene has none", 'options')
     if 'events' not in doc:
-        raise doc.error("a skin scene needs 'events: [...]' or 'generator: module:function'")
+        raise doc.error("a skin scene needs 'events: [...]' or 'generator: NAME' (a registered scene generator)")
     events = doc['events']
     if not isinstance(events, list):
         raise doc.error(f"'events' must be a list of events; got {type(events).__name__}", 'events')
