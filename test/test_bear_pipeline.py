@@ -1,4 +1,5 @@
-"""The three paths together through the real chain (device bytes -> decoder -> calibrator): hard cases."""
+"""The three paths together on what the bear_driver node makes of a virtual bear (the robot's decode and
+calibration, through the harness): hard cases."""
 
 from __future__ import annotations
 
@@ -6,9 +7,9 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap
-from touch_gestures.bear.chain import DriverChain, LevelModelChain
 from touch_gestures.bear.pipeline import BearRecognizer
 from touch_gestures.bear.subtype_labels import subtype_index
+from touch_sim.bear.render import BearCycles
 from touch_sim.scenes import BearScript, BearTouch
 
 BODY = BodyMap.default()
@@ -33,9 +34,9 @@ def events(results):
     return [(e.gesture, e.state_name) for r in results for e in r.symbolic_events]
 
 
-def test_sensor_level_subtype_and_symbolic_through_the_driver_chain() -> None:
+def test_sensor_level_subtype_and_symbolic_through_the_driver_node() -> None:
     script = BearScript([touch(['head2'], 5.0, 8.0)])
-    _, results = run(DriverChain(script, rate_hz=3.4, seed=1), 22.0)
+    _, results = run(BearCycles(script, rate_hz=3.4, seed=1), 22.0)
     during = [r for r in results if 7.0 < r.t < 12.0]
     assert all([s.name for s in r.active_sensors] == ['head2'] for r in during)
     assert during[0].active_sensors[0].region == 'head' and during[0].active_sensors[0].level > 0.8
@@ -52,7 +53,7 @@ def test_sensor_level_subtype_and_symbolic_through_the_driver_chain() -> None:
 def test_sensor_stuck_at_full_scale_is_masked_once_flagged() -> None:
     """A saturated back sensor plus three other hug sensors: only a real fourth one makes a hug."""
     script = BearScript([touch(['side_left_upper', 'side_right_upper', 'chest_left'], 30.0, 6.0)])
-    chain = DriverChain(script, rate_hz=3.4, seed=2, device_options={'faults': {'back_upper': 'saturated'}},
+    chain = BearCycles(script, rate_hz=3.4, seed=2, device_options={'faults': {'back_upper': 'saturated'}},
                         calibrator_options={'fault_after_s': 10.0})
     _, results = run(chain, 40.0)
     late = [r for r in results if r.t > 15.0]
@@ -80,7 +81,7 @@ def test_stuck_sensor_not_flagged_reads_as_a_hold() -> None:
 
 def test_dead_sensor_never_active_and_a_hug_still_detected() -> None:
     script = BearScript([touch(HUG, 6.0, 6.0)])
-    chain = DriverChain(script, rate_hz=3.4, seed=3, device_options={'faults': {'side_left_upper': 'dead'}})
+    chain = BearCycles(script, rate_hz=3.4, seed=3, device_options={'faults': {'side_left_upper': 'dead'}})
     _, results = run(chain, 16.0)
     assert all(not r.active[ch('side_left_upper')] for r in results)
     assert all(np.isfinite(r.features.table).all() for r in results)
@@ -106,7 +107,7 @@ def test_first_cycles_with_a_short_buffer() -> None:
 
 def test_two_gestures_at_once_end_to_end() -> None:
     script = BearScript([touch(['head1'], 4.0, 5.0), touch(['foot_right_sole'], 4.0, 5.0)])
-    _, results = run(LevelModelChain(script, rate_hz=10.0), 12.0)
+    _, results = run(BearCycles(script, rate_hz=10.0, device_options={'scan': 'parallel'}), 12.0)
     starts = {e.gesture for r in results for e in r.symbolic_events if e.state_name == 'START'}
     assert starts == {'head_pat', 'foot_rub'}
 

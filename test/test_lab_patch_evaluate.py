@@ -8,9 +8,8 @@ import pytest
 
 from touch_gestures.patch.classifier import NOT_RECOGNISED, Detection, PatchGestureClassifier
 from touch_gestures.patch.features import WindowFeatures, window_features
-from touch_gestures.patch.sensor_chain import render_session
 from touch_lab.patch import evaluate as evaluate_module
-from touch_lab.patch.datasets import Session
+from touch_lab.patch.datasets import Session, render_session
 from touch_lab.patch.evaluate import (
     Metrics,
     leave_one_subject_out,
@@ -90,7 +89,7 @@ def test_onset_ages_without_contact():
 @pytest.fixture(scope='module')
 def small_sessions():
     data = simulate_people(n_people=3, events_per_session=2, seed=5)
-    return [render_session(scene, person.name, gesture, seed=i, chain='simple')
+    return [render_session(scene, person.name, gesture, seed=i)
             for i, (person, gesture, scene) in enumerate(data)]
 
 
@@ -147,7 +146,8 @@ def test_doctests():
 
 def test_bench_frame_reports_its_figures():
     from touch_lab.patch.bench import bench_frame
-    result = bench_frame(window=20, n_components=2, repeats=1, frames=200, chain='simple', sklearn_frames=20)
+    result = bench_frame(window=20, n_components=2, repeats=1, frames=200, sklearn_frames=20, train_people=2,
+                         train_events=1)
     for key in ('us_per_frame', 'us_per_frame_contact', 'us_features', 'us_posterior', 'us_sklearn_score_samples',
                 'speedup', 'goal_us'):
         assert result[key] > 0

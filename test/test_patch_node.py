@@ -1,6 +1,6 @@
 """The patch_gestures node: parameters, the model file, bad frames, and events equal to the offline recogniser.
 
-Frames are simulated (SYNTHETIC): rendered through the driver sensor chain and published on
+Frames are simulated (SYNTHETIC): rendered by the patch_driver node on a virtual patch and published on
 /patch/frame in a simulated-time graph.
 """
 
@@ -16,11 +16,11 @@ from touch_driver.patch.calibration import load_outline
 from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
 from touch_gestures.patch.model_io import PatchModel, load_model, save_model
 from touch_gestures.patch.node import PatchGesturesNode, default_model_path
-from touch_gestures.patch.sensor_chain import render_scene
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_sim.patch.people import make_people, simulate_session
+from touch_sim.patch.render import render_scene
 
 PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
 GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')
@@ -66,12 +66,12 @@ class Harness:
 
 @pytest.fixture(scope='module')
 def session_frames():
-    """A simulated person's slaps then a stroke session, through the driver chain (SYNTHETIC)."""
+    """A simulated person's slaps then a stroke session, through the patch_driver node (SYNTHETIC)."""
     person = make_people(3, seed=77)[2]
     slaps = simulate_session(person, 'slap', n_events=2, seed=5, lead_s=(2.0, 2.0), pause_s=(4.0, 4.5))
     strokes = simulate_session(person, 'stroke', n_events=2, seed=6, lead_s=(2.0, 2.0), pause_s=(4.0, 4.5))
-    return (np.concatenate([render_scene(slaps, seed=1, chain='driver').activations,
-                            render_scene(strokes, seed=2, chain='driver').activations]), slaps, strokes)
+    return (np.concatenate([render_scene(slaps, seed=1).activations,
+                            render_scene(strokes, seed=2).activations]), slaps, strokes)
 
 
 def small_model(tmp_path, name='m.npz', grid=(16, 16), window=60, **model_kwargs):

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = [f'touch_gestures.skin.{name}' for name in ('screening', 'frames', 'graph_chain', 'node')] + \
+MODULES = [f'touch_gestures.skin.{name}' for name in ('screening', 'frames', 'node')] + \
     ['touch_sim.skin.people'] + [f'touch_lab.skin.{name}' for name in ('recording', 'record_cli', 'session_eval')]
 
 

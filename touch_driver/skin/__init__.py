@@ -16,9 +16,9 @@ from .calibration import (
     calibrate_frames,
     load_skin_calibration,
 )
-from .protocol import SkinRawFrame, SkinStreamDecoder, decode_payload, encode_payload, encode_skin_frame
+from .protocol import SkinScan, SkinStreamDecoder, decode_payload, encode_payload, encode_skin_frame
 
 __all__ = [
-    'CalibratedFrames', 'SkinCalibrationConfig', 'SkinCalibrator', 'SkinRawFrame', 'SkinState', 'SkinStreamDecoder',
+    'CalibratedFrames', 'SkinCalibrationConfig', 'SkinCalibrator', 'SkinScan', 'SkinState', 'SkinStreamDecoder',
     'calibrate_frames', 'decode_payload', 'encode_payload', 'encode_skin_frame', 'load_skin_calibration',
 ]

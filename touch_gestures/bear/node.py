@@ -28,11 +28,11 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_graph.compat import Node, ParameterDescriptor, get_message
 from touch_graph.errors import ParameterError
 from touch_graph.yamlconf import did_you_mean
 
-from .chain import REAL_RATE_HZ
 from .features import MIN_COMPONENT
 from .gate import NoTouchGate
 from .pipeline import BearRecognizer

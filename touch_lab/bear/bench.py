@@ -1,6 +1,6 @@
 """Benchmark of the bear recognisers: compute per scan cycle for all 56 sensors with every feature.
 
-``bench_cycle()`` feeds pre-computed levels of a synthetic scene (so the chain's cost is excluded)
+``bench_cycle()`` feeds levels of a synthetic scene, calibrated by the driver node beforehand (so its cost is excluded),
 through a fresh :class:`~.pipeline.BearRecognizer` per repeat and takes, per repeat, the mean time of
 one ``step`` (ring buffer push, all twelve features of 64 channels, subtype classification of the 56
 fitted sensors, change events, symbolic filters and priority logic, named outputs); the figure is the
@@ -17,11 +17,12 @@ import time
 
 import numpy as np
 
-from touch_gestures.bear.chain import REAL_RATE_HZ, LevelModelChain
+from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_gestures.bear.pipeline import BearRecognizer
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_lab.bear.evaluate import collect_training_rows, run_scene
 from touch_sim.bear.people import make_scene
+from touch_sim.bear.render import BearCycles
 
 __all__ = ['GOAL_US_PER_CYCLE', 'bench_cycle']
 
@@ -31,8 +32,8 @@ GOAL_US_PER_CYCLE = 200.0
 
 def _levels(rate_hz: float, cycles: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     scene = make_scene(n_people=1, seed=seed, subtype_reps=1, gesture_reps=1)
-    chain = LevelModelChain(scene, rate_hz, seed=seed)
-    rows = [(c.t, c.levels) for c in chain.cycles(min(scene.duration_s, cycles / rate_hz))]
+    source = BearCycles(scene, rate_hz, seed=seed, device_options={'scan': 'parallel'})
+    rows = [(c.t, c.levels) for c in source.cycles(min(scene.duration_s, cycles / rate_hz))]
     return np.array([t for t, _ in rows]), np.array([lv for _, lv in rows], dtype=np.float32)
 
 
@@ -40,7 +41,8 @@ def _small_model(rate_hz: float, buffer_len: int, seed: int) -> SubtypeClassifie
     """A model trained on a short synthetic scene: its weights do not change the cost, only its shape."""
     scene = make_scene(n_people=1, seed=seed + 7, subtype_reps=1, gesture_reps=0)
     rec = BearRecognizer(rate_hz, buffer_len, named_outputs=False)
-    run = run_scene(scene, LevelModelChain(scene, rate_hz, seed=seed), {'f': rec}, keep_features=True)
+    run = run_scene(scene, BearCycles(scene, rate_hz, seed=seed, device_options={'scan': 'parallel'}), {'f': rec},
+                    keep_features=True)
     X, y = collect_training_rows(run, rec.fitted, seed=seed)
     return SubtypeClassifier(max_iter=300).fit(X, y)
 

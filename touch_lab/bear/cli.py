@@ -1,4 +1,4 @@
-"""``social-touch eval bear``: run simulated people through the whole bear chain and score the recognisers.
+"""``social-touch eval bear``: run simulated people through the bear's graph and score the recognisers.
 
 Text report by default; ``--json`` prints one JSON object (at least ``subtype_accuracy``,
 ``symbolic_accuracy``, ``median_detection_latency_s``, ``us_per_cycle``). Progress goes to stderr.
@@ -13,13 +13,11 @@ import math
 import sys
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
-from touch_lab.bear.evaluate import CHAINS, EvalConfig, evaluate, stderr_progress
+from touch_lab.bear.evaluate import EvalConfig, evaluate, stderr_progress
 
 __all__ = ['HELP', 'add_arguments', 'format_text', 'run']
 
 HELP = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
-#: The graph gives the driver chain's figures within noise (docs/bear-evaluation.md) and is the robot's path.
-DEFAULT_CHAIN = 'graph'
 
 
 def positive_float(text: str) -> float:
@@ -54,17 +52,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
     parser.add_argument('--reps', type=positive_int, default=2,
                         help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
-    parser.add_argument('--chain', choices=CHAINS, default=DEFAULT_CHAIN,
-                        help="'graph': virtual bear -> bear_driver node -> /bear/frame in simulated time; 'driver': "
-                             "device bytes -> decoder -> calibrator without the graph; 'level': no bytes (quick) "
-                             f'({DEFAULT_CHAIN})')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 
 def _config(args: argparse.Namespace) -> EvalConfig:
     return EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, n_people=args.people,
                       train_people=args.train_people, seed=args.seed, subtype_reps=args.reps,
-                      gesture_reps=args.reps, chain=args.chain)
+                      gesture_reps=args.reps)
 
 
 def _pct(value) -> str:
@@ -80,7 +74,7 @@ def format_text(result: dict) -> str:
     m, r, cfg = result['model'], result['rule'], result['config']
     lines = [
         f"Sensate Bear recognisers, {cfg['rate_hz']} Hz scan, buffer {cfg['buffer_len']} cycles, "
-        f"{cfg['n_people']} simulated people (seed {cfg['seed']}), chain: {cfg['chain']}",
+        f"{cfg['n_people']} simulated people (seed {cfg['seed']}), through the bear_driver node",
         f"DATA: {result['data']}",
         '',
         f"{'':40s} {'trained model':>14s} {'paper rule':>12s}",
@@ -117,8 +111,8 @@ def format_text(result: dict) -> str:
     for g, v in m['symbolic']['table_iii'].items():
         lines.append(f"  {g:9s} {_pct(v['activated_first_try'])} / {_pct(v['activated_with_explanation'])} / "
                      f"{_pct(v['regional_accuracy'])}")
-    if result.get('chain'):
-        lines += ['', f"chain counters: {result['chain']}"]
+    if result.get('driver'):
+        lines += ['', f"driver counters: {result['driver']}"]
     return '\n'.join(lines)
 
 

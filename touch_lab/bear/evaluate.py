@@ -1,13 +1,11 @@
-"""Evaluate the bear recognisers on labelled scenes (synthetic people) through the real sensor chain.
+"""Evaluate the bear recognisers on labelled scenes (synthetic people) through the robot's own graph.
 
 ``evaluate(EvalConfig(...))`` scripts a training scene and a test scene with different simulated
-people, runs both through the chain, trains the eight-subtype model on the first, and scores the
-paper's rule and the trained model on the second. All figures are on **synthetic** data. Chains:
-``'graph'`` (:class:`~.graph_chain.GraphChain`: virtual device -> ``bear_driver`` node ->
-``/bear/frame`` in simulated time, the robot's path), ``'driver'`` (:class:`~.chain.DriverChain`:
-``BearDevice`` bytes -> ``BearDecoder`` -> ``BearCalibrator``, no graph; same levels, cycle times
-without the driver's poll latency) and ``'level'`` (no bytes, for quick tests). The trained model sits
-behind :class:`~.gate.NoTouchGate` (``no_touch_gate``), as in the ``bear_gestures`` node.
+people, plays both on a virtual bear read by the ``bear_driver`` node in simulated time
+(:class:`~touch_sim.bear.render.BearCycles`: the robot's decode and calibration, the driver's poll
+latency), trains the eight-subtype model on the first, and scores the paper's rule and the trained
+model on the second. All figures are on **synthetic** data. The trained model sits behind
+:class:`~touch_gestures.bear.gate.NoTouchGate` (``no_touch_gate``), as in the ``bear_gestures`` node.
 
 Scoring (documented here because the numbers mean nothing without it):
 
@@ -42,7 +40,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from touch_gestures.bear.chain import REAL_RATE_HZ, DriverChain, LevelModelChain
+from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.pipeline import BearRecognizer
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
@@ -50,9 +48,19 @@ from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import START, GestureLibrary
 from touch_sim.bear.people import BearScene, make_scene
+from touch_sim.bear.render import BearCycles
 
-__all__ = ['CHAINS', 'EvalConfig', 'SceneRun', 'chain_counters', 'collect_training_rows', 'evaluate', 'make_chain',
-           'run_scene', 'score_subtypes', 'score_symbolic', 'train_subtype_model']
+__all__ = [
+    'EvalConfig',
+    'SceneRun',
+    'bear_cycles',
+    'collect_training_rows',
+    'evaluate',
+    'run_scene',
+    'score_subtypes',
+    'score_symbolic',
+    'train_subtype_model',
+]
 
 PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
 #: Seconds after a labelled gesture's end during which its START still counts.
@@ -69,10 +77,7 @@ class EvalConfig:
         n_people: simulated people in the test scene; ``train_people`` in the training scene.
         seed: test scene seed; the training scene uses ``seed + 1000`` (different people).
         subtype_reps, gesture_reps: repetitions per person (gesture_reps >= 2 gives Table III's second column).
-        chain: ``'driver'`` (device bytes -> decoder -> calibrator), ``'graph'`` (the same through the
-            driver node and a simulated-time graph) or ``'level'`` (test stand-in).
-        device_options: extra ``BearDevice`` keywords (noise, faults, scan, ...); the graph chain takes
-            only those a ``bearsim://`` URL carries.
+        device_options: extra ``BearDevice`` keywords a ``bearsim://`` URL carries (noise, faults, scan, ...).
         detrend: feature detrending, see :mod:`.features`.
         no_touch_gate: the trained model answers 'none' where the buffer never reached the threshold
             (knight2009 V.D's first rule line, :class:`~.gate.NoTouchGate`), as the node does.
@@ -85,34 +90,23 @@ class EvalConfig:
     seed: int = 0
     subtype_reps: int = 2
     gesture_reps: int = 2
-    chain: str = 'driver'
     device_options: dict = field(default_factory=dict)
     detrend: str = 'constant'
     no_touch_gate: bool = True
 
 
-CHAINS = ('driver', 'graph', 'level')
-
-
-def make_chain(stimulus, config: EvalConfig, seed: int):
-    """The configured sensor chain for ``stimulus``."""
-    if config.chain in ('driver', 'graph'):
-        options = dict(config.device_options)
-        # The real bear reads its 56 channels one by one (5 ms each): that fits up to ~3.57 Hz. Faster
-        # rates need the Midplanes read in parallel (8 x 5 ms = 40 ms, the ideal 25 Hz).
-        options.setdefault('scan', 'sequential' if config.rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel')
-        if config.chain == 'graph':
-            from touch_gestures.bear.graph_chain import GraphChain
-            return GraphChain(stimulus, config.rate_hz, seed=seed, device_options=options)
-        return DriverChain(stimulus, config.rate_hz, seed=seed, device_options=options)
-    if config.chain == 'level':
-        return LevelModelChain(stimulus, config.rate_hz, seed=seed)
-    raise ValueError(f'chain must be one of {", ".join(CHAINS)}; got {config.chain!r}')
+def bear_cycles(stimulus, config: EvalConfig, seed: int) -> BearCycles:
+    """The virtual bear and its driver node for ``stimulus`` at the configured rate."""
+    options = dict(config.device_options)
+    # The real bear reads its 56 channels one by one (5 ms each): that fits up to ~3.57 Hz. Faster
+    # rates need the Midplanes read in parallel (8 x 5 ms = 40 ms, the ideal 25 Hz).
+    options.setdefault('scan', 'sequential' if config.rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel')
+    return BearCycles(stimulus, config.rate_hz, seed=seed, device_options=options)
 
 
 @dataclass
 class SceneRun:
-    """Per-cycle record of one scene through the chain and one or more recognisers.
+    """Per-cycle record of one scene through the graph and one or more recognisers.
 
     Attributes:
         times: (n,) float64 cycle times, s.
@@ -133,16 +127,16 @@ class SceneRun:
     features: np.ndarray | None = None
 
 
-def run_scene(scene: BearScene, chain, recognizers: dict[str, BearRecognizer], keep_features: bool = False,
+def run_scene(scene: BearScene, source: BearCycles, recognizers: dict[str, BearRecognizer], keep_features: bool = False,
               progress: Callable[[str], None] | None = None) -> SceneRun:
-    """Run every cycle of ``scene`` from ``chain`` through each recogniser."""
+    """Run every cycle of ``scene`` from ``source`` through each recogniser."""
     times, truth, active, feats = [], [], [], []
     codes = {k: [] for k in recognizers}
     events = {k: [] for k in recognizers}
     steps = {k: [] for k in recognizers}
     clock = time.perf_counter_ns
     next_report = 0.0
-    for cycle in chain.cycles(scene.duration_s):
+    for cycle in source.cycles(scene.duration_s):
         row = np.zeros(64, dtype=np.int8)
         for ch, sub in scene.subtype_truth(cycle.t).items():
             row[ch] = subtype_index(sub)
@@ -180,21 +174,12 @@ def collect_training_rows(run: SceneRun, fitted: np.ndarray, idle_fraction: floa
     return F[keep], y[keep]
 
 
-def chain_counters(chain) -> dict:
-    """The wire and graph counters of a chain after a run (empty for the level chain)."""
-    if isinstance(chain, DriverChain):
-        s = chain.decoder.stats
-        return {'frames': s.frames, 'dropped_bytes': s.dropped_bytes, 'checksum_errors': s.checksum_errors,
-                'sequence_gaps': s.sequence_gaps, 'corrupt_frames': chain.decoder.corrupt_frames}
-    return dict(getattr(chain, 'counters', {}))
-
-
 def train_subtype_model(config: EvalConfig, progress: Callable[[str], None] | None = None) -> SubtypeClassifier:
     """Train the eight-subtype model on a training scene (people other than the test scene's)."""
     scene = make_scene(n_people=config.train_people, seed=config.seed + 1000, subtype_reps=config.subtype_reps + 1,
                        gesture_reps=1)
     rec = BearRecognizer(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False)
-    run = run_scene(scene, make_chain(scene, config, config.seed + 1000), {'features': rec}, keep_features=True,
+    run = run_scene(scene, bear_cycles(scene, config, config.seed + 1000), {'features': rec}, keep_features=True,
                     progress=progress)
     X, y = collect_training_rows(run, rec.fitted, seed=config.seed)
     return SubtypeClassifier().fit(X, y)
@@ -350,8 +335,8 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
         'model': BearRecognizer(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
         'rule': BearRecognizer(config.rate_hz, config.buffer_len, detrend=config.detrend),
     }
-    chain = make_chain(scene, config, config.seed)
-    run = run_scene(scene, chain, recognizers, progress=say)
+    source = bear_cycles(scene, config, config.seed)
+    run = run_scene(scene, source, recognizers, progress=say)
     body_map = recognizers['model'].body_map
     fitted = recognizers['model'].fitted
     library = recognizers['model'].symbolic.library
@@ -362,7 +347,6 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
             'symbolic': score_symbolic(scene, run, run.events[name], library),
             'us_per_cycle': float(np.median(run.step_us[name])),
         }
-    chain_stats = chain_counters(chain)
     best = results['model']
     return {
         'data': 'synthetic: simulated people (knight2009 Table II statistics), not recordings of real people',
@@ -375,7 +359,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
         'rule_symbolic_accuracy': results['rule']['symbolic']['accuracy'],
         'cycles': len(run.times),
         'scene_s': scene.duration_s,
-        'chain': chain_stats,
+        'driver': dict(source.counters),
         'config': asdict(config),
         'model': results['model'],
         'rule': results['rule'],

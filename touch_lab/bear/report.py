@@ -3,8 +3,9 @@
     social-touch report bear                 # full report, several minutes on one core
     social-touch report bear --quick         # fewer people and configurations, for a look
 
-Everything measured here runs through the real chain (``BearDevice`` -> ``BearDecoder`` ->
-``BearCalibrator`` -> recognisers) on simulated people; every table says so.
+Everything measured here runs through the robot's graph (virtual bear -> ``bear_driver`` node, its
+decoder and calibrator -> recognisers, :class:`~touch_sim.bear.render.BearCycles`) on simulated
+people; every table says so.
 """
 
 from __future__ import annotations
@@ -23,9 +24,9 @@ from touch_gestures.bear.symbolic import GestureLibrary
 from touch_lab.bear.bench import bench_cycle
 from touch_lab.bear.evaluate import (
     EvalConfig,
+    bear_cycles,
     collect_training_rows,
     evaluate,
-    make_chain,
     run_scene,
     score_symbolic,
     stderr_progress,
@@ -37,7 +38,8 @@ __all__ = ['HELP', 'add_arguments', 'alias_table', 'compare_models', 'gap_sweep'
 HELP = 'regenerate docs/bear-evaluation.md and docs/bear-rates.md (simulated people; about 15 minutes)'
 
 SYNTHETIC = ('All figures: **synthetic** data (simulated people drawn from knight2009 Table II statistics, '
-             'through the virtual device, decoder and calibrator), not recordings of real people.')
+             'on a virtual bear read by the bear_driver node: its decoder and calibrator), not recordings of real '
+             'people.')
 
 
 def _fmt(value, digits: int = 2) -> str:
@@ -95,7 +97,7 @@ def alias_table(rates=(3.4, 10.0, 25.0), freqs=(0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10
             config = EvalConfig(rate_hz=rate, buffer_len=buffer_len)
             rec = BearRecognizer(rate, buffer_len, named_outputs=False)
             seen = []
-            for cycle in make_chain(scene, config, seed).cycles(scene.duration_s):
+            for cycle in bear_cycles(scene, config, seed).cycles(scene.duration_s):
                 result = rec.step(cycle.t, cycle.levels, cycle.faulty)
                 if 10.0 <= cycle.t < 39.0:
                     seen.append(float(result.features.base_frequency_hz[1]))
@@ -108,7 +110,7 @@ def alias_table(rates=(3.4, 10.0, 25.0), freqs=(0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10
 def _rows(config: EvalConfig, seed: int, people: int) -> tuple[np.ndarray, np.ndarray]:
     scene = make_scene(n_people=people, seed=seed, subtype_reps=config.subtype_reps + 1, gesture_reps=1)
     rec = BearRecognizer(config.rate_hz, config.buffer_len, named_outputs=False)
-    run = run_scene(scene, make_chain(scene, config, seed), {'f': rec}, keep_features=True)
+    run = run_scene(scene, bear_cycles(scene, config, seed), {'f': rec}, keep_features=True)
     return collect_training_rows(run, rec.fitted, seed=seed)
 
 
@@ -158,7 +160,7 @@ def compare_models(rate_hz: float = 3.4, buffer_len: int = 20, train_people: int
 
 
 def gap_sweep(gaps=(0.5, 1.0, 1.5, 2.0), rates=(3.4, 25.0), n_people: int = 6, seed: int = 5) -> list[dict]:
-    """Symbolic recall per gesture against the tolerated dropout ``gap_s`` (rule subtypes, driver chain)."""
+    """Symbolic recall per gesture against the tolerated dropout ``gap_s`` (rule subtypes)."""
     library = GestureLibrary.default()
     scene = make_scene(n_people=n_people, seed=seed, subtype_reps=1, gesture_reps=2)
     out = []
@@ -166,7 +168,7 @@ def gap_sweep(gaps=(0.5, 1.0, 1.5, 2.0), rates=(3.4, 25.0), n_people: int = 6, s
         recs = {}
         for gap in gaps:
             recs[gap] = BearRecognizer(rate, 20, library=library.with_default_gap(gap), named_outputs=False)
-        run = run_scene(scene, make_chain(scene, EvalConfig(rate_hz=rate), seed), recs)
+        run = run_scene(scene, bear_cycles(scene, EvalConfig(rate_hz=rate), seed), recs)
         for gap, rec in recs.items():
             score = score_symbolic(scene, run, run.events[gap], rec.symbolic.library)
             out.append({'rate_hz': rate, 'gap_s': gap, 'accuracy': score['accuracy'],
@@ -211,7 +213,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         f"| median us per cycle in the run (56 sensors, all features) | {_fmt(m['us_per_cycle'], 0)} | "
         f"{_fmt(r['us_per_cycle'], 0)} |",
         '',
-        f"Chain counters: {main_result['chain']}.",
+        f"Driver counters: {main_result['driver']}.",
         '',
         '## Touch subtypes, per interaction: trained model',
         '',

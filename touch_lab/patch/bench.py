@@ -2,9 +2,9 @@
 
 One frame of work is what the node does at 20 Hz: update the window features from a
 (16, 16) activation map, evaluate the log posterior of every class's mixture, apply the
-event rule. Frames come from a simulated mixed scene (SYNTHETIC) rendered through the
-sensor chain, so the share of frames with contact is realistic; the classifier is fitted
-on simulated people first (not timed).
+event rule. Frames come from a simulated mixed scene (SYNTHETIC) rendered on the virtual
+patch by the ``patch_driver`` node, so the share of frames with contact is realistic; the
+classifier is fitted on simulated people first (not timed).
 
 For comparison the same run times scikit-learn's ``GaussianMixture.score_samples`` called
 once per class per frame (what a naive node would do), and reports the ratio.
@@ -12,11 +12,6 @@ once per class per frame (what a naive node would do), and reports the ratio.
 :func:`bench_node` times the ``patch_gestures`` node's frame callback (message in, event
 out) against the bare recogniser on the same frames with the same model: the node's share of
 the cost (message fields, stamps, publishing).
-
-:func:`bench_chains` times rendering a simulated session through the driver chain (device,
-decoder and calibrators called directly) and the graph chain (the same through the
-``patch_driver`` node in simulated time): what ``--chain graph`` costs an evaluation.
-
 """
 
 from __future__ import annotations
@@ -29,19 +24,19 @@ import numpy as np
 
 from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
 from touch_gestures.patch.features import WindowFeatures, window_features
-from touch_gestures.patch.sensor_chain import FRAME_RATE_HZ, render_scene
 from touch_sim.patch.people import demo_scene, simulate_people
+from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
 
-__all__ = ['GOAL_US', 'bench_chains', 'bench_frame', 'bench_node']
+__all__ = ['GOAL_US', 'bench_frame', 'bench_node']
 
 #: Goal of issue 5: features and posterior within 50 us per frame.
 GOAL_US = 50.0
 
 
-def _fitted(window: int, n_components: int, seed: int, chain: str) -> PatchGestureClassifier:
+def _fitted(window: int, n_components: int, seed: int, people: int = 3, events: int = 3) -> PatchGestureClassifier:
     X, y = [], []
-    for i, (_person, gesture, scene) in enumerate(simulate_people(3, 3, seed=seed)):
-        acts = render_scene(scene, seed=i, chain=chain).activations
+    for i, (_person, gesture, scene) in enumerate(simulate_people(people, events, seed=seed)):
+        acts = render_scene(scene, seed=i).activations
         X.append(window_features(acts, window))
         y += [gesture] * len(acts)
     return PatchGestureClassifier(n_components=n_components, random_state=seed).fit(np.concatenate(X), y)
@@ -58,14 +53,15 @@ def _median_us(fn, n: int, repeats: int) -> float:
 
 
 def bench_frame(window: int = 60, n_components: int = 5, repeats: int = 7, frames: int = 2000, seed: int = 0,
-                chain: str = 'auto', sklearn_frames: int = 200) -> dict:
+                sklearn_frames: int = 200, train_people: int = 3, train_events: int = 3) -> dict:
     """Median microseconds per frame of the recogniser, and of scikit-learn's per-call scoring.
 
     Args:
         window: window length in frames (paper: 60). n_components: per class (paper: 5).
         repeats: timed runs; medians are reported. frames: frames per run.
-        seed: of the simulated people and scene. chain: sensor chain for the frames (see sensor_chain).
+        seed: of the simulated people and scene.
         sklearn_frames: frames for the (slow) scikit-learn comparison.
+        train_people, train_events: the simulated people the classifier is fitted on (not timed).
 
     Returns:
         dict with ``us_per_frame`` (features + posterior + event rule, on the scene's mix of
@@ -74,9 +70,9 @@ def bench_frame(window: int = 60, n_components: int = 5, repeats: int = 7, frame
         (sklearn / ours, posterior only), ``goal_us``, ``active_fraction``, settings, and
         ``synthetic: True``.
     """
-    clf = _fitted(window, n_components, seed, chain)
+    clf = _fitted(window, n_components, seed, train_people, train_events)
     scene = demo_scene(seed=seed + 1, n_events=max(4, frames // 160))
-    acts = render_scene(scene, seed=seed + 1, chain=chain).activations
+    acts = render_scene(scene, seed=seed + 1).activations
     acts = np.resize(acts, (frames, *acts.shape[1:])) if len(acts) < frames else acts[:frames]
     classes = tuple(str(c) for c in clf.classes_)
     feats = window_features(acts, window)
@@ -133,7 +129,7 @@ def bench_frame(window: int = 60, n_components: int = 5, repeats: int = 7, frame
 def bench_node(repeats: int = 7, frames: int = 2000, seed: int = 0, model: str | None = None) -> dict:
     """Median microseconds per frame of the ``patch_gestures`` node's callback and of the bare recogniser.
 
-    Frames come from the simulated demo scene (SYNTHETIC) through the driver chain, as
+    Frames come from the simulated demo scene (SYNTHETIC) through the patch_driver node, as
     ``PatchFrame`` messages with 20 Hz stamps; the node runs in a simulated-time context with
     no executor (its callback is called directly; the publisher has a subscriber, so events are
     delivered). ``model`` defaults to the package's ``config/patch_gestures.npz``.
@@ -183,27 +179,3 @@ def bench_node(repeats: int = 7, frames: int = 2000, seed: int = 0, model: str |
         context.shutdown()
     return {'us_node': us_node, 'us_recogniser': us_recogniser, 'node_overhead': us_node / us_recogniser,
             'events': events, 'frames': len(msgs), 'repeats': repeats, 'synthetic': True}
-
-
-def bench_chains(repeats: int = 3, seed: int = 0) -> dict:
-    """Median wall seconds per simulated minute of the driver and graph chains on one session (SYNTHETIC).
-
-    Returns:
-        dict with ``s_per_min_driver``, ``s_per_min_graph``, ``graph_over_driver`` (ratio),
-        ``identical`` (the two gave the same activations), ``scene_s``, ``repeats``, ``synthetic``.
-    """
-    _person, _gesture, scene = simulate_people(1, 6, seed=seed, gestures=('tickle',))[0]
-    times: dict[str, list[float]] = {'driver': [], 'graph': []}
-    outputs = {}
-    for _ in range(repeats):
-        for chain in times:
-            gc.collect()
-            start = time.perf_counter()
-            outputs[chain] = render_scene(scene, seed=seed, chain=chain).activations
-            times[chain].append(time.perf_counter() - start)
-    per_min = {c: statistics.median(t) / scene.duration_s * 60.0 for c, t in times.items()}
-    return {'s_per_min_driver': per_min['driver'], 's_per_min_graph': per_min['graph'],
-            'graph_over_driver': per_min['graph'] / per_min['driver'],
-            'identical': bool(np.array_equal(outputs['driver'], outputs['graph'])),
-            'scene_s': scene.duration_s, 'repeats': repeats, 'synthetic': True}
-

@@ -4,7 +4,8 @@ Sources (one of):
 
 - ``--csv FILE --grid RxC --rate HZ``: CoST-layout CSV (subject,variant,gesture,frame,ch1..chN);
 - ``--bags MANIFEST``: a YAML list of rosbag2 recordings of /patch/frame with subject and gesture;
-- ``--simulate N``: N simulated people (SYNTHETIC), one session per gesture, through the sensor chain.
+- ``--simulate N``: N simulated people (SYNTHETIC), one session per gesture, on the virtual patch read by
+  the ``patch_driver`` node (:func:`~touch_lab.patch.datasets.render_session`).
 
 ``train`` fits one Gaussian mixture per class on every frame of every session and writes a
 model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a grid search over
@@ -22,7 +23,7 @@ import sys
 import numpy as np
 
 from touch_lab.cli.targets import Target
-from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv
+from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv, render_session
 
 __all__ = ['EVAL', 'TRAIN', 'add_eval_arguments', 'add_train_arguments', 'load_sessions', 'run_eval', 'run_train']
 
@@ -67,10 +68,6 @@ def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gain', type=float, help='eq. (2) gain per count for raw CSV values (default 1/1023)')
     parser.add_argument('--events', type=int, default=6, help='simulated gestures per session (default 6)')
     parser.add_argument('--seed', type=int, default=0, help='seed of the simulated people and of EM (default 0)')
-    parser.add_argument('--chain', choices=('auto', 'driver', 'graph', 'simple'), default='auto',
-                        help='sensor chain for simulated data: driver (device, decoder and calibrators called '
-                        'directly), graph (the virtual device opened by URL and read by the patch_driver node in '
-                        'simulated time), simple (a stand-in); default: driver when installed')
     parser.add_argument('--window-s', type=float, default=3.0, help='window length, s (paper: 3 s)')
     parser.add_argument('--covariance', choices=('full', 'diag', 'tied', 'spherical'), default='full',
                         help='mixture covariance type (default full)')
@@ -91,7 +88,6 @@ def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
     if args.bags:
         say(f'reading bags listed in {args.bags}')
         return read_bag_manifest(args.bags, grid=args.grid or (16, 16))
-    from touch_gestures.patch.sensor_chain import render_session
     from touch_sim.patch.people import simulate_people
     if args.simulate < 2:
         raise SystemExit('--simulate needs at least 2 people (leave-one-subject-out)')
@@ -99,7 +95,7 @@ def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
     data = simulate_people(args.simulate, args.events, seed=args.seed)
     for i, (person, gesture, scene) in enumerate(data):
         say(f'simulating {person.name} {gesture} ({i + 1}/{len(data)}, SYNTHETIC)')
-        out.append(render_session(scene, person.name, gesture, seed=args.seed * 7919 + i, chain=args.chain))
+        out.append(render_session(scene, person.name, gesture, seed=args.seed * 7919 + i))
     return out
 
 
@@ -150,12 +146,6 @@ def run_train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _chain_of(sessions: list[Session]) -> str:
-    """The sensor chain(s) simulated sessions went through ('driver', 'graph', 'simple')."""
-    chains = sorted({s.source.split('(')[-1].split(' chain')[0] for s in sessions if 'chain)' in s.source})
-    return '+'.join(chains) or 'unknown'
-
-
 def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_frames: int) -> dict:
     """What a model file records about how it was made (model_io's optional ``metadata``)."""
     import datetime
@@ -165,7 +155,7 @@ def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_fram
         data = f"{'CSV' if args.csv else 'bags'} {args.csv or args.bags}"
     else:
         data = (f'simulated people (SYNTHETIC): {args.simulate} people x {args.events} events per gesture, seed '
-                f'{args.seed}, {_chain_of(sessions)} sensor chain (touch_gestures/patch/scene.py)')
+                f'{args.seed}, through the virtual patch and patch_driver (touch_sim/patch/people.py)')
     prog = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else 'social-touch'
     return {
         'synthetic': any(s.synthetic for s in sessions), 'data': data,
@@ -204,7 +194,7 @@ def run_eval(args: argparse.Namespace) -> int:
         raise SystemExit(f'eval patch: {err}') from err
     report = result.as_dict()
     report['source'] = args.csv or args.bags or \
-        f'simulated people: {args.simulate} (seed {args.seed}, {_chain_of(sessions)} sensor chain)'
+        f'simulated people: {args.simulate} (seed {args.seed}, virtual patch and patch_driver node)'
     if args.json:
         print(json.dumps(_jsonable(report), indent=2))
     else:

@@ -32,13 +32,15 @@ import csv
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import check_keys, load_yaml, typed
 
-__all__ = ['DatasetError', 'Session', 'activation_from_raw', 'parse_grid', 'read_bag_manifest', 'read_cost_csv']
+__all__ = ['DatasetError', 'Session', 'activation_from_raw', 'parse_grid', 'read_bag_manifest', 'read_cost_csv',
+           'render_session']
 
 _HEADER = ('subject', 'variant', 'gesture', 'frame')
 
@@ -286,3 +288,15 @@ def _read_bag(bag: Path, topic: str, grid: tuple[int, int], item) -> tuple[np.nd
     steps = steps[steps > 0]
     rate = 1.0 / float(np.median(steps)) if len(steps) else 20.0
     return np.stack(frames), rate, skipped
+
+
+def render_session(scene: Any, subject: str, gesture: str, seed: int = 0) -> Session:
+    """A labelled :class:`Session` (SYNTHETIC) of a simulated ``scene`` as the robot's graph renders it
+    (virtual patch -> ``patch_driver``, :func:`touch_sim.patch.render.render_scene`), with its
+    ground-truth events."""
+    from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
+    out = render_scene(scene, seed=seed)
+    events = [(e.onset_s, e.offset_s) for e in scene.events]
+    return Session(subject=subject, gesture=gesture, activations=out.activations, rate_hz=FRAME_RATE_HZ,
+                   events=events, source='simulated (virtual patch, patch_driver node)', synthetic=True,
+                   panels=out.panel_contact)

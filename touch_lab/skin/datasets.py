@@ -36,49 +36,13 @@ from typing import IO
 import numpy as np
 
 from touch_gestures.skin.errors import TraceFormatError
+from touch_sim.skin.traces import TraceSample
 
 __all__ = ['COLUMNS', 'TraceSample', 'TraceSet', 'read_traces', 'write_traces']
 
 #: The columns a trace file must have, in any order (extra columns are ignored).
 COLUMNS = ('subject', 'variant', 'gesture', 'sample', 'stroke', 'x', 'y', 't_ms')
 _KEY_COLUMNS = COLUMNS[:4]
-
-
-@dataclass(frozen=True, eq=False)
-class TraceSample:
-    """One traced gesture: the points of every stroke in time order.
-
-    Attributes:
-        subject, variant, gesture, sample: the key columns, as strings.
-        x, y: (n,) float64, the file's units (pixels for the $1 logs).
-        t_ms: (n,) float64, ms from the first point, non-decreasing within each stroke.
-        stroke: (n,) int32 stroke index of each point, non-decreasing.
-    """
-
-    subject: str
-    variant: str
-    gesture: str
-    sample: str
-    x: np.ndarray
-    y: np.ndarray
-    t_ms: np.ndarray
-    stroke: np.ndarray
-
-    @property
-    def n_strokes(self) -> int:
-        return len(np.unique(self.stroke))
-
-    @property
-    def key(self) -> tuple[str, str, str, str]:
-        return (self.subject, self.variant, self.gesture, self.sample)
-
-    @property
-    def duration_ms(self) -> float:
-        return float(self.t_ms[-1] - self.t_ms[0]) if len(self.t_ms) else 0.0
-
-    def __repr__(self) -> str:
-        return (f'TraceSample(subject={self.subject!r}, variant={self.variant!r}, gesture={self.gesture!r}, '
-                f'sample={self.sample!r}, points={len(self.x)}, strokes={self.n_strokes})')
 
 
 @dataclass

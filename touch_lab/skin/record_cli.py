@@ -105,7 +105,7 @@ def record_simulated(gestures: Sequence[str], repetitions: int, performers: int,
 
     Every performer traces each gesture ``ceil(m / performers) + 1`` times (one spare each), gesture
     after gesture, repetition after repetition, performer after performer; the skin graph
-    (:func:`~.graph_chain.graph_gestures`) cuts the frames, each gesture is matched to the trace it
+    (:func:`~touch_sim.skin.render.graph_gestures`) cuts the frames, each gesture is matched to the trace it
     came from by time, and the recorder takes them in order until it has ``repetitions`` of each.
 
     Returns: the recorder and counters: ``traced`` samples, ``kept``, ``refused`` by the recorder
@@ -114,8 +114,8 @@ def record_simulated(gestures: Sequence[str], repetitions: int, performers: int,
     Raises:
         ValueError: unknown shape names, bad counts, or too few usable traces for some gesture.
     """
-    from touch_gestures.skin.graph_chain import graph_gestures
     from touch_sim.skin.people import traced_scene
+    from touch_sim.skin.render import graph_gestures
     from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
     unknown = [g for g in gestures if g not in SHAPES]

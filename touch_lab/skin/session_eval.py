@@ -29,7 +29,6 @@ __all__ = ['HELP', 'SCENE_OPTIONS', 'add_arguments', 'bench_frames', 'bench_node
 
 HELP = 'how the skin nodes do on simulated sessions of people (SYNTHETIC): right, wrong, missed, false commands'
 
-_NS = 1_000_000_000
 #: The options of config/scenes/skin_people.yaml but the seed.
 SCENE_OPTIONS: dict[str, Any] = {
     'n_people': 2, 'gestures': ('diagonal_down', 'diagonal_up', 'line_right', 'line_left', 'one', 'two',
@@ -47,42 +46,17 @@ def run_session(scene: SkinScene, seed: int = 0, frames: list | None = None, **n
     """
     from touch_driver.skin.node import SkinDriverNode
     from touch_gestures.skin.node import HapticCommandsNode
-    from touch_graph.messages import get_message
-    from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
-    from touch_sim.skin.device import register_stimulus
-    from touch_sim.virtual_port import forget_device
+    from touch_sim.harness import Harness
 
-    name = f'skin-session-{seed}-{id(scene):x}'
-    register_stimulus(name, scene)
-    ctx = Context('sim')
-    ctx.init()
-    quiet = ['--ros-args', '--log-level', 'error']
-    nodes: list[Any] = []
-    try:
-        node = HapticCommandsNode(context=ctx, namespace='skin', cli_args=quiet,
-                                  parameter_overrides=[Parameter(k, value=v) for k, v in node_params.items()])
-        nodes.append(node)
-        listener = Node('session_eval', context=ctx)
-        nodes.append(listener)
-        commands: list[Any] = []
-        listener.create_subscription(get_message('HapticCommand'), '/touch/haptic_command', commands.append, 100)
+    with Harness(log_level='error') as harness:
+        node = harness.add_node(HapticCommandsNode, namespace='skin', parameters=node_params)
+        commands = harness.collect('/touch/haptic_command', 'HapticCommand', 100)
         if frames is not None:
-            listener.create_subscription(get_message('SkinFrame'), '/skin/frame', frames.append, 100)
-        driver = SkinDriverNode(context=ctx, namespace='skin', cli_args=quiet, parameter_overrides=[
-            Parameter('port', value=f'skinsim://{name}?scene={name}&seed={seed}')])
-        nodes.append(driver)
-        start_ns = ctx.now_ns()
-        executor = SingleThreadedExecutor(context=ctx)
-        for n in nodes:
-            executor.add_node(n)
-        executor.spin_for(scene.duration_s)
-        timed = [((c.header.stamp.sec * _NS + c.header.stamp.nanosec - start_ns) / _NS, c) for c in commands]
-        return node, timed
-    finally:
-        for n in reversed(nodes):
-            n.destroy_node()
-        ctx.try_shutdown()
-        forget_device(name)
+            harness.subscribe('/skin/frame', 'SkinFrame', frames.append, 100)
+        harness.add_node(SkinDriverNode, namespace='skin',
+                         parameters={'port': harness.device('skin', scene, seed=seed)})
+        harness.spin_for(scene.duration_s)
+        return node, [(harness.seconds(c), c) for c in commands]
 
 
 def evaluate_sessions(seeds: list[int], codebook: str = '', **scene_options: Any) -> dict[str, Any]:

@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from touch_gestures.skin.gesture import ACTIVE_MM
-from touch_lab.skin.datasets import TraceSample
 from touch_sim.skin.synthetic import SHAPES, random_touches, synthetic_traces
+from touch_sim.skin.traces import TraceSample
 
 __all__ = ['KINDS', 'SceneEvent', 'SkinScene', 'people_scene', 'traced_scene']
 

@@ -1,12 +1,19 @@
-"""Trace samples through the skin into :class:`TouchGesture` objects, for evaluation.
+"""Skin stimuli and trace samples through the skin into :class:`TouchGesture` objects (synthetic sensor).
 
-Two paths, so the cost of the sensor is visible:
+:func:`graph_gestures` plays a skin stimulus (e.g. a :class:`~touch_sim.skin.people.SkinScene`) on
+the virtual skin read by the real ``skin_driver`` node in the :class:`~touch_sim.harness.Harness`
+(simulated time, deterministic) and cuts the ``SkinFrame`` messages of ``/skin/frame`` into
+gestures with a :class:`~touch_gestures.skin.frames.SkinFrameStream`, the skin node's own frame
+handling. Each gesture comes with its start and end in scene time (device time: the stimulus's
+``t``), so it can be matched with the scene's ground truth. A frame's stamp is the graph time at
+which the driver's poll timer (300 Hz) read it: up to 3.3 ms after the frame's device time.
 
-- ``'sensor'``: the virtual skin of :mod:`touch_driver.skin` (finger contact model,
-  hysteresis, repeatability, noise, 150 Hz) renders raw frames; each frame is encoded to
-  wire bytes and goes through the real stream decoder (framing, CRC, reorder) and the real
-  :class:`~touch_driver.skin.calibration.SkinCalibrator` (tare, contact, contact point);
-  the :class:`GestureSegmenter` cuts the gestures. Synthetic sensor data.
+For evaluation, a trace sample goes one of two ways, so the cost of the sensor is visible:
+
+- ``'sensor'``: the virtual skin (finger contact model, hysteresis, repeatability, noise,
+  150 Hz) read by ``skin_driver`` (the robot's stream decoder and
+  :class:`~touch_driver.skin.calibration.SkinCalibrator`), the node's frame handling and
+  :class:`GestureSegmenter` cut the gestures (:func:`graph_gestures`). Synthetic sensor data.
 - ``'direct'`` ("before the sensor"): the same placement and timing, but the segmenter is
   fed the true finger position at 150 Hz and a perfect pressure map
   (:func:`~touch_gestures.skin.gesture.ideal_frame`).
@@ -17,7 +24,7 @@ size and position. Multi-stroke samples are traced stroke by stroke with the fin
 in between; the segmenter joins strokes whose gap is shorter than its hysteresis and
 splits the others into separate gestures (the evaluation counts a split sample as wrong).
 
-Rendering costs about 25 ms a sample, so :func:`render_samples` caches its output in an
+Rendering costs about 50 ms a sample, so :func:`render_samples` caches its output in an
 ``.npz`` file (no pickle) keyed by the samples' content and the settings.
 """
 
@@ -25,20 +32,26 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import GRID, TouchGesture, ideal_frame
 from touch_gestures.skin.segmentation import GestureSegmenter
-from touch_lab.skin.datasets import TraceSample
+from touch_sim.harness import DeviceRun, stamp_ns, wire_frames_before
+from touch_sim.skin.traces import TraceSample
 
-__all__ = ['RenderSettings', 'RenderedSample', 'default_cache_dir', 'render_sample', 'render_samples']
+__all__ = ['RenderSettings', 'RenderedSample', 'TimedGesture', 'default_cache_dir', 'graph_gestures', 'render_sample',
+           'render_samples']
 
-_CACHE_VERSION = 2  # bump when the segmenter or the chain changes what a sample renders to
+_NS = 1_000_000_000
+_CACHE_VERSION = 3  # bump when the segmenter or the sensor path changes what a sample renders to
 
 
 @dataclass(frozen=True)
@@ -100,32 +113,75 @@ def _stimulus(sample: TraceSample, settings: RenderSettings):
     return TraceStimulus(strokes, force_n=settings.force_n, radius_mm=settings.radius_mm)
 
 
+@dataclass(frozen=True, slots=True)
+class TimedGesture:
+    """A gesture cut from ``/skin/frame`` with its first and last contact in scene time (s)."""
+
+    start_s: float
+    end_s: float
+    gesture: TouchGesture
+
+
+def graph_gestures(stimulus: Any, duration_s: float | None = None, seed: int = 0,
+                   stream: SkinFrameStream | None = None, url_options: dict[str, str] | None = None,
+                   driver_parameters: dict[str, Any] | None = None,
+                   wire_frames: int | None = None) -> Iterator[TimedGesture]:
+    """The gestures the skin graph cuts from ``stimulus`` over ``duration_s`` (default: its own; module doc).
+
+    Args:
+        stimulus: a skin stimulus (``contacts(t)``).
+        duration_s: scene seconds: the frames of device time before it are read.
+        seed: the virtual skin's seed (baselines, noise, repeatability).
+        stream: frames -> gestures (default: a :class:`SkinFrameStream` with the default segmenter);
+            its counters tell the bad frames afterwards.
+        url_options: more ``skinsim://`` options (``noise``, ``dead``, ``garbage``...), strings.
+        driver_parameters: ``skin_driver`` parameters (``calibration``, ``poll_rate_hz``...).
+        wire_frames: read exactly this many frames instead (frames ``0 .. n-1``).
+
+    Raises:
+        ValueError: a bad duration, or the driver cannot open the virtual skin.
+    """
+    if duration_s is None:
+        duration_s = float(getattr(stimulus, 'duration_s', math.nan))
+    if not (duration_s >= 0 and math.isfinite(duration_s)):
+        raise ValueError(f'duration_s must be a finite number of seconds >= 0 (the stimulus has none of its own?); '
+                         f'got {duration_s}')
+    stream = stream if stream is not None else SkinFrameStream()
+    run = DeviceRun('skin', stimulus, seed=seed, url_options=url_options, driver_parameters=driver_parameters)
+    origin_ns = 0   # the graph time of the driver's start, from the first frame: stamp - (stamp - start)
+
+    def timed(g: TouchGesture) -> TimedGesture:
+        start, end = stream.stamp_ns(g.start_s), stream.end_stamp_ns(g)
+        return TimedGesture((start - origin_ns) / _NS, (end - origin_ns) / _NS, g)
+
+    frames = wire_frames if wire_frames is not None else wire_frames_before(duration_s)
+    for _, msg, t in run.messages(frames, [('/skin/frame', 'SkinFrame')], slice_s=5.0):
+        origin_ns = stamp_ns(msg) - round(t * _NS)
+        yield from (timed(g) for g in stream.feed(msg))
+    yield from (timed(g) for g in stream.flush())
+
+
 def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings(), seed: int | None = None
                   ) -> list[TouchGesture]:
     """The gestures the segmenter cuts from one sample traced across the skin (module doc)."""
-    from touch_driver.skin.calibration import SkinCalibrator
-    from touch_driver.skin.protocol import FRAME_RATE_HZ, SkinStreamDecoder, encode_skin_frame
-    from touch_sim.skin.device import render_frames
+    from touch_driver.skin.protocol import FRAME_RATE_HZ
 
     stim = _stimulus(sample, settings)
-    seg = settings.segmenter()
-    out: list[TouchGesture] = []
     if settings.mode == 'direct':
+        seg = settings.segmenter()
+        out: list[TouchGesture] = []
         n = int(stim.duration_s * FRAME_RATE_HZ) + 1
         times = np.arange(n) / FRAME_RATE_HZ
         xy, down = stim.truth(times)
         empty = np.zeros((GRID, GRID), dtype=np.float32)
         for t, p, d in zip(times, xy, down, strict=True):
             out += seg.feed(ideal_frame(p, settings.radius_mm) if d else empty, bool(d), p, t)
-    else:
-        frames = render_frames(stim, seed=settings.seed if seed is None else seed)
-        decoder, calibrator = SkinStreamDecoder(), SkinCalibrator()
-        for i, raw in enumerate(frames):
-            for frame in decoder.feed(encode_skin_frame(i, raw)):
-                state = calibrator.update(frame.raw)
-                if state.tared:
-                    out += seg.feed(state.pressure, state.contact, state.contact_xy_mm, i / FRAME_RATE_HZ)
-    return out + seg.flush()
+        return out + seg.flush()
+    # Frames 0 .. floor(duration * 150): the untouched lead, the trace and the lift.
+    n = math.floor(stim.duration_s * FRAME_RATE_HZ + 1e-9) + 1
+    timed = graph_gestures(stim, seed=settings.seed if seed is None else seed,
+                           stream=SkinFrameStream(settings.segmenter()), wire_frames=n)
+    return [g.gesture for g in timed]
 
 
 # ----------------------------------------------------------------------------- cache

@@ -13,7 +13,7 @@ the digits, traced by simulated performers who differ the way people do:
 - **a shaky line**: a slow wobble across the path (0-1 mm) and a tremor;
 - **corner style**: sharp or rounded corners.
 
-Traces come as :class:`~touch_lab.skin.datasets.TraceSample` in **mm on the skin**
+Traces come as :class:`~touch_sim.skin.traces.TraceSample` in **mm on the skin**
 (x along columns, y along rows) with ``t_ms``, sampled at ``rate_hz`` like a touch logger.
 :func:`random_touches` draws scribbles, wiggles and dabs that are no gesture at all, for
 measuring how often a random touch fires a command.
@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from touch_gestures.skin.gesture import ACTIVE_MM
-from touch_lab.skin.datasets import TraceSample
+from touch_sim.skin.traces import TraceSample
 
 __all__ = ['DIGITS', 'PAPER_CENTROID_SET', 'PAPER_MAP_SET', 'SHAPES', 'random_touches', 'shape_points',
            'synthetic_traces']

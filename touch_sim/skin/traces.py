@@ -1,4 +1,7 @@
-"""Trace a finger along a recorded trajectory (x, y, t) across the skin.
+"""Traced gestures (:class:`TraceSample`) and a finger tracing one across the skin (:class:`TraceStimulus`).
+
+A :class:`TraceSample` is one gesture as a pen or finger drew it (recorded, e.g. the $1 logs
+read by :func:`touch_lab.skin.datasets.read_traces`, or synthetic, :mod:`~touch_sim.skin.synthetic`).
 
 :meth:`TraceStimulus.from_points` takes a gesture sample as screen points (e.g. a row group of
 ``unistroke_dev.csv.gz``: x, y in pixels, y growing downward, t in ms) and places it on the skin:
@@ -26,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,7 +37,44 @@ from touch_driver.skin.protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
 from touch_sim.skin.contact import Contact
 from touch_sim.skin.device import render_frames
 
-__all__ = ['TraceStimulus', 'render_frames']
+__all__ = ['TraceSample', 'TraceStimulus', 'render_frames']
+
+
+@dataclass(frozen=True, eq=False)
+class TraceSample:
+    """One traced gesture: the points of every stroke in time order.
+
+    Attributes:
+        subject, variant, gesture, sample: the key columns, as strings.
+        x, y: (n,) float64, the file's units (pixels for the $1 logs).
+        t_ms: (n,) float64, ms from the first point, non-decreasing within each stroke.
+        stroke: (n,) int32 stroke index of each point, non-decreasing.
+    """
+
+    subject: str
+    variant: str
+    gesture: str
+    sample: str
+    x: np.ndarray
+    y: np.ndarray
+    t_ms: np.ndarray
+    stroke: np.ndarray
+
+    @property
+    def n_strokes(self) -> int:
+        return len(np.unique(self.stroke))
+
+    @property
+    def key(self) -> tuple[str, str, str, str]:
+        return (self.subject, self.variant, self.gesture, self.sample)
+
+    @property
+    def duration_ms(self) -> float:
+        return float(self.t_ms[-1] - self.t_ms[0]) if len(self.t_ms) else 0.0
+
+    def __repr__(self) -> str:
+        return (f'TraceSample(subject={self.subject!r}, variant={self.variant!r}, gesture={self.gesture!r}, '
+                f'sample={self.sample!r}, points={len(self.x)}, strokes={self.n_strokes})')
 
 
 class TraceStimulus:
