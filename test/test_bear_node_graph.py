@@ -68,7 +68,7 @@ def decoded_directly(script, rate_hz, seed, device_options, duration_s):
     decoder, calibrator = BearDecoder(), BearCalibrator(rate_hz=rate_hz)
     out = []
     for index in range(int(np.ceil(duration_s * rate_hz - 1e-9))):
-        for scan in decoder.feed(device.frame_bytes(index, index * device.frame_period)):
+        for scan in decoder.update(device.frame_bytes(index, index * device.frame_period)):
             levels = calibrator.update(scan.raw)
             out.append((index / rate_hz, levels.level, levels.faults != 0))
     return out

@@ -95,7 +95,7 @@ def test_long_run_through_a_faulty_port_has_bounded_memory():
     try:
         for step in range(16000 // 10):                   # 160 s of device time, read every 10 frames
             clock[0] += 10 / RATE
-            for f in dec.feed(port.read(port.in_waiting)):
+            for f in dec.update(port.read(port.in_waiting)):
                 s = cal.update(f.raw)
                 frames += 1
                 contacts += s.contact

@@ -21,7 +21,7 @@ def test_a_recording_holds_one_whole_frame_per_period():
     rec = record_scene('bear', 5.0)
     assert rec.period == pytest.approx(1 / 3.4) and len(rec.chunks) == 17
     decoder = BearDecoder()
-    assert [len(decoder.feed(chunk)) for chunk in rec.chunks] == [1] * 17
+    assert [len(decoder.update(chunk)) for chunk in rec.chunks] == [1] * 17
     assert decoder.stats.checksum_errors == 0 and decoder.stats.sequence_gaps == 0
 
 

@@ -49,7 +49,7 @@ class Harness:
         self.executor.add_node(io)
         self.io = io
 
-    def feed(self, activations, t0_ns=T0_NS, period_ns=NS // 20):
+    def update(self, activations, t0_ns=T0_NS, period_ns=NS // 20):
         for i, act in enumerate(activations):
             sec, nanosec = divmod(t0_ns + i * period_ns, NS)
             header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id='patch_link')
@@ -102,7 +102,7 @@ def test_events_are_the_offline_recognisers_with_the_frames_stamps(session_frame
     frames, _slaps, _strokes = session_frames
     h = Harness()
     try:
-        h.feed(frames)
+        h.update(frames)
         node = h.node
         assert node.model_path == default_model_path()
         expected = offline_events(load_model(default_model_path()), frames)
@@ -124,7 +124,7 @@ def test_latency_comes_from_the_stamps_not_the_nominal_rate(session_frames):
     frames, _, _ = session_frames
     h = Harness()
     try:
-        h.feed(frames[:400], period_ns=NS // 10)  # frames stamped at 10 Hz: the same frames, twice the time
+        h.update(frames[:400], period_ns=NS // 10)  # frames stamped at 10 Hz: the same frames, twice the time
         expected = offline_events(h.node.model, frames[:400])
         assert expected
         assert [e.latency_s for e in h.events] == pytest.approx([2 * x[2] for x in expected], abs=1e-6)
@@ -146,7 +146,7 @@ def test_parameters_default_to_the_model_and_can_be_overridden(session_frames):
     h = Harness(threshold=0.9, hold_s=0.0, window=60)
     try:
         assert (h.node.detector.threshold, h.node.detector.hold, h.node.detector.release) == (0.9, 1, 0.9)
-        h.feed(frames[:300])
+        h.update(frames[:300])
         assert [(round((e.header.stamp.sec * NS + e.header.stamp.nanosec - T0_NS) / (NS / 20)), e.gesture)
                 for e in h.events] == [x[:2] for x in offline_events(h.node.model, frames[:300], 0.9, 1)]
     finally:
@@ -204,7 +204,7 @@ def test_nan_cells_are_read_as_no_contact_and_counted(session_frames):
     frames = session_frames[0][:300]
     clean = Harness()
     try:
-        clean.feed(frames)
+        clean.update(frames)
     finally:
         clean.close()
     assert clean.events
@@ -214,13 +214,13 @@ def test_nan_cells_are_read_as_no_contact_and_counted(session_frames):
     bad[::11, outside[-1]] = np.inf
     h = Harness()
     try:
-        h.feed(bad)
+        h.update(bad)
         assert h.node.nonfinite_cells == len(range(0, 300, 7)) + len(range(0, 300, 11))
         assert [e.gesture for e in h.events] == [e.gesture for e in clean.events]   # no reading = no contact
         touched = bad.copy()
         touched[:, 7 * 16 + 8] = np.nan                    # a cell in the middle of the touches reads nothing
-        h.feed(touched, t0_ns=T0_NS + 300 * NS // 20)
-        h.feed(np.full((40, 256), np.nan, np.float32), t0_ns=T0_NS + 600 * NS // 20)
+        h.update(touched, t0_ns=T0_NS + 300 * NS // 20)
+        h.update(np.full((40, 256), np.nan, np.float32), t0_ns=T0_NS + 600 * NS // 20)
         assert h.node.frames == 640 and h.node.callback_errors == 0 and not h.node.skipped
         assert all(np.isfinite(e.posteriors).all() for e in h.events)
     finally:
@@ -234,7 +234,7 @@ def test_frames_of_another_size_are_counted_and_skipped():
         for cells in (64, 0, 257):
             h.node._on_frame(SimpleNamespace(header=header, activation=np.full(cells, 0.5, np.float32)))
         assert h.node.skipped == {'wrong_size': 3} and h.node.frames == 0
-        h.feed([IDLE] * 5)
+        h.update([IDLE] * 5)
         assert h.node.frames == 5
     finally:
         h.close()
@@ -244,13 +244,13 @@ def test_time_going_back_or_a_gap_starts_a_new_window(session_frames):
     frames = session_frames[0]
     h = Harness()
     try:
-        h.feed(frames[:200])
+        h.update(frames[:200])
         first = [e.gesture for e in h.events]
         assert first
-        h.feed(frames[:200])                           # the same stamps again: a looped bag
+        h.update(frames[:200])                           # the same stamps again: a looped bag
         assert h.node.resets == 1
         assert [e.gesture for e in h.events] == first * 2  # the loop gives the same events again
-        h.feed(frames[:200], t0_ns=T0_NS + 100 * NS)   # 90 s later: the old window is out of date
+        h.update(frames[:200], t0_ns=T0_NS + 100 * NS)   # 90 s later: the old window is out of date
         assert h.node.resets == 2 and [e.gesture for e in h.events] == first * 3
         assert h.node.features.filled == 60
     finally:

@@ -47,7 +47,7 @@ class Step:
 
 def decode(device: BearDevice, n: int) -> list[np.ndarray]:
     dec = BearDecoder()
-    out = [s.raw for i in range(n) for s in dec.feed(device.frame_bytes(i, i * device.frame_period))]
+    out = [s.raw for i in range(n) for s in dec.update(device.frame_bytes(i, i * device.frame_period))]
     assert len(out) == n and dec.stats.dropped_bytes == 0
     return out
 
@@ -138,7 +138,7 @@ def test_url_streams_frames_on_the_attached_clock() -> None:
     port, clock = open_port('bearsim://u1?scene=bear-step&rate=25&scan=parallel&seed=4')
     dec = BearDecoder()
     clock.t = 2.0
-    scans = dec.feed(port.read(1 << 20))
+    scans = dec.update(port.read(1 << 20))
     assert len(scans) == 51 and [s.seq for s in scans] == list(range(51))  # frames at 0, 0.04, ..., 2.0
     assert scans[5].raw[0] < 200 and scans[20].raw[0] == 1023
     port.close()
@@ -173,7 +173,7 @@ def test_calibration_on_the_virtual_bear_with_garbage_and_faulty_sensors() -> No
     false_active, head_active, sole_levels = 0, [], []
     for step in range(1, 61 * 4):
         clock.t = step * 0.25
-        for scan in dec.feed(port.read(1 << 16)):
+        for scan in dec.update(port.read(1 << 16)):
             out = cal.update(scan.raw)
             t = scan.seq / 25
             others = out.active.copy()
@@ -197,7 +197,7 @@ def test_unplug_and_replug() -> None:
     port, clock = open_port('bearsim://plug?rate=10&unplug_at=1.0&replug_at=2.0')
     dec = BearDecoder()
     clock.t = 0.95
-    assert len(dec.feed(port.read(1 << 16))) == 10
+    assert len(dec.update(port.read(1 << 16))) == 10
     clock.t = 1.5
     with pytest.raises(SerialException):
         port.read(1)
@@ -206,7 +206,7 @@ def test_unplug_and_replug() -> None:
     clock.t = 2.5
     port.open()
     dec.reset()  # as a driver does after a reconnect
-    scans = dec.feed(port.read(1 << 16))
+    scans = dec.update(port.read(1 << 16))
     assert scans and scans[-1].seq == 25
     port.close()
 
@@ -219,7 +219,7 @@ def test_long_run_bounded_and_drift_free() -> None:
     worst = 0.0
     n = int(3600 * 3.4)
     for i in range(n):
-        for scan in dec.feed(device.frame_bytes(i, i * device.frame_period)):
+        for scan in dec.update(device.frame_bytes(i, i * device.frame_period)):
             out = cal.update(scan.raw)
         if i == 100:
             sizes = {k: v.nbytes for k, v in vars(cal).items() if isinstance(v, np.ndarray)}

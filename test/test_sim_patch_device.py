@@ -47,7 +47,7 @@ def one_cell(row: int, col: int, p: float) -> np.ndarray:
 
 def run(device: PatchDevice, n: int) -> list:
     dec = PatchDecoder()
-    out = [s for i in range(n) for s in dec.feed(device.frame_bytes(i, i * device.frame_period))]
+    out = [s for i in range(n) for s in dec.update(device.frame_bytes(i, i * device.frame_period))]
     assert len(out) == n
     return out
 
@@ -171,12 +171,12 @@ def open_port(url: str) -> tuple[serial.SerialBase, Clock]:
 def test_url_modes_and_errors() -> None:
     port, clock = open_port('patchsim://m1')
     clock.t = 1.0
-    scans = PatchDecoder().feed(port.read(1 << 20))
+    scans = PatchDecoder().update(port.read(1 << 20))
     assert len(scans) == 101 and all(s.raw_scan for s in scans)
     port.close()
     port, clock = open_port('patchsim://m2?mode=averaged&dead=1:2,3:4&dead_panels=0')
     clock.t = 1.0
-    scans = PatchDecoder().feed(port.read(1 << 20))
+    scans = PatchDecoder().update(port.read(1 << 20))
     assert len(scans) == 21 and not any(s.raw_scan for s in scans)
     assert port.device.model.faults == {(1, 2): 'dead', (3, 4): 'dead'}
     port.close()
@@ -200,7 +200,7 @@ def test_calibration_on_the_virtual_patch_with_garbage_and_panels() -> None:
     idle_max, stroke_cols, push_rows, contact_times = 0.0, [], [], []
     for step in range(1, 121):
         clock.t = step * 0.1
-        for scan in dec.feed(port.read(1 << 20)):
+        for scan in dec.update(port.read(1 << 20)):
             t = scan.seq / 100
             if panels.update(scan.panels).contact[4]:
                 contact_times.append(t)
@@ -232,7 +232,7 @@ def test_long_run_through_the_device_is_bounded_and_drift_free() -> None:
     worst = 0.0
     gap = []
     for i in range(20 * 600):
-        for scan in dec.feed(device.frame_bytes(i, i * device.frame_period)):
+        for scan in dec.update(device.frame_bytes(i, i * device.frame_period)):
             out = cal.update(scan.cells)
         worst = max(worst, float(out.activation.max()))
         assert dec.buffered < 351

@@ -41,7 +41,7 @@ def decoded_directly(scene, seed):
     panels = PanelCalibrator.from_yaml(rate_hz=1.0 / device.frame_period)
     acts, contact = [], []
     for index in range(int(scene.duration_s / device.frame_period)):
-        for scan in decoder.feed(device.frame_bytes(index, index * device.frame_period)):
+        for scan in decoder.update(device.frame_bytes(index, index * device.frame_period)):
             state = panels.update(scan.panels)
             out = calibrator.update_scan(scan.cells)
             if out is not None:

@@ -209,7 +209,7 @@ def read_all(port, clock, seconds: float, dec: SkinStreamDecoder):
     frames = []
     for _ in range(int(seconds * 150)):
         clock[0] += 1 / 150
-        frames += dec.feed(port.read(port.in_waiting))
+        frames += dec.update(port.read(port.in_waiting))
     return frames
 
 

@@ -19,7 +19,7 @@ it resynchronises on the next sync pattern.
 >>> wire.hex(' ')
 'a5 5a 53 02 00 07 00 68 69 ba 66'
 >>> dec = FrameDecoder({0x53: 2})
->>> dec.feed(b'junk' + wire[:5]), dec.feed(wire[5:])
+>>> dec.update(b'junk' + wire[:5]), dec.update(wire[5:])
 ([], [Frame(sensor_id=83, seq=7, payload=b'hi')])
 >>> dec.stats.dropped_bytes, dec.stats.frames
 (4, 1)
@@ -114,7 +114,7 @@ class FrameDecoder:
         """Bytes held while waiting for the rest of a frame."""
         return len(self._buf)
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[Frame]:
+    def update(self, data: bytes | bytearray | memoryview) -> list[Frame]:
         """Add bytes; return the frames completed by them, in order."""
         buf = self._buf
         buf += data
@@ -175,7 +175,7 @@ class SensorStreamDecoder(Generic[ScanT]):
     A :class:`FrameDecoder` for the sensor's frame ids does the framing (resynchronisation,
     checksum, sequence gaps); a subclass implements :meth:`decode` for one checked frame. The
     driver (:class:`~touch_driver.serial_driver.SerialDriver`), the benchmarks and the
-    simulation all feed the same decoder object, so there is one path from bytes to a scan.
+    simulation all update the same decoder object, so there is one path from bytes to a scan.
 
     Args:
         payload_sizes: sensor id -> payload length, as for :class:`FrameDecoder`.
@@ -191,13 +191,13 @@ class SensorStreamDecoder(Generic[ScanT]):
         self.corrupt_frames = 0
 
     def decode(self, frame: Frame) -> ScanT | None:
-        """The scan of one checked frame, or None for a corrupt payload (counted by :meth:`feed`)."""
+        """The scan of one checked frame, or None for a corrupt payload (counted by :meth:`update`)."""
         raise NotImplementedError
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[ScanT]:
+    def update(self, data: bytes | bytearray | memoryview) -> list[ScanT]:
         """Add bytes read from the port; return the scans they complete, oldest first. Never raises on bytes."""
         out = []
-        for frame in self._frames.feed(data):
+        for frame in self._frames.update(data):
             scan = self.decode(frame)
             if scan is None:
                 self.corrupt_frames += 1

@@ -195,16 +195,16 @@ class SerialDriver(Generic[ScanT]):
         while not self._pending:
             wait = 0.1 if deadline is None else deadline - time.monotonic()
             if wait <= 0:
-                self._feed(self._read_available(0))
+                self._decode(self._read_available(0))
                 break
-            self._feed(self._read_available(min(wait, 0.1)))
+            self._decode(self._read_available(min(wait, 0.1)))
         return self._pending.popleft() if self._pending else None
 
-    def _feed(self, data: bytes) -> None:
+    def _decode(self, data: bytes) -> None:
         if not data:
             return
         now = self._clock()
-        for scan in self.decoder.feed(data):
+        for scan in self.decoder.update(data):
             if len(self._pending) == self._pending.maxlen:
                 self.overflow_frames += 1
             self._pending.append(DecodedFrame(scan, now))

@@ -17,7 +17,7 @@ decoder counts it as a corrupt frame and does not decode it.
 >>> bool((decode_payload(payload) == raw).all())
 True
 >>> dec = BearDecoder()
->>> scans = dec.feed(b'noise' + encode_frame(BEAR_ID, 9, payload))
+>>> scans = dec.update(b'noise' + encode_frame(BEAR_ID, 9, payload))
 >>> [(s.seq, int(s.raw[1])) for s in scans], dec.stats.dropped_bytes
 ([(9, 16)], 5)
 """

@@ -90,7 +90,7 @@ class ScanAverager:
         self._valid = np.zeros((self.window, *self.grid), dtype=bool)
         self._pushed = 0
 
-    def push(self, scan: np.ndarray) -> np.ndarray | None:
+    def update(self, scan: np.ndarray) -> np.ndarray | None:
         """Add one (16, 16) scan; return the (16, 16) float32 average when a 20 Hz frame is due, else None.
 
         Non-finite samples are left out of the average; a cell with none in the window is NaN.
@@ -212,5 +212,5 @@ class PatchCalibrator:
 
     def update_scan(self, scan: np.ndarray) -> PatchActivation | None:
         """Feed one raw 100 Hz scan; a :class:`PatchActivation` every ``decimation`` scans, else None."""
-        frame = self.averager.push(scan)
+        frame = self.averager.update(scan)
         return None if frame is None else self.update(frame)

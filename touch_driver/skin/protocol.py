@@ -165,7 +165,7 @@ class SkinStreamDecoder(SensorStreamDecoder[SkinScan]):
 
     >>> dec = SkinStreamDecoder()
     >>> wire = encode_skin_frame(9, np.full(144, 1000, dtype=np.uint16))
-    >>> frames = dec.feed(b'\\x00\\xa5garbage' + wire + wire[:100])
+    >>> frames = dec.update(b'\\x00\\xa5garbage' + wire + wire[:100])
     >>> [(f.seq, int(f.raw[0])) for f in frames], dec.stats.dropped_bytes, dec.buffered
     ([(9, 1000)], 9, 100)
     """

@@ -1,8 +1,8 @@
 """Benchmark of the bear recognisers: compute per scan cycle for all 56 sensors with every feature.
 
 ``bench_cycle()`` feeds levels of a synthetic scene, calibrated by the driver node beforehand (so its cost is excluded),
-through a fresh :class:`~.pipeline.BearRecognizer` per repeat and takes, per repeat, the mean time of
-one ``step`` (ring buffer push, all twelve features of 64 channels, subtype classification of the 56
+through a fresh :class:`~.pipeline.BearRecogniser` per repeat and takes, per repeat, the mean time of
+one ``update`` (ring buffer, all twelve features of 64 channels, subtype classification of the 56
 fitted sensors, change events, symbolic filters and priority logic, named outputs); the figure is the
 median over repeats. Goal (issue 4): at most 200 us per cycle on one core.
 
@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from touch_driver.bear.protocol import REAL_RATE_HZ
-from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_lab.bear.evaluate import collect_training_rows, run_scene
 from touch_sim.bear.people import make_scene
@@ -40,7 +40,7 @@ def _levels(rate_hz: float, cycles: int, seed: int) -> tuple[np.ndarray, np.ndar
 def _small_model(rate_hz: float, buffer_len: int, seed: int) -> SubtypeClassifier:
     """A model trained on a short synthetic scene: its weights do not change the cost, only its shape."""
     scene = make_scene(n_people=1, seed=seed + 7, subtype_reps=1, gesture_reps=0)
-    rec = BearRecognizer(rate_hz, buffer_len, named_outputs=False)
+    rec = BearRecogniser(rate_hz, buffer_len, named_outputs=False)
     run = run_scene(scene, BearCycles(scene, rate_hz, seed=seed, device_options={'scan': 'parallel'}), {'f': rec},
                     keep_features=True)
     X, y = collect_training_rows(run, rec.fitted, seed=seed)
@@ -70,17 +70,17 @@ def bench_cycle(buffer_len: int = 20, rate_hz: float = REAL_RATE_HZ, repeats: in
     clock = time.perf_counter_ns
 
     def one_run(classifier) -> float:
-        rec = BearRecognizer(rate_hz, buffer_len, classifier=classifier)
+        rec = BearRecogniser(rate_hz, buffer_len, classifier=classifier)
         t0 = clock()
         for t, row in zip(times, levels, strict=True):
-            rec.step(float(t), row)
+            rec.update(float(t), row)
         return (clock() - t0) / 1e3 / len(times)
 
     def features_only() -> float:
-        rec = BearRecognizer(rate_hz, buffer_len)
+        rec = BearRecogniser(rate_hz, buffer_len)
         t0 = clock()
         for row in levels:
-            rec.buffer.push(row)
+            rec.buffer.update(row)
             rec.extractor.update(rec.buffer.window())
         return (clock() - t0) / 1e3 / len(times)
 

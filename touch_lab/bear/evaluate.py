@@ -42,7 +42,7 @@ import numpy as np
 
 from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_gestures.bear.gate import NoTouchGate
-from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from touch_gestures.bear.subtype_model import SubtypeClassifier
@@ -127,13 +127,13 @@ class SceneRun:
     features: np.ndarray | None = None
 
 
-def run_scene(scene: BearScene, source: BearCycles, recognizers: dict[str, BearRecognizer], keep_features: bool = False,
+def run_scene(scene: BearScene, source: BearCycles, recognisers: dict[str, BearRecogniser], keep_features: bool = False,
               progress: Callable[[str], None] | None = None) -> SceneRun:
     """Run every cycle of ``scene`` from ``source`` through each recogniser."""
     times, truth, active, feats = [], [], [], []
-    codes = {k: [] for k in recognizers}
-    events = {k: [] for k in recognizers}
-    steps = {k: [] for k in recognizers}
+    codes = {k: [] for k in recognisers}
+    events = {k: [] for k in recognisers}
+    steps = {k: [] for k in recognisers}
     clock = time.perf_counter_ns
     next_report = 0.0
     for cycle in source.cycles(scene.duration_s):
@@ -142,9 +142,9 @@ def run_scene(scene: BearScene, source: BearCycles, recognizers: dict[str, BearR
             row[ch] = subtype_index(sub)
         times.append(cycle.t)
         truth.append(row)
-        for name, rec in recognizers.items():
+        for name, rec in recognisers.items():
             t0 = clock()
-            out = rec.step(cycle.t, cycle.levels, cycle.faulty)
+            out = rec.update(cycle.t, cycle.levels, cycle.faulty)
             steps[name].append((clock() - t0) / 1e3)
             codes[name].append(out.codes)
             events[name].extend(out.symbolic_events)
@@ -178,7 +178,7 @@ def train_subtype_model(config: EvalConfig, progress: Callable[[str], None] | No
     """Train the eight-subtype model on a training scene (people other than the test scene's)."""
     scene = make_scene(n_people=config.train_people, seed=config.seed + 1000, subtype_reps=config.subtype_reps + 1,
                        gesture_reps=1)
-    rec = BearRecognizer(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False)
+    rec = BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False)
     run = run_scene(scene, bear_cycles(scene, config, config.seed + 1000), {'features': rec}, keep_features=True,
                     progress=progress)
     X, y = collect_training_rows(run, rec.fitted, seed=config.seed)
@@ -331,17 +331,17 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
                        gesture_reps=config.gesture_reps)
     say(f'test scene: {config.n_people} simulated people, {len(scene.labels)} labelled interactions, '
         f'{scene.duration_s:.0f} s')
-    recognizers = {
-        'model': BearRecognizer(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
-        'rule': BearRecognizer(config.rate_hz, config.buffer_len, detrend=config.detrend),
+    recognisers = {
+        'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
+        'rule': BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend),
     }
     source = bear_cycles(scene, config, config.seed)
-    run = run_scene(scene, source, recognizers, progress=say)
-    body_map = recognizers['model'].body_map
-    fitted = recognizers['model'].fitted
-    library = recognizers['model'].symbolic.library
+    run = run_scene(scene, source, recognisers, progress=say)
+    body_map = recognisers['model'].body_map
+    fitted = recognisers['model'].fitted
+    library = recognisers['model'].symbolic.library
     results = {}
-    for name, _rec in recognizers.items():
+    for name, _rec in recognisers.items():
         results[name] = {
             'subtype': score_subtypes(scene, run, run.codes[name], fitted, body_map, config.rate_hz),
             'symbolic': score_symbolic(scene, run, run.events[name], library),

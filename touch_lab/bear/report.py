@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from touch_gestures.bear.pipeline import BearRecognizer
+from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.bear.subtype_model import SubtypeClassifier
@@ -95,10 +95,10 @@ def alias_table(rates=(3.4, 10.0, 25.0), freqs=(0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10
                               depth=0.6)
             scene = BearScene([contact], [], 40.0, 'synthetic: one periodic touch on head2')
             config = EvalConfig(rate_hz=rate, buffer_len=buffer_len)
-            rec = BearRecognizer(rate, buffer_len, named_outputs=False)
+            rec = BearRecogniser(rate, buffer_len, named_outputs=False)
             seen = []
             for cycle in bear_cycles(scene, config, seed).cycles(scene.duration_s):
-                result = rec.step(cycle.t, cycle.levels, cycle.faulty)
+                result = rec.update(cycle.t, cycle.levels, cycle.faulty)
                 if 10.0 <= cycle.t < 39.0:
                     seen.append(float(result.features.base_frequency_hz[1]))
             row['measured'][rate] = float(np.median(seen))
@@ -109,7 +109,7 @@ def alias_table(rates=(3.4, 10.0, 25.0), freqs=(0.5, 1.0, 2.0, 3.0, 5.0, 7.5, 10
 
 def _rows(config: EvalConfig, seed: int, people: int) -> tuple[np.ndarray, np.ndarray]:
     scene = make_scene(n_people=people, seed=seed, subtype_reps=config.subtype_reps + 1, gesture_reps=1)
-    rec = BearRecognizer(config.rate_hz, config.buffer_len, named_outputs=False)
+    rec = BearRecogniser(config.rate_hz, config.buffer_len, named_outputs=False)
     run = run_scene(scene, bear_cycles(scene, config, seed), {'f': rec}, keep_features=True)
     return collect_training_rows(run, rec.fitted, seed=seed)
 
@@ -142,8 +142,7 @@ def compare_models(rate_hz: float = 3.4, buffer_len: int = 20, train_people: int
     for name, model in candidates.items():
         model.fit(Xtr, ytr)
         if hasattr(model, 'predict_codes'):
-            pred = model.predict_codes(Xte)
-            pred = pred[0] if isinstance(pred, tuple) else pred
+            pred = model.predict_codes(Xte)[0]
             predict = model.predict_codes
         else:
             pred = model.predict(Xte)
@@ -167,7 +166,7 @@ def gap_sweep(gaps=(0.5, 1.0, 1.5, 2.0), rates=(3.4, 25.0), n_people: int = 6, s
     for rate in rates:
         recs = {}
         for gap in gaps:
-            recs[gap] = BearRecognizer(rate, 20, library=library.with_default_gap(gap), named_outputs=False)
+            recs[gap] = BearRecogniser(rate, 20, library=library.with_default_gap(gap), named_outputs=False)
         run = run_scene(scene, bear_cycles(scene, EvalConfig(rate_hz=rate), seed), recs)
         for gap, rec in recs.items():
             score = score_symbolic(scene, run, run.events[gap], rec.symbolic.library)

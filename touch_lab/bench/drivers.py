@@ -35,7 +35,7 @@ def _parts(node: Any, recording: Recording) -> tuple[float, float]:
     decoder = node.driver.decoder
     decoder.reset()
     start = clock()
-    scans = [scan for chunk in recording.chunks for scan in decoder.feed(chunk)]
+    scans = [scan for chunk in recording.chunks for scan in decoder.update(chunk)]
     decode_s = clock() - start
     start = clock()
     for scan in scans:

@@ -183,7 +183,7 @@ class LiveSession:
 
     def on_frame(self, msg: Any) -> None:
         """One ``SkinFrame``: a finished gesture is offered to the recorder and answered."""
-        for gesture in self.stream.feed(msg):
+        for gesture in self.stream.update(msg):
             if self.recorder.done:
                 return
             kept, line = self.recorder.add(gesture)

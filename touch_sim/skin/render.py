@@ -157,7 +157,7 @@ def graph_gestures(stimulus: Any, duration_s: float | None = None, seed: int = 0
     frames = wire_frames if wire_frames is not None else wire_frames_before(duration_s)
     for _, msg, t in run.messages(frames, [('/skin/frame', 'SkinFrame')], slice_s=5.0):
         origin_ns = stamp_ns(msg) - round(t * _NS)
-        yield from (timed(g) for g in stream.feed(msg))
+        yield from (timed(g) for g in stream.update(msg))
     yield from (timed(g) for g in stream.flush())
 
 
@@ -175,7 +175,7 @@ def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings
         xy, down = stim.truth(times)
         empty = np.zeros((GRID, GRID), dtype=np.float32)
         for t, p, d in zip(times, xy, down, strict=True):
-            out += seg.feed(ideal_frame(p, settings.radius_mm) if d else empty, bool(d), p, t)
+            out += seg.update(ideal_frame(p, settings.radius_mm) if d else empty, bool(d), p, t)
         return out + seg.flush()
     # Frames 0 .. floor(duration * 150): the untouched lead, the trace and the lift.
     n = math.floor(stim.duration_s * FRAME_RATE_HZ + 1e-9) + 1
