@@ -88,9 +88,12 @@ setup(
         'scipy>=1.13.1,<1.18',  # also a dependency of scikit-learn; used directly (linalg, ndimage, signal)
         'pyserial>=3.5,<4',
         'pyyaml>=6.0,<7',
-        # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
-        # writer's chunk flush, so the minor version is pinned.
+        # The message type system (CDR, .msg parsing, type hashes) and the rosbag2 reader the player
+        # uses; public APIs only (0.11.9 is the newest release, tested; the lower bound in CI).
         'rosbags>=0.11.6,<0.12',
+        # MCAP writing (the recorder, with chunk CRCs; Writer.flush() is public from 1.5.0) and
+        # reading and rewriting torn files (bag reindex).
+        'mcap>=1.5.0,<1.7',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
