@@ -1,7 +1,7 @@
-"""Evaluation chain: traces -> virtual skin -> driver decode + calibration -> segmenter -> recognisers.
+"""Skin evaluation: traces -> virtual skin -> skin_driver (decode + calibration) -> segmenter -> recognisers.
 
-Everything here is synthetic and small: a few synthetic performers, rendered through the real
-chain (about 20 ms a sample).
+Everything here is synthetic and small: a few synthetic performers, rendered through the skin
+driver node in the harness (about 50 ms a sample).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def rendered(small_set):
     return render_samples(small_set, RenderSettings(mode='sensor', placement='mm'))
 
 
-def test_sensor_chain_gives_one_gesture_per_trace_close_to_the_finger(small_set, rendered):
+def test_the_sensor_path_gives_one_gesture_per_trace_close_to_the_finger(small_set, rendered):
     assert [len(r.gestures) for r in rendered] == [1] * len(small_set)
     for sample, r in zip(small_set, rendered, strict=True):
         g = r.gestures[0]
