@@ -149,3 +149,22 @@ def test_simulated_sessions_are_labelled_synthetic(monkeypatch, push_scene, rend
 
 def test_doctests():
     assert doctest.testmod(render_module).failed == 0
+
+
+def test_a_run_whose_end_rounds_down_to_whole_nanoseconds_ends(push_scene):
+    """17 scans: the 20 Hz frames complete at scans 4, 9 and 14 and none comes in the two polls after the last
+    scan, so the run stops at its end, 17 x 0.01 + 2 polls = 0.18000000000000002 s, 0.18 s in whole ns."""
+    import signal
+
+    from touch_sim.harness import DeviceRun
+
+    def hung(signum, frame):
+        raise AssertionError('DeviceRun.messages did not stop')
+    old = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(20)
+    try:
+        run = DeviceRun('patch', push_scene, seed=1)
+        assert len(list(run.messages(17, [('/patch/frame', 'PatchFrame')]))) == 3 and run.counters['wire_frames'] == 17
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)

@@ -128,9 +128,13 @@ class Harness:
         """A message's stamp in seconds since the harness started."""
         return (stamp_ns(msg) - self.start_ns) / _NS
 
+    def time_ns(self, t_s: float) -> int:
+        """The graph time (ns) ``t_s`` seconds after the start."""
+        return self.start_ns + round(t_s * _NS)
+
     def spin_until(self, t_s: float) -> None:
         """Run every callback due up to ``t_s`` seconds since the start."""
-        self.executor.spin_until_time(self.start_ns + round(t_s * _NS))
+        self.executor.spin_until_time(self.time_ns(t_s))
 
     def spin_for(self, seconds: float) -> None:
         """Run ``seconds`` more of graph time."""
@@ -235,11 +239,13 @@ class DeviceRun:
                 harness.subscribe(topic, msg_type, lambda msg, topic=topic: inbox.append((topic, msg)),
                                   int(2 * slice_s / period) + 16)
             poll_s = 1.0 / driver.get_parameter('poll_rate_hz').value
-            end_s = n * period + 2 * poll_s
+            # Whole nanoseconds: a loop on float seconds may never reach an end that rounds down.
+            end_ns, slice_ns = harness.time_ns(n * period + 2 * poll_s), round(slice_s * _NS)
+            now_ns = harness.context.now_ns
             last_seq: int | None = None
             index, done = -1, n <= 0
-            while not done and harness.now_s < end_s:
-                harness.spin_until(min(harness.now_s + slice_s, end_s))
+            while not done and now_ns() < end_ns:
+                harness.executor.spin_until_time(min(now_ns() + slice_ns, end_ns))
                 while inbox and not done:
                     topic, msg = inbox.popleft()
                     seq = getattr(msg, 'sequence', None)
