@@ -77,7 +77,8 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         'correct events and 26 % false detections on its real data (sympartner2018 Fig. 6).',
         '',
         f'Data: {people} simulated people x 4 gestures x {events} events = {best["n_events"]} events in '
-        f'{frames} frames at 20 Hz ({frames / 20 / 60:.0f} min), seed {seed}, {source}. One class per session, pauses of at least 4 s (6.3). Leave-one-subject-out: trained on '
+        f'{frames} frames at 20 Hz ({frames / 20 / 60:.0f} min), seed {seed}, {source}. One class per session, '
+        'pauses of at least 4 s (6.3). Leave-one-subject-out: trained on '
         f'every frame of {people - 1} people (silences included, labelled with the session class), tested on the '
         'held-out person, frame by frame. Matching rules: touch_lab/patch/evaluate.py. The defaults of '
         'the code were chosen on other simulated people (seed 1); as in the paper, the best grid setting below '
