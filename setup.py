@@ -26,15 +26,60 @@ NODES: dict[str, tuple[str, str]] = {
     'foxglove_server': ('touch_view.foxglove_node', 'FoxgloveServerNode'),
 }
 
+# Plug-in points, importlib.metadata entry point groups. A package registers what it brings here; the
+# runtime finds it by group, so it never names (or imports) a module of the simulation or the lab.
+ENTRY_POINT_GROUPS: dict[str, list[str]] = {
+    # `social-touch NAME`: a module (or object) with add_arguments(parser) and run(args) (touch_graph.cli.main).
+    'social_touch.commands': [
+        'launch = touch_graph.launch.cli', 'topic = touch_graph.cli.topic', 'node = touch_graph.cli.node',
+        'record = touch_graph.cli.record', 'play = touch_graph.cli.play', 'bag = touch_graph.cli.bag',
+        'interface = touch_graph.cli.interface', 'export-interfaces = touch_graph.cli.export_interfaces',
+        'param = touch_graph.cli.param', 'service = touch_graph.cli.service',
+        'view = touch_view.cli', 'foxglove = touch_view.foxglove_cli',
+        'demo = touch_sim.demo',
+        'eval = touch_lab.cli.targets:EVAL', 'train = touch_lab.cli.targets:TRAIN',
+        'codebook = touch_lab.cli.targets:CODEBOOK', 'report = touch_lab.cli.targets:REPORT',
+        'bench = touch_lab.cli.bench', 'lines = touch_lab.lines',
+    ],
+    # Targets of the lab's commands (touch_lab.cli.targets): add_arguments(parser), run(args), HELP.
+    'social_touch.eval': ['bear = touch_lab.bear.cli', 'patch = touch_lab.patch.cli:EVAL', 'skin = touch_lab.skin.cli',
+                          'skin-sessions = touch_lab.skin.session_eval'],
+    'social_touch.train': ['bear = touch_lab.bear.train', 'patch = touch_lab.patch.cli:TRAIN'],
+    'social_touch.codebook': ['record = touch_lab.skin.record_cli'],
+    'social_touch.report': ['bear = touch_lab.bear.report', 'patch = touch_lab.patch.report',
+                            'skin = touch_lab.skin.report', 'view-screenshot = touch_view.screenshot',
+                            'foxglove-layout = touch_view.foxglove_layout'],
+    # `social-touch bench NAME`: a function bench(repeats=N) -> dict.
+    'social_touch.bench': [
+        'runtime = touch_lab.bench.runtime:bench_runtime', 'drivers = touch_lab.bench.drivers:bench_drivers',
+        'transport = touch_lab.bench.transport:bench_transport', 'view = touch_view.bench:bench_view',
+        'bear = touch_lab.bear.bench:bench_cycle',
+        'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
+        'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
+        'stack = touch_lab.bench.stack:bench_stack',
+    ],
+    # `generator: NAME` in a scene file (touch_sim.scenes): a function returning a stimulus.
+    'social_touch.scene_generators': ['bear_people = touch_sim.bear.people:make_scene',
+                                      'patch_people = touch_sim.patch.people:people_scene',
+                                      'skin_people = touch_sim.skin.people:people_scene'],
+    # URL scheme -> the package of its pyserial handler (protocol_<scheme>.py), added to
+    # serial.protocol_handler_packages by the drivers when a port uses the scheme (touch_driver.ports).
+    'social_touch.serial_url_handlers': ['bearsim = touch_sim.urlhandlers', 'patchsim = touch_sim.urlhandlers',
+                                         'skinsim = touch_sim.urlhandlers'],
+}
+
 setup(
     name=PACKAGE,
     version='0.1.0',
     description='Touch perception for a social robot: drivers and gesture recognisers as a ROS 2 node graph',
     license='Apache-2.0',
     python_requires='>=3.10',
-    packages=find_packages(include=['touch_graph', 'touch_graph.*', 'touch_driver', 'touch_driver.*',
-                                    'touch_gestures', 'touch_gestures.*', 'touch_view', 'touch_view.*',
-                                    'social_touch_msgs', 'social_touch_msgs.*']),
+    # Three layers, one distribution: the runtime (touch_graph, touch_driver, touch_gestures), the
+    # simulation (touch_sim: the demo runs on it) and the lab (touch_lab); beside them the live view
+    # (touch_view) and the ROS-style import of our messages (social_touch_msgs).
+    packages=find_packages(include=[f'{top}{sub}' for top in ('touch_graph', 'touch_driver', 'touch_gestures',
+                                                               'touch_sim', 'touch_lab', 'touch_view',
+                                                               'social_touch_msgs') for sub in ('', '.*')]),
     # The view's page, its assets and the Foxglove layout: shipped in the package, nothing fetched online.
     package_data={'touch_view': ['static/*.html', 'static/*.js', 'static/*.css', 'bear_layout.yaml',
                                  'layouts/*.json']},
@@ -55,8 +100,8 @@ setup(
         'scipy>=1.13.1,<1.18',  # also a dependency of scikit-learn; used directly (linalg, ndimage, signal)
         'pyserial>=3.5,<4',
         'pyyaml>=6.0,<7',
-        # The message type system and rosbag2/MCAP I/O; touch_graph.bag uses the MCAP
-        # writer's chunk flush, so the minor version is pinned.
+        # The message type system (CDR, .msg parsing, type hashes) and the rosbag2 reader the player
+        # uses; public APIs only (0.11.9 is the newest release, tested; the lower bound in CI).
         'rosbags>=0.11.6,<0.12',
         # social-touch foxglove: the Foxglove WebSocket server (touch_view.foxglove_node); 0.25 is the
         # first release whose start_server takes message_backlog_size (a bounded queue per client).
@@ -64,6 +109,9 @@ setup(
         # Cyclone DDS between processes and machines; the wheel bundles the C library. 11.0.1 is
         # the oldest release with a wheel for Python 3.11 (0.10.x must be built from source).
         'cyclonedds>=11.0.1,<12',
+        # MCAP writing (the recorder, with chunk CRCs; Writer.flush() is public from 1.5.0) and
+        # reading and rewriting torn files (bag reindex).
+        'mcap>=1.5.0,<1.7',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',
@@ -79,5 +127,6 @@ setup(
         ],
         # exec name -> node class, for in-process launch.
         'social_touch.nodes': [f'{name} = {module}:{cls}' for name, (module, cls) in NODES.items()],
+        **ENTRY_POINT_GROUPS,
     },
 )

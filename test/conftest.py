@@ -19,7 +19,7 @@ import socket
 import pytest
 from dds_testing import allocate_domain
 
-from touch_driver.virtual_port import forget_devices
+from touch_sim.virtual_port import forget_devices
 from touch_view.scene import BackgroundScene
 
 os.environ['SOCIAL_TOUCH_NETWORK'] = '0'

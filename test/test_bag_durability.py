@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from rosbags.rosbag2 import Reader
+from rosbags.rosbag2 import Reader, ReaderError
 
 from touch_graph.bag import BagRecorder, reindex
 from touch_graph.bag.reindex import scan_mcap
@@ -193,3 +193,66 @@ def test_sigkill_of_a_recording_process_loses_at_most_the_last_flush_period(tmp_
     messages = [m for _, _, m in read_all(bag)]
     assert len(messages) == report.message_count >= 40
     assert messages == [f'm{i}' for i in range(len(messages))]  # a gapless prefix of what was published
+
+
+def _chunks(path):
+    """(offset of the chunk's records, their length, CRC) of every chunk record of an MCAP file."""
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+    out = []
+    with path.open('rb') as f:
+        reader = StreamReader(f, emit_chunks=True)
+        for record in reader.records:
+            if isinstance(record, Chunk):
+                # The chunk's records are its last bytes before the message indexes follow.
+                out.append((f.tell() - len(record.data), len(record.data), record.uncompressed_crc, record.data))
+    return out
+
+
+def three_chunk_bag(bag):
+    """A closed bag of 30 messages in three chunks of ten."""
+    rec = BagRecorder(bag, flush_period_s=None).open()
+    for block in range(3):
+        write_messages(rec, 10 * block, 10 * block + 10)
+        rec.flush()
+    rec.close()
+
+
+def test_every_chunk_is_written_with_the_crc_of_its_records(tmp_path):
+    import zlib
+    three_chunk_bag(tmp_path / 'bag')
+    chunks = _chunks(tmp_path / 'bag' / 'bag.mcap')
+    assert len(chunks) == 3
+    for _, _, crc, data in chunks:
+        assert crc != 0 and crc == zlib.crc32(data)
+
+
+def test_a_corrupted_chunk_is_detected_by_reading_and_dropped_by_reindex(tmp_path):
+    from touch_graph.bag import BagPlayer
+    three_chunk_bag(tmp_path / 'bag')
+    path = tmp_path / 'bag' / 'bag.mcap'
+    offset, length, _, _ = _chunks(path)[1]
+    data = bytearray(path.read_bytes())
+    data[offset + length - 3] ^= 0x40          # one bit of a message of the middle chunk, framing intact
+    path.write_bytes(bytes(data))
+    # Reading: the CRC catches it, where a reader without it would hand over a wrong message.
+    with pytest.raises(ReaderError, match=r'(?i)checksum'):
+        read_all(tmp_path / 'bag')
+    with pytest.raises(BagError, match='unreadable'), BagPlayer(tmp_path / 'bag') as player:
+        list(player.messages())
+    # Reindex: finds it, keeps the other chunks, and leaves a bag every reader opens.
+    scan = scan_mcap(path)
+    assert scan.corrupt_chunks == 1 and scan.message_count == 20 and 'corrupt chunk' in scan.stop_reason
+    report = reindex(tmp_path / 'bag')
+    assert report.repaired == ['bag.mcap'] and report.corrupt_chunks == 1 and report.message_count == 20
+    assert [m for _, _, m in read_all(tmp_path / 'bag')] == [f'm{i}' for i in (*range(10), *range(20, 30))]
+    again = reindex(tmp_path / 'bag')
+    assert again.repaired == [] and again.corrupt_chunks == 0 and again.message_count == 20
+
+
+@pytest.mark.parametrize('name', ['touch_graph.bag.metadata', 'touch_graph.bag.definitions', 'touch_graph.bag.player'])
+def test_bag_doctests(name):
+    import doctest
+    import importlib
+    result = doctest.testmod(importlib.import_module(name))
+    assert result.failed == 0 and result.attempted > 0

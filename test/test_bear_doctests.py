@@ -8,8 +8,8 @@ import importlib
 import pytest
 
 MODULES = ['touch_gestures.bear.sensor_level', 'touch_gestures.bear.features', 'touch_gestures.bear.subtype',
-           'touch_gestures.bear.subtype_labels', 'touch_gestures.bear.subtype_model', 'touch_gestures.bear.scene',
-           'touch_gestures.bear.chain', 'touch_gestures.bear.pipeline']
+           'touch_gestures.bear.subtype_labels', 'touch_gestures.bear.subtype_model', 'touch_sim.bear.people',
+           'touch_sim.bear.render', 'touch_gestures.bear.pipeline']
 
 
 @pytest.mark.parametrize('name', MODULES)

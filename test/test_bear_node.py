@@ -13,7 +13,7 @@ import touch_gestures.bear.node as node_module
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.bear.subtype_model import SubtypeClassifier
-from touch_gestures.bear.symbolic import END, START, SymbolicRecognizer
+from touch_gestures.bear.symbolic import END, START, SymbolicRecogniser
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
@@ -64,7 +64,7 @@ class Graph:
         self.executor.add_node(self.node)
         self.executor.add_node(self.feeder)
 
-    def feed(self, frames) -> None:
+    def update(self, frames) -> None:
         for msg in frames:
             self.pub.publish(msg)
             self.executor.spin_for(0.0)      # deliver now: every ready callback runs
@@ -95,7 +95,7 @@ def test_head_hold_gives_sensor_level_every_cycle_subtypes_and_a_head_pat_start_
     g = graph(subtype_classifier='rule')
     head2 = ch('head2')[0]
     touch = range(10, 27)                                        # 17 scans = 5 s of hold at 3.4 Hz
-    g.feed(frame(i, {head2: 0.9} if i in touch else None) for i in range(50))
+    g.update(frame(i, {head2: 0.9} if i in touch else None) for i in range(50))
     levels = g.got['sensor_level']
     assert len(levels) == 50 and g.node.frames == 50 and not g.node.skipped
     assert [s.name for s in levels[12].sensors] == ['head2'] and levels[12].sensors[0].level == pytest.approx(0.9)
@@ -125,10 +125,10 @@ def test_head_hold_gives_sensor_level_every_cycle_subtypes_and_a_head_pat_start_
 def test_the_shipped_model_classifies_and_startup_gives_no_false_subtypes(graph) -> None:
     g = graph()
     assert g.node.classifier_kind == 'model'
-    g.feed(frame(i) for i in range(25))                         # nobody touches the bear while its buffer fills
+    g.update(frame(i) for i in range(25))                         # nobody touches the bear while its buffer fills
     assert g.got['subtype'] == [] and g.got['symbolic'] == [] and len(g.got['sensor_level']) == 25
     paw = ch('paw_left_palm')[0]
-    g.feed(frame(i, {paw: 1.0} if i < 40 else None) for i in range(25, 60))
+    g.update(frame(i, {paw: 1.0} if i < 40 else None) for i in range(25, 60))
     named = [(m.sensor, m.subtype) for m in g.got['subtype']]
     assert named and {s for s, _ in named} == {'paw_left_palm'} and named[-1] == ('paw_left_palm', 'none')
     assert all(0.0 < m.confidence <= 1.0 for m in g.got['subtype'])
@@ -142,7 +142,7 @@ def test_bad_frames_are_counted_and_skipped_and_the_node_goes_on(graph) -> None:
     short.level = np.zeros(10, np.float32)                     # attribute writes are not checked
     no_faults = frame(3)
     no_faults.faults = np.zeros(0, np.uint8)
-    g.feed([frame(0), nan, short, no_faults, frame(0), frame(4)])
+    g.update([frame(0), nan, short, no_faults, frame(0), frame(4)])
     assert g.node.skipped == {'non_finite': 1, 'wrong_size': 2, 'repeated_stamp': 1}
     assert g.node.frames == 2 and len(g.got['sensor_level']) == 2 and g.ctx.callback_errors == 0
 
@@ -157,7 +157,7 @@ def test_faulty_and_unfitted_channels_read_as_untouched(graph) -> None:
         msg.fitted = msg.fitted.copy()
         msg.fitted[head3] = False                                 # the driver says nothing is fitted there
         frames.append(msg)
-    g.feed(frames)
+    g.update(frames)
     assert {s.name for m in g.got['sensor_level'] for s in m.sensors} == {'head2'}
     assert {m.sensor for m in g.got['subtype']} == {'head2'}
     assert all(m.sensors == ['head2'] for m in g.got['symbolic'])
@@ -166,10 +166,10 @@ def test_faulty_and_unfitted_channels_read_as_untouched(graph) -> None:
 def test_time_going_back_ends_what_is_under_way_and_starts_afresh(graph) -> None:
     g = graph(subtype_classifier='rule')
     hug = ch('chest_left', 'back_upper', 'side_left_upper', 'side_right_upper', 'back_middle')
-    g.feed(frame(i, dict.fromkeys(hug, 1.0)) for i in range(12))
+    g.update(frame(i, dict.fromkeys(hug, 1.0)) for i in range(12))
     assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START)]
     before = len(g.got['subtype'])
-    g.feed([frame(3)])                                            # a looped bag: time jumps back 2.6 s
+    g.update([frame(3)])                                            # a looped bag: time jumps back 2.6 s
     assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START), ('hug', END)]
     end = g.got['symbolic'][-1]
     assert end.header.stamp == frame(11).header.stamp and end.duration_s == pytest.approx(11 / RATE, abs=1e-5)
@@ -181,7 +181,7 @@ def test_time_going_back_ends_what_is_under_way_and_starts_afresh(graph) -> None
 def test_frames_that_stop_end_gestures_after_max_gap(graph) -> None:
     g = graph(subtype_classifier='rule', max_gap_s=2.0)
     head2 = ch('head2')[0]
-    g.feed(frame(i, {head2: 1.0}) for i in range(12))
+    g.update(frame(i, {head2: 1.0}) for i in range(12))
     assert [(n, s) for n, s, _ in g.symbolic()] == [('head_pat', START)]
     g.executor.spin_for(3.0)                                     # no frame for 3 s of graph time
     assert [(n, s) for n, s, _ in g.symbolic()] == [('head_pat', START), ('head_pat', END)]
@@ -193,7 +193,7 @@ def test_frames_that_stop_end_gestures_after_max_gap(graph) -> None:
 def test_dwell_and_gap_parameters_override_the_files_defaults(graph) -> None:
     head2 = ch('head2')[0]
     quick = graph(subtype_classifier='rule', dwell_s=0.5)
-    quick.feed(frame(i, {head2: 1.0}) for i in range(12))
+    quick.update(frame(i, {head2: 1.0}) for i in range(12))
     assert quick.symbolic()[0][:2] == ('head_pat', START)
     assert quick.symbolic()[0][2] == pytest.approx(2 / RATE, abs=1e-6)   # 0.59 s >= 0.5 s after the onset
 
@@ -201,18 +201,18 @@ def test_dwell_and_gap_parameters_override_the_files_defaults(graph) -> None:
 def test_symbolic_off_does_no_symbolic_work_and_both_off_computes_no_features(graph, monkeypatch) -> None:
     def refuse(*args, **kwargs):
         raise AssertionError('symbolic work done although publish_symbolic is false')
-    monkeypatch.setattr(SymbolicRecognizer, 'update', refuse)
+    monkeypatch.setattr(SymbolicRecogniser, 'update', refuse)
     head2 = ch('head2')[0]
     g = graph(subtype_classifier='rule', publish_symbolic=False)
     assert g.node.symbolic_pub is None and g.node.count_publishers('/touch/symbolic') == 0
-    assert len(g.node.recognizer.symbolic.library) == 0
-    g.feed(frame(i, {head2: 1.0}) for i in range(12))
+    assert len(g.node.recogniser.symbolic.library) == 0
+    g.update(frame(i, {head2: 1.0}) for i in range(12))
     assert g.got['subtype'] and g.ctx.callback_errors == 0
 
     levels_only = graph(publish_symbolic=False, publish_subtypes=False)
     assert levels_only.node.classifier_kind is None and levels_only.node.subtype_pub is None
-    monkeypatch.setattr(levels_only.node.recognizer.extractor, 'update', refuse)
-    levels_only.feed(frame(i, {head2: 1.0}) for i in range(12))
+    monkeypatch.setattr(levels_only.node.recogniser.extractor, 'update', refuse)
+    levels_only.update(frame(i, {head2: 1.0}) for i in range(12))
     assert len(levels_only.got['sensor_level']) == 12 and levels_only.ctx.callback_errors == 0
     assert levels_only.got['sensor_level'][-1].sensors[0].name == 'head2'
 
@@ -281,7 +281,7 @@ def test_the_shipped_model_file_is_small_pickle_free_and_trained_at_the_real_rat
     model = SubtypeClassifier.load(path)
     assert (model.trained_rate_hz_, model.trained_buffer_len_) == (3.4, 20) and len(model.classes_) == 9
     notes = path.with_suffix('.md').read_text()
-    assert 'synthetic' in notes.lower() and 'python -m touch_gestures.bear.train' in notes
+    assert 'synthetic' in notes.lower() and 'social-touch train bear' in notes
 
 
 def test_gate_doctest() -> None:
@@ -291,10 +291,10 @@ def test_gate_doctest() -> None:
 
 def test_frames_at_another_rate_than_rate_hz_give_one_warning(graph, capfd) -> None:
     g = graph(subtype_classifier='rule')
-    g.feed(frame(i, rate=25.0) for i in range(60))
+    g.update(frame(i, rate=25.0) for i in range(60))
     assert capfd.readouterr().err.count('frames arrive at 25.00 Hz but rate_hz is 3.4') == 1
     right = graph(subtype_classifier='rule', rate_hz=25.0)
-    right.feed(frame(i, rate=25.0) for i in range(60))
+    right.update(frame(i, rate=25.0) for i in range(60))
     assert 'frames arrive at' not in capfd.readouterr().err
 
 
@@ -305,7 +305,7 @@ def test_a_ros_parameter_file_sets_nested_rule_constants(tmp_path: Path) -> None
     ctx = Context('sim')
     ctx.init()
     node = BearGesturesNode(context=ctx, namespace='bear', cli_args=['--ros-args', '--params-file', str(params)])
-    rule = node.recognizer.classifier
+    rule = node.recogniser.classifier
     assert (rule.tickle_cutoff, rule.poke_max_s, rule.pet_cutoff) == (2.0, 2.0, 0.25)
-    assert node.recognizer.buffer.buffer_len == 30 and node.classifier_kind == 'rule'
+    assert node.recogniser.buffer.buffer_len == 30 and node.classifier_kind == 'rule'
     ctx.shutdown()

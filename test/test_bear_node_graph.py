@@ -1,5 +1,6 @@
-"""The bear in the node graph: GraphChain against DriverChain, driver + recognisers in one simulated-time graph,
-the generated people scene and the bear launch file (all data synthetic)."""
+"""The bear in the node graph: the harness's cycles against the device's bytes decoded and calibrated directly,
+driver + recognisers in one simulated-time graph, the generated people scene and the bear launch file (all data
+synthetic)."""
 
 from __future__ import annotations
 
@@ -14,11 +15,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import touch_gestures.bear.graph_chain as graph_chain_module
-from touch_driver import virtual_port
+import touch_sim.bear.render as render_module
 from touch_driver.bear.body_map import BodyMap
+from touch_driver.bear.calibration import BearCalibrator
 from touch_driver.bear.node import BearDriverNode
-from touch_driver.scenes import (
+from touch_driver.bear.protocol import BearDecoder
+from touch_gestures.bear.node import BearGesturesNode
+from touch_gestures.bear.symbolic import END, START
+from touch_graph.errors import ConfigError
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.bear import cli
+from touch_sim import virtual_port
+from touch_sim.bear.device import BearDevice
+from touch_sim.bear.people import BearScene
+from touch_sim.bear.render import BearCycles
+from touch_sim.scenes import (
     BearScript,
     BearTouch,
     load_stimulus,
@@ -26,16 +38,7 @@ from touch_driver.scenes import (
     registered_stimuli,
     unregister_stimulus,
 )
-from touch_driver.virtual_port import forget_devices
-from touch_gestures.bear import cli
-from touch_gestures.bear.chain import DriverChain
-from touch_gestures.bear.graph_chain import GraphChain
-from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.scene import BearScene
-from touch_gestures.bear.symbolic import END, START
-from touch_graph.errors import ConfigError
-from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.virtual_port import forget_devices
 
 ROOT = Path(__file__).resolve().parents[1]
 BODY = BodyMap.default()
@@ -58,46 +61,59 @@ def fresh_devices():
     forget_devices()
 
 
-def test_graph_chain_gives_the_driver_chains_cycles_for_the_same_seed() -> None:
+def decoded_directly(script, rate_hz, seed, device_options, duration_s):
+    """The reference: every frame of the device's bytes through a BearDecoder and a BearCalibrator with the
+    driver's defaults, stamped with its scan time."""
+    device = BearDevice(script, rate_hz=rate_hz, seed=seed, **device_options)
+    decoder, calibrator = BearDecoder(), BearCalibrator(rate_hz=rate_hz)
+    out = []
+    for index in range(int(np.ceil(duration_s * rate_hz - 1e-9))):
+        for scan in decoder.update(device.frame_bytes(index, index * device.frame_period)):
+            levels = calibrator.update(scan.raw)
+            out.append((index / rate_hz, levels.level, levels.faults != 0))
+    return out
+
+
+def test_the_harness_gives_the_devices_bytes_as_the_driver_decodes_and_calibrates_them() -> None:
     options = {'scan': 'sequential', 'noise': 3.0, 'faults': {'head3': 'dead'}}
-    graph = list(GraphChain(SCRIPT, rate_hz=3.4, seed=5, device_options=options).cycles(25.0))
-    driver = list(DriverChain(SCRIPT, rate_hz=3.4, seed=5, device_options=options).cycles(25.0))
-    assert len(graph) == len(driver) == 85
-    assert all(np.array_equal(g.levels, d.levels) and np.array_equal(g.faulty, d.faulty)
-               for g, d in zip(graph, driver, strict=True))
+    graph = list(BearCycles(SCRIPT, rate_hz=3.4, seed=5, device_options=options).cycles(25.0))
+    direct = decoded_directly(SCRIPT, 3.4, 5, options, 25.0)
+    assert len(graph) == len(direct) == 85
+    assert all(np.array_equal(g.levels, level) and np.array_equal(g.faulty, faulty)
+               for g, (_, level, faulty) in zip(graph, direct, strict=True))
     assert any(g.levels[BODY.by_name('head2').channel] > 0.5 for g in graph)
-    # The one difference: a graph cycle is stamped when the driver's poll timer (2 x 3.4 Hz) read the frame.
-    lag = np.array([g.t - d.t for g, d in zip(graph, driver, strict=True)])
+    # A cycle is stamped when the driver's poll timer (2 x 3.4 Hz) read the frame: 0 to one poll after its scan.
+    lag = np.array([g.t - t for g, (t, _, _) in zip(graph, direct, strict=True)])
     assert np.all(lag >= -1e-6) and np.all(lag <= 1 / 6.8 + 1e-6)
     assert lag[0] == pytest.approx(1 / 6.8, abs=1e-6) and np.median(np.abs(lag)) < 1e-6
-    other = list(GraphChain(SCRIPT, rate_hz=3.4, seed=6, device_options=options).cycles(5.0))
+    other = list(BearCycles(SCRIPT, rate_hz=3.4, seed=6, device_options=options).cycles(5.0))
     assert not all(np.array_equal(a.levels, b.levels) for a, b in zip(other, graph[:len(other)], strict=True))
 
 
-def test_graph_chain_cleans_up_and_reports_counters() -> None:
-    chain = GraphChain(SCRIPT, rate_hz=3.4, seed=1, calibrator_options={'baseline_frames': 5})
-    cycles = list(chain.cycles(4.0))
-    assert len(cycles) == 14 and chain.counters['frames'] >= 14 and chain.counters['checksum_errors'] == 0
-    leftovers = lambda: [n for n in (*registered_stimuli(), *virtual_port._registry) if n.startswith('graphchain-')]  # noqa: E731
+def test_the_harness_cleans_up_and_reports_counters() -> None:
+    source = BearCycles(SCRIPT, rate_hz=3.4, seed=1, calibrator_options={'baseline_frames': 5})
+    cycles = list(source.cycles(4.0))
+    assert len(cycles) == 14 and source.counters['frames'] >= 14 and source.counters['checksum_errors'] == 0
+    leftovers = lambda: [n for n in (*registered_stimuli(), *virtual_port._registry) if n.startswith('bear-harness-')]  # noqa: E731
     assert not leftovers()
-    early = GraphChain(SCRIPT, rate_hz=3.4, seed=1).cycles(30.0)
+    early = BearCycles(SCRIPT, rate_hz=3.4, seed=1).cycles(30.0)
     next(early)
     assert leftovers()
     early.close()                                            # a caller that stops early leaves nothing behind
     assert not leftovers()
 
 
-def test_graph_chain_rejects_options_a_url_cannot_carry() -> None:
+def test_bear_cycles_reject_options_a_url_cannot_carry() -> None:
     with pytest.raises(ValueError, match="'baseline_range' cannot be set through a bearsim URL"):
-        GraphChain(SCRIPT, device_options={'baseline_range': (0, 10)})
+        BearCycles(SCRIPT, device_options={'baseline_range': (0, 10)})
     with pytest.raises(ValueError, match='not bear_driver parameters'):
-        GraphChain(SCRIPT, calibrator_options={'gain': 2.0})
+        BearCycles(SCRIPT, calibrator_options={'gain': 2.0})
     with pytest.raises(ValueError, match='rate_hz'):
-        GraphChain(SCRIPT, rate_hz=0.0)
+        BearCycles(SCRIPT, rate_hz=0.0)
 
 
-def test_graph_chain_doctests() -> None:
-    result = doctest.testmod(graph_chain_module)
+def test_render_doctests() -> None:
+    result = doctest.testmod(render_module)
     assert result.failed == 0 and result.attempted > 0
 
 
@@ -152,11 +168,12 @@ def test_the_people_scene_file_makes_a_labelled_synthetic_scene() -> None:
 
 
 @pytest.mark.parametrize('body, message', [
-    ('generator: os:system\n', "generator must be 'module:function' in touch_gestures or touch_driver"),
-    ('generator: touch_gestures.bear.scene:make_scen\n', "cannot find generator"),
-    ('generator: touch_gestures.bear.scene:make_scene\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
-    ('generator: touch_gestures.bear.scene:make_scene\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
-    ('generator: touch_gestures.bear.scene:make_scene\ntouches: []\n', 'not both'),
+    ('generator: os:system\n', "no scene generator 'os:system'"),
+    ('generator: touch_sim.bear.people:make_scene\n', "no scene generator 'touch_sim.bear.people:make_scene'"),
+    ('generator: bear_peple\n', "did you mean 'bear_people'"),
+    ('generator: bear_people\noptions: {n_peple: 2}\n', "did you mean 'n_people'"),
+    ('generator: bear_people\noptions: {n_people: 0}\n', 'n_people must be >= 1'),
+    ('generator: bear_people\ntouches: []\n', 'not both'),
     ('options: {n_people: 2}\ntouches: []\n', "'options' are the keyword arguments of a 'generator'"),
 ])
 def test_a_bad_generated_scene_gives_one_clear_error_with_file_and_line(tmp_path: Path, body: str, message: str):
@@ -167,15 +184,14 @@ def test_a_bad_generated_scene_gives_one_clear_error_with_file_and_line(tmp_path
     assert message in str(err.value) and str(path) in str(err.value) and err.value.line is not None
 
 
-def test_eval_bear_runs_through_the_graph_by_default(capsys) -> None:
+def test_eval_bear_runs_through_the_driver_node(capsys) -> None:
     parser = argparse.ArgumentParser()
     cli.add_arguments(parser)
     args = parser.parse_args(['--json', '--quiet', '--people', '1', '--train-people', '1', '--reps', '1'])
-    assert args.chain == 'graph'
     assert cli.run(args) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result['config']['chain'] == 'graph' and 'synthetic' in result['data']
-    assert result['chain']['frames'] >= result['cycles'] > 100 and result['chain']['checksum_errors'] == 0
+    assert 'synthetic' in result['data']
+    assert result['driver']['frames'] >= result['cycles'] > 100 and result['driver']['checksum_errors'] == 0
     assert 0.0 <= result['subtype_accuracy'] <= 1.0 and 0.0 <= result['symbolic_accuracy'] <= 1.0
 
 

@@ -24,7 +24,7 @@ def test_window_is_chronological_and_bounded() -> None:
     buf = LevelBuffer(buffer_len=4)
     assert buf.window().shape == (0, 64)
     for i in range(10):
-        buf.push(np.full(64, i / 10, dtype=np.float32))
+        buf.update(np.full(64, i / 10, dtype=np.float32))
         assert buf.window().shape == (min(i + 1, 4), 64)
     np.testing.assert_allclose(buf.window()[:, 5], [0.6, 0.7, 0.8, 0.9], rtol=1e-6)
     assert buf.window().dtype == np.float32
@@ -39,7 +39,7 @@ def test_window_matches_a_reference_deque(n: int, rows: list[float]) -> None:
     buf = LevelBuffer(buffer_len=n)
     ref: deque = deque(maxlen=n)
     for value in rows:
-        buf.push(np.full(64, value, dtype=np.float32))
+        buf.update(np.full(64, value, dtype=np.float32))
         clean = 0.0 if not np.isfinite(value) else min(max(value, 0.0), 1.0)
         ref.append(clean)
     np.testing.assert_allclose(buf.window()[:, 0], np.array(ref, dtype=np.float32))
@@ -51,7 +51,7 @@ def test_nan_and_inf_are_counted_and_read_as_no_touch() -> None:
     levels = np.zeros(64, dtype=np.float32)
     levels[[2, 7]] = [np.nan, np.inf]
     levels[9] = 0.8
-    buf.push(levels)
+    buf.update(levels)
     assert buf.invalid_counts[2] == 1 and buf.invalid_counts[7] == 1 and buf.invalid_counts.sum() == 2
     assert buf.latest()[2] == 0.0 and buf.latest()[7] == 0.0
     assert np.flatnonzero(buf.active()).tolist() == [9]
@@ -63,7 +63,7 @@ def test_faulty_channels_read_as_untouched() -> None:
     faulty = np.zeros(64, dtype=bool)
     faulty[24] = True
     for _ in range(5):
-        buf.push(np.ones(64, dtype=np.float32), faulty)
+        buf.update(np.ones(64, dtype=np.float32), faulty)
     assert not buf.active()[24] and buf.window()[:, 24].max() == 0.0
     assert buf.active()[25]
 
@@ -74,7 +74,7 @@ def test_bad_arguments_raise_value_error() -> None:
     with pytest.raises(ValueError, match='threshold'):
         LevelBuffer(threshold=0.0)
     with pytest.raises(ValueError, match=r'shape \(64,\)'):
-        LevelBuffer().push(np.zeros(63))
+        LevelBuffer().update(np.zeros(63))
 
 
 def test_active_sensors_are_named_through_the_body_map() -> None:

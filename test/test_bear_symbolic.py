@@ -7,7 +7,7 @@ import pytest
 
 from touch_driver.bear.body_map import BodyMap, BodySensor
 from touch_gestures.bear.subtype_labels import subtype_index
-from touch_gestures.bear.symbolic import END, START, GestureLibrary, SymbolicRecognizer
+from touch_gestures.bear.symbolic import END, START, GestureLibrary, SymbolicRecogniser
 from touch_graph.errors import ConfigError
 from touch_graph.paths import share_file
 
@@ -15,7 +15,7 @@ BODY = BodyMap.default()
 LIB = GestureLibrary.default(BODY)
 
 
-def drive(rec: SymbolicRecognizer, active_at, duration_s: float, rate_hz: float = 10.0, subtype_at=None):
+def drive(rec: SymbolicRecogniser, active_at, duration_s: float, rate_hz: float = 10.0, subtype_at=None):
     """Run ``rec`` with the sensors named by ``active_at(t)`` active; return all events."""
     events = []
     for i in range(int(duration_s * rate_hz)):
@@ -55,7 +55,7 @@ def test_default_library_lists_table_i_and_the_papers_four() -> None:
 
 
 def test_dwell_of_two_seconds_then_start_and_end_with_onset() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     events = drive(rec, lambda t: ['head2'] if 1.0 <= t < 4.0 else [], 8.0)
     assert summary(events) == [('head_pat', 'START', 3.0), ('head_pat', 'END', 5.5)]   # END after the 1.5 s gap
     start, end = events
@@ -64,12 +64,12 @@ def test_dwell_of_two_seconds_then_start_and_end_with_onset() -> None:
 
 
 def test_shorter_than_dwell_never_starts() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     assert drive(rec, lambda t: ['head2'] if 1.0 <= t < 2.9 else [], 8.0) == []
 
 
 def test_gaps_shorter_than_gap_s_do_not_restart_the_dwell() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     pats = lambda t: ['head1'] if (t % 1.0) < 0.3 else []      # noqa: E731  (a pat a second, hand lifted)
     events = drive(rec, lambda t: pats(t) if t < 6 else [], 10.0)
     assert summary(events)[0] == ('head_pat', 'START', 2.0)
@@ -77,7 +77,7 @@ def test_gaps_shorter_than_gap_s_do_not_restart_the_dwell() -> None:
 
 
 def test_hug_supersedes_tickle() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     sides = ['side_left_upper', 'side_right_upper']
     hug = [*sides, 'back_upper', 'back_middle', 'chest_left']
 
@@ -95,7 +95,7 @@ def test_hug_supersedes_tickle() -> None:
 
 
 def test_two_gestures_at_once() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     events = drive(rec, lambda t: ['head3', 'foot_left_sole'] if t < 5 else [], 8.0)
     assert sorted(summary(events)) == [('foot_rub', 'END', 6.5), ('foot_rub', 'START', 2.0),
                                        ('head_pat', 'END', 6.5), ('head_pat', 'START', 2.0)]
@@ -103,13 +103,13 @@ def test_two_gestures_at_once() -> None:
 
 
 def test_hug_needs_both_sides() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     left_only = ['side_left_upper', 'side_left_lower', 'chest_left', 'back_upper', 'back_middle']
     assert not any(e.gesture == 'hug' for e in drive(rec, lambda t: left_only, 5.0))
 
 
 def test_required_subtype() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     belly = lambda t: ['belly_middle']                               # noqa: E731
     assert [e.gesture for e in drive(rec, belly, 4.0, subtype_at=lambda t: {'belly_middle': 'pet'})] == []
     rec.reset()
@@ -121,7 +121,7 @@ def test_required_subtype() -> None:
 
 
 def test_foot_tickle_supersedes_foot_rub() -> None:
-    rec = SymbolicRecognizer(LIB, BODY)
+    rec = SymbolicRecogniser(LIB, BODY)
     events = drive(rec, lambda t: ['foot_right_sole'], 4.0, subtype_at=lambda t: {'foot_right_sole': 'tickle'})
     assert summary(events) == [('foot_tickle', 'START', 2.0)]
 
@@ -135,7 +135,7 @@ def write(tmp_path, text: str):
 def test_a_user_adds_a_gesture_in_yaml(tmp_path) -> None:
     path = write(tmp_path, 'gestures:\n  ear_rub:\n    sensors: [ear_left, ear_right]\n    min_active: 2\n'
                            '    dwell_s: 0.5\n')
-    rec = SymbolicRecognizer(GestureLibrary.load(path, BODY), BODY)
+    rec = SymbolicRecogniser(GestureLibrary.load(path, BODY), BODY)
     events = drive(rec, lambda t: ['ear_left', 'ear_right'], 2.0)
     assert summary(events) == [('ear_rub', 'START', 0.5)]
 

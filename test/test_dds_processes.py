@@ -161,7 +161,7 @@ def test_a_vanished_peer_blocks_nobody(dds_domain, tmp_path):
 
 def test_transport_bench_measures_both_paths(dds_domain, monkeypatch):
     """A short run of `social-touch bench transport`: every ping comes back on both paths, figures are sane."""
-    from touch_graph.dds.bench import bench_transport
+    from touch_lab.bench.transport import bench_transport
     monkeypatch.setenv('SOCIAL_TOUCH_BENCH_DOMAIN', str(dds_domain))
     result = bench_transport(repeats=1, pings=20, kinds=['gesture_event'], ramp_steps=1)
     figures = result['kinds']['gesture_event']

@@ -7,11 +7,11 @@ import importlib
 
 import pytest
 
-from touch_driver.virtual_port import forget_devices
+from touch_sim.virtual_port import forget_devices
 
 MODULES = ['touch_driver.bear.body_map', 'touch_driver.bear.protocol', 'touch_driver.patch.protocol',
-           'touch_driver.patch.panels', 'touch_driver.scenes', 'touch_driver.urlhandlers.protocol_bearsim',
-           'touch_driver.urlhandlers.protocol_patchsim']
+           'touch_driver.patch.panels', 'touch_sim.scenes', 'touch_sim.urlhandlers.protocol_bearsim',
+           'touch_sim.urlhandlers.protocol_patchsim']
 
 
 @pytest.mark.parametrize('name', MODULES)

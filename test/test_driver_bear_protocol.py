@@ -69,7 +69,7 @@ def test_decoder_counts_corrupt_frames_with_high_bits() -> None:
     good = np.arange(64, dtype=np.uint16)
     stream = encode_frame(BEAR_ID, 1, bytes(bad)) + encode_scan(2, good)
     dec = BearDecoder()
-    scans = dec.feed(stream)
+    scans = dec.update(stream)
     assert [s.seq for s in scans] == [2] and np.array_equal(scans[0].raw, good)
     assert dec.corrupt_frames == 1 and dec.stats.frames == 2
 
@@ -83,7 +83,7 @@ def test_decoder_resyncs_and_counts() -> None:
     dec = BearDecoder()
     scans = []
     for i in range(0, len(stream), 7):  # odd chunk sizes, as a serial port delivers them
-        scans += dec.feed(stream[i:i + 7])
+        scans += dec.update(stream[i:i + 7])
     assert [s.seq for s in scans] == [0, 3]
     assert dec.stats.checksum_errors == 1 and dec.stats.sequence_gaps == 1 and dec.stats.frames_missed == 2
     assert dec.stats.dropped_bytes == len(stream) - 2 * len(frames[0])
@@ -95,6 +95,6 @@ def test_decoder_resyncs_and_counts() -> None:
 @given(st.binary(max_size=2000))
 def test_decoder_never_raises_on_random_bytes(data: bytes) -> None:
     dec = BearDecoder()
-    scans = dec.feed(data)
+    scans = dec.update(data)
     assert all(s.raw.shape == (64,) and s.raw.max() <= 1023 for s in scans)
     assert dec.stats.frames * (PAYLOAD_SIZE + OVERHEAD) + dec.stats.dropped_bytes + dec.buffered == len(data)

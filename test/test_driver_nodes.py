@@ -7,13 +7,13 @@ import pytest
 
 from touch_driver.bear.node import BearDriverNode
 from touch_driver.patch.node import PatchDriverNode
-from touch_driver.scenes import BearScript, BearTouch, PanelTouch, PatchScript, PatchTouch, register_stimulus
-from touch_driver.skin.device import register_stimulus as register_skin_stimulus
 from touch_driver.skin.node import SkinDriverNode
-from touch_driver.skin.stimuli import StaticPress
-from touch_driver.virtual_port import forget_devices
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.scenes import BearScript, BearTouch, PanelTouch, PatchScript, PatchTouch, register_stimulus
+from touch_sim.skin.device import register_stimulus as register_skin_stimulus
+from touch_sim.skin.stimuli import StaticPress
+from touch_sim.virtual_port import forget_devices
 
 
 @pytest.fixture(autouse=True)

@@ -142,18 +142,18 @@ def test_eq1_matches_a_scalar_reference(values: list[int], tau: float) -> None:
 # ---------------------------------------------------------------------- averaging
 def test_scan_averager_decimates_and_averages() -> None:
     av = ScanAverager(window=5, decimation=5)
-    outs = [av.push(frame(v)) for v in range(10)]
+    outs = [av.update(frame(v)) for v in range(10)]
     assert [o is not None for o in outs] == [False] * 4 + [True] + [False] * 4 + [True]
     assert outs[4][0, 0] == pytest.approx(2.0) and outs[9][0, 0] == pytest.approx(7.0)
     assert outs[4].dtype == np.float32
     nan_scan = frame(10)
     nan_scan[1, 1] = np.nan
     av = ScanAverager(window=2, decimation=2)
-    av.push(nan_scan)
-    out = av.push(frame(20))
+    av.update(nan_scan)
+    out = av.update(frame(20))
     assert out[1, 1] == 20 and out[0, 0] == 15
     av = ScanAverager(window=2, decimation=1)
-    assert np.isnan(av.push(frame(np.nan))[0, 0])
+    assert np.isnan(av.update(frame(np.nan))[0, 0])
 
 
 def test_update_scan_runs_the_paper_chain() -> None:

@@ -83,7 +83,7 @@ def test_decoder_reads_both_frame_kinds_and_resyncs() -> None:
     broken[100] ^= 4
     stream = b'\x00garbage\xa5' + raw_frame + bytes(broken) + avg_frame + encode_scan(3, cells, ZERO_PANELS)
     dec = PatchDecoder()
-    got = [s for i in range(0, len(stream), 50) for s in dec.feed(stream[i:i + 50])]
+    got = [s for i in range(0, len(stream), 50) for s in dec.update(stream[i:i + 50])]
     assert [(s.seq, s.raw_scan) for s in got] == [(1, True), (1, False), (3, True)]
     assert np.array_equal(got[1].cells, cells) and got[1].panels[0] == 7
     assert dec.stats.checksum_errors == 1
@@ -96,6 +96,6 @@ def test_decoder_reads_both_frame_kinds_and_resyncs() -> None:
 @given(st.binary(max_size=3000))
 def test_decoder_never_raises_on_random_bytes(data: bytes) -> None:
     dec = PatchDecoder()
-    got = dec.feed(data)
+    got = dec.update(data)
     assert dec.stats.frames == len(got)
     assert dec.stats.frames * (PAYLOAD_SIZE + OVERHEAD) + dec.stats.dropped_bytes + dec.buffered == len(data)

@@ -12,11 +12,11 @@ import pytest
 import serial
 
 from touch_driver.driver_node import SerialDriverNode
-from touch_driver.framing import encode_frame
+from touch_driver.framing import SensorStreamDecoder, encode_frame
 from touch_driver.serial_driver import DriverError, PortDisconnected, SerialDriver
-from touch_driver.virtual_port import VirtualSerial, device_state, forget_devices
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, SingleThreadedExecutor
+from touch_sim.virtual_port import VirtualSerial, device_state, forget_devices
 
 TOY_ID = 0x7F
 Status = get_message('DriverStatus')
@@ -54,24 +54,36 @@ def toy_handler():
     forget_devices()
 
 
-def decode(frame):
-    (value,) = struct.unpack('<I', frame.payload)
-    if value > 10**6:
-        raise ValueError('implausible counter')
-    return value
+class ToyDecoder(SensorStreamDecoder[int]):
+    """The toy's stream decoder: a checked frame -> its counter; an implausible one is corrupt."""
+
+    def __init__(self):
+        super().__init__({TOY_ID: 4})
+
+    def decode(self, frame):
+        (value,) = struct.unpack('<I', frame.payload)
+        return None if value > 10**6 else value
 
 
 def make_driver(url, clock=None):
-    return SerialDriver(url, payload_sizes={TOY_ID: 4}, decode=decode, clock=clock)
+    return SerialDriver(url, ToyDecoder(), clock=clock)
+
+
+def drain(driver):
+    """Every frame that has arrived, read as the driver node's poll timer reads them."""
+    frames = []
+    while (frame := driver.read_frame(0)) is not None:
+        frames.append(frame)
+    return frames
 
 
 def test_driver_reads_frames_on_an_attached_clock_and_close_is_idempotent():
     now = [0.0]
     with make_driver('toysim://a', clock=lambda: now[0]) as driver:
-        assert [f.data for f in driver.poll()] == [0]  # device time starts at attach; frame 0 is at t=0
+        assert [f.scan for f in drain(driver)] == [0]  # device time starts at attach; frame 0 is at t=0
         now[0] = 0.1
-        frames = driver.poll()
-        assert [f.data for f in frames] == [1, 2, 3, 4, 5]
+        frames = drain(driver)
+        assert [f.scan for f in frames] == [1, 2, 3, 4, 5]
         assert frames[-1].received_s == 0.1
         driver.close()
         driver.close()
@@ -81,7 +93,7 @@ def test_driver_reads_frames_on_an_attached_clock_and_close_is_idempotent():
 def test_read_frame_waits_on_the_wall_clock():
     with make_driver('toysim://b') as driver:
         frame = driver.read_frame(timeout=1.0)
-    assert frame is not None and frame.data == 0
+    assert frame is not None and frame.scan == 0
 
 
 def test_bad_urls_and_options_give_clear_errors():
@@ -97,10 +109,10 @@ def test_a_reader_that_falls_behind_loses_old_frames_not_memory():
     now = [0.0]
     driver = make_driver('toysim://slow', clock=lambda: now[0])
     driver.open()
-    assert len(driver.poll()) == 1
+    assert len(drain(driver)) == 1
     now[0] = 3600.0  # an hour without reading
-    frames = driver.poll()
-    assert 50 < len(frames) <= 101 and frames[-1].data == 180000  # about the last 2 s (buffer_s)
+    frames = drain(driver)
+    assert 50 < len(frames) <= 101 and frames[-1].scan == 180000  # about the last 2 s (buffer_s)
     assert driver.stats.sequence_gaps == 1
 
 
@@ -109,17 +121,17 @@ def test_unplug_raises_port_disconnected_and_reopen_recovers():
     driver = make_driver('toysim://d', clock=lambda: now[0])
     driver.open()
     now[0] = 0.05
-    assert len(driver.poll()) == 3
+    assert len(drain(driver)) == 3
     device_state('d').unplug()
     with pytest.raises(PortDisconnected):
-        driver.poll()
+        drain(driver)
     assert not driver.is_open
     with pytest.raises(DriverError):
         driver.open()
     device_state('d').replug()
     driver.open()
     now[0] = 0.2
-    assert driver.poll()  # frames flow again, and the sequence gap is counted
+    assert drain(driver)  # frames flow again, and the sequence gap is counted
     assert driver.stats.sequence_gaps == 0  # the decoder was reset on reopen: no false gap
 
 
@@ -130,11 +142,11 @@ def test_garbage_and_corruption_are_counted_not_raised():
     frames = []
     for step in range(1, 101):
         now[0] = step * 0.1
-        frames += driver.poll()
+        frames += drain(driver)
     assert 300 < len(frames) < 500  # 501 sent; about 20 % corrupted
     stats = driver.stats
     assert stats.checksum_errors > 0 and stats.dropped_bytes > 0
-    assert stats.frames == len(frames) + driver.decode_errors
+    assert stats.frames == len(frames) + driver.decoder.corrupt_frames
 
 
 class ToyDriverNode(SerialDriverNode):
@@ -146,11 +158,11 @@ class ToyDriverNode(SerialDriverNode):
         super().__init__('toy_driver', **kwargs)
         self.values = []
 
-    def make_driver(self, port, clock):
-        return make_driver(port, clock=clock)
+    def make_decoder(self):
+        return ToyDecoder()
 
     def handle_frame(self, frame):
-        self.values.append(frame.data)
+        self.values.append(frame.scan)
 
 
 def run_node(**overrides):
@@ -191,3 +203,32 @@ def test_driver_node_starts_without_its_device_and_connects_when_it_appears():
     executor.spin_for(2.0)
     assert node.values and statuses[-1].connected
     ctx.shutdown()
+
+
+def test_a_simulator_url_without_the_simulator_is_a_clear_error_at_once(monkeypatch):
+    """A robot installed without touch_sim: a bearsim:// port says what is missing, the node does not start."""
+    from touch_driver.bear.node import BearDriverNode
+    from touch_driver.serial_driver import PortURLError, url_handler_packages
+    from touch_graph.runtime import Parameter
+    assert url_handler_packages()['bearsim'] == 'touch_sim.urlhandlers'
+    for name in [m for m in sys.modules if m == 'touch_sim' or m.startswith('touch_sim.')]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, 'touch_sim', None)  # import touch_sim raises ImportError
+    monkeypatch.setattr(serial, 'protocol_handler_packages',
+                        [p for p in serial.protocol_handler_packages if not p.startswith('touch_sim')])
+    with pytest.raises(PortURLError, match=r"'bearsim://' is a virtual device of the 'touch_sim' package"):
+        SerialDriver('bearsim://x', ToyDecoder())
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(PortURLError, match='pip install social_touch'):
+            BearDriverNode(context=ctx, parameter_overrides=[Parameter('port', value='bearsim://x')])
+    finally:
+        ctx.shutdown()
+    SerialDriver('loop://', ToyDecoder())  # pyserial's own: no lookup
+
+
+def test_importing_touch_sim_makes_its_urls_open_with_serial_for_url():
+    import touch_sim  # noqa: F401
+    port = serial.serial_for_url('skinsim://url-check', do_not_open=True)
+    assert type(port).__module__ == 'touch_sim.urlhandlers.protocol_skinsim'

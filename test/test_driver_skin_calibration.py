@@ -13,9 +13,9 @@ from hypothesis.extra import numpy as hnp
 
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
 from touch_driver.skin.calibration_config import SkinCalibrationConfig, load_skin_calibration
-from touch_driver.skin.contact import FingerContactModel
 from touch_driver.skin.protocol import MODULE_TAXELS, TAXEL_XY_MM
 from touch_graph.errors import ConfigError
+from touch_sim.skin.contact import FingerContactModel
 
 REST = 40000
 FS = 16000  # default full_scale_counts

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 import serial
 
-import touch_driver  # noqa: F401  (registers the skinsim:// URL handler)
+import touch_sim  # noqa: F401  (registers the skinsim:// URL handler)
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
 from touch_driver.skin.calibration_config import SkinCalibrationConfig
-from touch_driver.skin.contact import FingerContactModel
-from touch_driver.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
 from touch_driver.skin.protocol import SkinStreamDecoder
-from touch_driver.skin.stimuli import StaticPress, Timeline
-from touch_driver.virtual_port import forget_devices
+from touch_sim.skin.contact import FingerContactModel
+from touch_sim.skin.device import SkinDevice, forget_stimuli, register_stimulus, render_frames
+from touch_sim.skin.stimuli import StaticPress, Timeline
+from touch_sim.virtual_port import forget_devices
 
 pytestmark = pytest.mark.slow
 RATE = 150
@@ -95,7 +95,7 @@ def test_long_run_through_a_faulty_port_has_bounded_memory():
     try:
         for step in range(16000 // 10):                   # 160 s of device time, read every 10 frames
             clock[0] += 10 / RATE
-            for f in dec.feed(port.read(port.in_waiting)):
+            for f in dec.update(port.read(port.in_waiting)):
                 s = cal.update(f.raw)
                 frames += 1
                 contacts += s.contact

@@ -76,7 +76,7 @@ def test_whole_frame_byte_literal():
     assert wire[:7] == b'\xa5\x5a\x53\x20\x01\x02\x01'   # sync, id 'S', length 288 LE, seq 0x0102 LE
     assert wire[7 + 46:7 + 48] == b'\x34\x12'
     assert wire[-2:] == b'\xe9\x74'                      # CRC-16/CCITT-FALSE, LE
-    frames = SkinStreamDecoder().feed(wire)
+    frames = SkinStreamDecoder().update(wire)
     assert len(frames) == 1 and frames[0].seq == 0x0102 and np.array_equal(frames[0].raw, raw)
 
 
@@ -118,7 +118,7 @@ def test_decoder_counts_garbage_checksum_errors_and_gaps():
     f2, r2 = _frame(2)
     bad = bytearray(f1)
     bad[100] ^= 0x40                                     # corrupt frame 1's payload
-    frames = dec.feed(b'\x11\x22\x33' + f0 + bytes(bad) + f2)
+    frames = dec.update(b'\x11\x22\x33' + f0 + bytes(bad) + f2)
     assert [f.seq for f in frames] == [0, 2]
     assert np.array_equal(frames[0].raw, r0) and np.array_equal(frames[1].raw, r2)
     s = dec.stats
@@ -131,7 +131,7 @@ def test_decoder_ignores_other_sensor_ids_and_lengths():
     other = encode_frame(0x42, 0, b'\x00' * 56)          # a bear frame on the wrong port
     short = encode_frame(SENSOR_ID, 1, b'\x00' * 10)     # skin id, wrong length
     f, _ = _frame(5)
-    frames = dec.feed(other + short + f)
+    frames = dec.update(other + short + f)
     assert [x.seq for x in frames] == [5]
     assert dec.stats.length_errors >= 2 and dec.stats.dropped_bytes == len(other) + len(short)
 
@@ -139,10 +139,10 @@ def test_decoder_ignores_other_sensor_ids_and_lengths():
 def test_decoder_reset_forgets_partial_frame():
     dec = SkinStreamDecoder()
     f, _ = _frame(3)
-    assert dec.feed(f[:150]) == [] and dec.buffered == 150
+    assert dec.update(f[:150]) == [] and dec.buffered == 150
     dec.reset()
     assert dec.buffered == 0 and dec.stats.dropped_bytes == 150
-    assert [x.seq for x in dec.feed(f)] == [3]
+    assert [x.seq for x in dec.update(f)] == [3]
 
 
 @settings(max_examples=80, deadline=None)
@@ -151,7 +151,7 @@ def test_fuzz_garbage_never_raises_and_bytes_are_accounted(data, chunk):
     dec = SkinStreamDecoder()
     frames = []
     for i in range(0, len(data), chunk):
-        frames += dec.feed(data[i:i + chunk])
+        frames += dec.update(data[i:i + chunk])
     assert dec.stats.dropped_bytes + dec.buffered + len(frames) * FRAME_SIZE == len(data)
 
 
@@ -165,7 +165,7 @@ def test_fuzz_frames_between_garbage_are_all_recovered(garbage, chunks):
     out, pos, k = [], 0, 0
     while pos < len(stream):                            # arbitrary read sizes, as a serial port gives
         size = chunks[k % len(chunks)]
-        out += dec.feed(stream[pos:pos + size])
+        out += dec.update(stream[pos:pos + size])
         pos, k = pos + size, k + 1
     assert [f.seq for f in out] == list(range(len(garbage)))
     for f, (_, raw) in zip(out, wires, strict=True):

@@ -4,7 +4,6 @@ with the reason (never accepted and ignored). Through the nodes' parameter servi
 import pytest
 
 from touch_driver.bear.node import BearDriverNode
-from touch_driver.virtual_port import forget_devices
 from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.monitor_node import TouchMonitorNode
 from touch_gestures.patch.node import PatchGesturesNode
@@ -12,6 +11,7 @@ from touch_gestures.skin.node import HapticCommandsNode
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_graph.runtime.parameter_messages import parameter_msg
 from touch_graph.srv_types import get_service
+from touch_sim.virtual_port import forget_devices
 
 SetParameters = get_service('rcl_interfaces/srv/SetParameters')
 

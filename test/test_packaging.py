@@ -19,13 +19,17 @@ NODES = ('bear_driver', 'patch_driver', 'skin_driver', 'bear_gestures', 'patch_g
          'recorder', 'player')
 
 
-def _setup_nodes() -> dict:
+def _setup_constant(name: str) -> dict:
     import ast
     tree = ast.parse((ROOT / 'setup.py').read_text())
     for node in ast.walk(tree):
-        if isinstance(node, ast.AnnAssign) and getattr(node.target, 'id', None) == 'NODES':
+        if isinstance(node, ast.AnnAssign) and getattr(node.target, 'id', None) == name:
             return ast.literal_eval(node.value)
-    raise AssertionError('NODES not found in setup.py')
+    raise AssertionError(f'{name} not found in setup.py')
+
+
+def _setup_nodes() -> dict:
+    return _setup_constant('NODES')
 
 
 def test_package_xml_is_format_3_ament_python_with_declared_dependencies():
@@ -52,6 +56,56 @@ def test_installed_entry_points_match_setup_py():
     if not installed:
         pytest.skip('the package is not installed (pip install .): entry points come from its metadata')
     assert installed == {name: f'{m}:{c}' for name, (m, c) in _setup_nodes().items()}
+
+
+def test_every_plug_in_group_is_installed_as_setup_py_declares_it_and_loads():
+    """Commands, lab targets, benchmarks, scene generators and URL handlers: one entry point each."""
+    groups = _setup_constant('ENTRY_POINT_GROUPS')
+    assert {'social_touch.commands', 'social_touch.eval', 'social_touch.train', 'social_touch.codebook',
+            'social_touch.report', 'social_touch.bench', 'social_touch.scene_generators',
+            'social_touch.serial_url_handlers'} <= set(groups)
+    if not list(entry_points(group='social_touch.commands')):
+        pytest.skip('the package is not installed (pip install .): entry points come from its metadata')
+    for group, lines in groups.items():
+        declared = dict(line.replace(' ', '').split('=') for line in lines)
+        installed = {e.name: e.value for e in entry_points(group=group)}
+        assert installed == declared, f'{group}: reinstall (pip install -e .) after changing setup.py'
+        for ep in entry_points(group=group):
+            loaded = ep.load()
+            if group in ('social_touch.commands', 'social_touch.eval', 'social_touch.train', 'social_touch.codebook',
+                         'social_touch.report'):
+                assert callable(loaded.add_arguments) and callable(loaded.run), ep
+            elif group == 'social_touch.serial_url_handlers':
+                assert (Path(loaded.__file__).parent / f'protocol_{ep.name}.py').is_file(), ep
+            else:
+                assert callable(loaded), ep
+
+
+@pytest.mark.parametrize('argv', [['--help'], ['eval', '--help'], ['eval', 'bear', '--help'],
+                                  ['train', 'bear', '--help'], ['train', 'patch', '--help'],
+                                  ['report', 'skin', '--help'], ['bench', '--help'], ['codebook', 'record', '--help'],
+                                  ['lines', '--help'],
+                                  ['demo', '--help']])
+def test_the_cli_is_the_one_way_in_and_every_command_explains_itself(argv, capsys):
+    from touch_graph.cli.main import main
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith('usage: social-touch') and len(out.splitlines()) > 3
+
+
+def test_no_module_has_its_own_entry_point_outside_the_cli():
+    """No ``if __name__ == '__main__'`` and no argparse ``main()`` beside ``social-touch`` (the CLI's own module)."""
+    offenders = []
+    for path in sorted(ROOT.glob('touch_*/**/*.py')):
+        text = path.read_text()
+        rel = path.relative_to(ROOT).as_posix()
+        if rel == 'touch_graph/cli/main.py':
+            continue
+        if "__name__ == '__main__'" in text or ('ArgumentParser(' in text and '\ndef main(' in text):
+            offenders.append(rel)
+    assert offenders == []
 
 
 def test_export_interfaces_writes_an_ament_cmake_package(tmp_path):
@@ -90,3 +144,21 @@ def test_colcon_builds_the_package_and_installs_the_executables(tmp_path):
     assert len(list((share / 'msg').glob('*.msg'))) == len(msg_files())
     assert (tmp_path / 'install' / 'social_touch' / 'share' / 'ament_index' / 'resource_index' / 'packages'
             / 'social_touch').is_file()
+
+
+def test_cli_doctests():
+    import doctest
+
+    import touch_graph.cli.main
+    result = doctest.testmod(touch_graph.cli.main)
+    assert result.failed == 0 and result.attempted > 0
+
+
+def test_lines_counts_every_layer(capsys):
+    from touch_graph.cli.main import main
+    assert main(['lines', '--json']) == 0
+    import json
+    counts = json.loads(capsys.readouterr().out)
+    assert set(counts['layers']) == {'runtime', 'simulation', 'lab'}
+    assert counts['tree']['lines'] == sum(c['lines'] for c in counts['layers'].values())
+    assert 0 < counts['runtime_share_lines'] < 1 and counts['tests']['files'] > 10

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from touch_gestures.patch import features as features_module
-from touch_gestures.patch.evaluate import onset_ages
 from touch_gestures.patch.features import FEATURE_NAMES, WindowFeatures, basic_features, window_features
+from touch_lab.patch.evaluate import onset_ages
 
 K = 0.08
 

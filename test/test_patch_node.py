@@ -1,6 +1,6 @@
 """The patch_gestures node: parameters, the model file, bad frames, and events equal to the offline recogniser.
 
-Frames are simulated (SYNTHETIC): rendered through the driver sensor chain and published on
+Frames are simulated (SYNTHETIC): rendered by the patch_driver node on a virtual patch and published on
 /patch/frame in a simulated-time graph.
 """
 
@@ -16,11 +16,11 @@ from touch_driver.patch.calibration import load_outline
 from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
 from touch_gestures.patch.model_io import PatchModel, load_model, save_model
 from touch_gestures.patch.node import PatchGesturesNode, default_model_path
-from touch_gestures.patch.scene import make_people, simulate_session
-from touch_gestures.patch.sensor_chain import render_scene
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.patch.people import make_people, simulate_session
+from touch_sim.patch.render import render_scene
 
 PatchFrame = get_message('social_touch_msgs/msg/PatchFrame')
 GestureEvent = get_message('social_touch_msgs/msg/GestureEvent')
@@ -52,7 +52,7 @@ class Harness:
         self.executor.add_node(io)
         self.io = io
 
-    def feed(self, activations, t0_ns=T0_NS, period_ns=NS // 20):
+    def update(self, activations, t0_ns=T0_NS, period_ns=NS // 20):
         for i, act in enumerate(activations):
             sec, nanosec = divmod(t0_ns + i * period_ns, NS)
             header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id='patch_link')
@@ -69,12 +69,12 @@ class Harness:
 
 @pytest.fixture(scope='module')
 def session_frames():
-    """A simulated person's slaps then a stroke session, through the driver chain (SYNTHETIC)."""
+    """A simulated person's slaps then a stroke session, through the patch_driver node (SYNTHETIC)."""
     person = make_people(3, seed=77)[2]
     slaps = simulate_session(person, 'slap', n_events=2, seed=5, lead_s=(2.0, 2.0), pause_s=(4.0, 4.5))
     strokes = simulate_session(person, 'stroke', n_events=2, seed=6, lead_s=(2.0, 2.0), pause_s=(4.0, 4.5))
-    return (np.concatenate([render_scene(slaps, seed=1, chain='driver').activations,
-                            render_scene(strokes, seed=2, chain='driver').activations]), slaps, strokes)
+    return (np.concatenate([render_scene(slaps, seed=1).activations,
+                            render_scene(strokes, seed=2).activations]), slaps, strokes)
 
 
 def small_model(tmp_path, name='m.npz', grid=(16, 16), window=60, **model_kwargs):
@@ -105,7 +105,7 @@ def test_events_are_the_offline_recognisers_with_the_frames_stamps(session_frame
     frames, _slaps, _strokes = session_frames
     h = Harness()
     try:
-        h.feed(frames)
+        h.update(frames)
         node = h.node
         assert node.model_path == default_model_path()
         expected = offline_events(load_model(default_model_path()), frames)
@@ -150,7 +150,7 @@ def test_latency_comes_from_the_stamps_not_the_nominal_rate(session_frames):
     frames, _, _ = session_frames
     h = Harness()
     try:
-        h.feed(frames[:400], period_ns=NS // 10)  # frames stamped at 10 Hz: the same frames, twice the time
+        h.update(frames[:400], period_ns=NS // 10)  # frames stamped at 10 Hz: the same frames, twice the time
         expected = offline_events(h.node.model, frames[:400])
         assert expected
         assert [e.latency_s for e in h.events] == pytest.approx([2 * x[2] for x in expected], abs=1e-6)
@@ -172,7 +172,7 @@ def test_parameters_default_to_the_model_and_can_be_overridden(session_frames):
     h = Harness(threshold=0.9, hold_s=0.0, window=60)
     try:
         assert (h.node.detector.threshold, h.node.detector.hold, h.node.detector.release) == (0.9, 1, 0.9)
-        h.feed(frames[:300])
+        h.update(frames[:300])
         assert [(round((e.header.stamp.sec * NS + e.header.stamp.nanosec - T0_NS) / (NS / 20)), e.gesture)
                 for e in h.events] == [x[:2] for x in offline_events(h.node.model, frames[:300], 0.9, 1)]
     finally:
@@ -230,7 +230,7 @@ def test_nan_cells_are_read_as_no_contact_and_counted(session_frames):
     frames = session_frames[0][:300]
     clean = Harness()
     try:
-        clean.feed(frames)
+        clean.update(frames)
     finally:
         clean.close()
     assert clean.events
@@ -240,13 +240,13 @@ def test_nan_cells_are_read_as_no_contact_and_counted(session_frames):
     bad[::11, outside[-1]] = np.inf
     h = Harness()
     try:
-        h.feed(bad)
+        h.update(bad)
         assert h.node.nonfinite_cells == len(range(0, 300, 7)) + len(range(0, 300, 11))
         assert [e.gesture for e in h.events] == [e.gesture for e in clean.events]   # no reading = no contact
         touched = bad.copy()
         touched[:, 7 * 16 + 8] = np.nan                    # a cell in the middle of the touches reads nothing
-        h.feed(touched, t0_ns=T0_NS + 300 * NS // 20)
-        h.feed(np.full((40, 256), np.nan, np.float32), t0_ns=T0_NS + 600 * NS // 20)
+        h.update(touched, t0_ns=T0_NS + 300 * NS // 20)
+        h.update(np.full((40, 256), np.nan, np.float32), t0_ns=T0_NS + 600 * NS // 20)
         assert h.node.frames == 640 and h.node.callback_errors == 0 and not h.node.skipped
         assert all(np.isfinite(e.posteriors).all() for e in h.events)
     finally:
@@ -260,7 +260,7 @@ def test_frames_of_another_size_are_counted_and_skipped():
         for cells in (64, 0, 257):
             h.node._on_frame(SimpleNamespace(header=header, activation=np.full(cells, 0.5, np.float32)))
         assert h.node.skipped == {'wrong_size': 3} and h.node.frames == 0
-        h.feed([IDLE] * 5)
+        h.update([IDLE] * 5)
         assert h.node.frames == 5
     finally:
         h.close()
@@ -270,13 +270,13 @@ def test_time_going_back_or_a_gap_starts_a_new_window(session_frames):
     frames = session_frames[0]
     h = Harness()
     try:
-        h.feed(frames[:200])
+        h.update(frames[:200])
         first = [e.gesture for e in h.events]
         assert first
-        h.feed(frames[:200])                           # the same stamps again: a looped bag
+        h.update(frames[:200])                           # the same stamps again: a looped bag
         assert h.node.resets == 1
         assert [e.gesture for e in h.events] == first * 2  # the loop gives the same events again
-        h.feed(frames[:200], t0_ns=T0_NS + 100 * NS)   # 90 s later: the old window is out of date
+        h.update(frames[:200], t0_ns=T0_NS + 100 * NS)   # 90 s later: the old window is out of date
         assert h.node.resets == 2 and [e.gesture for e in h.events] == first * 3
         assert h.node.features.filled == 60
     finally:

@@ -9,13 +9,13 @@ import serial
 
 import touch_graph.launch.cli as launch_cli
 from touch_driver.patch.node import PatchDriverNode
-from touch_driver.scenes import load_stimulus, register_stimulus, unregister_stimulus
-from touch_driver.virtual_port import forget_devices
 from touch_gestures.patch.node import PatchGesturesNode
-from touch_gestures.patch.scene import PatchScene, people_scene
 from touch_graph.errors import ConfigError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.patch.people import PatchScene, people_scene
+from touch_sim.scenes import load_stimulus, register_stimulus, unregister_stimulus
+from touch_sim.virtual_port import forget_devices
 
 ROOT = Path(__file__).resolve().parent.parent
 PEOPLE_YAML = ROOT / 'config' / 'scenes' / 'patch_people.yaml'
@@ -141,7 +141,7 @@ def test_the_people_scene_loads_from_yaml_through_the_generator_hook():
 ])
 def test_a_bad_people_scene_is_an_error_at_its_line(tmp_path, options, fragment):
     path = tmp_path / 'people.yaml'
-    path.write_text('sensor: patch\ngenerator: touch_gestures.patch.scene:people_scene\noptions:\n'
+    path.write_text('sensor: patch\ngenerator: patch_people\noptions:\n'
                     f'  seed: 2\n  {options}\n')
     with pytest.raises(ConfigError) as info:
         load_stimulus(path, sensor='patch')

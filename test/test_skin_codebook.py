@@ -9,7 +9,7 @@ import pytest
 
 from touch_gestures.skin import CodebookRecorder, TouchGesture, load_codebook, make_recogniser, save_codebook
 from touch_gestures.skin.errors import CodebookError
-from touch_gestures.skin.synthetic import PAPER_CENTROID_SET, synthetic_traces
+from touch_sim.skin.synthetic import PAPER_CENTROID_SET, synthetic_traces
 
 
 def gestures(seed=0, performers=2):

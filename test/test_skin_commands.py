@@ -21,7 +21,7 @@ def write(tmp_path, text):
 
 def test_the_project_command_map_is_valid():
     config = Path(__file__).resolve().parent.parent / 'config' / 'skin_commands.yaml'
-    from touch_gestures.skin.synthetic import SHAPES
+    from touch_sim.skin.synthetic import SHAPES
 
     commands = load_command_map(config, gestures=SHAPES)
     assert commands.command_for('line_right') == 'move_right' and commands.command_for(None) is None

@@ -7,12 +7,14 @@ import importlib
 
 import pytest
 
-MODULES = ['traces', 'gesture', 'features', 'segmentation', 'proposed', 'registry', 'codebook', 'cli', 'base',
-           'paper', 'peers', 'commands', 'synthetic', 'render', 'evaluate', 'bench', 'report']
+MODULES = [f'touch_gestures.skin.{name}' for name in ('gesture', 'features', 'segmentation', 'proposed', 'registry',
+                                                      'codebook', 'base', 'paper', 'peers', 'commands')] + \
+    [f'touch_sim.skin.{name}' for name in ('synthetic', 'render')] + \
+    [f'touch_lab.skin.{name}' for name in ('datasets', 'cli', 'evaluate', 'bench', 'report')]
 
 
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name):
-    module = importlib.import_module(f'touch_gestures.skin.{name}')
+    module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0

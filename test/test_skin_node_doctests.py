@@ -5,11 +5,12 @@ import importlib
 
 import pytest
 
-MODULES = ['screening', 'frames', 'scene', 'graph_chain', 'recording', 'record_cli', 'node', 'session_eval']
+MODULES = [f'touch_gestures.skin.{name}' for name in ('screening', 'frames', 'node')] + \
+    ['touch_sim.skin.people'] + [f'touch_lab.skin.{name}' for name in ('recording', 'record_cli', 'session_eval')]
 
 
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name):
-    module = importlib.import_module(f'touch_gestures.skin.{name}')
+    module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0

@@ -42,7 +42,7 @@ def test_any_frame_stream_is_counted_and_never_raises(items):
     for stamp, point, kind in items:
         pressure = {'ok': None, 'nan': np.full(144, np.nan, np.float32), 'short': np.zeros(7, np.float32),
                     'inf': np.full(144, np.inf, np.float32)}[kind]
-        gestures += stream.feed(frame(1_700_000_000 * NS + stamp, point, pressure))
+        gestures += stream.update(frame(1_700_000_000 * NS + stamp, point, pressure))
     gestures += stream.flush()
     bad = sum(kind != 'ok' for _, _, kind in items)
     assert stream.frames + stream.skipped['wrong_size'] + stream.skipped['non_finite'] == len(items)
@@ -59,7 +59,7 @@ def test_stamps_map_back_to_header_time():
     t0 = 1_700_000_123 * NS + 456
     out = []
     for i in range(40):
-        out += stream.feed(frame(t0 + i * 10_000_000, np.array([5.0 + i, 20.0]) if i < 20 else None))
+        out += stream.update(frame(t0 + i * 10_000_000, np.array([5.0 + i, 20.0]) if i < 20 else None))
     (g,) = out
     assert stream.t0_ns == t0 and stream.end_stamp_ns(g) == t0 + 19 * 10_000_000
     assert stream.stamp_ns(g.start_s) == t0

@@ -12,16 +12,16 @@ import numpy as np
 import pytest
 
 import touch_graph.launch.cli as launch_cli
-from touch_driver.skin.device import forget_stimuli, register_stimulus
 from touch_driver.skin.node import SkinDriverNode
-from touch_driver.skin.stimuli import LineStroke, StaticPress, Timeline, load_scene
-from touch_driver.virtual_port import forget_devices
 from touch_gestures.skin.node import HapticCommandsNode
-from touch_gestures.skin.scene import SceneEvent, SkinScene, _trace_part, people_scene
-from touch_gestures.skin.synthetic import random_touches
 from touch_graph.errors import ConfigError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.skin.device import forget_stimuli, register_stimulus
+from touch_sim.skin.people import SceneEvent, SkinScene, _trace_part, people_scene
+from touch_sim.skin.stimuli import LineStroke, StaticPress, Timeline, load_scene
+from touch_sim.skin.synthetic import random_touches
+from touch_sim.virtual_port import forget_devices
 
 ROOT = Path(__file__).resolve().parent.parent
 PEOPLE_YAML = ROOT / 'config' / 'scenes' / 'skin_people.yaml'
@@ -136,14 +136,14 @@ def test_the_people_scene_fires_the_commands_of_its_gestures_only():
 
 
 @pytest.mark.parametrize('text, fragment', [
-    ('generator: touch_gestures.skin.scene:people_scene\noptions:\n  n_peeple: 2\n',
+    ('generator: skin_people\noptions:\n  n_peeple: 2\n',
      "takes no option 'n_peeple' (did you mean 'n_people'?)"),
-    ('generator: touch_gestures.skin.scene:people_scene\noptions:\n  gestures: [lien_right]\n',
+    ('generator: skin_people\noptions:\n  gestures: [lien_right]\n',
      'rejected the options: gestures must be some of'),
-    ('generator: os:system\n', "generator must be 'module:function' in touch_gestures or touch_driver"),
-    ('generator: touch_gestures.skin.scene:people_scene\nevents: []\n', 'a generator or events, not both'),
+    ('generator: os:system\n', "no scene generator 'os:system'"),
+    ('generator: skin_people\nevents: []\n', 'a generator or events, not both'),
     ('options: {seed: 1}\nevents: []\n', "'options' are the keyword arguments of a 'generator'"),
-    ('duration_s: 3\n', "needs 'events: [...]' or 'generator: module:function'"),
+    ('duration_s: 3\n', "needs 'events: [...]' or 'generator: NAME'"),
 ])
 def test_a_bad_generated_scene_is_an_error_at_its_line(tmp_path, text, fragment):
     path = tmp_path / 'scene.yaml'
@@ -181,7 +181,7 @@ def test_the_launch_file_prints_the_commands_as_they_happen(capsys):
 
 
 def test_session_evaluation_scores_commands_against_the_ground_truth():
-    from touch_gestures.skin.session_eval import evaluate_sessions
+    from touch_lab.skin.session_eval import evaluate_sessions
     r = evaluate_sessions([1])
     assert (r['sessions'], r['gestures'], r['right'], r['wrong'], r['missed']) == (1, 8, 8, 0, 0)
     assert (r['other_touches'], r['false_commands']) == (4, 0)

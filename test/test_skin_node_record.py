@@ -1,4 +1,4 @@
-"""``social-touch codebook record`` (touch_gestures.skin.record_cli): simulated and live, undo, skip, resume.
+"""``social-touch codebook record`` (touch_lab.skin.record_cli): simulated and live, undo, skip, resume.
 
 SYNTHETIC data throughout: simulated performers and scripted strokes on the virtual skin. The
 live tests run the recorder as its own process against a simulated-time graph in this
@@ -18,15 +18,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from touch_driver.skin.device import forget_stimuli, register_stimulus
-from touch_driver.skin.stimuli import LineStroke, Timeline
-from touch_driver.virtual_port import forget_devices
-from touch_gestures.skin import record_cli
 from touch_gestures.skin.codebook import CodebookRecorder, load_codebook
 from touch_gestures.skin.errors import CodebookError
 from touch_gestures.skin.gesture import TouchGesture, ideal_frame
-from touch_gestures.skin.recording import load_recording, save_recording
 from touch_graph.messages import get_message
+from touch_lab.skin import record_cli
+from touch_lab.skin.recording import load_recording, save_recording
+from touch_sim.skin.device import forget_stimuli, register_stimulus
+from touch_sim.skin.stimuli import LineStroke, Timeline
+from touch_sim.virtual_port import forget_devices
 
 REPO = Path(__file__).resolve().parent.parent
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
@@ -192,8 +192,9 @@ class LiveGraph:
         self.executor = SingleThreadedExecutor(context=self.ctx)
         self.lines: list[str] = []
         env = {**os.environ, 'ROS_DOMAIN_ID': str(domain), 'PYTHONPATH': str(REPO)}
-        self.proc = subprocess.Popen([sys.executable, '-m', 'touch_gestures.skin.record_cli', '--wait', '0.2', *argv],
-                                     cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        command = [sys.executable, '-m', 'touch_graph.cli.main', 'codebook', 'record', '--wait', '0.2', *argv]
+        self.proc = subprocess.Popen(command, cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True)
         threading.Thread(target=self._read, daemon=True).start()
         self.driver = None
 

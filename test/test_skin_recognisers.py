@@ -8,7 +8,7 @@ from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
 from touch_gestures.skin import RECOGNISERS, TouchGesture, make_recogniser
-from touch_gestures.skin.synthetic import PAPER_CENTROID_SET, random_touches, synthetic_traces
+from touch_sim.skin.synthetic import PAPER_CENTROID_SET, random_touches, synthetic_traces
 
 # $1 (rotated to its indicative angle) and Protractor (free rotation) make a line and its reverse one
 # shape: they follow the trace's order but are blind to a line's direction.

@@ -19,7 +19,7 @@ def feed_path(seg, points, t0=0.0, contact=True):
     out, t = [], t0
     for p in points:
         frame = ideal_frame(p) if contact else EMPTY
-        out += seg.feed(frame, contact, p if contact else None, t)
+        out += seg.update(frame, contact, p if contact else None, t)
         t += 1 / RATE
     return out, t
 
@@ -91,19 +91,21 @@ def test_two_fingers_are_flagged_one_finger_with_holes_is_not():
     for gap, expected in ((5, True), (2, False)):  # 3 empty taxels apart / 0: one blob
         seg = GestureSegmenter(min_frames=1)
         for k in range(30):
-            seg.feed(_two_blob_frame(gap), True, np.array([20.0, 22.0]), k / RATE)
+            seg.update(_two_blob_frame(gap), True, np.array([20.0, 22.0]), k / RATE)
         (g,) = seg.flush()
         assert g.multi_contact is expected, gap
     holey = np.zeros((12, 12), np.float32)
     holey[4, 4] = holey[4, 6] = holey[6, 5] = 0.3  # a pad seen through tilted domes: gaps of one taxel
     seg = GestureSegmenter()
     for k in range(30):
-        seg.feed(holey, True, np.array([5.5 * PITCH_MM, 5 * PITCH_MM]), k / RATE)
+        seg.update(holey, True, np.array([5.5 * PITCH_MM, 5 * PITCH_MM]), k / RATE)
     assert not seg.flush()[0].multi_contact
 
 
 def test_two_fingers_through_the_virtual_skin():
-    from touch_driver.skin import StaticPress, Timeline, calibrate_frames, render_frames
+    from touch_driver.skin.calibration import calibrate_frames
+    from touch_sim.skin.device import render_frames
+    from touch_sim.skin.stimuli import StaticPress, Timeline
 
     scene = Timeline([StaticPress(12.0, 23.0, 1.5, at_s=0.4, for_s=0.6),
                       StaticPress(35.0, 23.0, 1.5, at_s=0.4, for_s=0.6)])
@@ -112,7 +114,7 @@ def test_two_fingers_through_the_virtual_skin():
     out = []
     for i in range(len(cal.contact)):
         if cal.tared[i]:
-            out += seg.feed(cal.pressure[i], bool(cal.contact[i]), cal.contact_xy_mm[i], i / RATE)
+            out += seg.update(cal.pressure[i], bool(cal.contact[i]), cal.contact_xy_mm[i], i / RATE)
     out += seg.flush()
     assert len(out) == 1 and out[0].multi_contact
     # The contact point of two equal fingers lies between them, which is why the flag matters.
@@ -123,15 +125,15 @@ def test_bad_frames_are_counted_not_raised():
     seg = GestureSegmenter(min_frames=1)
     nan = np.full((12, 12), np.nan, np.float32)
     nan[3, 3] = 0.8
-    seg.feed(nan, True, np.array([13.0, 13.0]), 0.0)
-    seg.feed(ideal_frame(np.array([14.0, 13.0])), True, np.array([np.nan, np.nan]), 0.01)
-    seg.feed(EMPTY, False, None, 0.005)          # time went backwards: skipped
-    seg.feed(EMPTY, False, None, float('nan'))   # no time at all: skipped
+    seg.update(nan, True, np.array([13.0, 13.0]), 0.0)
+    seg.update(ideal_frame(np.array([14.0, 13.0])), True, np.array([np.nan, np.nan]), 0.01)
+    seg.update(EMPTY, False, None, 0.005)          # time went backwards: skipped
+    seg.update(EMPTY, False, None, float('nan'))   # no time at all: skipped
     (g,) = seg.flush()
     assert seg.stats.nan_frames == 1 and seg.stats.missing_points == 1 and seg.stats.time_reversals == 2
     assert g.frames == 2 and len(g.trajectory) == 1 and np.isfinite(g.peak_map).all()
     with pytest.raises(ValueError, match='pressure must be'):
-        seg.feed(np.zeros(10), True, None, 1.0)
+        seg.update(np.zeros(10), True, None, 1.0)
 
 
 def test_taps_shorter_than_min_frames_are_dropped():
@@ -159,7 +161,7 @@ def test_any_frame_stream_gives_consistent_gestures(frames):
         pressure = ideal_frame(np.array([x, y])) * (1.0 if np.isnan(level) else level + 0.1)
         if np.isnan(level):
             pressure[0, 0] = np.nan
-        out += seg.feed(pressure if contact else EMPTY, contact, np.array([x, y]) if contact else None, k / RATE)
+        out += seg.update(pressure if contact else EMPTY, contact, np.array([x, y]) if contact else None, k / RATE)
     out += seg.flush()
     starts = sum(1 for i, f in enumerate(frames) if f[0] and (i == 0 or not frames[i - 1][0]))
     assert len(out) <= starts + len(frames) // 40 + 1

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap, BodySensor
-from touch_graph.cli import demo
 from touch_graph.errors import ConfigError
 from touch_graph.launch import evaluate_launch
 from touch_graph.launch.cli import parse_launch_arguments
 from touch_graph.paths import share_file
+from touch_sim import demo
 from touch_view.bench import bench_view
 from touch_view.body_layout import VIEW_SIZE, load_layout, sensor_layout
 from touch_view.colormap import heat_rgb

@@ -1,7 +1,6 @@
-"""Serial drivers for the three touch sensors, their calibration and virtual devices."""
+"""Serial drivers of the three touch sensors: framing, wire protocols, calibration and driver nodes.
 
-import serial
-
-# Make bearsim://, patchsim:// and skinsim:// URLs resolvable by serial.serial_for_url.
-if 'touch_driver.urlhandlers' not in serial.protocol_handler_packages:
-    serial.protocol_handler_packages.append('touch_driver.urlhandlers')
+The virtual sensors behind ``bearsim://``, ``patchsim://`` and ``skinsim://`` URLs are in
+:mod:`touch_sim`; a driver finds them through entry points when a port URL asks for one
+(:func:`touch_driver.serial_driver.prepare_port_url`).
+"""

@@ -1,12 +1,13 @@
 """The part every sensor driver node shares: port, polling, reconnects, diagnostics.
 
-A sensor's node subclasses :class:`SerialDriverNode`, says how to build its
-:class:`~touch_driver.serial_driver.SerialDriver`, and turns each decoded frame into its
-calibrated message in :meth:`SerialDriverNode.handle_frame`. This base
+A sensor's node subclasses :class:`SerialDriverNode`, gives the sensor's stream decoder
+(:meth:`SerialDriverNode.make_decoder`) and turns each decoded scan into its calibrated message
+in :meth:`SerialDriverNode.handle_frame`. This base
 
-- reads the port from a timer at ``poll_rate_hz`` (twice the sensor rate by default), so a
-  frame is published at most half a period after it arrives, on the graph's clock (a
-  virtual device on a simulated clock then runs as fast as the graph);
+- reads the port from a timer at ``poll_rate_hz`` (twice the sensor rate by default) with
+  :meth:`~touch_driver.serial_driver.SerialDriver.read_frame`, so a frame is published at most
+  half a period after it arrives, on the graph's clock (a virtual device on a simulated clock
+  then runs as fast as the graph);
 - survives an unplugged port: it logs once, reports ``connected: false``, and tries to
   reopen every ``reconnect_period_s`` until the device is back;
 - publishes a ``DriverStatus`` on ``~/status`` and a ``diagnostic_msgs/DiagnosticArray`` on
@@ -21,10 +22,11 @@ reason instead of being accepted and ignored.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Generic
 
 from touch_graph.compat import USING_ROS, Node, ParameterDescriptor, SetParametersResult, get_message
 
+from .framing import ScanT, SensorStreamDecoder
 from .serial_driver import DecodedFrame, DriverError, SerialDriver
 
 __all__ = ['SerialDriverNode']
@@ -39,11 +41,14 @@ _OK, _WARN, _ERROR = 0, 1, 2
 _BYTE_LEVEL = USING_ROS
 
 
-class SerialDriverNode(Node):
+class SerialDriverNode(Node, Generic[ScanT]):
     """Base of the three driver nodes.
 
     Subclasses set :attr:`sensor` (e.g. ``'skin'``), :attr:`default_port`, :attr:`frame_rate_hz`
-    and implement :meth:`make_driver` and :meth:`handle_frame`.
+    and implement :meth:`make_decoder` and :meth:`handle_frame`.
+
+    Attributes:
+        driver: the :class:`SerialDriver` reading the port (its ``decoder`` is the sensor's).
     """
 
     sensor = 'sensor'
@@ -70,7 +75,8 @@ class SerialDriverNode(Node):
                 raise ValueError(f"parameter '{name}' of {self.get_fully_qualified_name()} must be > 0, got {value}")
         self.expected_rate_hz = expected
 
-        self.driver = self.make_driver(self.port, self._clock_s)
+        self.driver: SerialDriver[ScanT] = SerialDriver(self.port, self.make_decoder(), baudrate=self.baudrate,
+                                                        clock=self._clock_s)
         self.status_pub = self.create_publisher(DriverStatus, '~/status', 10)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.frames = 0
@@ -86,11 +92,12 @@ class SerialDriverNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
     # ------------------------------------------------------------------ for subclasses
-    def make_driver(self, port: str, clock: Any) -> SerialDriver:
+    def make_decoder(self) -> SensorStreamDecoder[ScanT]:
+        """The sensor's stream decoder (bytes -> scans)."""
         raise NotImplementedError
 
-    def handle_frame(self, frame: DecodedFrame) -> None:
-        """Calibrate ``frame`` and publish it."""
+    def handle_frame(self, frame: DecodedFrame[ScanT]) -> None:
+        """Calibrate ``frame.scan`` and publish it."""
         raise NotImplementedError
 
     def header(self) -> Any:
@@ -140,14 +147,17 @@ class SerialDriverNode(Node):
                 self._try_open()
             if not self.driver.is_open:
                 return
-        try:
-            frames = self.driver.poll()
-        except DriverError as err:
-            self.last_error = str(err)
-            self._next_attempt_s = self._clock_s() + self.reconnect_period_s
-            self.get_logger().warning(f'{err}; reconnecting every {self.reconnect_period_s:g} s')
-            return
-        for frame in frames:
+        read_frame = self.driver.read_frame
+        while True:
+            try:
+                frame = read_frame(0)        # what has arrived; never waits
+            except DriverError as err:
+                self.last_error = str(err)
+                self._next_attempt_s = self._clock_s() + self.reconnect_period_s
+                self.get_logger().warning(f'{err}; reconnecting every {self.reconnect_period_s:g} s')
+                return
+            if frame is None:
+                return
             self.frames += 1
             self.handle_frame(frame)
 

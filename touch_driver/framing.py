@@ -19,7 +19,7 @@ it resynchronises on the next sync pattern.
 >>> wire.hex(' ')
 'a5 5a 53 02 00 07 00 68 69 ba 66'
 >>> dec = FrameDecoder({0x53: 2})
->>> dec.feed(b'junk' + wire[:5]), dec.feed(wire[5:])
+>>> dec.update(b'junk' + wire[:5]), dec.update(wire[5:])
 ([], [Frame(sensor_id=83, seq=7, payload=b'hi')])
 >>> dec.stats.dropped_bytes, dec.stats.frames
 (4, 1)
@@ -30,14 +30,17 @@ from __future__ import annotations
 import struct
 from binascii import crc_hqx
 from dataclasses import dataclass, field
+from typing import Generic, TypeVar
 
-__all__ = ['HEADER_SIZE', 'OVERHEAD', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'SensorStreamDecoder', 'crc16',
-           'encode_frame']
+__all__ = ['HEADER_SIZE', 'OVERHEAD', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'ScanT', 'SensorStreamDecoder',
+           'crc16', 'encode_frame']
 
 SYNC = b'\xa5\x5a'
 _HEADER = struct.Struct('<2sBHH')
 HEADER_SIZE = _HEADER.size  # 7
 OVERHEAD = HEADER_SIZE + 2  # header + CRC
+#: What a sensor's stream decoder yields per frame (BearScan, PatchScan, SkinScan).
+ScanT = TypeVar('ScanT')
 
 
 def crc16(data: bytes | bytearray | memoryview) -> int:
@@ -111,7 +114,7 @@ class FrameDecoder:
         """Bytes held while waiting for the rest of a frame."""
         return len(self._buf)
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[Frame]:
+    def update(self, data: bytes | bytearray | memoryview) -> list[Frame]:
         """Add bytes; return the frames completed by them, in order."""
         buf = self._buf
         buf += data
@@ -166,19 +169,41 @@ class FrameDecoder:
         return out
 
 
-class SensorStreamDecoder:
-    """Base of the sensors' stream decoders: a :class:`FrameDecoder` for their frame ids.
+class SensorStreamDecoder(Generic[ScanT]):
+    """Base of the sensors' stream decoders: bytes from a port -> the sensor's decoded scans.
 
-    Subclasses implement ``feed(data)`` on top of :attr:`_frames`, turning checked frames
-    into the sensor's decoded payloads; the counters and buffering are the framing's.
+    A :class:`FrameDecoder` for the sensor's frame ids does the framing (resynchronisation,
+    checksum, sequence gaps); a subclass implements :meth:`decode` for one checked frame. The
+    driver (:class:`~touch_driver.serial_driver.SerialDriver`), the benchmarks and the
+    simulation all update the same decoder object, so there is one path from bytes to a scan.
 
     Args:
         payload_sizes: sensor id -> payload length, as for :class:`FrameDecoder`.
         max_buffer: bytes kept while waiting for the rest of a frame.
+
+    Attributes:
+        corrupt_frames: checked frames whose payload still makes no sense (e.g. bits above
+            the converter's range), skipped.
     """
 
     def __init__(self, payload_sizes: dict[int, int], max_buffer: int = 1 << 16) -> None:
         self._frames = FrameDecoder(payload_sizes, max_buffer=max_buffer)
+        self.corrupt_frames = 0
+
+    def decode(self, frame: Frame) -> ScanT | None:
+        """The scan of one checked frame, or None for a corrupt payload (counted by :meth:`update`)."""
+        raise NotImplementedError
+
+    def update(self, data: bytes | bytearray | memoryview) -> list[ScanT]:
+        """Add bytes read from the port; return the scans they complete, oldest first. Never raises on bytes."""
+        out = []
+        for frame in self._frames.update(data):
+            scan = self.decode(frame)
+            if scan is None:
+                self.corrupt_frames += 1
+            else:
+                out.append(scan)
+        return out
 
     @property
     def stats(self) -> DecoderStats:

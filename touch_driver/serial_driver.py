@@ -2,36 +2,52 @@
 
 :class:`SerialDriver` opens a port URL with ``serial.serial_for_url`` (real hardware such
 as ``/dev/ttyACM0``, pyserial's ``loop://``, or one of our virtual devices such as
-``skinsim://demo``), splits the byte stream into checked frames with
-:class:`~touch_driver.framing.FrameDecoder`, and decodes each payload with the sensor's
-protocol function. It has no graph code: the driver nodes wrap it.
+``skinsim://demo``) and hands the bytes to the sensor's stream decoder
+(:class:`~touch_driver.framing.SensorStreamDecoder`: framing, checksum, payload decode), the
+one object every path from bytes to a scan goes through. It has no graph code: the driver
+nodes wrap it, and read it with :meth:`SerialDriver.read_frame`.
 
 ::
 
-    with SerialDriver('skinsim://demo', payload_sizes={0x53: 288}, decode=decode_skin) as driver:
-        frame = driver.read_frame(timeout=1.0)
+    with SerialDriver('skinsim://demo', SkinStreamDecoder()) as driver:
+        frame = driver.read_frame(timeout=1.0)     # DecodedFrame[SkinScan] or None
 
-Bad bytes never raise: they are counted in :attr:`stats`. A port that fails (unplugged,
-removed) raises :class:`PortDisconnected` from ``read_frame``/``poll``; ``open()`` again
-reconnects, and ``close()`` is safe to call twice.
+Bad bytes never raise: they are counted in :attr:`stats` and the decoder's ``corrupt_frames``.
+A port that fails (unplugged, removed) raises :class:`PortDisconnected` from ``read_frame``;
+``open()`` again reconnects, and ``close()`` is safe to call twice.
+
+URL schemes beyond pyserial's own (the virtual sensors ``bearsim://``, ``patchsim://``,
+``skinsim://`` of the simulation package) are found through the ``social_touch.serial_url_handlers``
+entry point group, ``scheme = package`` (the package holding ``protocol_<scheme>.py``): the driver
+adds that package to ``serial.protocol_handler_packages`` when a port uses the scheme, so the
+runtime imports no simulator until a URL asks for one, and says which package is missing when
+it cannot be imported (:class:`PortURLError`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import importlib
 import time
+import urllib.parse
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from importlib.metadata import entry_points
+from typing import Any, Generic
 
 import serial
 
 from touch_graph.errors import SocialTouchError
 
-from .framing import DecoderStats, Frame, FrameDecoder
+from .framing import DecoderStats, ScanT, SensorStreamDecoder
 
-__all__ = ['DecodedFrame', 'DriverError', 'PortDisconnected', 'SerialDriver']
+__all__ = ['URL_HANDLER_GROUP', 'DecodedFrame', 'DriverError', 'PortDisconnected', 'PortURLError', 'SerialDriver',
+           'prepare_port_url', 'url_handler_packages']
+
+#: Entry point group of pyserial URL handlers: ``scheme = package`` (setup.py).
+URL_HANDLER_GROUP = 'social_touch.serial_url_handlers'
 
 
 class DriverError(SocialTouchError):
@@ -42,43 +58,74 @@ class PortDisconnected(DriverError):
     """The port went away while open (cable pulled, device reset)."""
 
 
-@dataclass(frozen=True, slots=True)
-class DecodedFrame:
-    """A frame with its decoded payload and the time it was read (``clock()`` seconds)."""
+class PortURLError(DriverError, ValueError):
+    """A port URL that can never open here: its scheme's handler package cannot be imported."""
 
-    sensor_id: int
-    seq: int
-    data: Any
+
+@functools.cache
+def url_handler_packages() -> dict[str, str]:
+    """``scheme -> package`` of the URL handlers installed through :data:`URL_HANDLER_GROUP`."""
+    return {ep.name: ep.value for ep in entry_points(group=URL_HANDLER_GROUP)}
+
+
+def prepare_port_url(port: str) -> None:
+    """Make ``port`` openable by ``serial.serial_for_url`` when its scheme is one of the installed handlers.
+
+    Device paths and pyserial's own URLs pass through untouched.
+
+    Raises:
+        PortURLError: the scheme's handler package (e.g. ``touch_sim.urlhandlers`` for
+            ``bearsim://``) cannot be imported.
+    """
+    scheme = urllib.parse.urlsplit(port).scheme if '://' in port else ''
+    package = url_handler_packages().get(scheme)
+    if package is None:
+        return
+    try:
+        importlib.import_module(package)
+    except ImportError as err:
+        top = package.split('.')[0]
+        raise PortURLError(
+            f"{port}: '{scheme}://' is a virtual device of the '{top}' package, which cannot be imported here "
+            f'({err}). Install social_touch with its simulator (pip install social_touch), or point the '
+            'driver at a real port (e.g. /dev/ttyACM0)') from err
+    if package not in serial.protocol_handler_packages:
+        serial.protocol_handler_packages.append(package)
+
+
+@dataclass(frozen=True, slots=True)
+class DecodedFrame(Generic[ScanT]):
+    """A sensor's decoded scan and the time it was read (``clock()`` seconds)."""
+
+    scan: ScanT
     received_s: float
 
 
-class SerialDriver:
-    """Read framed sensor data from a serial port URL.
+class SerialDriver(Generic[ScanT]):
+    """Read a sensor's scans from a serial port URL.
 
     Args:
         port: a pyserial URL or device path.
-        payload_sizes: sensor id -> payload length, for the frame decoder.
-        decode: ``decode(frame) -> data``; may raise ``ValueError`` for a payload that passed the
-            checksum but makes no sense (counted in ``stats_decode_errors``, skipped).
+        decoder: the sensor's stream decoder (``BearDecoder()``, ``PatchDecoder()``,
+            ``SkinStreamDecoder()``); its counters are the driver's (:attr:`stats`).
         baudrate: ignored by USB CDC devices and virtual ports, used by real UARTs.
         clock: seconds; virtual devices run on it (a graph's simulated clock), and read times use it.
         max_pending: decoded frames kept for ``read_frame``; older ones are dropped and counted.
     """
 
-    def __init__(self, port: str, *, payload_sizes: dict[int, int], decode: Callable[[Frame], Any],
-                 baudrate: int = 115200, clock: Callable[[], float] | None = None, max_pending: int = 1024) -> None:
+    def __init__(self, port: str, decoder: SensorStreamDecoder[ScanT], *, baudrate: int = 115200,
+                 clock: Callable[[], float] | None = None, max_pending: int = 1024) -> None:
         if not isinstance(port, str) or not port:
             raise ValueError(f'port must be a device path or URL, got {port!r}')
+        prepare_port_url(port)
         self.port = port
         self.baudrate = baudrate
-        self._decode = decode
+        self.decoder = decoder
         self._clock = clock or time.monotonic
         self._clock_given = clock is not None
-        self._decoder = FrameDecoder(payload_sizes)
         self._serial: Any = None
         # Bounded: a reader that falls behind loses the oldest frames (counted), not memory.
-        self._pending: deque[DecodedFrame] = deque(maxlen=max_pending)
-        self.decode_errors = 0
+        self._pending: deque[DecodedFrame[ScanT]] = deque(maxlen=max_pending)
         self.overflow_frames = 0
         self.opens = 0
 
@@ -89,7 +136,8 @@ class SerialDriver:
 
     @property
     def stats(self) -> DecoderStats:
-        return self._decoder.stats
+        """The decoder's framing counters (frames, dropped bytes, checksum errors, sequence gaps)."""
+        return self.decoder.stats
 
     def open(self) -> None:
         """Open (or reopen) the port; raises :class:`DriverError` naming the port and the cause."""
@@ -103,7 +151,7 @@ class SerialDriver:
             raise DriverError(f'cannot open {self.port}: {err}. Is the sensor plugged in, and is the '
                               'URL right (e.g. /dev/ttyACM0, loop://, bearsim://, patchsim://, skinsim://)?') from err
         self._serial = port
-        self._decoder.reset()  # bytes from before a reconnect belong to no frame
+        self.decoder.reset()  # bytes from before a reconnect belong to no frame
         self._pending.clear()
         self.opens += 1
 
@@ -140,34 +188,23 @@ class SerialDriver:
             self.close()
             raise PortDisconnected(f'{self.port} stopped answering: {err}') from err
 
-    def poll(self) -> list[DecodedFrame]:
-        """Every frame that has arrived, without waiting."""
-        self._feed(self._read_available(0))
-        out = list(self._pending)
-        self._pending.clear()
-        return out
-
-    def read_frame(self, timeout: float | None = None) -> DecodedFrame | None:
-        """The next frame, waiting up to ``timeout`` seconds (None: until one comes); None on timeout."""
+    def read_frame(self, timeout: float | None = None) -> DecodedFrame[ScanT] | None:
+        """The next frame, waiting up to ``timeout`` seconds (None: until one comes; 0: only what has
+        arrived, as the driver node's poll timer asks); None on timeout."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while not self._pending:
             wait = 0.1 if deadline is None else deadline - time.monotonic()
             if wait <= 0:
-                self._feed(self._read_available(0))
+                self._decode(self._read_available(0))
                 break
-            self._feed(self._read_available(min(wait, 0.1)))
+            self._decode(self._read_available(min(wait, 0.1)))
         return self._pending.popleft() if self._pending else None
 
-    def _feed(self, data: bytes) -> None:
+    def _decode(self, data: bytes) -> None:
         if not data:
             return
         now = self._clock()
-        for frame in self._decoder.feed(data):
-            try:
-                decoded = self._decode(frame)
-            except ValueError:
-                self.decode_errors += 1
-                continue
+        for scan in self.decoder.update(data):
             if len(self._pending) == self._pending.maxlen:
                 self.overflow_frames += 1
-            self._pending.append(DecodedFrame(frame.sensor_id, frame.seq, decoded, now))
+            self._pending.append(DecodedFrame(scan, now))

@@ -53,6 +53,12 @@ class StopSignals:
         if self._wake is not None:
             self._wake()
 
+    def wake_with(self, wake: Callable[[], None]) -> None:
+        """Call ``wake`` on the next signal (and now, if one came already), e.g. once an executor exists."""
+        self._wake = wake
+        if self.event.is_set():
+            wake()
+
     def __enter__(self) -> StopSignals:
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -76,26 +82,28 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if args is None else args)
     context = get_default_context()
     prog = getattr(node_class, '__name__', 'node')
-    try:
-        context.init(argv)
-        node = node_class()
-        check_overrides([node], node.get_logger())  # a misspelt -p or params-file name: warn, file and line
-    except SocialTouchError as err:
-        sys.stderr.write(f'{prog}: error: {err}\n')
-        context.try_shutdown()
-        return 1
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    try:
-        with StopSignals(executor.wake) as stop:
+    # Handlers before the node exists: a Ctrl-C while it starts is a clean stop, not a traceback.
+    with StopSignals() as stop:
+        try:
+            context.init(argv)
+            node = node_class()
+            check_overrides([node], node.get_logger())  # a misspelt -p or params-file name: warn, file and line
+        except SocialTouchError as err:
+            sys.stderr.write(f'{prog}: error: {err}\n')
+            context.try_shutdown()
+            return 1
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        stop.wake_with(executor.wake)
+        try:
             while context.ok() and not stop.requested:
                 executor.spin_once(0.5)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        executor.shutdown()
-        context.try_shutdown()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            node.destroy_node()
+            executor.shutdown()
+            context.try_shutdown()
     return 0
 
 

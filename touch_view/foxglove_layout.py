@@ -3,7 +3,7 @@
 Built with foxglove-sdk's layout model (``foxglove.layouts``) and shipped as
 ``touch_view/layouts/social_touch.json``; regenerate it after changing this file with::
 
-    python -m touch_view.foxglove_layout touch_view/layouts/social_touch.json
+    social-touch report foxglove-layout touch_view/layouts/social_touch.json
 
 Panels: the patch and skin maps (Image, from ``foxglove_server``'s image topics), the patch's
 class posteriors over time (Plot of ``/patch/posteriors``, sympartner2018 Fig. 7, with the class
@@ -14,10 +14,11 @@ Transitions), the last haptic command and gesture event (Raw Messages), and the 
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
-__all__ = ['POSTERIOR_CLASSES', 'build_layout']
+__all__ = ['HELP', 'POSTERIOR_CLASSES', 'add_arguments', 'build_layout', 'run']
 
 #: The classes of the shipped patch model, in its order (``/patch/posteriors.classes``).
 POSTERIOR_CLASSES = ('push', 'slap', 'stroke', 'tickle')
@@ -52,16 +53,18 @@ def build_layout() -> dict:
     return json.loads(fl.Layout(content=content).to_json())
 
 
-def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+HELP = "write the package's Foxglove layout (touch_view/layouts/social_touch.json) from this module"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('output', nargs='?', help='JSON file to write (default: print it)')
+
+
+def run(args: argparse.Namespace) -> int:
     text = json.dumps(build_layout(), indent=2) + '\n'
-    if argv:
-        with open(argv[0], 'w', encoding='utf-8') as out:
+    if args.output:
+        with open(args.output, 'w', encoding='utf-8') as out:
             out.write(text)
     else:
         sys.stdout.write(text)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -2,7 +2,7 @@
 
 ::
 
-    python -m touch_view.screenshot docs/touch-view.png
+    social-touch report view-screenshot docs/touch-view.png
 
 runs ``launch/demo.launch.yaml`` with the view in this process on a simulated clock (``--rate``
 times real time), opens the page in headless Chromium (:mod:`touch_view.browser`) and saves a
@@ -22,7 +22,7 @@ from touch_graph.paths import share_file
 from .browser import headless_chromium
 from .scene import BackgroundScene
 
-__all__ = ['main', 'take_screenshot']
+__all__ = ['HELP', 'add_arguments', 'run', 'take_screenshot']
 
 
 def take_screenshot(path: str, *, at_s: float = 17.0, rate: float = 2.0, size: tuple[int, int] = (1400, 1050)) -> None:
@@ -47,16 +47,16 @@ def take_screenshot(path: str, *, at_s: float = 17.0, rate: float = 2.0, size: t
         scene.stop()
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_view.screenshot', description=__doc__.split('\n\n')[0])
+HELP = "the README's screenshot of the touch view on the demo scene (synthetic), in headless Chromium"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('output', help='PNG file to write, e.g. docs/touch-view.png')
     parser.add_argument('--at', type=float, default=17.0, metavar='SECONDS', help='scene time of the screenshot')
     parser.add_argument('--rate', type=float, default=2.0, help='simulated seconds per wall second')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
     take_screenshot(args.output, at_s=args.at, rate=args.rate)
     print(f'wrote {args.output}', file=sys.stderr)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

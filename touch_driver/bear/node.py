@@ -13,20 +13,20 @@ from typing import Any
 from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
-from ..serial_driver import SerialDriver
+from ..serial_driver import DecodedFrame
 from .body_map import BodyMap
 from .calibration import BearCalibrator
-from .protocol import BEAR_ID, PAYLOAD_SIZE, decode_payload
+from .protocol import REAL_RATE_HZ, BearDecoder, BearScan
 
 __all__ = ['BearDriverNode', 'main']
 
 BearFrame = get_message('social_touch_msgs/msg/BearFrame')
 
 
-class BearDriverNode(SerialDriverNode):
+class BearDriverNode(SerialDriverNode[BearScan]):
     sensor = 'bear'
     default_port = 'bearsim://bear'
-    frame_rate_hz = 3.4  # 58 channels x 5 ms (knight2009 VI.B)
+    frame_rate_hz = REAL_RATE_HZ
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('bear_driver', **kwargs)
@@ -42,14 +42,13 @@ class BearDriverNode(SerialDriverNode):
             saturated_after_s=self.declare_parameter('saturated_after_s', 300.0).value)
         self.frame_pub = self.create_publisher(BearFrame, 'frame', sensor_data_qos())
 
-    def make_driver(self, port: str, clock: Any) -> SerialDriver:
-        return SerialDriver(port, payload_sizes={BEAR_ID: PAYLOAD_SIZE},
-                            decode=lambda frame: decode_payload(frame.payload), baudrate=self.baudrate, clock=clock)
+    def make_decoder(self) -> BearDecoder:
+        return BearDecoder()
 
-    def handle_frame(self, frame: Any) -> None:
-        levels = self.calibrator.update(frame.data)
+    def handle_frame(self, frame: DecodedFrame[BearScan]) -> None:
+        levels = self.calibrator.update(frame.scan.raw)
         self.frame_pub.publish(BearFrame(
-            header=self.header(), sequence=frame.seq, raw=levels.raw, level=levels.level, active=levels.active,
+            header=self.header(), sequence=frame.scan.seq, raw=levels.raw, level=levels.level, active=levels.active,
             fitted=levels.fitted, faults=levels.faults))
 
 

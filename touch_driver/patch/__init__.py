@@ -1,10 +1,8 @@
-"""Textile patch driver, pure layers (sympartner2018): wire protocol, calibration, panels, virtual device.
+"""Textile patch driver, pure layers (sympartner2018): wire protocol, calibration, panels.
 
 - :mod:`.protocol`: 20 Hz (0x50) and raw 100 Hz (0x51) frames, 10-bit packed cells + 11 panels; :class:`PatchDecoder`
 - :mod:`.calibration`: :class:`ScanAverager`, :class:`PatchCalibrator` (eq. 1 and 2), the outline mask
 - :mod:`.panels`: :class:`PanelCalibrator`, capacitive panel contact
-- :mod:`.device`: :class:`PatchDevice`, the simulator behind ``patchsim://`` URLs
-- :mod:`.bench`: decode + calibrate cost per frame
 """
 
 from touch_driver.patch.calibration import PatchActivation, PatchCalibrator, ScanAverager, load_outline

@@ -19,7 +19,7 @@ The chain, per cell (i, j) of the 16x16 matrix:
 
 The paper gives neither tau nor g. The default g = 1/400 per count puts r = 1 at 400 counts
 above the resting minimum, about 3.5 N/cm^2 (360 g/cm^2) on the simulated fabric
-(touch_driver/patch/device.py), the top of the range the paper calls nearly linear
+(touch_sim/patch/device.py), the top of the range the paper calls nearly linear
 (below 300-400 g/cm^2); recalibrate it on real hardware.
 
 NaN or out-of-range cells are counted and skipped: their minimum is not updated and they
@@ -90,7 +90,7 @@ class ScanAverager:
         self._valid = np.zeros((self.window, *self.grid), dtype=bool)
         self._pushed = 0
 
-    def push(self, scan: np.ndarray) -> np.ndarray | None:
+    def update(self, scan: np.ndarray) -> np.ndarray | None:
         """Add one (16, 16) scan; return the (16, 16) float32 average when a 20 Hz frame is due, else None.
 
         Non-finite samples are left out of the average; a cell with none in the window is NaN.
@@ -212,5 +212,5 @@ class PatchCalibrator:
 
     def update_scan(self, scan: np.ndarray) -> PatchActivation | None:
         """Feed one raw 100 Hz scan; a :class:`PatchActivation` every ``decimation`` scans, else None."""
-        frame = self.averager.push(scan)
+        frame = self.averager.update(scan)
         return None if frame is None else self.update(frame)

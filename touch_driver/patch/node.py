@@ -19,10 +19,10 @@ import numpy as np
 from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
-from ..serial_driver import SerialDriver
+from ..serial_driver import DecodedFrame
 from .calibration import PatchCalibrator
 from .panels import PanelCalibrator
-from .protocol import PATCH_FRAME_ID, PATCH_SCAN_ID, PAYLOAD_SIZE, decode_payload
+from .protocol import PatchDecoder, PatchScan
 
 __all__ = ['PatchDriverNode', 'main']
 
@@ -33,7 +33,7 @@ SCAN_RATE_HZ = 100.0  # the firmware's internal scan rate (sympartner2018 6.1)
 FRAME_RATE_HZ = 20.0  # averaged frames to the PC (sympartner2018 6.1)
 
 
-class PatchDriverNode(SerialDriverNode):
+class PatchDriverNode(SerialDriverNode[PatchScan]):
     sensor = 'patch'
     default_port = 'patchsim://patch'
     # Wire frames per second: raw scans by default; set expected_rate_hz: 20.0 for firmware
@@ -56,12 +56,8 @@ class PatchDriverNode(SerialDriverNode):
         self.frame_pub = self.create_publisher(PatchFrame, 'frame', sensor_data_qos())
         self.panels_pub = self.create_publisher(PanelContact, 'panels', sensor_data_qos())
 
-    def make_driver(self, port: str, clock: Any) -> SerialDriver:
-        def decode(frame: Any) -> tuple[bool, np.ndarray, np.ndarray]:
-            cells, panels = decode_payload(frame.payload)
-            return frame.sensor_id == PATCH_SCAN_ID, cells, panels
-        return SerialDriver(port, payload_sizes={PATCH_FRAME_ID: PAYLOAD_SIZE, PATCH_SCAN_ID: PAYLOAD_SIZE},
-                            decode=decode, baudrate=self.baudrate, clock=clock)
+    def make_decoder(self) -> PatchDecoder:
+        return PatchDecoder()
 
     def _panel_calibrator(self, raw_scan: bool) -> PanelCalibrator:
         # Panels are sampled with every frame of the stream: 100 Hz scans or 20 Hz averages.
@@ -71,10 +67,10 @@ class PatchDriverNode(SerialDriverNode):
             self._panel_calibrators[key] = PanelCalibrator.from_yaml(self._panels_config, rate_hz=rate)
         return self._panel_calibrators[key]
 
-    def handle_frame(self, frame: Any) -> None:
-        raw_scan, cells, panels = frame.data
-        activation = self.calibrator.update_scan(cells) if raw_scan else self.calibrator.update(cells)
-        state = self._panel_calibrator(raw_scan).update(panels)
+    def handle_frame(self, frame: DecodedFrame[PatchScan]) -> None:
+        scan = frame.scan
+        activation = self.calibrator.update_scan(scan.cells) if scan.raw_scan else self.calibrator.update(scan.cells)
+        state = self._panel_calibrator(scan.raw_scan).update(scan.panels)
         changed = self._last_contact is None or not np.array_equal(state.contact, self._last_contact)
         self._last_contact = state.contact
         if not (changed or activation is not None):
@@ -84,7 +80,7 @@ class PatchDriverNode(SerialDriverNode):
                                              contact=state.contact, any_contact=bool(state.any_contact)))
         if activation is not None:
             self.frame_pub.publish(PatchFrame(
-                header=header, sequence=frame.seq, raw=activation.raw.ravel(),
+                header=header, sequence=scan.seq, raw=activation.raw.ravel(),
                 activation=activation.activation.ravel(), in_outline=activation.in_outline.ravel()))
 
 

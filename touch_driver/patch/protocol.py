@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from touch_driver.framing import SensorStreamDecoder, encode_frame
+from touch_driver.framing import Frame, SensorStreamDecoder, encode_frame
 from touch_graph.errors import MessageError
 
 __all__ = ['ADC_MAX', 'GRID', 'N_PANELS', 'PATCH_FRAME_ID', 'PATCH_SCAN_ID', 'PAYLOAD_SIZE', 'PatchDecoder',
@@ -119,7 +119,7 @@ def encode_scan(seq: int, cells: np.ndarray, panels: np.ndarray, raw_scan: bool 
     return encode_frame(PATCH_SCAN_ID if raw_scan else PATCH_FRAME_ID, seq, encode_payload(cells, panels))
 
 
-class PatchDecoder(SensorStreamDecoder):
+class PatchDecoder(SensorStreamDecoder[PatchScan]):
     """Bytes from the patch's port -> :class:`PatchScan` objects; never raises on bad bytes.
 
     Accepts both frame kinds (0x50 averaged, 0x51 raw scans); resynchronisation, checksum
@@ -129,10 +129,7 @@ class PatchDecoder(SensorStreamDecoder):
     def __init__(self, max_buffer: int = 1 << 16) -> None:
         super().__init__({PATCH_FRAME_ID: PAYLOAD_SIZE, PATCH_SCAN_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[PatchScan]:
-        """Add bytes; return the frames they complete, in order."""
-        out = []
-        for frame in self._frames.feed(data):
-            cells, panels = decode_payload(frame.payload)  # length checked by the framing
-            out.append(PatchScan(frame.seq, frame.sensor_id == PATCH_SCAN_ID, cells, panels))
-        return out
+    def decode(self, frame: Frame) -> PatchScan:
+        """The scan of one checked frame (every bit pattern decodes; the framing checked the length)."""
+        cells, panels = decode_payload(frame.payload)
+        return PatchScan(frame.seq, frame.sensor_id == PATCH_SCAN_ID, cells, panels)

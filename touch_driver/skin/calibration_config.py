@@ -47,7 +47,7 @@ class SkinCalibrationConfig:
 
     The paper (cirillo2017) gives the rate and the sensor's figures, not the calibration
     constants of its firmware; the other defaults are derived from the simulator's contact model
-    (:mod:`touch_driver.skin.contact`) and labelled so in the YAML file.
+    (:mod:`touch_sim.skin.contact`) and labelled so in the YAML file.
     """
 
     #: frames per second (cirillo2017 2.2: 150 Hz); converts the time constants below to frames.

@@ -14,17 +14,17 @@ from typing import Any
 from touch_graph.compat import get_message, sensor_data_qos
 
 from ..driver_node import SerialDriverNode
-from ..serial_driver import SerialDriver
+from ..serial_driver import DecodedFrame
 from .calibration import SkinCalibrator
 from .calibration_config import load_skin_calibration
-from .protocol import FRAME_RATE_HZ, PAYLOAD_SIZE, SENSOR_ID, decode_payload
+from .protocol import FRAME_RATE_HZ, SkinScan, SkinStreamDecoder
 
 __all__ = ['SkinDriverNode', 'main']
 
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 
 
-class SkinDriverNode(SerialDriverNode):
+class SkinDriverNode(SerialDriverNode[SkinScan]):
     sensor = 'skin'
     default_port = 'skinsim://skin'
     frame_rate_hz = FRAME_RATE_HZ
@@ -35,15 +35,15 @@ class SkinDriverNode(SerialDriverNode):
         self.calibrator = SkinCalibrator(load_skin_calibration(config_path or None))
         self.frame_pub = self.create_publisher(SkinFrame, 'frame', sensor_data_qos())
 
-    def make_driver(self, port: str, clock: Any) -> SerialDriver:
-        return SerialDriver(port, payload_sizes={SENSOR_ID: PAYLOAD_SIZE},
-                            decode=lambda frame: decode_payload(frame.payload), baudrate=self.baudrate, clock=clock)
+    def make_decoder(self) -> SkinStreamDecoder:
+        return SkinStreamDecoder()
 
-    def handle_frame(self, frame: Any) -> None:
-        state = self.calibrator.update(frame.data)
+    def handle_frame(self, frame: DecodedFrame[SkinScan]) -> None:
+        scan = frame.scan
+        state = self.calibrator.update(scan.raw)
         x, y = (float(v) for v in state.contact_xy_mm) if state.contact else (math.nan, math.nan)
         self.frame_pub.publish(SkinFrame(
-            header=self.header(), sequence=frame.seq, raw=frame.data, pressure=state.pressure.ravel(),
+            header=self.header(), sequence=scan.seq, raw=scan.raw, pressure=state.pressure.ravel(),
             contact=bool(state.contact), contact_x=x, contact_y=y, force=state.force.ravel(),
             total_force=float(state.total_force)))
 

@@ -33,12 +33,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..framing import SensorStreamDecoder, encode_frame
+from ..framing import Frame, SensorStreamDecoder, encode_frame
 
 __all__ = [
     'ACTIVE_SIDE_MM', 'FRAME_PERIOD_S', 'FRAME_RATE_HZ', 'MODULES_PER_GROUP', 'MODULE_TAXELS', 'N_COLS',
     'N_GROUPS', 'N_MODULES', 'N_ROWS', 'N_TAXELS', 'PAYLOAD_SIZE', 'ROW_MAJOR_FROM_WIRE', 'SENSOR_ID',
-    'TAXEL_PITCH_MM', 'TAXEL_XY_MM', 'WIRE_FROM_ROW_MAJOR', 'SkinRawFrame', 'SkinStreamDecoder',
+    'TAXEL_PITCH_MM', 'TAXEL_XY_MM', 'WIRE_FROM_ROW_MAJOR', 'SkinScan', 'SkinStreamDecoder',
     'decode_payload', 'encode_payload', 'encode_skin_frame', 'module_of_taxel',
 ]
 
@@ -149,15 +149,15 @@ def encode_skin_frame(seq: int, taxels: np.ndarray) -> bytes:
     return encode_frame(SENSOR_ID, seq, encode_payload(taxels))
 
 
-class SkinRawFrame(NamedTuple):
+class SkinScan(NamedTuple):
     """One decoded skin scan: wire sequence counter (0..65535) and (144,) uint16 counts, row-major."""
 
     seq: int
     raw: np.ndarray
 
 
-class SkinStreamDecoder(SensorStreamDecoder):
-    """Bytes from the serial port -> :class:`SkinRawFrame` objects; never raises on bad bytes.
+class SkinStreamDecoder(SensorStreamDecoder[SkinScan]):
+    """Bytes from the serial port -> :class:`SkinScan` objects; never raises on bad bytes.
 
     A thin layer over :class:`touch_driver.framing.FrameDecoder` that accepts only id 0x53 with
     a 288-byte payload (anything else is garbage to resynchronise past) and reorders each payload
@@ -165,7 +165,7 @@ class SkinStreamDecoder(SensorStreamDecoder):
 
     >>> dec = SkinStreamDecoder()
     >>> wire = encode_skin_frame(9, np.full(144, 1000, dtype=np.uint16))
-    >>> frames = dec.feed(b'\\x00\\xa5garbage' + wire + wire[:100])
+    >>> frames = dec.update(b'\\x00\\xa5garbage' + wire + wire[:100])
     >>> [(f.seq, int(f.raw[0])) for f in frames], dec.stats.dropped_bytes, dec.buffered
     ([(9, 1000)], 9, 100)
     """
@@ -173,6 +173,6 @@ class SkinStreamDecoder(SensorStreamDecoder):
     def __init__(self, max_buffer: int = 1 << 16) -> None:
         super().__init__({SENSOR_ID: PAYLOAD_SIZE}, max_buffer=max_buffer)
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[SkinRawFrame]:
-        """Add bytes read from the port; return the scans they completed, oldest first."""
-        return [SkinRawFrame(f.seq, decode_payload(f.payload)) for f in self._frames.feed(data)]
+    def decode(self, frame: Frame) -> SkinScan:
+        """The scan of one checked frame (the framing checked id and length), reordered to row-major."""
+        return SkinScan(frame.seq, decode_payload(frame.payload))

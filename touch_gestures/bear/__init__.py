@@ -10,7 +10,9 @@ Pure classes with no graph code, in the order of the paper's processing paths (F
   (Table I), one subtype per sensor, with change events;
 - :mod:`.symbolic`: locational filters and priority logic from ``config/bear_gestures.yaml`` (V.E);
 - :mod:`.pipeline`: the three paths run together, one call per scan cycle;
-- :mod:`.scene`: simulated people (Table II statistics) scripting labelled interactions (synthetic);
-- :mod:`.chain`, :mod:`.evaluate`, :mod:`.bench`, :mod:`.report`, :mod:`.cli`, :mod:`.train`: evaluation,
-  benchmark, reports, the `social-touch eval bear` command and model training.
+- :mod:`.gate`: the no-touch gate in front of the trained model;
+- :mod:`.node`: ``bear_gestures``, the recognisers on the graph.
+
+Simulated people are in :mod:`touch_sim.bear`; evaluation, benchmark, reports and training in
+:mod:`touch_lab.bear`.
 """

@@ -34,7 +34,7 @@ class NoTouchGate:
     """Wrap ``classifier`` (anything with ``predict_codes(X)``): rows with peak amplitude < ``threshold`` are 'none'.
 
     Args:
-        classifier: returns (n,) int codes, or ((n,) codes, (n,) confidence).
+        classifier: its ``predict_codes(X)`` returns ((n,) int8 codes, (n,) float32 confidence).
         threshold: activation threshold, level 0..1 (knight2009 V.A / V.D: 0.3).
     """
 
@@ -51,11 +51,7 @@ class NoTouchGate:
     def predict_codes(self, X) -> tuple[np.ndarray, np.ndarray]:
         """(n,) int8 codes into SUBTYPES and (n,) float32 confidence (1 where the gate decided)."""
         X = check_feature_table(X)
-        result = self.classifier.predict_codes(X)
-        if isinstance(result, tuple):
-            codes, confidence = result
-        else:
-            codes, confidence = result, np.ones(len(X), dtype=np.float32)
+        codes, confidence = self.classifier.predict_codes(X)
         quiet = X[:, _PEAK] < self.threshold
         return (np.where(quiet, 0, codes).astype(np.int8),
                 np.where(quiet, np.float32(1.0), confidence).astype(np.float32))

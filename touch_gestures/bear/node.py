@@ -1,7 +1,7 @@
 """``bear_gestures``: the Sensate Bear's recognisers on the graph (knight2009 V.C-V.E, Fig. 5).
 
 Subscribes to ``frame`` (``/bear/frame`` in the ``bear`` namespace, ``BearFrame`` from
-``bear_driver``) and wraps :class:`~.pipeline.BearRecognizer`:
+``bear_driver``) and wraps :class:`~.pipeline.BearRecogniser`:
 
 - ``/touch/sensor_level`` (``SensorLevel``): the active sensors, every cycle (V.C);
 - ``/touch/subtype`` (``TouchSubtype``): a sensor's subtype changed, with its buffer features (V.D);
@@ -28,16 +28,17 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.bear.body_map import BodyMap
+from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 from touch_graph.yamlconf import did_you_mean
 
-from .chain import REAL_RATE_HZ
 from .features import MIN_COMPONENT
 from .gate import NoTouchGate
-from .pipeline import BearRecognizer
-from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, N_CHANNELS, active_sensors
-from .subtype import PaperRuleClassifier
+from .pipeline import BearRecogniser
+from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, N_CHANNELS
+from .subtype import PaperRuleClassifier, SubtypePredictor
 from .subtype_model import SubtypeClassifier  # imports scikit-learn (~1 s): at class lookup, before nodes start
 from .symbolic import END, GestureLibrary
 
@@ -77,7 +78,7 @@ class BearGesturesNode(Node):
     """Sensor level, touch subtypes and symbolic gestures of the bear, from its driver's frames.
 
     Attributes:
-        recognizer: the wrapped :class:`BearRecognizer`.
+        recogniser: the wrapped :class:`BearRecogniser`.
         frames: frames processed.
         skipped: reason -> frames skipped for it.
         resets: times the recogniser was started afresh (time went back, or frames stopped).
@@ -91,10 +92,8 @@ class BearGesturesNode(Node):
         self.publish_subtypes = p['publish_subtypes']
         self.publish_symbolic = p['publish_symbolic']
         self.max_gap_ns = round(p['max_gap_s'] * _NS)
-        self.recognizer = self._build_recognizer(p)
-        # Features and a classifier are needed for /touch/subtype or for gestures that require a subtype.
-        self._classify = self.classifier_kind is not None
-        self._names = {s.channel: s.name for s in self.recognizer.body_map.sensors}
+        self.recogniser = self._build_recogniser(p)
+        self._names = {s.channel: s.name for s in self.recogniser.body_map.sensors}
         self.frames = 0
         self.skipped: Counter[str] = Counter()
         self.resets = 0
@@ -114,8 +113,8 @@ class BearGesturesNode(Node):
         outputs = (('subtypes', self.publish_subtypes), ('symbolic gestures', self.publish_symbolic))
         what = [name for name, on in outputs if on]
         self.get_logger().info(
-            f'{self.recognizer.rate_hz:g} Hz, buffer {self.recognizer.buffer.buffer_len} cycles, threshold '
-            f'{self.recognizer.threshold:g}; sensor level{"".join(", " + w for w in what)}'
+            f'{self.recogniser.rate_hz:g} Hz, buffer {self.recogniser.buffer.buffer_len} cycles, threshold '
+            f'{self.recogniser.threshold:g}; sensor level{"".join(", " + w for w in what)}'
             f'{"; subtypes by the " + self.classifier_kind if self.classifier_kind else ""}')
 
     # ------------------------------------------------------------------ parameters
@@ -184,8 +183,7 @@ class BearGesturesNode(Node):
                           f'; no such file (relative paths start at {Path.cwd()})')
         return p
 
-    def _build_recognizer(self, p: dict[str, Any]) -> BearRecognizer:
-        from touch_driver.bear.body_map import BodyMap
+    def _build_recogniser(self, p: dict[str, Any]) -> BearRecogniser:
         body_map = BodyMap.load(p['body_map']) if p['body_map'] else BodyMap.default()
         if p['publish_symbolic']:
             library = GestureLibrary.load(p['gestures'], body_map) if p['gestures'] else \
@@ -196,10 +194,11 @@ class BearGesturesNode(Node):
         need_classifier = p['publish_subtypes'] or (p['publish_symbolic'] and any(g.subtypes for g in
                                                                                    library.detectable))
         classifier = self._classifier(p) if need_classifier else None
-        return BearRecognizer(p['rate_hz'], p['buffer_len'], p['threshold'], classifier=classifier, library=library,
-                              body_map=body_map, detrend=p['detrend'], min_component=p['min_component'])
+        return BearRecogniser(p['rate_hz'], p['buffer_len'], p['threshold'], classifier=classifier, library=library,
+                              body_map=body_map, detrend=p['detrend'], min_component=p['min_component'],
+                              subtypes=p['publish_subtypes'], symbolic=p['publish_symbolic'], classify=need_classifier)
 
-    def _classifier(self, p: dict[str, Any]) -> Any:
+    def _classifier(self, p: dict[str, Any]) -> SubtypePredictor:
         rule = PaperRuleClassifier(amplitude_threshold=p['threshold'],
                                    **{k: p[f'rule.{k}'] for k in _RULE_DEFAULTS})
         self.classifier_kind = 'rule'
@@ -209,7 +208,7 @@ class BearGesturesNode(Node):
         path = Path(p['subtype_model']) if explicit else default_model_path()
         if not path.is_file():
             self.get_logger().warning(f'no trained subtype model at {path}; using the paper rule (knight2009 V.D) '
-                                      'instead. Train one: python -m touch_gestures.bear.train --out '
+                                      'instead. Train one: social-touch train bear --out '
                                       'config/bear_subtype_model.npz')
             return rule
         fqn = self.get_fully_qualified_name()
@@ -224,7 +223,7 @@ class BearGesturesNode(Node):
                        f"{p['rate_hz']} Hz with {p['buffer_len']} cycles (its features differ)")
             if explicit:
                 raise ParameterError(f"parameter 'subtype_model' of {fqn}: {problem}; retrain: python -m "
-                                     f"touch_gestures.bear.train --rate {p['rate_hz']} --buffer {p['buffer_len']} "
+                                     f"touch_lab.bear.train --rate {p['rate_hz']} --buffer {p['buffer_len']} "
                                      '--out FILE')
             self.get_logger().warning(f'{problem}; using the paper rule (knight2009 V.D) instead')
             return rule
@@ -267,7 +266,7 @@ class BearGesturesNode(Node):
         self._last_ns = stamp_ns
         self._last_header = msg.header
         self._last_receipt_ns = self.get_clock().now().nanoseconds
-        rec = self.recognizer
+        rec = self.recogniser
         if not self._fitted_warned and not np.array_equal(fitted, rec.fitted):
             self._fitted_warned = True
             self.get_logger().warning(f'the driver reports {int(fitted.sum())} fitted channels, this body map '
@@ -277,24 +276,12 @@ class BearGesturesNode(Node):
         if not self._rate_checked and rec.buffer.count == RATE_CHECK_FRAMES:
             self._check_rate(stamp_ns)
         self.frames += 1
-        self._step((stamp_ns - self._t0_ns) / _NS, levels, excluded, msg.header)
+        self._recognise_and_publish((stamp_ns - self._t0_ns) / _NS, levels, excluded, msg.header)
 
-    def _step(self, t: float, levels: np.ndarray, excluded: np.ndarray, header: Any) -> None:
-        rec = self.recognizer
-        if self.publish_subtypes and self.publish_symbolic:
-            out = rec.step(t, levels, excluded)            # the evaluated path, unchanged
-            changes = [named.change for named in out.subtype_changes]
-            events, sensors = out.symbolic_events, out.active_sensors
-        else:
-            rec.buffer.push(levels, excluded)
-            codes = confidence = features = None
-            if self._classify:
-                features = rec.extractor.update(rec.buffer.window())
-                codes, confidence = rec.classify(features.table)
-            changes = rec.tracker.update(t, codes, confidence, features.table) if self.publish_subtypes else []
-            active = rec.buffer.active() & rec.fitted
-            events = rec.symbolic.update(t, active, codes) if self.publish_symbolic else []
-            sensors = active_sensors(rec.buffer.latest(), rec.body_map, rec.threshold)
+    def _recognise_and_publish(self, t: float, levels: np.ndarray, excluded: np.ndarray, header: Any) -> None:
+        out = self.recogniser.update(t, levels, excluded)      # only what the parameters ask for
+        sensors, events = out.active_sensors, out.symbolic_events
+        changes = [named.change for named in out.subtype_changes]
         self.level_pub.publish(SensorLevel(header=header, sensors=[
             SensorState(channel=s.channel, name=s.name, location=s.location, region=s.region, level=s.level)
             for s in sensors]))
@@ -314,14 +301,14 @@ class BearGesturesNode(Node):
         """Warn once when frames arrive at a rate far from ``rate_hz`` (the features assume it)."""
         self._rate_checked = True
         measured = RATE_CHECK_FRAMES / ((stamp_ns - self._t0_ns) / _NS)
-        if not 0.7 < measured / self.recognizer.rate_hz < 1.0 / 0.7:
-            self.get_logger().warning(f'frames arrive at {measured:.2f} Hz but rate_hz is {self.recognizer.rate_hz:g}: '
+        if not 0.7 < measured / self.recogniser.rate_hz < 1.0 / 0.7:
+            self.get_logger().warning(f'frames arrive at {measured:.2f} Hz but rate_hz is {self.recogniser.rate_hz:g}: '
                                       'frequencies and durations will be wrong; set rate_hz to the driver\'s rate')
 
     # ------------------------------------------------------------------ endings
     def _restart(self) -> None:
         """End whatever is under way at the latest frame's time, then forget all history."""
-        rec = self.recognizer
+        rec = self.recogniser
         header, last_ns = self._last_header, self._last_ns
         if header is not None and last_ns is not None and self._t0_ns is not None:
             t = (last_ns - self._t0_ns) / _NS

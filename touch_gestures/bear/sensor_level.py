@@ -8,7 +8,7 @@ vectorised pass; :func:`active_sensors` names the active ones through the body m
 
 >>> buf = LevelBuffer(buffer_len=3)
 >>> for value in (0.1, 0.5, 0.9, 0.2):
-...     buf.push(np.full(64, value, dtype=np.float32))
+...     buf.update(np.full(64, value, dtype=np.float32))
 >>> buf.window()[:, 0].tolist()   # oldest first, the first value has left the ring
 [0.5, 0.8999999761581421, 0.20000000298023224]
 >>> bool(buf.active()[0]), buf.count
@@ -72,7 +72,7 @@ class LevelBuffer:
 
     Bad input is counted and skipped, never raised on: a non-finite level (NaN, inf) is stored as
     0.0 (no touch) and counted per channel in :attr:`invalid_counts`; levels outside [0, 1] are
-    clipped. Channels flagged faulty (dead or stuck, see :meth:`push`) are stored as 0.0 so a
+    clipped. Channels flagged faulty (dead or stuck, see :meth:`update`) are stored as 0.0 so a
     stuck-at-full-scale sensor does not look like an endless hold.
 
     Args:
@@ -101,7 +101,7 @@ class LevelBuffer:
         self._ring.fill(0.0)
         self.count = 0
 
-    def push(self, levels: np.ndarray, faulty: np.ndarray | None = None) -> None:
+    def update(self, levels: np.ndarray, faulty: np.ndarray | None = None) -> None:
         """Add one cycle.
 
         Args:
@@ -143,7 +143,7 @@ class LevelBuffer:
         return self._ring[start:start + n]
 
     def latest(self) -> np.ndarray:
-        """(n_channels,) float32 levels of the last cycle (zeros before the first push)."""
+        """(n_channels,) float32 levels of the last cycle (zeros before the first update)."""
         if self.count == 0:
             return np.zeros(self.n_channels, dtype=np.float32)
         return self._ring[(self.count - 1) % self.buffer_len]

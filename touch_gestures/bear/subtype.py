@@ -10,30 +10,33 @@
                   If (ref_var > tickle_cutoff) Tickle  else if (ref_var > pet_cutoff) Pet  else Hold } }
 
 Both classifiers take rows of the feature table of :mod:`.features` (``X``: (n_samples,
-len(FEATURE_NAMES)) float) and return subtype codes, indices into
-:data:`~.subtype_labels.SUBTYPES`. :class:`SubtypeTracker` keeps one subtype per sensor and turns
-the per-cycle codes into change events (msg/TouchSubtype.msg: published when a sensor's subtype
-changes, including back to 'none').
+len(FEATURE_NAMES)) float) and their ``predict_codes(X)`` returns ``(codes, confidence)``: (n_samples,)
+int8 subtype codes, indices into :data:`~.subtype_labels.SUBTYPES`, and (n_samples,) float32
+confidence in [0, 1] (1 for the rule, which is always sure). :class:`SubtypeTracker` keeps one
+subtype per sensor and turns the per-cycle codes into change events (msg/TouchSubtype.msg: published
+when a sensor's subtype changes, including back to 'none').
 
 >>> rule = PaperRuleClassifier()
 >>> X = np.zeros((4, len(FEATURE_NAMES)), dtype=np.float32)
 >>> X[:, 0] = [0.1, 0.9, 0.9, 0.9]                       # peak amplitude
 >>> X[:, 3] = [0.0, 1.0, 5.0, 5.0]                       # duration, s
 >>> X[:, 1] = [0.0, 0.0, 7.0, 0.0]                       # base frequency, Hz
->>> [SUBTYPES[c] for c in rule.predict_codes(X)]
-['none', 'poke', 'tickle', 'hold']
+>>> codes, confidence = rule.predict_codes(X)
+>>> [SUBTYPES[c] for c in codes], confidence.tolist()
+(['none', 'poke', 'tickle', 'hold'], [1.0, 1.0, 1.0, 1.0])
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from .features import FEATURE_NAMES
 from .subtype_labels import RULE_SUBTYPES, SUBTYPES, subtype_index
 
-__all__ = ['PaperRuleClassifier', 'SubtypeChange', 'SubtypeTracker', 'check_feature_table']
+__all__ = ['PaperRuleClassifier', 'SubtypeChange', 'SubtypePredictor', 'SubtypeTracker', 'check_feature_table']
 
 _NONE, _POKE, _TICKLE, _PET, _HOLD = (subtype_index(s) for s in ('none', 'poke', 'tickle', 'pet', 'hold'))
 
@@ -50,6 +53,13 @@ def check_feature_table(X, what: str = 'X') -> np.ndarray:
     if not np.isfinite(arr).all():
         arr = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
     return arr
+
+
+class SubtypePredictor(Protocol):
+    """What classifies subtypes: :class:`PaperRuleClassifier`, ``SubtypeClassifier``, ``NoTouchGate``."""
+
+    def predict_codes(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n_samples, n_features) feature rows -> ((n,) int8 codes into SUBTYPES, (n,) float32 confidence)."""
 
 
 class PaperRuleClassifier:
@@ -107,9 +117,13 @@ class PaperRuleClassifier:
         X = check_feature_table(X)
         return self.alpha * X[:, 1] + self.beta * X[:, 2]
 
-    def predict_codes(self, X) -> np.ndarray:
-        """(n_samples,) int8 codes into SUBTYPES: none, poke, tickle, pet or hold."""
-        X = check_feature_table(X)
+    def predict_codes(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """(n_samples,) int8 codes into SUBTYPES (none, poke, tickle, pet or hold) and (n_samples,) float32
+        confidence, 1 everywhere (a rule has no doubt)."""
+        codes = self._rule_codes(check_feature_table(X))
+        return codes, np.ones(codes.shape, dtype=np.float32)
+
+    def _rule_codes(self, X: np.ndarray) -> np.ndarray:
         tickle_cut, pet_cut = self._cutoffs()
         ref = self.alpha * X[:, 1] + self.beta * X[:, 2]
         long_touch = np.where(ref > tickle_cut, _TICKLE, np.where(ref > pet_cut, _PET, _HOLD))
@@ -118,7 +132,7 @@ class PaperRuleClassifier:
 
     def predict(self, X) -> np.ndarray:
         """(n_samples,) subtype names."""
-        return np.asarray(SUBTYPES, dtype=object)[self.predict_codes(X)]
+        return np.asarray(SUBTYPES, dtype=object)[self.predict_codes(X)[0]]
 
     def fit(self, X, y) -> PaperRuleClassifier:
         """Optionally tune the two cutoffs (``tune_cutoffs=True``) by grid search on rows with a rule label."""

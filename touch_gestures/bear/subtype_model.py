@@ -4,7 +4,7 @@ Model: multinomial logistic regression on the standardised feature table of :mod
 (durations through ``log1p``, since they span 0.1 s to minutes), trained with scikit-learn's
 ``LogisticRegression`` and balanced class weights, evaluated here with numpy in the log domain.
 
-Why this model (measured by ``python -m touch_gestures.bear.report``, table "Choice of the subtype
+Why this model (measured by ``social-touch report bear``, table "Choice of the subtype
 model" in docs/bear-evaluation.md; synthetic people, per sensor-cycle, held-out people, 3.4 Hz, 20
 cycles): accuracy / balanced accuracy 0.90 / 0.71, against 0.94 / 0.68 for a random forest, 0.94 /
 0.65 for gradient boosting, 0.95 / 0.63 for an MLP and 0.49 / 0.29 for the paper's rule. It trails the

@@ -3,7 +3,7 @@
 "A minimum number of sensors within the locational filter must be active for at least two seconds
 [...] Next, the algorithm enters its priority logic [...] hug supersedes Tickle" (V.E). Filters and
 priorities live in ``config/bear_gestures.yaml`` (format documented there); :class:`GestureLibrary`
-loads and checks it against the body map, :class:`SymbolicRecognizer` runs it once per cycle and emits
+loads and checks it against the body map, :class:`SymbolicRecogniser` runs it once per cycle and emits
 START / END events (msg/SymbolicGesture.msg) with the onset, the time the filter first matched.
 
 Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) masks):
@@ -31,13 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
+from touch_driver.bear.body_map import BodyMap
 from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, loads_yaml, typed
 
 from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES
 
 __all__ = ['DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'END', 'START', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent',
-           'SymbolicRecognizer']
+           'SymbolicRecogniser']
 
 #: "active for at least two seconds, an increment informally chosen to parallel human recognition time" (V.E).
 DEFAULT_DWELL_S = 2.0
@@ -150,25 +151,24 @@ class GestureLibrary:
         return tuple(g for g in self.gestures if g.detectable)
 
     @classmethod
-    def load(cls, path: str | Path, body_map=None) -> GestureLibrary:
+    def load(cls, path: str | Path, body_map: BodyMap | None = None) -> GestureLibrary:
         """Read a gesture YAML file; ConfigError with file:line (and a did-you-mean) on any problem."""
         return cls._from_doc(load_yaml(path), body_map, str(path))
 
     @classmethod
-    def loads(cls, text: str, body_map=None, source: str = '<string>') -> GestureLibrary:
+    def loads(cls, text: str, body_map: BodyMap | None = None, source: str = '<string>') -> GestureLibrary:
         """As :meth:`load`, from YAML text."""
         return cls._from_doc(loads_yaml(text, source), body_map, source)
 
     @classmethod
-    def default(cls, body_map=None) -> GestureLibrary:
+    def default(cls, body_map: BodyMap | None = None) -> GestureLibrary:
         """The package's ``config/bear_gestures.yaml``."""
         from touch_graph.paths import share_file
         return cls.load(share_file('config', 'bear_gestures.yaml'), body_map)
 
     @classmethod
-    def _from_doc(cls, doc, body_map, source: str) -> GestureLibrary:
+    def _from_doc(cls, doc: YamlDict, body_map: BodyMap | None, source: str) -> GestureLibrary:
         if body_map is None:
-            from touch_driver.bear.body_map import BodyMap
             body_map = BodyMap.default()
         check_keys(doc, required=('gestures',), optional=('format', 'defaults'), what='bear gesture library')
         version = typed(doc, 'format', int, 'bear gesture library', default=FORMAT_VERSION)
@@ -214,7 +214,7 @@ def _string_list(spec, key: str, what: str) -> YamlList:
     return value
 
 
-def _parse_gesture(name, spec, items, body_map, default_dwell: float, default_gap: float) -> GestureFilter:
+def _parse_gesture(name, spec, items, body_map: BodyMap, default_dwell: float, default_gap: float) -> GestureFilter:
     what = f"gesture '{name}'"
     if not isinstance(name, str) or not _NAME.match(name):
         raise items.error(f'gesture name {name!r} must be lower case letters, digits and _ (e.g. head_pat)', name)
@@ -282,7 +282,7 @@ def _parse_gesture(name, spec, items, body_map, default_dwell: float, default_ga
                          table_i, paper, note)
 
 
-def _regions_of(body_map) -> set[str]:
+def _regions_of(body_map: BodyMap) -> set[str]:
     return {s.region for s in body_map.sensors}
 
 
@@ -308,7 +308,7 @@ def _priority_order(parsed: dict[str, GestureFilter], items: YamlDict) -> list[G
     return out
 
 
-class SymbolicRecognizer:
+class SymbolicRecogniser:
     """Runs a :class:`GestureLibrary` once per cycle and emits START / END events.
 
     Args:
@@ -317,9 +317,9 @@ class SymbolicRecognizer:
         n_channels: wire channels.
     """
 
-    def __init__(self, library: GestureLibrary | None = None, body_map=None, n_channels: int = 64) -> None:
+    def __init__(self, library: GestureLibrary | None = None, body_map: BodyMap | None = None,
+                 n_channels: int = 64) -> None:
         if body_map is None:
-            from touch_driver.bear.body_map import BodyMap
             body_map = BodyMap.default()
         self.library = library if library is not None else GestureLibrary.default(body_map)
         self.gestures = self.library.detectable

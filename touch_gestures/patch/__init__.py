@@ -1,5 +1,6 @@
 """Textile patch gestures (sympartner2018 6.2): sliding-window features, one Gaussian mixture per
-class, the event rule, model files, simulated people, training and leave-one-subject-out evaluation.
+class, the event rule, model files and the ``patch_gestures`` node. Simulated people are in
+:mod:`touch_sim.patch`; training and leave-one-subject-out evaluation in :mod:`touch_lab.patch`.
 
 Per frame::
 

@@ -7,14 +7,13 @@
   :class:`~.base.TemplateRecogniser` (``fit(gestures, labels)``, ``predict(gesture) -> Match``).
 - :mod:`.codebook`: codebook files (.npz, no pickle) and the recorder; :mod:`.commands`: the
   gesture -> command map and the HapticCommand message.
-- :mod:`.traces`, :mod:`.render`, :mod:`.evaluate`, :mod:`.cli`, :mod:`.bench`, :mod:`.report`:
-  the evaluation of ``social-touch eval skin``; :mod:`.synthetic`: synthetic traces.
 - On the graph: :mod:`.node` (``haptic_commands``: /skin/frame -> /touch/haptic_command), with
   :mod:`.frames` (SkinFrame messages -> gestures) and :mod:`.screening` (touches that are no
-  gesture); :mod:`.record_cli` (``social-touch codebook record``) with :mod:`.recording` (resume
-  files); :mod:`.scene` (simulated people at the skin), :mod:`.graph_chain` (a scene through the
-  skin driver node) and :mod:`.session_eval` (the node on simulated sessions). These are not
-  imported here: importing the package stays free of graph code.
+  gesture). These are not imported here: importing the package stays free of graph code.
+
+Synthetic traces, simulated people and rendering through the virtual skin are in
+:mod:`touch_sim.skin`; the evaluation, the benchmark, the reports and the codebook recorder CLI in
+:mod:`touch_lab.skin`.
 """
 
 from .base import Match, TemplateRecogniser

@@ -62,7 +62,7 @@ class SkinFrameStream:
         self.t0_ns: int | None = None
         self._last_ns: int | None = None
 
-    def feed(self, msg: Any) -> list[TouchGesture]:
+    def update(self, msg: Any) -> list[TouchGesture]:
         """Add one ``SkinFrame``; returns the gestures it completes (usually none)."""
         pressure = np.asarray(msg.pressure, dtype=np.float32)
         if pressure.size != GRID * GRID:
@@ -85,7 +85,7 @@ class SkinFrameStream:
         self.frames += 1
         contact = bool(msg.contact)
         xy = np.array([msg.contact_x, msg.contact_y], dtype=np.float32) if contact else None
-        return self.segmenter.feed(pressure, contact, xy, (stamp_ns - self.t0_ns) / _NS)
+        return self.segmenter.update(pressure, contact, xy, (stamp_ns - self.t0_ns) / _NS)
 
     def flush(self) -> list[TouchGesture]:
         """End the gesture under way as if the finger had lifted (the end of a recording)."""

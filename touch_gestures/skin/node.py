@@ -245,7 +245,7 @@ class HapticCommandsNode(Node):
     def _on_frame(self, msg: Any) -> None:
         stream = self.stream
         skipped, restarts = sum(stream.skipped.values()), stream.restarts
-        gestures = stream.feed(msg)
+        gestures = stream.update(msg)
         if sum(stream.skipped.values()) != skipped:
             self.get_logger().warning(f'skipped a frame: its pressure must be 144 finite values; frames skipped so '
                                       f'far: {dict(stream.skipped)}', throttle_duration_sec=5.0)

@@ -82,8 +82,8 @@ class GestureSegmenter:
 
     >>> seg = GestureSegmenter(off_hysteresis_s=0.05, min_frames=2)
     >>> touch = np.zeros((12, 12), np.float32); touch[3, 4] = 1.0
-    >>> out = [seg.feed(touch, True, np.array([17.0, 13.7]), i / 150) for i in range(5)]
-    >>> out += [seg.feed(np.zeros((12, 12), np.float32), False, None, (5 + i) / 150) for i in range(10)]
+    >>> out = [seg.update(touch, True, np.array([17.0, 13.7]), i / 150) for i in range(5)]
+    >>> out += [seg.update(np.zeros((12, 12), np.float32), False, None, (5 + i) / 150) for i in range(10)]
     >>> [g for batch in out for g in batch]
     [TouchGesture(points=5, frames=5, duration_s=0.027, taxels=1, strokes=1)]
     """
@@ -148,7 +148,7 @@ class GestureSegmenter:
         """True while a gesture is being collected (including its hysteresis tail)."""
         return self._active
 
-    def feed(self, pressure: np.ndarray, contact: bool, contact_xy_mm: np.ndarray | None,
+    def update(self, pressure: np.ndarray, contact: bool, contact_xy_mm: np.ndarray | None,
              t: float) -> list[TouchGesture]:
         """Add one frame; return the gestures it completes (usually none, at most one).
 

@@ -1,16 +1,16 @@
 """Write rosbag2 bags (MCAP storage, metadata version 9) that survive a crash of their writer.
 
-:class:`BagRecorder` wraps ``rosbags.rosbag2.Writer``. Each topic becomes a connection
-carrying its full message definition (from :data:`touch_graph.messages.typestore`, so
-``ros2 bag``, Foxglove and the rosbags reader can decode it) and its offered QoS.
+:class:`BagRecorder` writes the MCAP file with the ``mcap`` library's writer, in rosbag2's ROS 2
+profile: each topic is a channel (CDR messages, its offered QoS in ``offered_qos_profiles``) whose
+schema is the type's full ``.msg`` definition from :data:`touch_graph.messages.typestore`, so
+``ros2 bag``, Foxglove and the rosbags reader can decode it. Every chunk carries the CRC-32 of
+its records, so a reader detects a corrupted chunk instead of decoding garbage.
 
-Durability: rosbags' MCAP writer keeps messages in an in-memory chunk until it holds
-1 MiB or the bag closes. A background thread closes the pending chunk and fsyncs the file
-every ``flush_period_s`` (default 1 s), so a recorder killed with SIGKILL loses at most
-about that much; :func:`touch_graph.bag.reindex.reindex` then rebuilds the summary and
-``metadata.yaml``. Closing the pending chunk uses the writer's storage internals
-(``McapWriter.close_chunk``), which is why setup.py pins ``rosbags<0.12``;
-:func:`check_writer_internals` fails loudly if a newer rosbags changed them.
+Durability: the writer keeps messages in an in-memory chunk until it holds 1 MiB or the bag
+closes. A background thread closes the pending chunk (the writer's public ``flush()``) and
+fsyncs the file every ``flush_period_s`` (default 1 s), so a recorder killed with SIGKILL loses
+at most about that much; :func:`touch_graph.bag.reindex.reindex` then rebuilds the summary and
+``metadata.yaml``. :meth:`BagRecorder.close` writes both.
 """
 
 from __future__ import annotations
@@ -18,56 +18,35 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
-from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from mcap.writer import CompressionType, Writer
 
 from .. import messages
 from ..errors import BagError, MessageError
+from .metadata import (
+    SCHEMA_ENCODING,
+    FileRecord,
+    TopicRecord,
+    bag_metadata,
+    qos_text,
+    to_bag_qos,
+    type_hash,
+    write_metadata,
+)
 
-__all__ = ['BagRecorder', 'check_writer_internals', 'to_bag_qos']
+__all__ = ['BagRecorder', 'to_bag_qos']
 
-_ZERO = QosTime(0, 0)
-
-
-def to_bag_qos(qos: Any) -> Qos:
-    """A rosbags ``Qos`` from a runtime ``QoSProfile`` or its dict form (``qos_to_dict``); None -> defaults.
-
-    >>> to_bag_qos({'depth': 5, 'reliability': 2}).reliability.name
-    'BEST_EFFORT'
-    """
-    if qos is None:
-        qos = {}
-    if not isinstance(qos, dict):
-        qos = {'history': int(qos.history), 'depth': int(qos.depth), 'reliability': int(qos.reliability),
-               'durability': int(qos.durability)}
-
-    def pick(enum: Any, key: str, default: int) -> Any:
-        try:
-            return enum(int(qos.get(key, default)))
-        except (TypeError, ValueError):
-            return enum(default)
-    depth = qos.get('depth', 10)
-    return Qos(history=pick(QosHistory, 'history', 1), depth=int(depth) if isinstance(depth, int) else 10,
-               reliability=pick(QosReliability, 'reliability', 1), durability=pick(QosDurability, 'durability', 2),
-               deadline=_ZERO, lifespan=_ZERO, liveliness=QosLiveliness.AUTOMATIC, liveliness_lease_duration=_ZERO,
-               avoid_ros_namespace_conventions=False)
+#: Messages per chunk before the writer closes it by itself (between flushes), bytes.
+CHUNK_SIZE = 1 << 20
 
 
-def check_writer_internals(writer: Writer) -> None:
-    """Raise BagError when rosbags' MCAP writer lacks what :meth:`BagRecorder.flush` uses."""
-    storage = writer.storage
-    missing = [a for a in ('close_chunk', 'chunk', 'bio') if not hasattr(storage, a)]
-    if not missing and not hasattr(storage.chunk, 'msgs'):
-        missing.append('chunk.msgs')
-    if missing:
-        import rosbags
-        version = getattr(rosbags, '__version__', '?')
-        raise BagError(f'rosbags {version} MCAP writer has no {", ".join(missing)}; the recorder needs them to '
-                       "flush once a second. Install the pinned version: pip install 'rosbags>=0.10,<0.12'")
+@dataclass
+class _Channel:
+    id: int
+    topic: TopicRecord
 
 
 class BagRecorder:
@@ -96,7 +75,10 @@ class BagRecorder:
         self._lock = threading.Lock()  # writer state
         self._io_lock = threading.Lock()  # fsync vs close, so fsync runs outside the writer lock
         self._writer: Writer | None = None
-        self._connections: dict[str, Any] = {}
+        self._file: Any = None
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, _Channel] = {}
+        self._span: list[int] = []    # [first, last] log time written, ns
         self._dirty = False
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -108,15 +90,14 @@ class BagRecorder:
             raise BagError(f'bag {self.path} is already open or closed')
         if self.path.exists():
             raise BagError(f'{self.path} exists already; record to a new path (-o) or remove it first')
-        writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
         try:
-            writer.open()
-        except (WriterError, OSError) as err:
+            self.path.mkdir(parents=True)
+            self._file = (self.path / f'{self.path.name}.mcap').open('xb')
+        except OSError as err:
             raise BagError(f'cannot create bag {self.path}: {err}') from err
-        check_writer_internals(writer)
-        writer.storage.bio.flush()  # the MCAP header on disk at once: a bag killed early is still MCAP
-        for key, value in self._custom.items():
-            writer.set_custom_data(key, str(value))
+        writer = Writer(self._file, chunk_size=CHUNK_SIZE, compression=CompressionType.NONE)
+        writer.start(profile='ros2', library='social_touch')
+        writer.flush()  # the MCAP header on disk at once: a bag killed early is still MCAP
         self._writer = writer
         if self.flush_period_s is not None:
             self._thread = threading.Thread(target=self._flush_loop, name=f'bag-flush-{self.path.name}', daemon=True)
@@ -135,11 +116,23 @@ class BagRecorder:
             writer, self._writer = self._writer, None
             if writer is not None:
                 try:
-                    writer.close()
-                except (WriterError, OSError) as err:
+                    info = self._metadata()
+                    writer.add_metadata('rosbag2', {'serialized_metadata': _yaml(info['rosbag2_bagfile_information'])})
+                    writer.finish()
+                    self._file.flush()
+                    os.fsync(self._file.fileno())
+                    self._file.close()
+                    write_metadata(self.path, info)
+                except OSError as err:
                     raise BagError(f'cannot close bag {self.path}: {err}; run social-touch bag reindex '
                                    f'{self.path} to recover what was flushed') from err
             self.flushes += 1
+
+    def _metadata(self) -> dict:
+        first, last = self._span or (0, 0)
+        name = f'{self.path.name}.mcap'
+        topics = [c.topic for c in self._channels.values()]
+        return bag_metadata([FileRecord(name, first, last, self.message_count)], topics, self._custom)
 
     def __enter__(self) -> BagRecorder:
         return self.open() if self._writer is None else self
@@ -157,24 +150,31 @@ class BagRecorder:
         with self._lock:
             self._connection(topic, type_name, qos)
 
-    def _connection(self, topic: str, type_name: str, qos: Any) -> Any:
-        conn = self._connections.get(topic)
-        if conn is not None:
-            if conn.msgtype != type_name:
-                raise BagError(f"topic '{topic}' is recorded as {conn.msgtype}, not {type_name}")
-            return conn
+    def _connection(self, topic: str, type_name: str, qos: Any) -> _Channel:
+        channel = self._channels.get(topic)
+        if channel is not None:
+            if channel.topic.type_name != type_name:
+                raise BagError(f"topic '{topic}' is recorded as {channel.topic.type_name}, not {type_name}")
+            return channel
         if self._writer is None:
             raise BagError(f'bag {self.path} is not open')
         try:
             messages.get_message(type_name)
-            conn = self._writer.add_connection(topic, type_name, typestore=messages.typestore,
-                                               offered_qos_profiles=[to_bag_qos(qos)])
-        except (WriterError, MessageError) as err:
+            definition, _ = messages.typestore.generate_msgdef(type_name, ros_version=2)
+        except (MessageError, KeyError) as err:
             raise BagError(f"cannot record '{topic}' ({type_name}): {err}") from err
-        self._connections[topic] = conn
+        schema = self._schemas.get(type_name)
+        if schema is None:
+            schema = self._schemas[type_name] = self._writer.register_schema(
+                name=type_name, encoding=SCHEMA_ENCODING, data=definition.encode())
+        offered = qos_text([to_bag_qos(qos)])
+        record = TopicRecord(topic, type_name, 'cdr', offered, type_hash(type_name, SCHEMA_ENCODING, definition))
+        channel_id = self._writer.register_channel(topic=topic, message_encoding='cdr', schema_id=schema,
+                                                   metadata={'offered_qos_profiles': offered})
+        channel = self._channels[topic] = _Channel(channel_id, record)
         self.counts[topic] = 0
         self.sizes[topic] = 0
-        return conn
+        return channel
 
     def write(self, topic: str, type_name: str, stamp_ns: int, data: bytes, qos: Any = None) -> None:
         """Append one message (CDR bytes) stamped ``stamp_ns`` (ROS time, ns).
@@ -187,11 +187,15 @@ class BagRecorder:
         with self._lock:
             if self._writer is None:
                 raise BagError(f'bag {self.path} is closed; message on {topic!r} not recorded')
-            conn = self._connection(topic, type_name, qos)
+            channel = self._connection(topic, type_name, qos)
+            stamp = int(stamp_ns)
             try:
-                self._writer.write(conn, int(stamp_ns), data)
-            except (WriterError, OSError) as err:
+                self._writer.add_message(channel.id, log_time=stamp, data=bytes(data), publish_time=stamp,
+                                         sequence=self.counts[topic])
+            except OSError as err:
                 raise BagError(f'cannot write to bag {self.path}: {err}') from err
+            self._span = [min(self._span[0], stamp), max(self._span[1], stamp)] if self._span else [stamp, stamp]
+            channel.topic.message_count += 1
             self.counts[topic] += 1
             self.sizes[topic] += len(data)
             self._dirty = True
@@ -208,15 +212,12 @@ class BagRecorder:
                 writer = self._writer
                 if writer is None or not self._dirty:
                     return False
-                storage = writer.storage
                 try:
-                    if storage.chunk.msgs:
-                        storage.close_chunk()
-                    storage.bio.flush()
+                    writer.flush()   # the chunk in progress, with its CRC and message indexes
                 except OSError as err:
                     raise BagError(f'cannot flush bag {self.path}: {err}') from err
                 self._dirty = False
-                fd = storage.bio.fileno()
+                fd = self._file.fileno()
             # fsync outside the writer lock: a slow disk must not stall the graph's callbacks.
             with contextlib.suppress(OSError):
                 os.fsync(fd)
@@ -231,6 +232,11 @@ class BagRecorder:
                 import sys
                 sys.stderr.write(f'[bag recorder] {err}\n')
 
-    def topics(self) -> Sequence[str]:
+    def topics(self) -> list[str]:
         with self._lock:
-            return list(self._connections)
+            return list(self._channels)
+
+
+def _yaml(data: Any) -> str:
+    import yaml
+    return yaml.safe_dump(data, sort_keys=False).strip()

@@ -1,6 +1,6 @@
 """A launched node in a process of its own, started by the launcher.
 
-``python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params]``.
+``python -c "$NODE_PROCESS_MAIN" SPEC_JSON PARENT_PID [--strict-params]`` (:data:`NODE_PROCESS_MAIN`).
 
 The launcher (:mod:`.processes`) starts one of these per node that runs alone. It builds the
 node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
@@ -19,7 +19,10 @@ import sys
 
 from ..errors import SocialTouchError
 
-__all__ = ['main']
+__all__ = ['NODE_PROCESS_MAIN', 'main']
+
+#: What the launcher runs with ``python -c`` (no module of ours has a ``__main__`` of its own).
+NODE_PROCESS_MAIN = 'import sys; from touch_graph.launch.node_process import main; sys.exit(main())'
 
 _PR_SET_PDEATHSIG = 1
 
@@ -40,27 +43,27 @@ def main(argv: list[str] | None = None) -> int:
     strict = '--strict-params' in argv
     argv = [a for a in argv if a != '--strict-params']
     if len(argv) != 2:
-        sys.stderr.write('usage: python -m touch_graph.launch.node_process SPEC_JSON PARENT_PID [--strict-params] '
-                         '(the launcher starts it)\n')
+        sys.stderr.write('usage: node_process SPEC_JSON PARENT_PID [--strict-params] (the launcher starts it)\n')
         return 2
     die_with_parent(int(argv[1]))
+    from ..node_main import StopSignals
     from .runner import LaunchRunner
     from .specs import spec_from_json
     spec = spec_from_json(argv[0])
     runner = LaunchRunner([spec], network=True, strict_params=strict)
-    try:
-        runner.start()
-    except SocialTouchError as err:
-        sys.stderr.write(f'error: {err}\n')
-        return 1
-    try:
-        runner.spin()
-    except KeyboardInterrupt:  # a second signal: stop now
-        pass
-    finally:
-        runner.shutdown()
+    # Handlers from the first line on: the launcher may stop us while the node is still starting
+    # (a SIGINT then must still end in a clean shutdown and exit code 0, not a KeyboardInterrupt).
+    with StopSignals(wake=runner.request_stop):
+        try:
+            runner.start()
+        except SocialTouchError as err:
+            sys.stderr.write(f'error: {err}\n')
+            return 1
+        try:
+            runner.spin(handle_signals=False)  # returns at once when a stop came during start()
+        except KeyboardInterrupt:  # a second signal: stop now
+            pass
+        finally:
+            runner.shutdown()
     return 0
 
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,6 +1,6 @@
 """Nodes in processes of their own: start them, watch them, restart them, stop them, as ros2 launch does.
 
-Each node that runs alone is ``python -m touch_graph.launch.node_process`` (:mod:`.node_process`)
+Each node that runs alone is a Python process running :func:`.node_process.main` (:mod:`.node_process`)
 with its spec; they and the launcher meet on the DDS domain. ros2 launch's conventions:
 
 - a process is named ``<name>-<n>`` (the node's name, else its executable; ``n`` counts the
@@ -33,6 +33,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from .node_process import NODE_PROCESS_MAIN
 from .specs import NodeSpec, ProcessOptions, spec_to_json
 
 __all__ = ['FIRST_BACKOFF_S', 'MAX_BACKOFF_S', 'STABLE_S', 'NodeProcess', 'ProcessSupervisor']
@@ -79,7 +80,7 @@ class NodeProcess:
         return self.proc is not None and self.proc.poll() is None
 
     def command(self, strict_params: bool = False) -> list[str]:
-        return [sys.executable, '-m', 'touch_graph.launch.node_process', spec_to_json(self.spec), str(os.getpid()),
+        return [sys.executable, '-c', NODE_PROCESS_MAIN, spec_to_json(self.spec), str(os.getpid()),
                 *(['--strict-params'] if strict_params else [])]
 
 

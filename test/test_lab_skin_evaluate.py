@@ -1,0 +1,146 @@
+"""Skin evaluation: traces -> virtual skin -> skin_driver (decode + calibration) -> segmenter -> recognisers.
+
+Everything here is synthetic and small: a few synthetic performers, rendered through the skin
+driver node in the harness (about 50 ms a sample).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from touch_gestures.skin.registry import make_recogniser
+from touch_graph.cli.main import main as social_touch
+from touch_lab.skin.bench import bench_recognition
+from touch_lab.skin.datasets import TraceSample, write_traces
+from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
+from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
+from touch_sim.skin.synthetic import synthetic_traces
+
+SHAPES = ('line_right', 'line_left', 'diagonal_down')
+
+
+@pytest.fixture(scope='module')
+def small_set():
+    return synthetic_traces(SHAPES, performers=3, repetitions=3, seed=4)
+
+
+@pytest.fixture(scope='module')
+def rendered(small_set):
+    return render_samples(small_set, RenderSettings(mode='sensor', placement='mm'))
+
+
+def test_the_sensor_path_gives_one_gesture_per_trace_close_to_the_finger(small_set, rendered):
+    assert [len(r.gestures) for r in rendered] == [1] * len(small_set)
+    for sample, r in zip(small_set, rendered, strict=True):
+        g = r.gestures[0]
+        assert not g.multi_contact and not g.truncated and g.binary_map.any()
+        # The contact point follows the finger: start and end within a few mm of the true path.
+        assert np.hypot(*(g.trajectory[0] - [sample.x[0], sample.y[0]])) < 4.0
+        assert np.hypot(*(g.trajectory[-1] - [sample.x[-1], sample.y[-1]])) < 4.0
+        assert g.duration_s == pytest.approx(sample.duration_ms / 1000, abs=0.1)
+
+
+def test_direct_path_matches_the_true_trajectory(small_set):
+    g = render_sample(small_set[0], RenderSettings(mode='direct', placement='mm'))[0]
+    true = np.column_stack([small_set[0].x, small_set[0].y])
+    assert np.abs(g.trajectory.min(axis=0) - true.min(axis=0)).max() < 0.5
+
+
+def test_multi_stroke_samples_join_or_split_on_the_hysteresis():
+    t = np.linspace(0, 300, 30)
+
+    def two_strokes(gap_ms):
+        x = np.r_[np.linspace(5, 40, 30), np.linspace(5, 40, 30)]
+        y = np.r_[np.full(30, 10.0), np.full(30, 35.0)]
+        return TraceSample('s', 'v', 'z', '0', x=x, y=y, t_ms=np.r_[t, t + 300 + gap_ms],
+                           stroke=np.r_[np.zeros(30), np.ones(30)].astype(np.int32))
+
+    settings = RenderSettings(mode='direct', placement='mm')
+    (quick,) = render_sample(two_strokes(120), settings)  # ramps take 100 ms, a 20 ms lift
+    assert quick.strokes == 2 and set(quick.stroke.tolist()) == {0, 1}
+    assert len(render_sample(two_strokes(600), settings)) == 2
+
+
+def test_leave_one_subject_out_counts_and_equations_8_9(rendered):
+    results = leave_one_subject_out(rendered, {'trace': lambda: make_recogniser('trace'),
+                                               'map': lambda: make_recogniser('map')})
+    trace, blind = results['trace'], results['map']
+    assert trace.samples == len(rendered) and sum(sum(r.values()) for r in trace.confusion.values()) == len(rendered)
+    assert trace.accuracy >= 0.85
+    # line_right and line_left differ only in direction: the map-based method confuses them.
+    assert blind.confusion['line_right'].get('line_left', 0) + blind.confusion['line_left'].get('line_right', 0) > 0
+    stats = trace.gesture_stats()
+    for gesture, st in stats.items():
+        rates = np.array([trace.per_performer[s][gesture] for s in trace.per_performer])
+        assert st['mu'] == pytest.approx(rates.mean())                      # eq. (9)
+        assert st['sigma'] == pytest.approx(np.sqrt(np.mean((rates - rates.mean()) ** 2)))  # eq. (8), 1/N
+    assert trace.us_per_recognition > 0
+
+
+def test_equation_8_9_on_known_rates():
+    r = RecogniserResult('x', per_performer={'a': {'g': 1.0}, 'b': {'g': 0.5}, 'c': {'g': 0.0}})
+    st = r.gesture_stats()['g']
+    assert st['mu'] == pytest.approx(0.5) and st['sigma'] == pytest.approx(np.sqrt(1 / 6))
+
+
+def test_codebook_choice_spreads_over_people_and_is_bounded(rendered):
+    book = choose_codebook(rendered, 2, np.random.default_rng(0))
+    assert len(book) == 2 * len(SHAPES)
+    for label in SHAPES:
+        assert len({r.subject for r in book if r.label == label}) == 2  # two different people
+    assert len(choose_codebook(rendered, 50, np.random.default_rng(0))) == len(rendered)
+
+
+def test_segmentation_failures_count_as_wrong(rendered):
+    broken = [RenderedSample(r.subject, r.variant, r.label, r.sample, r.gestures * 2 if i % 3 == 0 else r.gestures)
+              for i, r in enumerate(rendered)]
+    res = leave_one_subject_out(broken, {'trace': lambda: make_recogniser('trace')})['trace']
+    assert res.segmentation_failures == sum(1 for i in range(len(rendered)) if i % 3 == 0)
+    assert res.accuracy <= 1 - res.segmentation_failures / res.samples
+
+
+def test_cache_round_trip(tmp_path, small_set):
+    settings = RenderSettings(mode='sensor', placement='mm', seed=3)
+    first = render_samples(small_set[:3], settings, tmp_path)
+    assert len(list(tmp_path.glob('sensor-*.npz'))) == 1
+    again = render_samples(small_set[:3], settings, tmp_path)
+    for a, b in zip(first, again, strict=True):
+        assert (a.subject, a.label) == (b.subject, b.label)
+        np.testing.assert_array_equal(a.gestures[0].trajectory, b.gestures[0].trajectory)
+        np.testing.assert_array_equal(a.gestures[0].binary_map, b.gestures[0].binary_map)
+        assert a.gestures[0].frames == b.gestures[0].frames
+
+
+def test_cli_json_on_a_pixel_trace_file(tmp_path, capsys, small_set):
+    # Screen-pixel coordinates, y downward, as in the $1 logs: the stimulus fits the box onto the skin.
+    pixels = [TraceSample(s.subject, s.variant, s.gesture, s.sample, x=s.x * 7.0, y=s.y * 7.0 + 100, t_ms=s.t_ms,
+                          stroke=s.stroke) for s in small_set]
+    path = tmp_path / 'traces.csv.gz'
+    write_traces(path, pixels)
+    code = social_touch(['eval', 'skin', '--traces', str(path), '--json', '--recognisers', 'centroid,trace',
+                         '--no-cache', '--random-touches', '6', '--templates-per-gesture', '2'])
+    out = capsys.readouterr()
+    assert code == 0 and '[eval skin]' in out.err
+    report = json.loads(out.out)
+    assert set(report['recognisers']) == {'centroid', 'trace'} and report['best'] in report['recognisers']
+    for r in report['recognisers'].values():
+        assert 0 <= r['accuracy'] <= 1 and r['us_per_recognition'] > 0 and r['random_touches'] == 6 * 3
+    assert report['samples'] == len(small_set) and report['multi_stroke_samples'] == 0
+
+
+def test_cli_errors_are_clear(tmp_path, capsys):
+    assert social_touch(['eval', 'skin', '--traces', str(tmp_path / 'missing.csv')]) == 2
+    assert 'file not found' in capsys.readouterr().err
+    path = tmp_path / 't.csv'
+    path.write_text('subject,variant,gesture,sample,stroke,x,y,t_ms\n1,a,b,0,0,0,0,0\n')
+    assert social_touch(['eval', 'skin', '--traces', str(path), '--recognisers', 'centriod']) == 2
+    assert "did you mean 'centroid'" in capsys.readouterr().err
+
+
+def test_bench_smoke():
+    result = bench_recognition(['centroid', 'trace'], n_gestures=3, templates_per_gesture=2, queries=3, repeats=1)
+    assert set(result['recognisers']) == {'centroid', 'trace'} and result['data'] == 'synthetic gestures'
+    assert result['recognisers']['trace']['templates'] == 6

@@ -1,0 +1,101 @@
+"""Tracing trajectories across the virtual skin, and the calibrated contact point that comes back (synthetic)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from touch_driver.skin.calibration import calibrate_frames
+from touch_sim.skin.traces import TraceStimulus, render_frames
+
+PITCH = 47 / 12
+
+
+def test_bounding_box_fills_the_area_keeping_aspect_and_margin():
+    # A tall shape: 20 px wide, 100 px high, y growing downward on the screen.
+    stim = TraceStimulus.from_points([100, 120, 120], [300, 300, 400], [0, 100, 200])
+    xy = stim.strokes[0][:, 1:]
+    assert xy[:, 1].min() == pytest.approx(PITCH) and xy[:, 1].max() == pytest.approx(47 - PITCH)
+    assert np.ptp(xy[:, 0]) == pytest.approx(np.ptp(xy[:, 1]) / 5)        # aspect ratio kept
+    assert (xy[:, 0].min() + xy[:, 0].max()) / 2 == pytest.approx(23.5)                # centred
+    assert xy[2, 1] > xy[1, 1]                                              # screen down = more rows
+
+
+def test_degenerate_shapes():
+    tap = TraceStimulus.from_points([5], [5], [0])
+    (c,) = tap.contacts(0.55)
+    assert (c.x_mm, c.y_mm, c.vx_mm_s) == (23.5, 23.5, 0.0)
+    line = TraceStimulus.from_points([0, 50, 100], [7, 7, 7], [0, 100, 200], margin_mm=0)
+    assert line.strokes[0][:, 1].tolist() == pytest.approx([0, 23.5, 47])
+    assert line.strokes[0][:, 2].tolist() == pytest.approx([23.5] * 3)
+    dup = TraceStimulus.from_points([0, 1, 2], [0, 1, 2], [0, 0, 10])     # equal times keep the last point
+    assert len(dup.strokes[0]) == 2
+
+
+@pytest.mark.parametrize(('args', 'kwargs', 'message'), [
+    (([0, 1], [0, 1], [0, np.nan]), {}, 'finite'),
+    (([0, 1], [0, 1], [10, 0]), {}, 'must not decrease'),
+    (([0, 1], [0], [0, 1]), {}, 'same length'),
+    (([], [], []), {}, 'at least one point'),
+    (([0, 1], [0, 1], [0, 1]), {'stroke': [0]}, 'one id per point'),
+    (([0, 1, 2, 3], [0, 1, 2, 3], [0, 100, 50, 150]), {'stroke': [0, 0, 1, 1]}, 'overlaps'),
+    (([0, 1], [0, 1], [0, 1]), {'margin_mm': 30}, 'area_mm > 2'),
+])
+def test_bad_input_is_rejected_with_a_clear_error(args, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        TraceStimulus.from_points(*args, **kwargs)
+
+
+def test_timing_ramps_and_lift_between_strokes():
+    # Two strokes of an "x", 300 ms apart; t in ms.
+    x = [0, 100, 100, 0]
+    y = [0, 100, 0, 100]
+    t = [0, 400, 700, 1100]
+    stim = TraceStimulus.from_points(x, y, t, stroke=[0, 0, 1, 1], lead_in_s=0.5, ramp_s=0.05, force_n=2.0)
+    assert stim.contacts(0.49) == []                                    # lead-in: untouched
+    assert stim.contacts(0.525)[0].force_n == pytest.approx(1.0)        # touch-down ramp at the first point
+    (c,) = stim.contacts(0.75)                                          # halfway along stroke 0
+    assert c.force_n == 2.0 and (c.x_mm, c.y_mm) == pytest.approx((23.5, 23.5))
+    assert c.vx_mm_s > 0 and c.vy_mm_s > 0
+    assert stim.contacts(1.1) == []                                     # lifted between strokes
+    assert stim.contacts(1.25)[0].x_mm == pytest.approx(47 - PITCH)     # stroke 1 starts top right
+    assert stim.duration_s == pytest.approx(0.55 + 1.1 + 0.05 + 0.5)
+    short = TraceStimulus.from_points(x, y, [0, 400, 420, 800], stroke=[0, 0, 1, 1], ramp_s=0.05)
+    assert short.contacts(0.55 + 0.41) == []                            # ramps shrink to fit a 20 ms gap
+    xy, down = stim.truth(np.array([0.2, 0.75, 1.1]))
+    assert down.tolist() == [False, True, False] and np.isnan(xy[0]).all()
+
+
+def circle(n: int = 60, period_ms: float = 1500.0):
+    a = np.linspace(0, 2 * np.pi, n)
+    return 200 + 80 * np.cos(a), 200 + 80 * np.sin(a), np.linspace(0, period_ms, n)
+
+
+def test_traced_circle_comes_back_as_the_contact_point():
+    x, y, t = circle()
+    stim = TraceStimulus.from_points(x, y, t, force_n=1.5)
+    frames = render_frames(stim, seed=3)
+    out = calibrate_frames(frames)
+    times = np.arange(len(frames)) / 150
+    truth, down = stim.truth(times)
+    full = np.array([bool(c) and c[0].force_n == 1.5 for c in map(stim.contacts, times)])
+    assert out.contact[full].all()                                       # every full-force frame is a contact
+    assert not out.contact[~down].any()                                 # and never without a finger
+    err = np.linalg.norm(out.contact_xy_mm[full] - truth[full], axis=1)
+    assert np.median(err) < 1.0 and err.max() < PITCH
+    # Shear: the module x force summed over the skin follows the finger's x velocity.
+    vx = np.array([c[0].vx_mm_s if c else 0.0 for c in map(stim.contacts, times)])
+    fx = out.force[:, :, 0].sum(axis=1)
+    fast = full & (np.abs(vx) > 40)
+    assert np.mean(np.sign(fx[fast]) == np.sign(vx[fast])) > 0.9
+    assert out.total_force[full].mean() == pytest.approx(1.5, rel=0.25)
+
+
+def test_multistroke_contact_lifts_between_strokes():
+    stim = TraceStimulus.from_points([0, 100, 100, 0], [0, 100, 0, 100], [0, 400, 900, 1300], stroke=[0, 0, 1, 1])
+    out = calibrate_frames(render_frames(stim, seed=1))
+    times = np.arange(len(out.contact)) / 150
+    between = (times > 0.55 + 0.4 + 0.1) & (times < 0.55 + 0.9 - 0.1)
+    assert not out.contact[between].any()
+    runs = np.flatnonzero(np.diff(out.contact.astype(int)) == 1)
+    assert len(runs) == 2                                                # two touch-downs

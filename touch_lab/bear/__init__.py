@@ -1,0 +1,1 @@
+"""Sensate Bear: evaluation, benchmark, reports and training on simulated people."""

@@ -1,0 +1,1 @@
+"""Benchmarks behind ``social-touch bench``: medians of repeated runs on this machine."""

@@ -1,0 +1,300 @@
+"""``social-touch bench transport``: our DDS path against raw cyclonedds, side by side, across processes.
+
+For each kind of message (bear frame, patch frame, skin frame, gesture event, synthetic
+content of the real sizes) the bench starts two echo processes (:mod:`touch_lab.bench.transport_echo`): one
+runs a runtime node that sends each message back, the other plain cyclonedds that sends
+each sample's bytes back. In this process a runtime node and a raw cyclonedds
+participant ping them, alternating in blocks, so both paths see the same machine load:
+
+- **latency**: one message in flight, half the round trip (wall clock,
+  ``time.perf_counter``); median and 99th percentile over every ping of every repeat.
+  ``ours`` is ``publish(msg)`` to the pong callback with decoded messages on both ends
+  (encoding and decoding twice per round trip); ``ours_cdr`` publishes CDR bytes and
+  subscribes raw (the transport without (de)serialisation); ``raw`` writes and takes bytes
+  with cyclonedds. ``overhead_ratio`` is ours / raw of the median latencies
+  (``overhead_ratio_cdr`` likewise for ``ours_cdr``).
+- **throughput**: one-second bursts paced at rising rates (from a quarter of the goal, 10x
+  the sensor's rate, doubling up to 8x the goal, ``rate_ramp_top_hz``) on a reliable topic
+  until a burst loses a message on the round trip (ping and pong) or cannot be sent at the
+  rate; the highest lossless rate is reported, per path.
+
+Runs in ``$SOCIAL_TOUCH_BENCH_DOMAIN`` (default 231) with discovery on this host only,
+so it never disturbs a robot's graph.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from typing import Any
+
+import numpy as np
+
+from touch_graph import messages
+from touch_lab.bench.timing import gc_paused
+from touch_lab.bench.transport_echo import BENCH_QOS, KINDS
+
+__all__ = ['ECHO_MAIN', 'bench_transport']
+
+#: What an echo process runs (``python -c ECHO_MAIN MODE KIND...``): no module of ours has a
+#: ``__main__`` of its own, the CLI being the one way in for people.
+ECHO_MAIN = 'import sys; from touch_lab.bench.transport_echo import main; sys.exit(main())'
+
+#: Sensor rates the goal is 10 times of, Hz (bear 25 Hz ideal, patch 100 Hz internal, skin 150 Hz;
+#: gesture events are rare, 10 Hz is far above a person's pace).
+SENSOR_RATES_HZ = {'bear_frame': 25.0, 'patch_frame': 100.0, 'skin_frame': 150.0, 'gesture_event': 10.0}
+DEFAULT_DOMAIN = 231
+#: Steps of the rate ramp: goal/4 doubling up to 8 x the goal.
+RAMP_STEPS = 6
+
+
+def sample_message(kind: str) -> Any:
+    """A message of ``kind`` with synthetic content of the real size (fixed arrays full, 8 classes)."""
+    cls = messages.get_message(KINDS[kind])
+    rng = np.random.default_rng(0)
+    if kind == 'gesture_event':
+        return cls(gesture='stroke', probability=0.93, classes=['stroke', 'tickle', 'push', 'slap'] * 2,
+                   posteriors=list(rng.random(8)), latency_s=0.4)
+    values = {}
+    for field, type_str in cls.get_fields_and_field_types().items():
+        default = getattr(cls(), field)
+        if isinstance(default, np.ndarray) and default.size and default.dtype.kind == 'f':
+            values[field] = rng.random(default.size).astype(default.dtype)
+        elif isinstance(default, np.ndarray) and default.size and default.dtype.kind in 'iu':
+            values[field] = rng.integers(0, 1000 if type_str.startswith('uint16') else 2, default.size,
+                                         dtype=default.dtype)
+    return cls(**values)
+
+
+class _Echo:
+    def __init__(self, mode: str, env: dict[str, str]) -> None:
+        self.proc = subprocess.Popen([sys.executable, '-c', ECHO_MAIN, mode, *KINDS],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+        if self.proc.stdout.readline().strip() != 'ready':
+            self.close()
+            raise RuntimeError(f'the {mode} echo process did not start')
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.stdin.close()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+        self.proc.stdout.close()
+
+
+class _OursPath:
+    """The runtime: a node publishing pings and counting pongs, its executor in a thread."""
+
+    def __init__(self, kind: str, cdr: bool) -> None:
+        from touch_graph.runtime import Context, Node, SingleThreadedExecutor
+        self.context = Context('wall', network=True)
+        self.context.init()
+        node = Node(f'bench_{kind}{"_cdr" if cdr else ""}', context=self.context)
+        cls = messages.get_message(KINDS[kind])
+        suffix = '_cdr' if cdr else ''
+        self.pub = node.create_publisher(cls, f'/bench/{kind}/ping{suffix}', BENCH_QOS)
+        self.got = 0
+        self.arrived = threading.Event()
+        node.create_subscription(cls, f'/bench/{kind}/pong{suffix}', self._on_pong, BENCH_QOS, raw=cdr)
+        self.payload = messages.serialize(sample_message(kind)) if cdr else sample_message(kind)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(node)
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _on_pong(self, _msg: Any) -> None:
+        self.got += 1
+        self.arrived.set()
+
+    def _spin(self) -> None:
+        from touch_graph.runtime import ExternalShutdownException
+        try:
+            while self.context.ok():
+                self.executor.spin_once(0.05)
+        except ExternalShutdownException:
+            pass
+
+    def ready(self) -> bool:
+        return self.pub.get_subscription_count() > 0
+
+    def send(self) -> None:
+        self.pub.publish(self.payload)
+
+    def close(self) -> None:
+        self.context.try_shutdown()
+        self.thread.join(10)
+
+
+class _RawPath:
+    """Plain cyclonedds: bytes written and taken, a thread waiting on the pong reader."""
+
+    def __init__(self, participant: Any, kind: str) -> None:
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+        from cyclonedds.pub import DataWriter
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        from touch_graph.dds.cdds import WaitSet
+        from touch_graph.dds.idl import idl_struct
+        from touch_graph.dds.qos import dds_qos
+        cls = idl_struct(KINDS[kind])
+        qos = dds_qos(BENCH_QOS)
+        self.writer = DataWriter(participant, Topic(participant, f'rt/bench_raw/{kind}/ping', cls), qos)
+        self.reader = DataReader(participant, Topic(participant, f'rt/bench_raw/{kind}/pong', cls), qos)
+        self.mask = SampleState.Any | ViewState.Any | InstanceState.Any
+        self.condition = ReadCondition(self.reader, self.mask)
+        self.waitset = WaitSet(participant._ref)
+        self.waitset.attach(self.condition._ref, 1)
+        self.payload = messages.serialize(sample_message(kind))
+        self.got = 0
+        self.arrived = threading.Event()
+        self.stopping = False
+        self.thread = threading.Thread(target=self._receive, daemon=True)
+        self.thread.start()
+
+    def _receive(self) -> None:
+        from cyclonedds._clayer import ddspy_take
+        while not self.stopping:
+            if self.waitset.wait(50_000_000):
+                samples = ddspy_take(self.reader._ref, self.mask, 256)
+                if isinstance(samples, list) and samples:
+                    self.got += len(samples)
+                    self.arrived.set()
+
+    def ready(self) -> bool:
+        return len(self.writer.get_matched_subscriptions()) > 0
+
+    def send(self) -> None:
+        from cyclonedds._clayer import ddspy_write
+        ddspy_write(self.writer._ref, self.payload)
+
+    def close(self) -> None:
+        self.stopping = True
+        self.waitset.wake()
+        self.thread.join(10)
+
+
+def _latencies(path: Any, count: int) -> list[float]:
+    out = []
+    for _ in range(count):
+        path.arrived.clear()
+        start = time.perf_counter()
+        path.send()
+        if not path.arrived.wait(2.0):
+            continue  # lost on a reliable topic would be a bug; it is visible as fewer samples
+        out.append((time.perf_counter() - start) / 2)
+    return out
+
+
+def _lossless_rate(path: Any, goal_hz: float, seconds: float = 1.0, max_steps: int = RAMP_STEPS) -> float:
+    """The highest rate (Hz) of the ramp goal/4, goal/2, goal, 2 goal, ... sent and echoed back without loss."""
+    best = 0.0
+    rate = goal_hz / 4
+    for _ in range(max_steps):
+        n = max(50, int(rate * seconds))
+        start_got = path.got
+        start = time.perf_counter()
+        for i in range(n):
+            due = start + i / rate
+            while (wait := due - time.perf_counter()) > 0:
+                time.sleep(min(wait, 0.001))
+            path.send()
+        achieved = n / max(time.perf_counter() - start, 1e-9)
+        deadline = time.monotonic() + 3.0
+        while path.got - start_got < n and time.monotonic() < deadline:
+            time.sleep(0.005)
+        if path.got - start_got != n or achieved < 0.9 * rate:
+            break
+        best = rate
+        rate *= 2
+        time.sleep(0.2)  # let queues drain between steps
+    return best
+
+
+def _wait_ready(paths: list[Any], timeout_s: float = 15.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not all(p.ready() for p in paths):
+        if time.monotonic() > deadline:
+            raise RuntimeError('the bench endpoints did not match within 15 s (is discovery on this host blocked?)')
+        time.sleep(0.02)
+    time.sleep(0.2)
+
+
+def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None = None,
+                    ramp_steps: int = RAMP_STEPS) -> dict:
+    """Per kind: latency median/p99 (us) of ours, ours_cdr and raw, overhead ratios, lossless rates (Hz).
+
+    ``kinds`` (default all of :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a
+    short run (tests).
+    """
+    from cyclonedds.domain import DomainParticipant
+
+    from touch_graph.dds.cdds import delete_entity
+    from touch_graph.dds.config import read_discovery
+    from touch_graph.dds.domain import acquire_domain, release_domain
+    domain = int(os.environ.get('SOCIAL_TOUCH_BENCH_DOMAIN', DEFAULT_DOMAIN))
+    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
+    os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    env = {**os.environ}
+    echoes = []
+    results: dict[str, Any] = {}
+    try:
+        echoes = [_Echo('ours', env), _Echo('raw', env)]
+        acquire_domain(domain, read_discovery())
+        participant = DomainParticipant(domain)
+        try:
+            for kind in kinds or list(KINDS):
+                results[kind] = _bench_kind(participant, kind, repeats, pings, ramp_steps)
+        finally:
+            delete_entity(participant)
+            release_domain(domain)
+    finally:
+        for echo in echoes:
+            echo.close()
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+    return {'message': 'synthetic messages of the real sizes; latency is half the round trip to an echo process',
+            'domain': domain, 'repeats': repeats, 'pings_per_repeat': pings, 'kinds': results}
+
+
+def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_steps: int) -> dict:
+    paths = {'ours': _OursPath(kind, cdr=False), 'ours_cdr': _OursPath(kind, cdr=True),
+             'raw': _RawPath(participant, kind)}
+    try:
+        _wait_ready(list(paths.values()))
+        samples: dict[str, list[float]] = {name: [] for name in paths}
+        for path in paths.values():
+            _latencies(path, 20)  # warm up
+        with gc_paused():
+            for _ in range(repeats):
+                for name, path in paths.items():
+                    samples[name] += _latencies(path, pings)
+        goal = 10 * SENSOR_RATES_HZ[kind]
+        rates = {name: _lossless_rate(paths[name], goal, max_steps=ramp_steps) for name in ('ours', 'raw')}
+    finally:
+        for path in paths.values():
+            path.close()
+    out: dict[str, Any] = {'bytes': len(messages.serialize(sample_message(kind)))}
+    for name, values in samples.items():
+        out[f'{name}_latency_median_us'] = round(statistics.median(values) * 1e6, 1) if values else None
+        out[f'{name}_latency_p99_us'] = round(float(np.percentile(values, 99)) * 1e6, 1) if values else None
+        out[f'{name}_lost_pings'] = repeats * pings - len(values)
+    if out['raw_latency_median_us']:
+        out['overhead_ratio'] = round(out['ours_latency_median_us'] / out['raw_latency_median_us'], 2)
+        out['overhead_ratio_cdr'] = round(out['ours_cdr_latency_median_us'] / out['raw_latency_median_us'], 2)
+    out['goal_rate_hz'] = goal
+    out['rate_ramp_top_hz'] = goal / 4 * 2 ** (ramp_steps - 1)  # a rate equal to this: lossless all the way up
+    out['ours_lossless_rate_hz'] = rates['ours']
+    out['raw_lossless_rate_hz'] = rates['raw']
+    out['meets_rate_goal'] = rates['ours'] >= goal
+    return out

@@ -1,0 +1,1 @@
+"""Lab commands of ``social-touch``: eval, train, bench, codebook, report."""

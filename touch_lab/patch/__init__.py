@@ -1,0 +1,1 @@
+"""Textile patch: dataset readers, evaluation, benchmark, reports and training."""

@@ -1,0 +1,260 @@
+"""``social-touch train patch`` and ``social-touch eval patch``.
+
+Sources (one of):
+
+- ``--csv FILE --grid RxC --rate HZ``: CoST-layout CSV (subject,variant,gesture,frame,ch1..chN);
+- ``--bags MANIFEST``: a YAML list of rosbag2 recordings of /patch/frame with subject and gesture;
+- ``--simulate N``: N simulated people (SYNTHETIC), one session per gesture, on the virtual patch read by
+  the ``patch_driver`` node (:func:`~touch_lab.patch.datasets.render_session`).
+
+``train`` fits one Gaussian mixture per class on every frame of every session and writes a
+model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a grid search over
+components, threshold and hold, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
+one JSON object). Progress goes to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from touch_lab.cli.targets import Target
+from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv, render_session
+
+__all__ = ['EVAL', 'TRAIN', 'add_eval_arguments', 'add_train_arguments', 'load_sessions', 'run_eval', 'run_train']
+
+
+def _progress(args: argparse.Namespace):
+    if getattr(args, 'quiet', False):
+        return lambda _msg: None
+    return lambda msg: print(f'[patch] {msg}', file=sys.stderr, flush=True)
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(',') if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected comma-separated numbers such as 0.9,0.99; got {text!r}') from None
+
+
+def _ints(text: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(',') if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected comma-separated integers such as 3,5,7; got {text!r}') from None
+
+
+def _grid(text: str) -> tuple[int, int]:
+    try:
+        return parse_grid(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
+def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
+    src = parser.add_mutually_exclusive_group(required=True)
+    src.add_argument('--csv', metavar='FILE', help='CoST-layout CSV: subject,variant,gesture,frame,ch1..chN')
+    src.add_argument('--bags', metavar='MANIFEST', help='YAML manifest of rosbag2 recordings of /patch/frame')
+    src.add_argument('--simulate', metavar='PEOPLE', type=int, help='simulated people (SYNTHETIC data)')
+    parser.add_argument('--grid', type=_grid, help='activation map ROWSxCOLS (CSV: required, e.g. 8x8 for CoST; '
+                        'bags: 16x16)')
+    parser.add_argument('--rate', type=float, help='frame rate of the CSV, Hz (CoST: 135)')
+    parser.add_argument('--values', choices=('raw', 'activation'), default='raw',
+                        help='CSV values: raw counts (converted by eq. 1-2) or activations (default raw)')
+    parser.add_argument('--gain', type=float, help='eq. (2) gain per count for raw CSV values (default 1/1023)')
+    parser.add_argument('--events', type=int, default=6, help='simulated gestures per session (default 6)')
+    parser.add_argument('--seed', type=int, default=0, help='seed of the simulated people and of EM (default 0)')
+    parser.add_argument('--window-s', type=float, default=3.0, help='window length, s (paper: 3 s)')
+    parser.add_argument('--covariance', choices=('full', 'diag', 'tied', 'spherical'), default='full',
+                        help='mixture covariance type (default full)')
+    parser.add_argument('--reg-covar', type=float, default=1e-3,
+                        help='added to covariance diagonals, standardised units (default 1e-3)')
+    parser.add_argument('--release', type=float, default=0.9, help='event rule release posterior (default 0.9)')
+    parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
+
+
+def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
+    """The labelled sessions the arguments name (see the module docstring)."""
+    say = progress or (lambda _m: None)
+    if args.csv:
+        if args.grid is None or args.rate is None:
+            raise SystemExit('--csv needs --grid ROWSxCOLS and --rate HZ (CoST: --grid 8x8 --rate 135)')
+        say(f'reading {args.csv}')
+        return read_cost_csv(args.csv, grid=args.grid, rate_hz=args.rate, values=args.values, gain=args.gain)
+    if args.bags:
+        say(f'reading bags listed in {args.bags}')
+        return read_bag_manifest(args.bags, grid=args.grid or (16, 16))
+    from touch_sim.patch.people import simulate_people
+    if args.simulate < 2:
+        raise SystemExit('--simulate needs at least 2 people (leave-one-subject-out)')
+    out = []
+    data = simulate_people(args.simulate, args.events, seed=args.seed)
+    for i, (person, gesture, scene) in enumerate(data):
+        say(f'simulating {person.name} {gesture} ({i + 1}/{len(data)}, SYNTHETIC)')
+        out.append(render_session(scene, person.name, gesture, seed=args.seed * 7919 + i))
+    return out
+
+
+# ---------------------------------------------------------------------- train
+def add_train_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``social-touch train patch``."""
+    _add_source_arguments(parser)
+    parser.add_argument('--output', '-o', required=True, help='model file to write (.npz)')
+    parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
+    parser.add_argument('--threshold', type=float, default=0.99, help='posterior threshold for events (paper: 0.99)')
+    parser.add_argument('--hold-s', type=float, default=0.4,
+                        help='time a class must stay above the threshold before an event, s (default 0.4; '
+                        'one frame is the paper rule)')
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """Fit on every frame of every session and write the model file; returns the exit code."""
+    from touch_gestures.patch.classifier import PatchGestureClassifier
+    from touch_gestures.patch.features import window_features
+    from touch_gestures.patch.model_io import PatchModel, save_model
+
+    say = _progress(args)
+    sessions = load_sessions(args, say)
+    rates = {round(s.rate_hz, 6) for s in sessions}
+    if len(rates) != 1:
+        raise SystemExit(f'sessions have different frame rates {sorted(rates)}; train on one rate at a time')
+    rate = sessions[0].rate_hz
+    window = max(1, round(args.window_s * rate))
+    grids = {s.grid for s in sessions}
+    if len(grids) != 1:
+        raise SystemExit(f'sessions have different grids {sorted(grids)}')
+    say(f'features of {len(sessions)} sessions, window {window} frames at {rate:g} Hz')
+    X = np.concatenate([window_features(s.activations, window) for s in sessions])
+    y = np.concatenate([[s.gesture] * s.n_frames for s in sessions])
+    say(f'fitting {args.components} components per class on {len(X)} frames')
+    try:
+        clf = PatchGestureClassifier(n_components=args.components, threshold=args.threshold,
+                                     covariance_type=args.covariance, reg_covar=args.reg_covar,
+                                     random_state=args.seed).fit(X, y)
+    except ValueError as err:  # one class only, bad settings: say so, no traceback
+        raise SystemExit(f'train patch: {err}') from err
+    model = PatchModel(clf, window=window, rate_hz=rate, grid=sessions[0].grid, release=args.release,
+                       hold=max(1, round(args.hold_s * rate)), metadata=_training_metadata(args, sessions, len(X)))
+    save_model(args.output, model)
+    synthetic = ' (SYNTHETIC data)' if any(s.synthetic for s in sessions) else ''
+    say(f'wrote {args.output}: classes {", ".join(model.classes)}, components {clf.n_components_.tolist()}'
+        f'{synthetic}')
+    return 0
+
+
+def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_frames: int) -> dict:
+    """What a model file records about how it was made (model_io's optional ``metadata``)."""
+    import datetime
+    import shlex
+    from pathlib import Path
+    if args.csv or args.bags:
+        data = f"{'CSV' if args.csv else 'bags'} {args.csv or args.bags}"
+    else:
+        data = (f'simulated people (SYNTHETIC): {args.simulate} people x {args.events} events per gesture, seed '
+                f'{args.seed}, through the virtual patch and patch_driver (touch_sim/patch/people.py)')
+    prog = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else 'social-touch'
+    return {
+        'synthetic': any(s.synthetic for s in sessions), 'data': data,
+        'subjects': len({s.subject for s in sessions}), 'sessions': len(sessions), 'frames': int(n_frames),
+        'seed': int(args.seed), 'components': int(args.components), 'covariance': args.covariance,
+        'reg_covar': float(args.reg_covar), 'command': shlex.join([prog, *sys.argv[1:]]),
+        'created_utc': datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ'),
+    }
+
+
+# ---------------------------------------------------------------------- eval
+def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``social-touch eval patch``."""
+    _add_source_arguments(parser)
+    parser.add_argument('--components', type=_ints, default=[3, 5, 7],
+                        help='grid of components per class (default 3,5,7)')
+    parser.add_argument('--thresholds', type=_floats, default=[0.9, 0.99, 0.999],
+                        help='grid of posterior thresholds (default 0.9,0.99,0.999)')
+    parser.add_argument('--holds-s', type=_floats, default=[0.05, 0.25, 0.4],
+                        help='grid of event hold times, s (default 0.05,0.25,0.4; 0.05 s = one frame = the paper)')
+    parser.add_argument('--json', action='store_true', help='print one JSON object')
+
+
+def run_eval(args: argparse.Namespace) -> int:
+    """Leave-one-subject-out evaluation with grid search; prints a report or JSON."""
+    from touch_lab.patch.evaluate import leave_one_subject_out
+
+    say = _progress(args)
+    sessions = load_sessions(args, say)
+    try:
+        result = leave_one_subject_out(sessions, n_components=args.components, thresholds=args.thresholds,
+                                       holds_s=args.holds_s, window_s=args.window_s, release=args.release,
+                                       covariance_type=args.covariance, reg_covar=args.reg_covar,
+                                       random_state=args.seed, progress=say)
+    except ValueError as err:  # too few subjects or classes, mixed rates: say so, no traceback
+        raise SystemExit(f'eval patch: {err}') from err
+    report = result.as_dict()
+    report['source'] = args.csv or args.bags or \
+        f'simulated people: {args.simulate} (seed {args.seed}, virtual patch and patch_driver node)'
+    if args.json:
+        print(json.dumps(_jsonable(report), indent=2))
+    else:
+        print(format_report(report))
+    return 0
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return None if not math.isfinite(float(value)) else float(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def format_report(report: dict) -> str:
+    """Fig. 6-style text of an evaluation report (``EvaluationResult.as_dict()``)."""
+    lines = []
+    tag = ' -- SYNTHETIC data (simulated people)' if report.get('synthetic') else ''
+    lines.append(f"Leave-one-subject-out over {len(report['subjects'])} subjects{tag}")
+    lines.append(f"best: {report['n_components']} components, threshold {report['threshold']}, hold "
+                 f"{report['hold_frames']} frames, window {report['window_s']:g} s")
+    n = report['n_events']
+    lines.append(f"events: {n}; correct {report['event_correct']} ({report['event_correct_rate']:.0%}), "
+                 f"false detections {report['false_detections']} ({report['false_detection_rate']:.0%}), "
+                 f"misses {report['misses']} ({report['miss_rate']:.0%})")
+    lines.append(f"median detection latency {report['median_detection_latency_s']:.2f} s "
+                 f"(90th percentile {report['p90_detection_latency_s']:.2f} s); {report['us_per_frame']:.1f} us/frame")
+    lines.append(f"per-sample TPR {report['tpr_all_samples']:.2f} (all samples), "
+                 f"{report['tpr_detected_samples']:.2f} (detected samples)")
+    lines.append('')
+    lines += _matrix('per-sample confusion (rows: predicted, columns: truth)', report['sample_confusion'])
+    lines.append('')
+    lines += _matrix('event confusion (rows: truth, columns: detected)', report['event_confusion'])
+    lines.append('')
+    lines.append('grid: components threshold hold | correct false misses latency_s')
+    for g in report['grid']:
+        lines.append(f"  {g['n_components']:>3} {g['threshold']:>7} {g['hold_frames']:>3} | "
+                     f"{g['event_correct_rate']:.2f} {g['false_detection_rate']:.2f} {g['miss_rate']:.2f} "
+                     f"{g['median_detection_latency_s']:.2f}")
+    return '\n'.join(lines)
+
+
+def _matrix(title: str, table: dict) -> list[str]:
+    cols = list(next(iter(table.values())).keys())
+    width = max(8, *(len(c) for c in cols)) + 1
+    out = [title, ' ' * 16 + ''.join(f'{c:>{width}}' for c in cols)]
+    for row, values in table.items():
+        out.append(f'{row:<16}' + ''.join(f'{values[c]:>{width}}' for c in cols))
+    return out
+
+
+
+TRAIN = Target('train the patch gesture model (Gaussian mixtures) from a CSV, bags or simulated people',
+               add_train_arguments, run_train, __doc__)
+EVAL = Target('evaluate the patch gesture recogniser leave-one-subject-out (Fig. 6 of sympartner2018)',
+              add_eval_arguments, run_eval, __doc__)

@@ -1,0 +1,1 @@
+"""Optoelectronic skin: trace datasets, evaluation, benchmark, reports and the codebook recorder."""

@@ -1,0 +1,79 @@
+"""Benchmark: microseconds per recognition with a codebook of n gestures x m templates.
+
+Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
+``predict`` call (features + matching against the whole codebook + decision), on one core.
+The paper's C++ took 50 us (map-based) and 80 us (centroid-based) for 5 gestures
+(cirillo2017 3.3, i7 at 2.8 GHz).
+
+The gestures are synthetic (:func:`~touch_sim.skin.synthetic.synthetic_traces`, 16 shapes
+by simulated performers, contact points at 150 Hz as the skin gives them), so the figure
+does not depend on a data file. Each recogniser is timed over ``queries`` gestures,
+``repeats`` times; the median of the repeats is reported, with its ratio to the goal and to
+the centroid method, measured in the same run: ``social-touch bench skin [--json]``.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+import numpy as np
+
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
+from touch_lab.bench.timing import gc_paused
+from touch_sim.skin.synthetic import SHAPES, synthetic_traces
+
+__all__ = ['GOAL_US', 'bench_recognition', 'synthetic_codebook']
+
+GOAL_US = 50.0
+
+
+def synthetic_codebook(n_gestures: int = 16, templates_per_gesture: int = 30, seed: int = 0
+                       ) -> tuple[list[TouchGesture], list[str]]:
+    """``n_gestures`` x ``templates_per_gesture`` synthetic gestures (first shapes of SHAPES), 150 Hz."""
+    shapes = list(SHAPES)[:n_gestures]
+    if len(shapes) < n_gestures:
+        raise ValueError(f'at most {len(SHAPES)} synthetic shapes, asked for {n_gestures}')
+    performers = 3
+    reps = -(-templates_per_gesture // performers)
+    traces = synthetic_traces(shapes, performers=performers, repetitions=reps, seed=seed, rate_hz=150.0)
+    gestures, labels, count = [], [], {}
+    for s in traces:
+        if count.get(s.gesture, 0) >= templates_per_gesture:
+            continue
+        count[s.gesture] = count.get(s.gesture, 0) + 1
+        gestures.append(TouchGesture.from_trajectory(np.column_stack([s.x, s.y]), s.t_ms / 1000.0))
+        labels.append(s.gesture)
+    return gestures, labels
+
+
+def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, templates_per_gesture: int = 30,
+                      queries: int = 64, repeats: int = 7, seed: int = 0) -> dict:
+    """Median us per ``predict`` for each recogniser (module doc); returns a JSON-ready dict."""
+    names = list(RECOGNISERS) if names is None else names
+    gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
+    probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
+    probe = probe[:queries]
+    out: dict = {'goal_us': GOAL_US, 'gestures': n_gestures, 'templates_per_gesture': templates_per_gesture,
+                 'queries': len(probe), 'repeats': repeats, 'data': 'synthetic gestures', 'recognisers': {}}
+    for name in names:
+        model = make_recogniser(name).fit(gestures, labels)
+        for g in probe[:3]:
+            model.predict(g)  # warm up caches and lazy imports
+        runs = []
+        with gc_paused():
+            for _ in range(repeats):
+                start = time.perf_counter()
+                for g in probe:
+                    model.predict(g)
+                runs.append((time.perf_counter() - start) / len(probe) * 1e6)
+        us = statistics.median(runs)
+        out['recognisers'][name] = {'us_per_recognition': us, 'ratio_to_goal': us / GOAL_US,
+                                    'templates': len(model.templates_)}
+    base = out['recognisers'].get('centroid', {}).get('us_per_recognition')
+    if base:
+        for r in out['recognisers'].values():
+            r['ratio_to_centroid'] = r['us_per_recognition'] / base
+    return out
+

@@ -1,0 +1,203 @@
+"""``social-touch eval skin``: leave-one-subject-out evaluation of the skin recognisers.
+
+    social-touch eval skin --traces ../shared/data/unistroke_dev.csv.gz [--json]
+        [--recognisers trace,centroid,...] [--limit N] [--templates-per-gesture M (default: all)]
+        [--mode sensor|direct|both] [--random-touches N] [--seed S] [--no-cache]
+
+Each trace of the file goes through the virtual skin, the real driver decode and
+calibration and the segmenter (:mod:`.render`), then every recogniser is evaluated
+leave-one-subject-out (:mod:`.evaluate`). Progress goes to stderr; the report to stdout,
+as text or, with ``--json``, as one object::
+
+    {"recognisers": {NAME: {"accuracy": ..., "us_per_recognition": ..., ...}}, "best": NAME, ...}
+
+Multi-stroke samples are traced with the finger lifted between strokes; strokes closer
+than the segmenter's hysteresis (0.15 s) join into one gesture, a longer pen-up splits the
+sample into several gestures, which counts as a segmentation failure (wrong).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from typing import Any
+
+from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
+from touch_graph.errors import SocialTouchError
+from touch_lab.skin.datasets import read_traces
+from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.synthetic import random_touches
+
+__all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
+
+HELP = 'evaluate the skin recognisers on real traces through the virtual skin, leave-one-subject-out'
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options of ``social-touch eval skin`` to ``parser``."""
+    parser.add_argument('--traces', required=True, help='trace CSV (.csv or .csv.gz): '
+                        'subject,variant,gesture,sample,stroke,x,y,t_ms')
+    parser.add_argument('--json', action='store_true', help='print one JSON object instead of text')
+    parser.add_argument('--recognisers', default=','.join(RECOGNISERS),
+                        help=f'comma-separated names (default: all: {",".join(RECOGNISERS)})')
+    parser.add_argument('--limit', type=int, default=None, help='use only the first N samples of the file')
+    parser.add_argument('--templates-per-gesture', type=int, default=0,
+                        help='codebook size per gesture per fold, spread over the training subjects '
+                             '(default 0: every training sample; 30 is the m of cirillo2017 3.3)')
+    parser.add_argument('--mode', choices=('sensor', 'direct', 'both'), default='sensor',
+                        help='through the virtual skin (default), before it (true finger path, perfect map), or both')
+    parser.add_argument('--random-touches', type=int, default=150,
+                        help='synthetic touches that are no gesture, for the random-touch acceptance (0: none)')
+    parser.add_argument('--seed', type=int, default=0, help='noise and codebook-choice seed')
+    parser.add_argument('--no-cache', action='store_true', help='render every trace again (cache: '
+                        f'{default_cache_dir()})')
+
+
+def _progress(line: str) -> None:
+    print(f'[eval skin] {line}', file=sys.stderr, flush=True)
+
+
+def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None, templates_per_gesture: int = 0,
+                  mode: str = 'sensor', random_count: int = 150, seed: int = 0, cache: bool = True,
+                  progress: Any = _progress) -> dict:
+    """Run the whole evaluation and return the report object (see the module doc)."""
+    for name in recognisers:
+        make_recogniser(name)  # unknown names fail before minutes of rendering
+    say = progress or (lambda line: None)
+    trace_set = read_traces(traces, limit=limit)
+    samples = trace_set.samples
+    cache_dir = default_cache_dir() if cache else None
+    per_gesture = templates_per_gesture if templates_per_gesture > 0 else None
+    factories = {name: (lambda name=name: make_recogniser(name)) for name in recognisers}
+    modes = ('direct', 'sensor') if mode == 'both' else (mode,)
+    report: dict[str, Any] = {
+        'traces': str(traces), 'samples': len(samples), 'subjects': trace_set.subjects,
+        'gestures': trace_set.gestures, 'multi_stroke_samples': trace_set.multi_stroke_samples,
+        'skipped_rows': trace_set.skipped_rows, 'templates_per_gesture': per_gesture or 'all', 'seed': seed,
+        'protocol': 'leave-one-subject-out; accuracy = nearest class right (rejection off, as the paper); '
+                    'accuracy_with_rejection, rejection_rate, error_rate with the rejection rule on',
+    }
+    for m in modes:
+        t0 = time.perf_counter()
+        say(f'rendering {len(samples)} samples ({m}) ...')
+        settings = RenderSettings(mode=m, seed=seed)
+        rendered = render_samples(samples, settings, cache_dir,
+                                  progress=lambda done, total: say(f'  {done}/{total} samples'))
+        randoms = []
+        if random_count > 0:
+            touches = random_touches(random_count, seed=seed + 1)
+            randoms = render_samples(touches, RenderSettings(mode=m, placement='mm', seed=seed + 10**6), cache_dir)
+        say(f'rendered in {time.perf_counter() - t0:.1f} s; evaluating {", ".join(recognisers)}')
+        results = leave_one_subject_out(rendered, factories, per_gesture, seed, randoms, progress=say)
+        block = {
+            'mode': m, 'data': 'synthetic sensor frames (virtual skin) from real traces' if m == 'sensor'
+            else 'true finger path and perfect maps (before the sensor)',
+            'gestures_per_sample': _histogram(len(r.gestures) for r in rendered),
+            'random_touches': len(randoms), 'recognisers': {k: v.to_dict() for k, v in results.items()},
+            'best': _best(results),
+        }
+        if m == modes[-1]:
+            report.update(block)
+        else:
+            report['before_sensor'] = block
+    if 'before_sensor' in report:
+        report['sensor_cost'] = {name: report['before_sensor']['recognisers'][name]['accuracy']
+                                 - report['recognisers'][name]['accuracy'] for name in recognisers}
+    return report
+
+
+def _histogram(values: Any) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for v in values:
+        out[str(v)] = out.get(str(v), 0) + 1
+    return dict(sorted(out.items()))
+
+
+def _best(results: dict[str, RecogniserResult]) -> str:
+    """Highest accuracy; ties go to the faster recogniser."""
+    return min(results, key=lambda k: (-results[k].accuracy, results[k].us_per_recognition))
+
+
+def _pct(x: float | None) -> str:
+    return '   n/a' if x is None or (isinstance(x, float) and math.isnan(x)) else f'{100 * x:6.2f}'
+
+
+def format_text(report: dict) -> str:
+    """The report as text: summary table, then per recogniser eq. 8-9 and the confusion matrix."""
+    recs = report['recognisers']
+    lines = [f"skin recognisers, leave-one-subject-out on {report['traces']} ({report['samples']} samples, "
+             f"subjects {', '.join(report['subjects'])}, {len(report['gestures'])} gestures)",
+             f"mode: {report['mode']} ({report['data']}); codebook: {report['templates_per_gesture']} templates "
+             f"per gesture per fold; random touches (synthetic): {report['random_touches']}",
+             f"multi-stroke samples: {report['multi_stroke_samples']}; gestures per sample after segmentation: "
+             f"{report['gestures_per_sample']}", '',
+             f"{'recogniser':12s} {'acc %':>6s} {'before':>6s} {'acc+rej':>7s} {'rej %':>6s} {'err %':>6s} "
+             f"{'random':>6s} {'us/rec':>8s} {'us p90':>8s}"]
+    before = report.get('before_sensor', {}).get('recognisers', {})
+    for name, r in recs.items():
+        b = before.get(name, {}).get('accuracy')
+        lines.append(f"{name:12s} {_pct(r['accuracy'])} {_pct(b)} {_pct(r['accuracy_with_rejection']):>7s} "
+                     f"{_pct(r['rejection_rate'])} {_pct(r['error_rate'])} {_pct(r['random_touch_acceptance'])} "
+                     f"{r['us_per_recognition']:8.1f} {r['us_p90']:8.1f}")
+    lines += ['', f"best: {report['best']}", '(acc: nearest class right, rejection off; before: same before the '
+              'sensor; acc+rej, rej, err: with the rejection rule; random: synthetic random touches that fired '
+              'a command)']
+    for name, r in recs.items():
+        lines += ['', f'== {name}: per gesture, mean and standard deviation over performers (eq. 9, eq. 8), %']
+        for g, st in r['per_gesture'].items():
+            lines.append(f"  {g:20s} mu {100 * st['mu']:6.2f}  sigma {100 * st['sigma']:6.2f}")
+        lines.append('  per performer: ' + ', '.join(f'{s}: {100 * a:.2f}' for s, a in r['per_performer'].items()))
+        lines += _confusion_lines(r['confusion'])
+    return '\n'.join(lines)
+
+
+def _confusion_lines(confusion: dict[str, dict[str, int]]) -> list[str]:
+    labels = list(confusion)
+    extra = [c for c in (REJECTED, SEGMENTATION) if any(c in row for row in confusion.values())]
+    cols = labels + extra
+    short = {c: c[:6] for c in cols}
+    out = ['  confusion (rows: traced, columns: recognised nearest class)',
+           '  ' + ' ' * 20 + ' '.join(f'{short[c]:>6s}' for c in cols)]
+    for g in labels:
+        row = confusion[g]
+        out.append(f'  {g:20s}' + ' '.join(f'{row.get(c, 0):6d}' for c in cols))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Entry point of ``social-touch eval skin``; returns the exit status."""
+    names = [n.strip() for n in str(args.recognisers).split(',') if n.strip()]
+    if args.limit is not None and args.limit < 1:
+        print('eval skin: --limit must be a positive number of samples', file=sys.stderr)
+        return 2
+    try:
+        report = evaluate_file(args.traces, names, args.limit, args.templates_per_gesture, args.mode,
+                               args.random_touches, args.seed, cache=not args.no_cache)
+    except (SocialTouchError, ValueError) as err:
+        print(f'eval skin: {err}', file=sys.stderr)
+        return 2
+    try:
+        print(json.dumps(json_safe(report), indent=1, allow_nan=False) if args.json else format_text(report))
+    except BrokenPipeError:  # `... | head`: the reader left, which is fine
+        sys.stderr.close()
+    return 0
+
+
+def json_safe(value: Any) -> Any:
+    """``value`` with NaN and infinities replaced by None (strict JSON has neither).
+
+    >>> json_safe({'a': float('nan'), 'b': [1.0, float('inf')]})
+    {'a': None, 'b': [1.0, None]}
+    """
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+

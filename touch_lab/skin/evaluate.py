@@ -1,0 +1,205 @@
+"""Leave-one-subject-out evaluation of the skin recognisers (issue 6, item 5).
+
+For each subject in turn, every recogniser gets a codebook made from the other subjects'
+gestures (all of them, or ``templates_per_gesture`` per gesture chosen evenly across
+subjects and variants) and recognises the held-out subject's gestures. Reported per
+recogniser:
+
+- **accuracy**: the nearest class is right, over all samples (the paper's recognition
+  rate: its recognisers always answer; a sample the segmenter did not cut into exactly
+  one gesture counts as wrong);
+- with the recogniser's **rejection rule** on: **accuracy_with_rejection** (the command
+  fired is right), **rejection rate** (no command) and **error rate** (a wrong command);
+- the **confusion matrix** of the nearest class (true gesture x recognised, with a
+  ``<segmentation>`` column when the segmenter failed);
+- **per-performer** recognition rates R_{i,h} and, per gesture h, their mean mu_h (cirillo2017
+  eq. 9) and standard deviation sigma_h (eq. 8, the population form, 1/N);
+- **us per recognition**: median wall time of one ``predict`` (features + matching + decision),
+  with the codebook of the evaluation;
+- **random-touch acceptance** (when random touches are given): the fraction of touches that
+  are no gesture which still fire a command, over all folds' codebooks.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_sim.skin.render import RenderedSample
+
+__all__ = ['REJECTED', 'SEGMENTATION', 'RecogniserResult', 'choose_codebook', 'leave_one_subject_out']
+
+REJECTED = '<rejected>'
+SEGMENTATION = '<segmentation>'
+
+
+@dataclass
+class RecogniserResult:
+    """What :func:`leave_one_subject_out` measured for one recogniser (see the module doc)."""
+
+    name: str
+    samples: int = 0
+    correct: int = 0
+    accepted_correct: int = 0
+    rejected: int = 0
+    segmentation_failures: int = 0
+    us_per_recognition: float = float('nan')
+    us_p90: float = float('nan')
+    codebook_size: float = 0.0
+    confusion: dict[str, dict[str, int]] = field(default_factory=dict)
+    per_performer: dict[str, dict[str, float]] = field(default_factory=dict)
+    random_touches: int = 0
+    random_accepted: int = 0
+
+    @property
+    def accuracy(self) -> float:
+        return self.correct / self.samples if self.samples else float('nan')
+
+    @property
+    def accuracy_with_rejection(self) -> float:
+        return self.accepted_correct / self.samples if self.samples else float('nan')
+
+    @property
+    def rejection_rate(self) -> float:
+        return self.rejected / self.samples if self.samples else float('nan')
+
+    @property
+    def error_rate(self) -> float:
+        wrong = self.samples - self.accepted_correct - self.rejected - self.segmentation_failures
+        return wrong / self.samples if self.samples else float('nan')
+
+    @property
+    def random_acceptance(self) -> float | None:
+        return self.random_accepted / self.random_touches if self.random_touches else None
+
+    def gesture_stats(self) -> dict[str, dict[str, float]]:
+        """Per gesture h: ``mu`` (eq. 9) and ``sigma`` (eq. 8) of the performers' rates R_{i,h}."""
+        gestures = sorted({g for rates in self.per_performer.values() for g in rates})
+        out = {}
+        for g in gestures:
+            rates = np.array([r[g] for r in self.per_performer.values() if g in r], dtype=np.float64)
+            mu = float(rates.mean())
+            out[g] = {'mu': mu, 'sigma': float(np.sqrt(np.mean((rates - mu) ** 2)))}
+        return out
+
+    def to_dict(self) -> dict:
+        return {
+            'accuracy': self.accuracy, 'accuracy_with_rejection': self.accuracy_with_rejection,
+            'rejection_rate': self.rejection_rate, 'error_rate': self.error_rate,
+            'us_per_recognition': self.us_per_recognition, 'us_p90': self.us_p90,
+            'codebook_size': self.codebook_size, 'samples': self.samples, 'correct': self.correct,
+            'rejected': self.rejected, 'segmentation_failures': self.segmentation_failures,
+            'random_touch_acceptance': self.random_acceptance, 'random_touches': self.random_touches,
+            'per_gesture': self.gesture_stats(),
+            'per_performer': {s: float(np.mean(list(r.values()))) for s, r in self.per_performer.items()},
+            'confusion': self.confusion,
+        }
+
+
+def _usable(r: RenderedSample) -> bool:
+    return len(r.gestures) == 1 and not r.gestures[0].multi_contact and not r.gestures[0].truncated
+
+
+def choose_codebook(train: Sequence[RenderedSample], per_gesture: int | None, rng: np.random.Generator
+                    ) -> list[RenderedSample]:
+    """The usable training samples, or ``per_gesture`` of each gesture spread evenly over the
+    (subject, variant) groups (round robin over shuffled groups), so no person dominates."""
+    usable = [r for r in train if _usable(r)]
+    if per_gesture is None:
+        return usable
+    chosen = []
+    for label in sorted({r.label for r in usable}):
+        groups: dict[tuple[str, str], list[RenderedSample]] = {}
+        for r in usable:
+            if r.label == label:
+                groups.setdefault((r.subject, r.variant), []).append(r)
+        queues = [list(rng.permutation(len(g))) for g in groups.values()]
+        members = list(groups.values())
+        order = rng.permutation(len(members))
+        picked = []
+        while len(picked) < per_gesture and any(queues):
+            for k in order:
+                if queues[k] and len(picked) < per_gesture:
+                    picked.append(members[k][queues[k].pop()])
+        chosen += picked
+    return chosen
+
+
+def leave_one_subject_out(rendered: Sequence[RenderedSample],
+                          factories: Mapping[str, Callable[[], TemplateRecogniser]],
+                          templates_per_gesture: int | None = None, seed: int = 0,
+                          random_rendered: Sequence[RenderedSample] = (),
+                          progress: Callable[[str], None] | None = None) -> dict[str, RecogniserResult]:
+    """Evaluate every recogniser of ``factories`` (name -> a new unfitted recogniser).
+
+    Args:
+        rendered: samples through the skin (:func:`~touch_sim.skin.render.render_samples`).
+        templates_per_gesture: codebook size per gesture per fold (None: every training sample).
+        seed: seeds the choice of templates.
+        random_rendered: touches that are no gesture, for the random-touch acceptance.
+        progress: called with a line of text per fold and recogniser.
+
+    Raises:
+        ValueError: fewer than two subjects (nothing to leave out), or no recogniser.
+    """
+    subjects = sorted({r.subject for r in rendered})
+    if len(subjects) < 2:
+        raise ValueError(f'leave-one-subject-out needs at least 2 subjects; got {subjects}')
+    if not factories:
+        raise ValueError('no recogniser to evaluate')
+    labels = sorted({r.label for r in rendered})
+    results = {name: RecogniserResult(name) for name in factories}
+    for res in results.values():
+        res.confusion = {lab: {} for lab in labels}
+    times: dict[str, list[float]] = {name: [] for name in factories}
+    sizes: dict[str, list[int]] = {name: [] for name in factories}
+    random_gestures = [g for r in random_rendered for g in r.gestures if not g.truncated]
+    for fold, subject in enumerate(subjects):
+        train = [r for r in rendered if r.subject != subject]
+        test = [r for r in rendered if r.subject == subject]
+        codebook = choose_codebook(train, templates_per_gesture, np.random.default_rng([seed, fold]))
+        if not codebook:
+            raise ValueError(f'fold {subject}: no usable training gesture for the codebook')
+        gestures = [r.gestures[0] for r in codebook]
+        names = [r.label for r in codebook]
+        for name, make in factories.items():
+            res = results[name]
+            start = time.perf_counter()
+            recogniser = make().fit(gestures, names)
+            sizes[name].append(len(recogniser.templates_))
+            hits: dict[str, list[bool]] = {}
+            for r in test:
+                res.samples += 1
+                if len(r.gestures) != 1:
+                    predicted = SEGMENTATION
+                    res.segmentation_failures += 1
+                else:
+                    t0 = time.perf_counter()
+                    match = recogniser.predict(r.gestures[0])
+                    times[name].append(time.perf_counter() - t0)
+                    predicted = REJECTED if match.nearest is None else match.nearest
+                    res.rejected += match.label is None
+                    res.accepted_correct += match.label == r.label
+                ok = predicted == r.label
+                res.correct += ok
+                row = res.confusion[r.label]
+                row[predicted] = row.get(predicted, 0) + 1
+                hits.setdefault(r.label, []).append(ok)
+            res.per_performer[subject] = {lab: float(np.mean(v)) for lab, v in sorted(hits.items())}
+            for g in random_gestures:
+                res.random_touches += 1
+                res.random_accepted += recogniser.predict(g).label is not None
+            if progress is not None:
+                acc = np.mean([v for vs in hits.values() for v in vs]) if hits else float('nan')
+                progress(f'fold {fold + 1}/{len(subjects)} (subject {subject}) {name}: accuracy {acc:.4f}, '
+                         f'{time.perf_counter() - start:.1f} s')
+    for name, res in results.items():
+        if times[name]:
+            us = np.asarray(times[name]) * 1e6
+            res.us_per_recognition, res.us_p90 = float(np.median(us)), float(np.percentile(us, 90))
+        res.codebook_size = float(np.mean(sizes[name]))
+    return results

@@ -1,0 +1,1 @@
+"""Virtual Sensate Bear: the device model behind ``bearsim://`` and simulated people (synthetic)."""

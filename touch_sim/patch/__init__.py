@@ -1,0 +1,1 @@
+"""Virtual textile patch: the device model behind ``patchsim://`` and simulated people (synthetic)."""

@@ -1,0 +1,213 @@
+"""Traced gestures (:class:`TraceSample`) and a finger tracing one across the skin (:class:`TraceStimulus`).
+
+A :class:`TraceSample` is one gesture as a pen or finger drew it (recorded, e.g. the $1 logs
+read by :func:`touch_lab.skin.datasets.read_traces`, or synthetic, :mod:`~touch_sim.skin.synthetic`).
+
+:meth:`TraceStimulus.from_points` takes a gesture sample as screen points (e.g. a row group of
+``unistroke_dev.csv.gz``: x, y in pixels, y growing downward, t in ms) and places it on the skin:
+
+- **space**: the bounding box of all points is scaled onto the 47 x 47 mm active area minus a
+  margin (default one taxel pitch) on each side, keeping the aspect ratio, and centred. Screen x
+  runs along the columns, screen y (downward) along the rows, so the picture is not mirrored when
+  row 0 (the connector edge) is drawn at the top. A sample with no extent (a tap) lands in the centre.
+- **time**: ``t_ms`` (times ``time_scale``) from the first point. After ``lead_in_s`` of untouched
+  skin (the calibrator tares on it) the force ramps up over ``ramp_s`` at the first point, the
+  finger follows the points (linear between samples, velocity from the segment for shear), and
+  the force ramps down over ``ramp_s`` at the last point; ``tail_s`` of untouched skin follows.
+- **strokes**: several strokes (``stroke`` ids) are traced in time order; the finger lifts between
+  them (ramp down, ramp up; ramps shorten to fit a short gap). Overlapping strokes are an error.
+
+:func:`render_frames` (from :mod:`~touch_sim.skin.device`) turns the stimulus into raw frames
+with the same device model as the ``skinsim://`` URL handler, without a serial port::
+
+    stim = TraceStimulus.from_points(x, y, t_ms)
+    frames = render_frames(stim, seed=1)            # (n, 144) uint16 at 150 Hz
+    states = calibrate_frames(frames)               # pressure, contact, contact_xy_mm, force
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from touch_driver.skin.protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
+from touch_sim.skin.contact import Contact
+from touch_sim.skin.device import render_frames
+
+__all__ = ['TraceSample', 'TraceStimulus', 'render_frames']
+
+
+@dataclass(frozen=True, eq=False)
+class TraceSample:
+    """One traced gesture: the points of every stroke in time order.
+
+    Attributes:
+        subject, variant, gesture, sample: the key columns, as strings.
+        x, y: (n,) float64, the file's units (pixels for the $1 logs).
+        t_ms: (n,) float64, ms from the first point, non-decreasing within each stroke.
+        stroke: (n,) int32 stroke index of each point, non-decreasing.
+    """
+
+    subject: str
+    variant: str
+    gesture: str
+    sample: str
+    x: np.ndarray
+    y: np.ndarray
+    t_ms: np.ndarray
+    stroke: np.ndarray
+
+    @property
+    def n_strokes(self) -> int:
+        return len(np.unique(self.stroke))
+
+    @property
+    def key(self) -> tuple[str, str, str, str]:
+        return (self.subject, self.variant, self.gesture, self.sample)
+
+    @property
+    def duration_ms(self) -> float:
+        return float(self.t_ms[-1] - self.t_ms[0]) if len(self.t_ms) else 0.0
+
+    def __repr__(self) -> str:
+        return (f'TraceSample(subject={self.subject!r}, variant={self.variant!r}, gesture={self.gesture!r}, '
+                f'sample={self.sample!r}, points={len(self.x)}, strokes={self.n_strokes})')
+
+
+class TraceStimulus:
+    """A finger tracing strokes of (time s, position mm) across the skin; build it with :meth:`from_points`.
+
+    Args:
+        strokes: per stroke a (k, 3) float64 array of rows (t_s, x_mm, y_mm), times strictly increasing,
+            strokes in time order and not overlapping.
+        force_n: normal force while tracing, N. radius_mm: finger contact radius, mm.
+        ramp_s: touch-down / lift ramp, s. tail_s: untouched time after the last lift, s.
+    """
+
+    def __init__(self, strokes: Sequence[np.ndarray], force_n: float = 1.5, radius_mm: float = 4.0,
+                 ramp_s: float = 0.05, tail_s: float = 0.5) -> None:
+        if not strokes:
+            raise ValueError('a trace needs at least one stroke')
+        for name, value in (('force_n', force_n), ('radius_mm', radius_mm), ('ramp_s', ramp_s), ('tail_s', tail_s)):
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f'{name} must be a finite number >= 0, got {value}')
+        if ramp_s <= 0:
+            raise ValueError(f'ramp_s must be > 0, got {ramp_s}')
+        self.strokes = [np.asarray(s, dtype=np.float64) for s in strokes]
+        for i, s in enumerate(self.strokes):
+            if s.ndim != 2 or s.shape[1] != 3 or len(s) == 0 or not np.isfinite(s).all():
+                raise ValueError(f'stroke {i} must be a non-empty (k, 3) array of finite (t_s, x_mm, y_mm)')
+            if np.any(np.diff(s[:, 0]) <= 0):
+                raise ValueError(f'stroke {i}: times must strictly increase')
+        self.force_n, self.radius_mm, self.ramp_s, self.tail_s = float(force_n), float(radius_mm), ramp_s, tail_s
+        # Ramps per stroke: (down_ramp, up_ramp), shortened to half of a short gap between strokes.
+        self._ramps = []
+        for i, s in enumerate(self.strokes):
+            before = ramp_s if i == 0 else (s[0, 0] - self.strokes[i - 1][-1, 0]) / 2
+            after = ramp_s if i == len(self.strokes) - 1 else (self.strokes[i + 1][0, 0] - s[-1, 0]) / 2
+            if before <= 0 or after <= 0:
+                raise ValueError(f'stroke {i} overlaps its neighbour in time; strokes must follow each other')
+            self._ramps.append((min(before, ramp_s), min(after, ramp_s)))
+        if self.strokes[0][0, 0] < ramp_s:
+            raise ValueError(f'the first point must come at least ramp_s={ramp_s} s after t=0 (for the touch-down)')
+        self._starts = np.array([s[0, 0] - r[0] for s, r in zip(self.strokes, self._ramps, strict=True)])
+
+    @property
+    def duration_s(self) -> float:
+        """Seconds from the start to the end of the tail after the last lift."""
+        return float(self.strokes[-1][-1, 0] + self._ramps[-1][1] + self.tail_s)
+
+    @classmethod
+    def from_points(cls, x: Sequence[float] | np.ndarray, y: Sequence[float] | np.ndarray,
+                    t_ms: Sequence[float] | np.ndarray, stroke: Sequence[int] | np.ndarray | None = None, *,
+                    force_n: float = 1.5, radius_mm: float = 4.0, margin_mm: float = TAXEL_PITCH_MM,
+                    area_mm: float = ACTIVE_SIDE_MM, lead_in_s: float = 0.5, tail_s: float = 0.5,
+                    ramp_s: float = 0.05, time_scale: float = 1.0) -> TraceStimulus:
+        """Place screen points (x, y px, y downward; t ms) on the skin (see the module doc).
+
+        Points with equal times keep the last one. Raises ValueError on empty, mismatched,
+        non-finite or time-reversed input, and on overlapping strokes.
+
+        >>> stim = TraceStimulus.from_points([0, 100, 100], [0, 0, 50], [0, 500, 1000])
+        >>> stim.strokes[0].round(2).tolist()      # t_s, x_mm, y_mm: 39.17 mm wide, centred vertically
+        [[0.55, 3.92, 13.71], [1.05, 43.08, 13.71], [1.55, 43.08, 33.29]]
+        """
+        x, y, t = (np.asarray(a, dtype=np.float64).reshape(-1) for a in (x, y, t_ms))
+        if not len(x) == len(y) == len(t):
+            raise ValueError(f'x, y and t_ms must have the same length; got {len(x)}, {len(y)}, {len(t)}')
+        if len(x) == 0:
+            raise ValueError('a trace needs at least one point; got none')
+        if not (np.isfinite(x).all() and np.isfinite(y).all() and np.isfinite(t).all()):
+            raise ValueError('x, y and t_ms must be finite numbers (found NaN or inf); drop those samples first')
+        for name, value in (('margin_mm', margin_mm), ('area_mm', area_mm), ('lead_in_s', lead_in_s),
+                            ('time_scale', time_scale)):
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f'{name} must be a finite number >= 0, got {value}')
+        if not (area_mm > 2 * margin_mm and time_scale > 0):
+            raise ValueError(f'need area_mm > 2 * margin_mm and time_scale > 0; got {area_mm}, {margin_mm}, '
+                             f'{time_scale}')
+        ids = np.zeros(len(x), dtype=np.int64) if stroke is None else np.asarray(stroke).reshape(-1)
+        if len(ids) != len(x):
+            raise ValueError(f'stroke must give one id per point; got {len(ids)} ids for {len(x)} points')
+        # Space: bounding box -> active area minus margins, aspect kept, centred.
+        extent = max(np.ptp(x), np.ptp(y))
+        scale = (area_mm - 2 * margin_mm) / extent if extent > 0 else 1.0
+        cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+        x_mm = (x - cx) * scale + area_mm / 2
+        y_mm = (y - cy) * scale + area_mm / 2
+        t_s = lead_in_s + ramp_s + (t - t.min()) * (time_scale / 1000.0)
+        strokes = []
+        for sid in sorted(set(ids.tolist()), key=lambda s: t_s[ids == s].min()):
+            sel = ids == sid
+            ts, xs, ys = t_s[sel], x_mm[sel], y_mm[sel]
+            if np.any(np.diff(ts) < 0):
+                raise ValueError(f'stroke {sid}: t_ms must not decrease within a stroke')
+            keep = np.r_[np.diff(ts) > 0, True]        # of equal times keep the last point
+            strokes.append(np.stack([ts[keep], xs[keep], ys[keep]], axis=1))
+        return cls(strokes, force_n=force_n, radius_mm=radius_mm, ramp_s=ramp_s, tail_s=tail_s)
+
+    def contacts(self, t: float) -> list[Contact]:
+        """The finger contact at ``t`` s (empty between strokes and outside the trace)."""
+        i = int(np.searchsorted(self._starts, t, side='right')) - 1
+        if i < 0:
+            return []
+        s = self.strokes[i]
+        ramp_down, ramp_up = self._ramps[i]
+        t0, t1 = s[0, 0], s[-1, 0]
+        if t > t1 + ramp_up:
+            return []
+        if t < t0:
+            k, vx, vy = (t - (t0 - ramp_down)) / ramp_down, 0.0, 0.0
+            x, y = s[0, 1], s[0, 2]
+        elif t > t1:
+            k, vx, vy = (t1 + ramp_up - t) / ramp_up, 0.0, 0.0
+            x, y = s[-1, 1], s[-1, 2]
+        else:
+            k = 1.0
+            j = min(int(np.searchsorted(s[:, 0], t, side='right')) - 1, len(s) - 2)
+            if j < 0:                                   # a single-point stroke: a tap
+                x, y, vx, vy = s[0, 1], s[0, 2], 0.0, 0.0
+            else:
+                dt = s[j + 1, 0] - s[j, 0]
+                a = (t - s[j, 0]) / dt
+                x = s[j, 1] + a * (s[j + 1, 1] - s[j, 1])
+                y = s[j, 2] + a * (s[j + 1, 2] - s[j, 2])
+                vx, vy = (s[j + 1, 1] - s[j, 1]) / dt, (s[j + 1, 2] - s[j, 2]) / dt
+        if k <= 0:
+            return []
+        return [Contact(float(x), float(y), self.force_n * min(k, 1.0), self.radius_mm, float(vx), float(vy))]
+
+    def truth(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Ground truth at ``times`` (n,) s: ((n, 2) float64 finger position in mm, NaN when lifted; (n,) bool down)."""
+        times = np.asarray(times, dtype=np.float64).reshape(-1)
+        xy = np.full((len(times), 2), np.nan)
+        down = np.zeros(len(times), dtype=bool)
+        for i, t in enumerate(times):
+            c = self.contacts(float(t))
+            if c:
+                xy[i] = c[0].x_mm, c[0].y_mm
+                down[i] = True
+        return xy, down
