@@ -127,7 +127,7 @@ def test_every_frame_publishes_the_posteriors_the_events_come_from(session_frame
     frames, _, _ = session_frames
     h = Harness()
     try:
-        h.feed(frames[:300])
+        h.update(frames[:300])
         model = h.node.model
         features, classifier = model.features(), model.classifier
         expected = np.exp([classifier.log_posterior(features.update(a)) for a in frames[:300]])
