@@ -23,6 +23,7 @@ NODES: dict[str, tuple[str, str]] = {
     'bear_sensor_frames': ('touch_gestures.bear.sensor_frames', 'BearSensorFramesNode'),
     'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
     'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
+    'touch_state': ('touch_gestures.touch_state.node', 'TouchStateNode'),
     'touch_view': ('touch_view.node', 'TouchViewNode'),
     'foxglove_server': ('touch_view.foxglove_node', 'FoxgloveServerNode'),
 }
