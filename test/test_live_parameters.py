@@ -88,7 +88,7 @@ def test_bear_gestures_reads_everything_at_start(graph):
     start, set_parameters = graph
     node = start(BearGesturesNode)
     [(ok, why)] = set_parameters(node, threshold=0.4)
-    assert not ok and 'read-only' in why and node.recognizer.threshold == pytest.approx(0.3)
+    assert not ok and 'read-only' in why and node.recogniser.threshold == pytest.approx(0.3)
 
 
 def test_touch_monitor_switches_subtypes_live(graph):

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.paths import share_file
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import DecodedFrame
@@ -37,6 +38,7 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
         super().__init__('skin_driver', **kwargs)
         config_path = self.declare_parameter('calibration', '').value
         self.calibrator = SkinCalibrator(load_skin_calibration(config_path or None))
+        self.get_logger().info(f"calibration {config_path or share_file('config', 'skin_calibration.yaml')}")
         self.frame_pub = self.create_publisher(SkinFrame, 'frame', sensor_data_qos())
 
     def make_decoder(self) -> SkinStreamDecoder:

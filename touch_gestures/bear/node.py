@@ -90,6 +90,7 @@ class BearGesturesNode(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('bear_gestures', **kwargs)
         self.classifier_kind: str | None = None
+        self.loaded_files: list[str] = []       # config files read, for the start-up log line
         p = self._declare()
         self.publish_subtypes = p['publish_subtypes']
         self.publish_symbolic = p['publish_symbolic']
@@ -123,6 +124,7 @@ class BearGesturesNode(Node):
             f'{self.recogniser.rate_hz:g} Hz, buffer {self.recogniser.buffer.buffer_len} cycles, threshold '
             f'{self.recogniser.threshold:g}; sensor level{"".join(", " + w for w in what)}'
             f'{"; subtypes by the " + self.classifier_kind if self.classifier_kind else ""}')
+        self.get_logger().info('loaded ' + ', '.join(self.loaded_files))
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name: str, default: Any, description: str) -> Any:
@@ -192,9 +194,11 @@ class BearGesturesNode(Node):
 
     def _build_recogniser(self, p: dict[str, Any]) -> BearRecogniser:
         body_map = BodyMap.load(p['body_map']) if p['body_map'] else BodyMap.default()
+        self.loaded_files.append(f'body map {body_map.source}')
         if p['publish_symbolic']:
             library = GestureLibrary.load(p['gestures'], body_map) if p['gestures'] else \
                 GestureLibrary.default(body_map)
+            self.loaded_files.append(f'gestures {library.source}')
             library = _with_default_timing(library, p['dwell_s'], p['gap_s'])
         else:
             library = GestureLibrary([], source='(publish_symbolic is false)')
@@ -235,6 +239,7 @@ class BearGesturesNode(Node):
             self.get_logger().warning(f'{problem}; using the paper rule (knight2009 V.D) instead')
             return rule
         self.classifier_kind = 'model'
+        self.loaded_files.append(f'subtype model {path}')
         return NoTouchGate(model, p['threshold'])    # no false taps from the short buffers of a (re)start
 
     # ------------------------------------------------------------------ frames
