@@ -178,6 +178,14 @@ def test_the_launch_command_stops_before_starting_anything_on_a_broken_config_fi
     assert 'node(s) running' not in result.stderr
 
 
+def test_the_demo_checks_its_config_arguments_too(tmp_path) -> None:
+    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'demo', '--fast', '--duration', '1',
+                             f'commands:={tmp_path / "mine.yaml"}'], capture_output=True, text=True, timeout=120,
+                            cwd=tmp_path)
+    assert result.returncode != 0 and "parameter 'commands' of /skin/haptic_commands: no such file" in result.stderr
+    assert 'nodes, 1 s of a simulated scene' not in result.stderr
+
+
 def test_a_node_logs_the_config_files_it_loaded(tmp_path) -> None:
     gestures = tmp_path / 'my_gestures.yaml'
     gestures.write_text((Path(__file__).resolve().parents[1] / 'config' / 'bear_gestures.yaml').read_text())
