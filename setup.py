@@ -20,8 +20,10 @@ NODES: dict[str, tuple[str, str]] = {
     'player': ('touch_graph.bag.player_node', 'PlayerNode'),
     'touch_monitor': ('touch_gestures.monitor_node', 'TouchMonitorNode'),
     'bear_gestures': ('touch_gestures.bear.node', 'BearGesturesNode'),
+    'bear_sensor_frames': ('touch_gestures.bear.sensor_frames', 'BearSensorFramesNode'),
     'patch_gestures': ('touch_gestures.patch.node', 'PatchGesturesNode'),
     'haptic_commands': ('touch_gestures.skin.node', 'HapticCommandsNode'),
+    'touch_state': ('touch_gestures.touch_state.node', 'TouchStateNode'),
     'touch_view': ('touch_view.node', 'TouchViewNode'),
     'foxglove_server': ('touch_view.foxglove_node', 'FoxgloveServerNode'),
 }

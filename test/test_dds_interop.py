@@ -48,6 +48,13 @@ class Header_(IdlStruct, typename='std_msgs::msg::dds_::Header_'):
 
 
 @dataclass
+class Point_(IdlStruct, typename='geometry_msgs::msg::dds_::Point_'):
+    x: float64
+    y: float64
+    z: float64
+
+
+@dataclass
 class SymbolicGesture_(IdlStruct, typename='social_touch_msgs::msg::dds_::SymbolicGesture_'):
     header: Header_
     gesture: str
@@ -55,6 +62,9 @@ class SymbolicGesture_(IdlStruct, typename='social_touch_msgs::msg::dds_::Symbol
     onset: Time_
     duration_s: float32
     sensors: sequence[str]
+    has_centroid: bool
+    centroid: Point_
+    frame_id: str
 
 
 @dataclass

@@ -45,7 +45,8 @@ def test_cdr_bytes_match_ros2_layout():
         '03000000' '616200'     # name 'ab\0'
         '00' '01000000' '00'    # pad, location ''
         '000000' '01000000' '00'  # pad, region ''
-        '000000' '0000003f')    # pad, level 0.5
+        '000000' '0000003f'     # pad, level 0.5
+        + '00' * 24)            # position: geometry_msgs/Point (0, 0, 0), three float64, 8-aligned already
     assert serialize(state) == expected
     assert deserialize(expected, 'SensorState') == state
 

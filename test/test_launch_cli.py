@@ -36,7 +36,7 @@ def share(tmp_path, monkeypatch):
             raise ConfigError(f"package '{package}' not found")
         return root
 
-    monkeypatch.setattr(cli, 'package_share', lookup)
+    monkeypatch.setattr(cli, 'launch_share', lookup)
     return root
 
 

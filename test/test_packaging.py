@@ -113,12 +113,12 @@ def test_export_interfaces_writes_an_ament_cmake_package(tmp_path):
     root = ET.parse(package / 'package.xml').getroot()
     assert root.findtext('name') == 'social_touch_msgs'
     assert root.findtext('member_of_group') == 'rosidl_interface_packages'
-    assert {e.text for e in root.findall('depend')} == {'builtin_interfaces', 'std_msgs'}
+    assert {e.text for e in root.findall('depend')} == {'builtin_interfaces', 'geometry_msgs', 'std_msgs'}
     cmake = (package / 'CMakeLists.txt').read_text()
     for path in msg_files():
         assert f'"msg/{path.name}"' in cmake
         assert (package / 'msg' / path.name).read_text() == path.read_text()
-    assert 'DEPENDENCIES builtin_interfaces std_msgs' in cmake
+    assert 'DEPENDENCIES builtin_interfaces geometry_msgs std_msgs' in cmake
     with pytest.raises(ConfigError, match='--force'):
         export_interfaces(tmp_path)
     export_interfaces(tmp_path, force=True)

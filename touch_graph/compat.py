@@ -17,8 +17,9 @@ import os
 from typing import Any
 
 __all__ = [
-    'USING_ROS', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile', 'SetParametersResult',
-    'Time', 'get_message', 'get_service', 'qos_profile_sensor_data', 'rclpy', 'sensor_data_qos', 'stamp_now',
+    'USING_ROS', 'DurabilityPolicy', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile',
+    'SetParametersResult', 'Time', 'get_message', 'get_service', 'latched_qos', 'qos_profile_sensor_data', 'rclpy',
+    'sensor_data_qos', 'stamp_now',
 ]
 
 
@@ -40,7 +41,7 @@ if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
     from rclpy.duration import Duration
     from rclpy.node import Node
     from rclpy.parameter import Parameter
-    from rclpy.qos import QoSProfile, qos_profile_sensor_data
+    from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
     from rclpy.time import Time
     from rosidl_runtime_py.utilities import get_message as _ros_get_message
     from rosidl_runtime_py.utilities import get_service as _ros_get_service
@@ -56,6 +57,7 @@ else:
     from . import runtime as rclpy
     from .messages import get_message
     from .runtime import (
+        DurabilityPolicy,
         Duration,
         Node,
         Parameter,
@@ -75,6 +77,15 @@ def sensor_data_qos(depth: int = 5) -> Any:
     next one, and a best-effort subscription also matches a reliable publisher.
     """
     return QoSProfile(depth=depth, reliability=qos_profile_sensor_data.reliability)
+
+
+def latched_qos(depth: int = 1) -> Any:
+    """Reliable, TRANSIENT_LOCAL, keep last ``depth``: a late subscriber gets the last ``depth`` messages.
+
+    What ROS 2's static transform broadcaster uses for ``/tf_static`` (depth 1) and what a
+    subscriber to a latched topic must ask for to receive them.
+    """
+    return QoSProfile(depth=depth, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def stamp_now(node: Any) -> Any:

@@ -3,6 +3,13 @@
 The same lookup serves a source checkout, ``pip install .`` (data files under
 ``<prefix>/share/social_touch``) and a colcon workspace (``AMENT_PREFIX_PATH``), as
 ``ros2 pkg prefix`` / ``$(find-pkg-share ...)`` do on ROS 2.
+
+Tuning without reinstalling: ``social-touch launch`` run inside a source checkout of this
+package (the working directory or one above it holds its ``package.xml`` and ``config/``)
+calls :func:`prefer_checkout`, which sets :data:`CHECKOUT_ENV`; from then on, in that process
+and the node processes it starts, :func:`share_file` and :func:`launch_share` read ``config/``
+and ``launch/`` from the checkout instead of the installed copy, so an edit there counts at the
+next launch. Messages (``msg/``, ``srv/``) stay those of the installed code.
 """
 
 from __future__ import annotations
@@ -18,6 +25,10 @@ PACKAGE = 'social_touch'
 #: Name of the interface package that `social-touch export-interfaces` writes; message type
 #: names use it (``social_touch_msgs/msg/SkinFrame``) so bags open on a ROS 2 machine.
 INTERFACE_PACKAGE = 'social_touch_msgs'
+#: A checkout whose config/ and launch/ replace the installed ones (set by prefer_checkout()).
+CHECKOUT_ENV = 'SOCIAL_TOUCH_CHECKOUT'
+#: The parts of the share directory a checkout replaces: what users edit to tune a scene.
+CHECKOUT_PARTS = ('config', 'launch')
 
 _SOURCE_ROOT = Path(__file__).resolve().parent.parent
 
@@ -49,5 +60,56 @@ def package_share(package: str = PACKAGE) -> Path:
 
 
 def share_file(*parts: str, package: str = PACKAGE) -> Path:
-    """A file under the package's share directory, e.g. ``share_file('config', 'x.yaml')``."""
+    """A file under the package's share directory, e.g. ``share_file('config', 'x.yaml')``.
+
+    ``config/`` and ``launch/`` come from the checkout :func:`prefer_checkout` chose, if any.
+    """
+    checkout = os.environ.get(CHECKOUT_ENV)
+    if checkout and package == PACKAGE and parts and parts[0] in CHECKOUT_PARTS:
+        return Path(checkout).joinpath(*parts)
     return package_share(package).joinpath(*parts)
+
+
+def launch_share(package: str) -> Path:
+    """``$(find-pkg-share package)`` for launch files: the preferred checkout for this package, if any."""
+    checkout = os.environ.get(CHECKOUT_ENV)
+    if checkout and package == PACKAGE:
+        return Path(checkout)
+    return package_share(package)
+
+
+def find_checkout(start: Path | None = None) -> Path | None:
+    """The source checkout of this package that ``start`` (default: the working directory) is in, or None.
+
+    A checkout is a directory with this package's ``package.xml`` (``<name>social_touch</name>``)
+    and a ``config/`` directory: ``start`` itself or the nearest one above it.
+    """
+    here = (start or Path.cwd()).resolve()
+    for directory in (here, *here.parents):
+        manifest = directory / 'package.xml'
+        if manifest.is_file() and (directory / 'config').is_dir():
+            try:
+                text = manifest.read_text(encoding='utf-8')
+            except (OSError, UnicodeDecodeError):
+                continue
+            if f'<name>{PACKAGE}</name>' in text:
+                return directory
+    return None
+
+
+def prefer_checkout(start: Path | None = None) -> tuple[Path | None, Path | None]:
+    """Use the checkout around ``start`` for ``config/`` and ``launch/`` when it is not the installed copy.
+
+    Returns ``(checkout, installed)``: the checkout now preferred (None when there is none, or when
+    it is what is installed, as with ``pip install -e .``) and the share directory it replaces.
+    Sets :data:`CHECKOUT_ENV`, which node processes started afterwards inherit.
+    """
+    checkout = find_checkout(start)
+    try:
+        installed = package_share(PACKAGE)
+    except ConfigError:
+        installed = None
+    if checkout is None or (installed is not None and installed.resolve() == checkout):
+        return None, installed
+    os.environ[CHECKOUT_ENV] = str(checkout)
+    return checkout, installed

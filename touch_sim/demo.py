@@ -54,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
     if args.foxglove:
         arguments.update(foxglove='true', foxglove_port=str(args.foxglove_port))
     plan = evaluate_launch(share_file('launch', 'demo.launch.yaml'), arguments)
+    from touch_graph.launch.preflight import check_config_files
+    check_config_files(plan.nodes)  # gestures:=./mine.yaml: a missing or broken file stops here, named
     print(f'social_touch demo: {len(plan.nodes)} nodes, {args.duration:g} s of a simulated scene '
           f'({"as fast as possible" if args.fast else f"{rate:g}x real time"}); all sensor data is synthetic.',
           file=sys.stderr)

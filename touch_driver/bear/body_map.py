@@ -1,4 +1,4 @@
-"""The Sensate Bear's body map: wire channel -> sensor name, body location and region.
+"""The Sensate Bear's body map: wire channel -> sensor name, body location, region and position.
 
 knight2009 V.C maps the incoming sensor ids to on-bear locations with an XML lookup table
 ("remaps data into human-readable labels, e.g. 'head2'"). Here the table is
@@ -7,6 +7,10 @@ knight2009 V.C maps the incoming sensor ids to on-bear locations with an XML loo
 Wire channel = midplane * 8 + input, 0..63 (8 Midplane boards x 8 inputs, knight2009 IV.A).
 The paper's bear has 56 fitted sensors; the other channels are unfitted.
 
+Positions are metres in the body frame :attr:`BodyMap.frame_id` (REP 103: x forward, y left, z up),
+approximate for the shipped bear (see the file's header); :meth:`BodyMap.centroid` gives the
+level-weighted touch centroid a robot can look at.
+
 >>> body = BodyMap.default()
 >>> len(body), body.by_name('head2').location, body.by_channel(13) is None
 (56, 'crown', True)
@@ -14,6 +18,8 @@ The paper's bear has 56 fitted sensors; the other channels are unfitted.
 [0, 54]
 >>> [s.name for s in body.region('left_foot')]
 ['foot_left_top', 'foot_left_sole', 'foot_left_toe']
+>>> body.frame_id, body.by_name('head2').position
+('bear_link', (0.0, 0.0, 0.415))
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ from touch_graph.errors import ConfigError
 from touch_graph.paths import share_file
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, typed
 
-__all__ = ['N_CHANNELS', 'REGIONS', 'SIDES', 'SIZES', 'BodyMap', 'BodySensor', 'channel_of']
+__all__ = ['DEFAULT_FRAME_ID', 'N_CHANNELS', 'REGIONS', 'SIDES', 'SIZES', 'BodyMap', 'BodySensor', 'channel_of']
 
 #: Channels on the wire: 8 Midplanes x 8 inputs (knight2009 IV.A).
 N_CHANNELS = 64
@@ -42,9 +48,15 @@ SIDES = ('left', 'right', 'center')
 #: Sensor board sizes in inches (width, height), knight2009 IV.C.
 SIZES = {'small': (1.5, 2.0), 'large': (3.0, 2.0)}
 FORMAT_VERSION = 1
+#: Body frame of the positions when the file names none: the bear driver's default ``frame_id``.
+DEFAULT_FRAME_ID = 'bear_link'
+#: A position further than this from the body origin is a typo (mm for m?), metres.
+MAX_POSITION_M = 5.0
 
 _NAME = re.compile(r'^[a-z][a-z0-9_]*$')
 _SENSOR_KEYS = ('channel', 'name', 'location', 'region', 'side', 'size')
+_OPTIONAL_SENSOR_KEYS = ('position',)
+Position = tuple[float, float, float]
 
 
 def channel_of(midplane: int, input_: int) -> int:
@@ -69,6 +81,8 @@ class BodySensor:
         region: one of :data:`REGIONS`.
         side: ``'left'``, ``'right'`` or ``'center'`` (the bear's own sides).
         size: ``'small'`` (1.5"x2") or ``'large'`` (3"x2"), knight2009 IV.C.
+        position: ``(x, y, z)`` of the sensor's centre, metres, in the body frame (REP 103), or
+            None when the map gives none.
     """
 
     channel: int
@@ -77,6 +91,7 @@ class BodySensor:
     region: str
     side: str
     size: str
+    position: Position | None = None
 
     @property
     def midplane(self) -> int:
@@ -99,8 +114,10 @@ class BodyMap:
             region, side or size.
     """
 
-    def __init__(self, sensors: Iterable[BodySensor], source: str | None = None) -> None:
+    def __init__(self, sensors: Iterable[BodySensor], source: str | None = None,
+                 frame_id: str = DEFAULT_FRAME_ID) -> None:
         self.source = source
+        self.frame_id = frame_id
         ordered = sorted(sensors, key=lambda s: s.channel)
         by_name: dict[str, BodySensor] = {}
         by_channel: dict[int, BodySensor] = {}
@@ -121,6 +138,14 @@ class BodyMap:
         mask[list(by_channel)] = True
         mask.setflags(write=False)
         self._fitted = mask
+        # (64, 3) float64 positions and a (64,) mask of channels that have one, for centroid().
+        positions = np.zeros((N_CHANNELS, 3), dtype=np.float64)
+        placed = np.zeros(N_CHANNELS, dtype=bool)
+        for sensor in ordered:
+            if sensor.position is not None:
+                positions[sensor.channel] = sensor.position
+                placed[sensor.channel] = True
+        self._positions, self._placed = positions, placed
 
     # ------------------------------------------------------------------ lookups
     def __len__(self) -> int:
@@ -172,6 +197,33 @@ class BodyMap:
             raise ConfigError(f'unknown side {side!r}; sides are: {", ".join(SIDES)}')
         return tuple(s for s in self.sensors if s.side == side)
 
+    def centroid(self, channels: Iterable[int], levels: Iterable[float]) -> Position | None:
+        """Level-weighted mean position of ``channels`` (metres, body frame), or None.
+
+        Args:
+            channels: wire channels of the touched sensors.
+            levels: their levels (0..1), same order; the weights.
+
+        Returns None when no given channel has a position or the weights sum to 0 (nothing to
+        look at); non-finite or negative levels weigh nothing.
+
+        >>> body = BodyMap.default()
+        >>> [round(v, 3) for v in body.centroid([1, 0], [0.5, 0.25])]   # head2 weighs twice head1
+        [0.013, 0.0, 0.41]
+        >>> body.centroid([], []) is None, body.centroid([13], [1.0]) is None
+        (True, True)
+        """
+        index = np.fromiter((int(c) for c in channels), dtype=np.intp)
+        weights = np.fromiter((float(v) for v in levels), dtype=np.float64, count=len(index))
+        inside = (index >= 0) & (index < N_CHANNELS)
+        index, weights = index[inside], weights[inside]
+        weights = np.where(np.isfinite(weights) & (weights > 0) & self._placed[index], weights, 0.0)
+        total = float(weights.sum())
+        if not total > 0.0:
+            return None
+        x, y, z = (weights @ self._positions[index]) / total
+        return float(x), float(y), float(z)
+
     # ------------------------------------------------------------------ files
     @classmethod
     def load(cls, path: str | Path) -> BodyMap:
@@ -181,11 +233,15 @@ class BodyMap:
             ConfigError: naming file and line of the first problem.
         """
         doc = load_yaml(path)
-        check_keys(doc, required=('sensors',), optional=('format',), what='bear body map')
+        check_keys(doc, required=('sensors',), optional=('format', 'frame_id'), what='bear body map')
         version = typed(doc, 'format', int, 'bear body map', default=FORMAT_VERSION)
         if version != FORMAT_VERSION:
             raise doc.error(f'body map format {version} is not supported; this code reads format {FORMAT_VERSION}',
                             'format')
+        frame_id = typed(doc, 'frame_id', str, 'bear body map', default=DEFAULT_FRAME_ID)
+        if not frame_id or frame_id.startswith('/'):
+            raise doc.error(f'frame_id must be a tf2 frame name without a leading slash; got {frame_id!r}',
+                            'frame_id')
         items = doc['sensors']
         if not isinstance(items, YamlList) or not items:
             raise doc.error('sensors must be a non-empty list of {channel, name, location, region, side, size}',
@@ -197,7 +253,7 @@ class BodyMap:
             what = f'sensor #{index + 1}'
             if not isinstance(item, YamlDict):
                 raise items.error(f'{what} must be a mapping with keys {", ".join(_SENSOR_KEYS)}; got {item!r}', index)
-            check_keys(item, required=_SENSOR_KEYS, what=what)
+            check_keys(item, required=_SENSOR_KEYS, optional=_OPTIONAL_SENSOR_KEYS, what=what)
             channel = typed(item, 'channel', int, what)
             name, location, region, side, size = (typed(item, k, str, what) for k in _SENSOR_KEYS[1:])
             if not 0 <= channel < N_CHANNELS:
@@ -216,8 +272,9 @@ class BodyMap:
                 raise item.error(f'sensor name {name!r} must be lower case letters, digits and _', 'name')
             seen_channels[channel] = item.line_of('channel')
             seen_names[name] = item.line_of('name')
-            sensors.append(BodySensor(channel, name, location, region, side, size))
-        return cls(sensors, source=str(path))
+            position = _position(item, name) if 'position' in item else None
+            sensors.append(BodySensor(channel, name, location, region, side, size, position))
+        return cls(sensors, source=str(path), frame_id=frame_id)
 
     @classmethod
     def default(cls) -> BodyMap:
@@ -230,6 +287,21 @@ class BodyMap:
 @cache
 def _default_map() -> BodyMap:
     return BodyMap.load(share_file('config', 'bear_body.yaml'))
+
+
+def _position(item: YamlDict, name: str) -> Position:
+    """The ``position: [x, y, z]`` of a sensor entry, metres; ConfigError at its line when malformed."""
+    value = item['position']
+    numbers = isinstance(value, list) and len(value) == 3 and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    if not numbers or not all(np.isfinite(value)):
+        raise item.error(f'position of {name!r} must be [x, y, z], three finite numbers in metres; got {value!r}',
+                         'position')
+    if float(np.linalg.norm(value)) > MAX_POSITION_M:
+        raise item.error(f'position of {name!r} is {float(np.linalg.norm(value)):g} m from the body origin; '
+                         f'positions are metres (more than {MAX_POSITION_M:g} m: millimetres by mistake?)', 'position')
+    x, y, z = (float(v) for v in value)
+    return x, y, z
 
 
 def _check_sensor_values(sensor: BodySensor, source: str | None) -> None:

@@ -32,6 +32,7 @@ class BearDriverNode(SerialDriverNode[BearScan]):
         super().__init__('bear_driver', **kwargs)
         body_map_path = self.declare_parameter('body_map', '').value
         self.body_map = BodyMap.load(body_map_path) if body_map_path else BodyMap.default()
+        self.get_logger().info(f'body map {self.body_map.source}')
         self.calibrator = BearCalibrator(
             self.body_map,
             threshold=self.declare_parameter('threshold', 0.3).value,

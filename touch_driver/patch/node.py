@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.paths import share_file
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import DecodedFrame
@@ -51,6 +52,8 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
             average_window=self.declare_parameter('average_window', 5).value,
             decimation=self.declare_parameter('decimation', 5).value)
         self._panels_config = self.declare_parameter('panels', '').value or None
+        self.get_logger().info(f"outline {outline or share_file('config', 'patch_outline.yaml')}, panels "
+                               f"{self._panels_config or share_file('config', 'panels.yaml')}")
         self._panel_calibrators: dict[int, PanelCalibrator] = {}
         self._last_contact: np.ndarray | None = None
         self.frame_pub = self.create_publisher(PatchFrame, 'frame', sensor_data_qos())

@@ -11,7 +11,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.paths import share_file
 
 from ..driver_node import SerialDriverNode
 from ..serial_driver import DecodedFrame
@@ -22,6 +25,8 @@ from .protocol import FRAME_RATE_HZ, SkinScan, SkinStreamDecoder
 __all__ = ['SkinDriverNode', 'main']
 
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
+Point = get_message('geometry_msgs/msg/Point')
+Vector3 = get_message('geometry_msgs/msg/Vector3')
 
 
 class SkinDriverNode(SerialDriverNode[SkinScan]):
@@ -33,6 +38,7 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
         super().__init__('skin_driver', **kwargs)
         config_path = self.declare_parameter('calibration', '').value
         self.calibrator = SkinCalibrator(load_skin_calibration(config_path or None))
+        self.get_logger().info(f"calibration {config_path or share_file('config', 'skin_calibration.yaml')}")
         self.frame_pub = self.create_publisher(SkinFrame, 'frame', sensor_data_qos())
 
     def make_decoder(self) -> SkinStreamDecoder:
@@ -42,10 +48,13 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
         scan = frame.scan
         state = self.calibrator.update(scan.raw)
         x, y = (float(v) for v in state.contact_xy_mm) if state.contact else (math.nan, math.nan)
+        z = 0.0 if state.contact else math.nan
+        fx, fy, _ = (float(v) for v in state.force.sum(axis=0, dtype=np.float64))
         self.frame_pub.publish(SkinFrame(
             header=self.header(), sequence=scan.seq, raw=scan.raw, pressure=state.pressure.ravel(),
             contact=bool(state.contact), contact_x=x, contact_y=y, force=state.force.ravel(),
-            total_force=float(state.total_force)))
+            total_force=float(state.total_force), contact_point=Point(x=x * 1e-3, y=y * 1e-3, z=z),
+            net_force=Vector3(x=fx, y=fy, z=float(state.total_force))))
 
 
 def main(args: list[str] | None = None) -> int:

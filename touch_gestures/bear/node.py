@@ -50,6 +50,8 @@ SensorState = get_message('social_touch_msgs/msg/SensorState')
 TouchSubtype = get_message('social_touch_msgs/msg/TouchSubtype')
 SymbolicGesture = get_message('social_touch_msgs/msg/SymbolicGesture')
 TimeMsg = get_message('builtin_interfaces/msg/Time')
+Point = get_message('geometry_msgs/msg/Point')
+_NO_POSITION = (math.nan, math.nan, math.nan)
 
 #: The shipped subtype model, relative to the package's share directory (see config/bear_subtype_model.md).
 DEFAULT_MODEL = ('config', 'bear_subtype_model.npz')
@@ -88,12 +90,18 @@ class BearGesturesNode(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('bear_gestures', **kwargs)
         self.classifier_kind: str | None = None
+        self.loaded_files: list[str] = []       # config files read, for the start-up log line
         p = self._declare()
         self.publish_subtypes = p['publish_subtypes']
         self.publish_symbolic = p['publish_symbolic']
         self.max_gap_ns = round(p['max_gap_s'] * _NS)
         self.recogniser = self._build_recogniser(p)
-        self._names = {s.channel: s.name for s in self.recogniser.body_map.sensors}
+        body = self.recogniser.body_map
+        self._names = {s.channel: s.name for s in body.sensors}
+        self._channels = {s.name: s.channel for s in body.sensors}
+        self._positions = {s.channel: Point(**dict(zip('xyz', s.position or _NO_POSITION, strict=True)))
+                           for s in body.sensors}
+        self._levels = np.zeros(N_CHANNELS, dtype=np.float32)  # this cycle's levels, for the centroids
         self.frames = 0
         self.skipped: Counter[str] = Counter()
         self.resets = 0
@@ -116,6 +124,7 @@ class BearGesturesNode(Node):
             f'{self.recogniser.rate_hz:g} Hz, buffer {self.recogniser.buffer.buffer_len} cycles, threshold '
             f'{self.recogniser.threshold:g}; sensor level{"".join(", " + w for w in what)}'
             f'{"; subtypes by the " + self.classifier_kind if self.classifier_kind else ""}')
+        self.get_logger().info('loaded ' + ', '.join(self.loaded_files))
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name: str, default: Any, description: str) -> Any:
@@ -185,9 +194,11 @@ class BearGesturesNode(Node):
 
     def _build_recogniser(self, p: dict[str, Any]) -> BearRecogniser:
         body_map = BodyMap.load(p['body_map']) if p['body_map'] else BodyMap.default()
+        self.loaded_files.append(f'body map {body_map.source}')
         if p['publish_symbolic']:
             library = GestureLibrary.load(p['gestures'], body_map) if p['gestures'] else \
                 GestureLibrary.default(body_map)
+            self.loaded_files.append(f'gestures {library.source}')
             library = _with_default_timing(library, p['dwell_s'], p['gap_s'])
         else:
             library = GestureLibrary([], source='(publish_symbolic is false)')
@@ -228,6 +239,7 @@ class BearGesturesNode(Node):
             self.get_logger().warning(f'{problem}; using the paper rule (knight2009 V.D) instead')
             return rule
         self.classifier_kind = 'model'
+        self.loaded_files.append(f'subtype model {path}')
         return NoTouchGate(model, p['threshold'])    # no false taps from the short buffers of a (re)start
 
     # ------------------------------------------------------------------ frames
@@ -276,15 +288,18 @@ class BearGesturesNode(Node):
         if not self._rate_checked and rec.buffer.count == RATE_CHECK_FRAMES:
             self._check_rate(stamp_ns)
         self.frames += 1
+        self._levels = np.where(excluded, np.float32(0.0), levels)
         self._recognise_and_publish((stamp_ns - self._t0_ns) / _NS, levels, excluded, msg.header)
 
     def _recognise_and_publish(self, t: float, levels: np.ndarray, excluded: np.ndarray, header: Any) -> None:
         out = self.recogniser.update(t, levels, excluded)      # only what the parameters ask for
         sensors, events = out.active_sensors, out.symbolic_events
         changes = [named.change for named in out.subtype_changes]
+        positions = self._positions
         self.level_pub.publish(SensorLevel(header=header, sensors=[
-            SensorState(channel=s.channel, name=s.name, location=s.location, region=s.region, level=s.level)
-            for s in sensors]))
+            SensorState(channel=s.channel, name=s.name, location=s.location, region=s.region, level=s.level,
+                        position=positions[s.channel])
+            for s in sensors], **self._centroid([s.channel for s in sensors], weighted=True)))
         names = self._names
         for c in changes:
             f = c.features
@@ -295,7 +310,23 @@ class BearGesturesNode(Node):
         for e in events:
             self.symbolic_pub.publish(SymbolicGesture(
                 header=header, gesture=e.gesture, state=e.state, onset=_time_msg(self._t0_ns + round(e.onset * _NS)),
-                duration_s=e.duration_s, sensors=list(e.sensors)))
+                duration_s=e.duration_s, sensors=list(e.sensors), **self._centroid(
+                    [self._channels[n] for n in e.sensors if n in self._channels], weighted=False)))
+
+    def _centroid(self, channels: list[int], weighted: bool) -> dict[str, Any]:
+        """The centroid fields of a SensorLevel or SymbolicGesture (see their .msg), from this cycle's levels.
+
+        ``weighted``: by level only (a sensor level message names active sensors); otherwise by level,
+        or unweighted when none of ``channels`` is touched now (a gesture that ended: where it was).
+        """
+        body = self.recogniser.body_map
+        point = body.centroid(channels, self._levels[channels]) if channels else None
+        if point is None and channels and not weighted:
+            point = body.centroid(channels, np.ones(len(channels)))
+        if point is None:
+            return {'has_centroid': False, 'frame_id': body.frame_id}
+        return {'has_centroid': True, 'centroid': Point(x=point[0], y=point[1], z=point[2]),
+                'frame_id': body.frame_id}
 
     def _check_rate(self, stamp_ns: int) -> None:
         """Warn once when frames arrive at a rate far from ``rate_hz`` (the features assume it)."""
@@ -316,7 +347,7 @@ class BearGesturesNode(Node):
                 for name, onset in rec.symbolic.active_gestures().items():
                     self.symbolic_pub.publish(SymbolicGesture(
                         header=header, gesture=name, state=END, onset=_time_msg(self._t0_ns + round(onset * _NS)),
-                        duration_s=t - onset, sensors=[]))
+                        duration_s=t - onset, sensors=[], **self._centroid([], weighted=False)))
             if self.publish_subtypes:
                 for channel, subtype in rec.tracker.labels().items():
                     self.subtype_pub.publish(TouchSubtype(header=header, channel=channel, sensor=self._names[channel],

@@ -104,7 +104,7 @@ class PatchGesturesNode(Node):
         origin = ('SYNTHETIC data (simulated people)' if self.model.synthetic else
                   'recorded data' if 'synthetic' in meta else 'data the file does not describe')
         self.get_logger().info(
-            f'{self.model_path.name}: {", ".join(self._classes)} from {origin}; window {self.model.window} frames '
+            f'{self.model_path}: {", ".join(self._classes)} from {origin}; window {self.model.window} frames '
             f'at {self.model.rate_hz:g} Hz, threshold {det.threshold:g}, hold {det.hold} frames, release '
             f'{det.release:g}')
 

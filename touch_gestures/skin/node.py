@@ -137,8 +137,9 @@ class HapticCommandsNode(Node):
         unmapped = [c for c in classes if c not in self.commands.commands]
         origin = self.recogniser.description_ or 'a codebook without a description'
         self.get_logger().info(
-            f'{self.codebook_path.name} ({origin}): {len(self.recogniser.templates_)} templates of {len(classes)} '
-            f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands'
+            f'{self.codebook_path} ({origin}): {len(self.recogniser.templates_)} templates of {len(classes)} '
+            f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands from '
+            f'{self.commands_path}'
             + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
 
     # ------------------------------------------------------------------ parameters
@@ -174,6 +175,7 @@ class HapticCommandsNode(Node):
     def _load_commands(self) -> CommandMap:
         given = self._param('commands', '', 'gesture -> command map YAML (default: config/skin_commands.yaml)')
         path = Path(given) if given else default_commands_path()
+        self.commands_path = path
         try:
             return load_command_map(path, gestures=[str(c) for c in self.recogniser.classes_])
         except ConfigError as err:

@@ -13,6 +13,13 @@ The graph joins the DDS domain (``ROS_DOMAIN_ID``; ``--no-network`` keeps it in 
 process), also with ``--sim-time``: other processes and ROS 2 machines see its nodes
 and topics, and its nodes hear theirs.
 
+Run inside a source checkout of social_touch, the checkout's ``config/`` and ``launch/`` are
+used instead of the installed copy (and the launch says so), so an edited threshold counts
+without ``pip install .`` again. Every config file is also a launch argument (``gestures:=``,
+``body_map:=``, ``panels:=``, ``commands:=``, ``codebook:=``, ``model:=``); a config file that
+does not exist or does not parse stops the launch with one error naming it before any node
+starts (:mod:`touch_graph.launch.preflight`).
+
 Like ``ros2 launch``, FILE may be a path or ``PKG FILE`` (looked up in the package's share
 directory, under ``launch/`` first). Launch arguments are ``name:=value``; a name the file
 does not declare is an error listing the declared ones.
@@ -35,9 +42,10 @@ import time
 from pathlib import Path
 
 from ..errors import ConfigError, LaunchError
-from ..paths import package_share
+from ..paths import launch_share, prefer_checkout
 from ..yamlconf import did_you_mean
 from .entities import collect_arguments, evaluate_launch
+from .preflight import check_config_files
 from .runner import LaunchRunner
 from .specs import DeclaredArgument
 
@@ -101,7 +109,7 @@ def find_launch_file(words: list[str]) -> tuple[Path, list[str]]:
         raise LaunchError(f"launch file not found: {first} (give a path to a .launch.yaml file, or 'PKG FILE')")
     package, name = words[0], words[1]
     try:
-        share = package_share(package)
+        share = launch_share(package)
     except ConfigError as err:
         raise LaunchError(f'{first} is neither a file nor a package: {err.bare_message}') from err
     direct = share / 'launch' / name
@@ -152,23 +160,28 @@ def format_arguments(arguments: list[DeclaredArgument]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``social-touch launch``; errors are raised as :class:`LaunchError` (``main`` prints them)."""
+    checkout, installed = prefer_checkout()
+    if checkout is not None:
+        print(f"[launch] inside the checkout {checkout}: its config/ and launch/ are used, not the installed "
+              f'copy in {installed}', file=sys.stderr)
     path, rest = find_launch_file(list(args.words))
     arguments = parse_launch_arguments(rest)
     if args.rate is not None and not args.sim_time:
         raise LaunchError('--rate needs --sim-time (it sets how fast simulated time runs)')
     if args.show_args:
-        declared, unresolved = collect_arguments(path, arguments)
+        declared, unresolved = collect_arguments(path, arguments, find_package_share=launch_share)
         print(format_arguments(declared))
         for where in unresolved:
             print(f'\n(arguments of the include at {where} are not listed: its file is known only at launch)')
         return 0
-    plan = evaluate_launch(path, arguments)
+    plan = evaluate_launch(path, arguments, find_package_share=launch_share)
     if args.print_description:
         print(plan.describe())
         return 0
     if not plan.nodes:
         print(f'{path}: no nodes to start (check the if/unless conditions and arguments)', file=sys.stderr)
         return 0
+    check_config_files(plan.nodes)
     alone = [spec for spec in plan.nodes if args.processes or spec.process is not None]
     together = [spec for spec in plan.nodes if not (args.processes or spec.process is not None)]
     if alone and args.sim_time:

@@ -21,7 +21,7 @@ from typing import Any
 import yaml
 
 from ..errors import LaunchError
-from ..paths import package_share
+from ..paths import launch_share
 from ..yamlconf import did_you_mean
 from .parser import (
     Action,
@@ -403,7 +403,7 @@ def _uniform(values: tuple[Any, ...], name: str, where: Location) -> ParamData:
 
 def evaluate_launch(path: str | Path, arguments: Mapping[str, str] | None = None, *,
                     environ: Mapping[str, str] | None = None,
-                    find_package_share: Callable[[str], Path] = package_share,
+                    find_package_share: Callable[[str], Path] = launch_share,
                     check_arguments: bool = True) -> LaunchPlan:
     """Evaluate the launch file at ``path`` with ``arguments`` (``name -> value``, as ``name:=value``).
 
@@ -433,7 +433,7 @@ def evaluate_launch(path: str | Path, arguments: Mapping[str, str] | None = None
 
 def collect_arguments(path: str | Path, arguments: Mapping[str, str] | None = None, *,
                       environ: Mapping[str, str] | None = None,
-                      find_package_share: Callable[[str], Path] = package_share,
+                      find_package_share: Callable[[str], Path] = launch_share,
                       ) -> tuple[list[DeclaredArgument], list[Location]]:
     """Every ``arg`` of the file and of the includes whose path resolves, whatever the conditions.
 

@@ -1,13 +1,23 @@
 """Start the nodes of a launch plan in this process and spin them until shutdown.
 
 Each :class:`~touch_graph.launch.specs.NodeSpec` names a package and an executable; the
-class comes from the ``social_touch.nodes`` entry-point group (entry point name = exec,
-its distribution = pkg), or from an explicit registry (tests). Nodes are constructed the way
-rclpy component containers do it::
+class comes from, in this order:
+
+1. the ``social_touch.nodes`` entry-point group of any installed distribution (entry point
+   name = ``exec``, the distribution's name = ``pkg``; ``-`` and ``_`` are the same), or an
+   explicit registry (tests);
+2. ``exec: module.path:Class`` (``pkg`` is then only a label);
+3. ``pkg: module.path`` with ``exec: Class``, a class of that importable module.
+
+Nodes are constructed the way rclpy component containers do it::
 
     cls(context=ctx, cli_args=['--ros-args', '-r', '__node:=driver', '-r', '__ns:=/bear',
                                '-r', 'frame:=/touch/bear_frame', '--params-file', F],
         parameter_overrides=[Parameter('rate', value=25.0)])
+
+A class with rclpy's plain constructor (``__init__(self)`` calling ``super().__init__('name')``,
+no keyword arguments) is called with none and receives the same arguments through
+:func:`touch_graph.runtime.node.node_arguments`, as an rclpy node receives them from ``ros2 launch``.
 
 so the node parses its own parameter files and raises its own parameter errors; those come
 back as a :class:`~touch_graph.errors.LaunchError` naming the launch file and the node's
@@ -24,7 +34,10 @@ them in file order.
 from __future__ import annotations
 
 import ast
+import importlib
 import importlib.metadata
+import importlib.util
+import inspect
 import math
 import signal
 import threading
@@ -104,6 +117,9 @@ def resolve_node_class(spec: NodeSpec, registry: Registry, node_base: type | Non
     """
     where = spec.where
     key = (_normalize(spec.pkg), spec.exec)
+    by_path = _module_path_target(spec, registry)
+    if key not in registry and by_path is not None:
+        return _check_node_class(spec, _load_module_class(spec, *by_path), node_base)
     if key not in registry:
         packages = sorted({pkg for pkg, _ in registry})
         if not registry:
@@ -123,10 +139,57 @@ def resolve_node_class(spec: NodeSpec, registry: Registry, node_base: type | Non
         except Exception as err:  # an import error inside the node's module: say which node and where
             raise where.error(f'cannot load {spec.pkg}/{spec.exec} ({getattr(registry[key], "value", target)}): '
                               f'{type(err).__name__}: {err}') from err
+    return _check_node_class(spec, target, node_base)
+
+
+def _check_node_class(spec: NodeSpec, target: Any, node_base: type | None) -> type:
     if not isinstance(target, type) or (node_base is not None and not issubclass(target, node_base)):
-        raise where.error(f'{spec.pkg}/{spec.exec} is {target!r}, not a Node subclass; the entry point must name '
-                          "a class whose __init__(**kwargs) calls Node.__init__(self, 'name', **kwargs)")
+        raise spec.where.error(f'{spec.pkg}/{spec.exec} is {target!r}, not a Node subclass; name a class whose '
+                               "__init__(self) calls super().__init__('name') (rclpy's shape), or that takes "
+                               "**kwargs and passes them on: super().__init__('name', **kwargs)")
     return target
+
+
+def _module_path_target(spec: NodeSpec, registry: Registry) -> tuple[str, str] | None:
+    """``(module, class)`` when the spec names a class by module path (``exec: mod:Class``, or
+    ``pkg: a.module`` that is no registered package and ``exec: Class``); else None."""
+    if ':' in spec.exec:
+        module, _, name = spec.exec.partition(':')
+        return module, name
+    packages = {pkg for pkg, _ in registry}
+    if _normalize(spec.pkg) not in packages and spec.exec.isidentifier():
+        try:
+            found = importlib.util.find_spec(spec.pkg)
+        except (ImportError, ValueError):  # a parent package that does not import, or a bad name
+            found = None
+        if found is not None:
+            return spec.pkg, spec.exec
+    return None
+
+
+def _load_module_class(spec: NodeSpec, module_name: str, class_name: str) -> Any:
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as err:  # an import error inside the user's module: say which node and where
+        raise spec.where.error(f'cannot import {module_name} for {spec.pkg}/{spec.exec}: '
+                               f'{type(err).__name__}: {err}') from err
+    try:
+        return getattr(module, class_name)
+    except AttributeError:
+        classes = sorted(n for n, v in vars(module).items() if isinstance(v, type) and v.__module__ == module.__name__)
+        raise spec.where.error(f"module {module_name} has no class '{class_name}'{did_you_mean(class_name, classes)}"
+                               f'; its classes: {", ".join(classes) or "none"}') from None
+
+
+def takes_node_arguments(cls: type) -> bool:
+    """True when ``cls(context=..., cli_args=..., parameter_overrides=...)`` works: its ``__init__``
+    takes ``**kwargs`` or those keywords; False for rclpy's plain ``__init__(self)``."""
+    try:
+        parameters = inspect.signature(cls).parameters.values()
+    except (TypeError, ValueError):  # no signature to read: assume the keyword form
+        return True
+    names = {p.name for p in parameters}
+    return any(p.kind is p.VAR_KEYWORD for p in parameters) or {'context', 'cli_args'} <= names
 
 
 class LaunchRunner:
@@ -205,13 +268,26 @@ class LaunchRunner:
                 if value.where is not None:
                     param.source = value.where  # where the launch file wrote it, for errors and warnings
                 overrides.append(param)
-            return cls(context=self.context, cli_args=spec.cli_args(), parameter_overrides=overrides)
+            if takes_node_arguments(cls):
+                return cls(context=self.context, cli_args=spec.cli_args(), parameter_overrides=overrides)
+            return self._create_plain(spec, cls, overrides)
         except SocialTouchError as err:
             who = spec.full_name or f'{spec.pkg}/{spec.exec}'
             raise spec.where.error(f'node {who} ({spec.pkg}/{spec.exec}) failed to start: {err}') from err
         except Exception as err:  # a bug in the node: keep the exception, say which launch entry it was
             err.add_note(f'while starting {spec.pkg}/{spec.exec} from {spec.where}')
             raise
+
+    def _create_plain(self, spec: NodeSpec, cls: type, overrides: list[Any]) -> Any:
+        """A node class with rclpy's ``__init__(self)``: its arguments go through ``node_arguments``."""
+        from ..runtime.node import node_arguments
+        with node_arguments(context=self.context, cli_args=spec.cli_args(),
+                            parameter_overrides=overrides) as pending:
+            node = cls()
+        if not pending['taken']:  # nothing joined this graph (a node made with its own context is not ours)
+            raise spec.where.error(f'{spec.pkg}/{spec.exec}: {cls.__name__}.__init__ made no node of this graph '
+                                   "(does it call super().__init__('name')?)")
+        return node
 
     def _check_parameters(self) -> None:
         """Warn about (``strict_params``: refuse) launch or file parameters that no node declares."""

@@ -1,18 +1,27 @@
 """``Node`` with rclpy's constructor, endpoints, parameters, logger and clock.
 
 A node class written against this module runs unchanged on real rclpy (import the names
-from :mod:`touch_graph.compat`). Node classes that a launch file can start take
-``**kwargs`` and forward them::
+from :mod:`touch_graph.compat`). A launch file starts node classes of either shape::
 
-    class BearDriver(Node):
+    class BearDriver(Node):                      # takes rclpy's keyword arguments and forwards them
         def __init__(self, **kwargs):
             super().__init__('bear_driver', **kwargs)
+
+    class Greeter(Node):                         # rclpy's usual shape: no arguments at all
+        def __init__(self):
+            super().__init__('greeter')
+
+The second gets its context, name, namespace, remaps and parameters as rclpy's nodes get them
+from ``ros2 launch`` (the process's ``--ros-args``), here through :func:`node_arguments`: the
+launcher sets them for the next node this thread constructs, which takes them when its own
+call passes none.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from ..errors import GraphError
@@ -47,9 +56,30 @@ from .qos import (
 )
 from .services import Client, Service
 
-__all__ = ['Node']
+__all__ = ['Node', 'node_arguments']
 
 _rosout_guard = threading.local()
+_pending = threading.local()   # arguments node_arguments() holds for the next Node of this thread
+
+
+@contextmanager
+def node_arguments(*, context: Context | None = None, cli_args: list[str] | None = None,
+                   parameter_overrides: list[Parameter] | None = None) -> Iterator[dict[str, Any]]:
+    """Give the next :class:`Node` this thread constructs these arguments, when its call passes none.
+
+    How a launcher starts a node class with rclpy's constructor (``__init__(self)`` calling
+    ``super().__init__('name')``): rclpy's node would read them from the process's context and
+    ``--ros-args``; many nodes share a process here, so each gets its own this way. The yielded
+    dict's ``'taken'`` says whether a node took them (a class that never calls ``Node.__init__`` does not).
+    """
+    pending = {'context': context, 'cli_args': cli_args, 'parameter_overrides': parameter_overrides,
+               'taken': False}
+    previous = getattr(_pending, 'value', None)
+    _pending.value = pending
+    try:
+        yield pending
+    finally:
+        _pending.value = previous
 _Log = get_message('rcl_interfaces/msg/Log')
 _ParameterEvent = get_message('rcl_interfaces/msg/ParameterEvent')
 
@@ -66,6 +96,12 @@ class Node(NodeParameters):
                  start_parameter_services: bool = True, parameter_overrides: list[Parameter] | None = None,
                  allow_undeclared_parameters: bool = False,
                  automatically_declare_parameters_from_overrides: bool = False) -> None:
+        pending = getattr(_pending, 'value', None)
+        if pending is not None and not pending['taken'] and context is None and cli_args is None \
+                and parameter_overrides is None:
+            pending['taken'] = True  # only the first node of the class's __init__ (not nodes it makes inside)
+            context, cli_args = pending['context'], pending['cli_args']
+            parameter_overrides = pending['parameter_overrides']
         self.context = context or get_default_context()
         if not self.context.ok():
             raise GraphError('the context is not initialised: call init() (rclpy.init()) before creating nodes')
