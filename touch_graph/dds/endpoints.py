@@ -89,7 +89,7 @@ class DdsWriter:
         if not self.latched and matched_readers(self.ref) == 0:
             self.skipped += 1
             return
-        data = pad4(raw if raw is not None else messages.serialize(msg, self.type_name))
+        data = pad4(raw) if raw is not None else messages.serialize(msg, self.type_name, pad=True)
         ret = ddspy_write_ts(self.ref, data, self._now_ns())
         if ret < 0:
             self.failed += 1
