@@ -66,7 +66,8 @@ class Codec:
         typename: ``pkg/msg/Name``.
         encode: ``encode(message, pad=False) -> bytes``: header and fields; ``pad`` adds zero
             bytes up to a multiple of 4, as rmw_cyclonedds sends a payload.
-        decode: ``decode(data) -> message`` for little-endian CDR ``bytes``.
+        decode: ``decode(data) -> message`` for CDR ``bytes`` (not another bytes-like type);
+            what is not little endian goes to the ``other`` decoder given to :func:`make_codec`.
         source: the generated Python source (for reading and debugging).
     """
 
@@ -297,16 +298,18 @@ class _Encoder(_Generator):
                 self.field(desc, f'{expr}.{name}', name)
 
     def build(self, typename: str) -> str:
+        self.indent = 2
         self.emit('parts = [_HEADER]')
         self.emit('_a = parts.append')
         self.emit('p = 0')
-        self.env['_HEADER'] = HEADER_LE
         self.nested(typename, 'm')
         self.sync()
         self.emit('if pad and p % 4:')
         self.emit('    _a(_ZEROS[-p % 4])')
         self.emit("return b''.join(parts)")
-        return 'def encode(m, pad=False):\n' + '\n'.join(self.lines) + '\n'
+        self.env.update(_HEADER=HEADER_LE, _ERRORS=_ENCODE_ERRORS, _failed=_failure('serialise', typename))
+        return ('def encode(m, pad=False):\n    try:\n' + '\n'.join(self.lines) +
+                '\n    except _ERRORS as err:\n        raise _failed(m, err) from err\n')
 
 
 class _Decoder(_Generator):
@@ -419,7 +422,8 @@ class _Decoder(_Generator):
         self.message(typename, value)  # made before any pending run that fills it is unpacked
         self.emit(f'{target} = {value}')
 
-    def build(self, typename: str) -> str:
+    def build(self, typename: str, other: Callable[[bytes], Any]) -> str:
+        self.indent = 2
         self.emit('L = len(data)')
         self.emit('p = 4')
         self.message(typename, 'm')
@@ -427,7 +431,11 @@ class _Decoder(_Generator):
         self.emit('if p + 3 < L:')
         self.emit('    raise _bad("%d bytes left over after the message" % (L - p))')
         self.emit('return m')
-        return 'def decode(data):\n' + '\n'.join(self.lines) + '\n'
+        self.env.update(_LE=HEADER_LE[:2], _other=other, _ERRORS=_DECODE_ERRORS,
+                        _failed=_failure('deserialise', typename))
+        return ('def decode(data):\n    if not data.startswith(_LE):\n        return _other(data)\n    try:\n' +
+                '\n'.join(self.lines) + '\n    except _ERRORS as err:  # UnicodeDecodeError is a ValueError\n'
+                '        raise _failed(data, err) from err\n')
 
 
 def _coerce(arr: Any, dtype: np.dtype, length: int | None, field: str) -> np.ndarray:
@@ -449,12 +457,21 @@ def _compile(source: str, env: dict[str, Any], name: str) -> Callable:
     return env[name.split()[0]]
 
 
-def make_codec(typename: str, fielddefs: dict, get_class: Callable[[str], type]) -> Codec:
+def _failure(verb: str, typename: str) -> Callable[[Any, Exception], MessageError]:
+    def failed(subject: Any, err: Exception) -> MessageError:
+        what = f'{len(subject)} bytes as ' if verb == 'deserialise' else ''
+        return MessageError(f'cannot {verb} {what}{typename}: {err}')
+    return failed
+
+
+def make_codec(typename: str, fielddefs: dict, get_class: Callable[[str], type],
+               other: Callable[[bytes], Any]) -> Codec:
     """Generate the encoder and decoder of ``typename``.
 
     Args:
         fielddefs: rosbags' field definitions (``typestore.fielddefs``) of the type and every type it uses.
         get_class: the message class of a type name (decoded messages are made of these classes).
+        other: decodes what is not little-endian CDR (big endian, or raises MessageError).
 
     Raises:
         UnsupportedType: a field type outside ROS 2's primitives, strings, arrays and messages.
@@ -462,20 +479,6 @@ def make_codec(typename: str, fielddefs: dict, get_class: Callable[[str], type])
     encoder = _Encoder(fielddefs, get_class)
     enc_source = encoder.build(typename)
     decoder = _Decoder(fielddefs, get_class)
-    dec_source = decoder.build(typename)
-    raw_encode = _compile(enc_source, encoder.env, 'encode')
-    raw_decode = _compile(dec_source, decoder.env, 'decode')
-
-    def encode(message: Any, pad: bool = False) -> bytes:
-        try:
-            return raw_encode(message, pad)
-        except _ENCODE_ERRORS as err:
-            raise MessageError(f'cannot serialise {typename}: {err}') from err
-
-    def decode(data: bytes) -> Any:
-        try:
-            return raw_decode(data)
-        except _DECODE_ERRORS as err:  # UnicodeDecodeError is a ValueError
-            raise MessageError(f'cannot deserialise {len(data)} bytes as {typename}: {err}') from err
-
-    return Codec(typename, encode, decode, enc_source + '\n' + dec_source)
+    dec_source = decoder.build(typename, other)
+    return Codec(typename, _compile(enc_source, encoder.env, 'encode'), _compile(dec_source, decoder.env, 'decode'),
+                 enc_source + '\n' + dec_source)

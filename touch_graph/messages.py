@@ -33,6 +33,7 @@ import math
 import struct
 import threading
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -48,7 +49,7 @@ from .paths import INTERFACE_PACKAGE, share_file
 from .yamlconf import did_you_mean
 
 __all__ = [
-    'Message', 'deserialize', 'from_dict', 'get_message', 'interface_names', 'message_definition',
+    'Message', 'decoder', 'deserialize', 'encoder', 'from_dict', 'get_message', 'interface_names', 'message_definition',
     'msg_files', 'normalize_type_name', 'serialize', 'to_dict', 'typestore',
 ]
 
@@ -66,7 +67,6 @@ _DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
 _lock = threading.RLock()
 _classes: dict[str, type[Message]] = {}
 _codecs: dict[str, Codec | None] = {}
-_LITTLE_ENDIAN = b'\x00\x01'
 
 
 def msg_files() -> list[Path]:
@@ -355,17 +355,32 @@ def get_message(typename: str) -> type[Message]:
 
 def _codec(typename: str) -> Codec | None:
     """The generated codec of a type (None: a type the generator does not handle; rosbags serves it)."""
+    codec = _codecs.get(typename)
+    if codec is not None:
+        return codec
     with _lock:
         if typename in _codecs:
             return _codecs[typename]
         full = get_message(typename).__msgtype__
         if full not in _codecs:
             try:
-                _codecs[full] = make_codec(full, typestore.fielddefs, get_message)
+                _codecs[full] = make_codec(full, typestore.fielddefs, get_message, partial(_rosbags_decode, full))
             except UnsupportedType:
                 _codecs[full] = None
         _codecs[typename] = _codecs[full]
         return _codecs[full]
+
+
+def encoder(typename: str) -> Callable[..., bytes]:
+    """The fastest ``encode(message, pad=False) -> bytes`` of a type (see :func:`serialize`), for hot paths."""
+    codec = _codec(typename)
+    return codec.encode if codec is not None else partial(_rosbags_encode, get_message(typename).__msgtype__)
+
+
+def decoder(typename: str) -> Callable[[bytes], Message]:
+    """The fastest ``decode(data: bytes) -> message`` of a type (see :func:`deserialize`; ``bytes`` only)."""
+    codec = _codec(typename)
+    return codec.decode if codec is not None else partial(_rosbags_decode, get_message(typename).__msgtype__)
 
 
 def serialize(message: Message, typename: str | None = None, *, pad: bool = False) -> bytes:
@@ -381,14 +396,7 @@ def serialize(message: Message, typename: str | None = None, *, pad: bool = Fals
     typename = typename or getattr(message, '__msgtype__', None)
     if typename is None:
         raise MessageError(f'cannot serialise {type(message).__name__}: not a message')
-    codec = _codecs.get(typename) or _codec(typename)
-    if codec is not None:
-        return codec.encode(message, pad)
-    try:
-        data = bytes(typestore.serialize_cdr(message, get_message(typename).__msgtype__, little_endian=True))
-    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
-        raise MessageError(f'cannot serialise {typename}: {err}') from err
-    return data + b'\0' * (-len(data) % 4) if pad else data
+    return encoder(typename)(message, pad)
 
 
 def deserialize(data: bytes | bytearray | memoryview, typename: str) -> Message:
@@ -399,13 +407,19 @@ def deserialize(data: bytes | bytearray | memoryview, typename: str) -> Message:
     Raises:
         MessageError: on truncated or malformed bytes.
     """
-    codec = _codecs.get(typename) or _codec(typename)
-    if type(data) is not bytes:
-        data = bytes(data)
-    if codec is not None and data.startswith(_LITTLE_ENDIAN):
-        return codec.decode(data)
-    full = get_message(typename).__msgtype__
-    try:  # big endian (or a type without a codec): rosbags
+    return decoder(typename)(data if type(data) is bytes else bytes(data))
+
+
+def _rosbags_encode(full: str, message: Message, pad: bool = False) -> bytes:
+    try:
+        data = bytes(typestore.serialize_cdr(message, full, little_endian=True))
+    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
+        raise MessageError(f'cannot serialise {full}: {err}') from err
+    return data + b'\0' * (-len(data) % 4) if pad else data
+
+
+def _rosbags_decode(full: str, data: bytes) -> Message:
+    try:  # big endian, or a type without a generated codec
         return typestore.deserialize_cdr(data, full)
     except (SerdeError, IndexError, ValueError, TypeError) as err:
         raise MessageError(f'cannot deserialise {len(data)} bytes as {full}: {err}') from err
