@@ -252,7 +252,7 @@ class Executor:
             else:
                 sub._ready = False
             self.callbacks_run += 1
-            try:  # the common case inline; a failure is reported by _guarded's handler
+            try:  # _guarded inlined: this is every subscription's path
                 sub._handler(*item) if sub._packs else sub._handler(item)
             except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
                 raise
