@@ -21,6 +21,7 @@ from dds_testing import SpinningGraph, wait_until
 from touch_graph.cli import main as cli_main
 from touch_graph.dds.config import DiscoveryOptions, cyclone_config
 from touch_graph.messages import get_message
+from touch_graph.runtime import Parameter
 
 STAND_IN = r'''
 import sys, time
@@ -170,6 +171,8 @@ answered = False
 my_id = 0x5EED
 while True:
     for sample in reader.take(N=10):
+        if not isinstance(sample, SymbolicGesture_):
+            continue  # a writer that went away (no data)
         print('heard', sample.gesture, sample.state, ','.join(sample.sensors), flush=True)
     writer.write(HapticCommand_(header=Header_(stamp=Time_(sec=n, nanosec=5), frame_id='skin'), gesture='circle',
                                 command='come_here', recogniser='dollar_p', distance=0.25, margin=0.5,
@@ -215,8 +218,10 @@ def stand_in(dds_domain, tmp_path):
 def test_an_independent_ros2_style_participant_talks_both_ways_and_is_listed(stand_in, capsys):
     graph = SpinningGraph()
     try:
-        node = graph.add_node('bear_gestures', namespace='/bear')
-        graph.call(lambda: node.declare_parameter('threshold', 0.3))
+        # declared as the node is made: the stand-in calls get_parameters as soon as it sees the service
+        node = graph.add_node('bear_gestures', namespace='/bear',
+                              parameter_overrides=[Parameter('threshold', value=0.3)],
+                              automatically_declare_parameters_from_overrides=True)
         commands = []
         graph.call(lambda: node.create_subscription(get_message('HapticCommand'), '/touch/haptic_command',
                                                     commands.append, 10))

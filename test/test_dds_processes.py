@@ -169,4 +169,12 @@ def test_transport_bench_measures_both_paths(dds_domain, monkeypatch):
     assert figures['ours_lost_pings'] == figures['ours_cdr_lost_pings'] == figures['raw_lost_pings'] == 0
     assert 0 < figures['raw_latency_median_us'] <= figures['raw_latency_p99_us']
     assert figures['overhead_ratio'] > 0 and figures['overhead_ratio_cdr'] > 0
+    low, high = figures['overhead_ratio_rounds']
+    assert 0 < low <= high
+    low, high = figures['raw_latency_round_medians_us']
+    assert 0 < low <= figures['raw_latency_median_us'] * 1.01 and high >= low
     assert figures['ours_lossless_rate_hz'] == figures['rate_ramp_top_hz'] == 25.0  # goal/4: 10 Hz x 10 / 4
+    load = result['load']
+    assert load['cpus'] >= 1 and len(load['loadavg_before']) == 3
+    if 'machine_busy_pct' in load:  # Linux
+        assert 0 <= load['bench_pct'] <= load['machine_busy_pct'] <= 100 and load['others_pct'] >= 0

@@ -75,6 +75,32 @@ def test_nothing_is_serialised_for_nobody(graphs):
     assert pub._dds.written == 0 and pub._dds.skipped == 5
 
 
+def test_spin_once_runs_the_sample_it_waited_for(graphs):
+    """As rclpy's spin_once: a sample that wakes the wait is run in that call, not the next one."""
+    a = graphs()
+    ctx = Context(network=True)
+    ctx.init()
+    try:
+        got = []
+        listener = Node('listener', context=ctx)
+        listener.create_subscription(String, '/wake', lambda m: got.append(m.data), 10)
+        executor = SingleThreadedExecutor(context=ctx)
+        executor.add_node(listener)
+        talker = a.add_node('talker')
+        pub = a.call(lambda: talker.create_publisher(String, '/wake', 10))
+        wait_until(lambda: pub.get_subscription_count() == 1, 10, 'the remote reader to match')
+        for _ in range(20):
+            executor.spin_once(0)  # what is pending already (the waker's first wake)
+        sender = threading.Timer(0.3, lambda: a.call(lambda: pub.publish(String(data='now'))))
+        sender.start()
+        started = time.monotonic()
+        executor.spin_once(5.0)
+        sender.join()
+        assert got == ['now'] and time.monotonic() - started < 5.0
+    finally:
+        ctx.shutdown()
+
+
 def test_sensor_frames_best_effort_and_message_info(graphs):
     a, b = graphs(), graphs()
     driver, recogniser = a.add_node('driver'), b.add_node('recogniser')

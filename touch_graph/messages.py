@@ -4,8 +4,10 @@ The ``.msg`` files in ``msg/`` are the one definition of every message. The rosb
 type system parses them (and knows the standard ROS 2 types such as
 ``std_msgs/msg/Header``); this module turns each type into a Python class with rclpy's
 manners: keyword construction with ROS defaults for every field, checked field types,
-constants as class attributes, ``get_fields_and_field_types()``. rosbags then gives CDR
-(de)serialisation, the bytes ROS 2 puts on the wire and in bags.
+constants as class attributes, ``get_fields_and_field_types()``. CDR (de)serialisation,
+the bytes ROS 2 puts on the wire and in bags, comes from an encoder and a decoder generated
+per type (:mod:`touch_graph.cdr`), byte-identical to rosbags', which still decodes
+big-endian payloads.
 
 Type names are those of the interface package ``social_touch-export-interfaces`` writes
 (``social_touch_msgs/msg/SkinFrame``), so bags recorded here open on a ROS 2 machine.
@@ -31,6 +33,7 @@ import math
 import struct
 import threading
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -40,12 +43,13 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.base import TypesysError
 
+from .cdr import Codec, UnsupportedType, make_codec
 from .errors import MessageError
 from .paths import INTERFACE_PACKAGE, share_file
 from .yamlconf import did_you_mean
 
 __all__ = [
-    'Message', 'deserialize', 'from_dict', 'get_message', 'interface_names', 'message_definition',
+    'Message', 'decoder', 'deserialize', 'encoder', 'from_dict', 'get_message', 'interface_names', 'message_definition',
     'msg_files', 'normalize_type_name', 'serialize', 'to_dict', 'typestore',
 ]
 
@@ -62,6 +66,7 @@ _DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
 
 _lock = threading.RLock()
 _classes: dict[str, type[Message]] = {}
+_codecs: dict[str, Codec | None] = {}
 
 
 def msg_files() -> list[Path]:
@@ -348,27 +353,73 @@ def get_message(typename: str) -> type[Message]:
         return cls
 
 
-def serialize(message: Message, typename: str | None = None) -> bytes:
-    """CDR bytes (little endian, with the 4-byte encapsulation header) of ``message``."""
+def _codec(typename: str) -> Codec | None:
+    """The generated codec of a type (None: a type the generator does not handle; rosbags serves it)."""
+    codec = _codecs.get(typename)
+    if codec is not None:
+        return codec
+    with _lock:
+        if typename in _codecs:
+            return _codecs[typename]
+        full = get_message(typename).__msgtype__
+        if full not in _codecs:
+            try:
+                _codecs[full] = make_codec(full, typestore.fielddefs, get_message, partial(_rosbags_decode, full))
+            except UnsupportedType:
+                _codecs[full] = None
+        _codecs[typename] = _codecs[full]
+        return _codecs[full]
+
+
+def encoder(typename: str) -> Callable[..., bytes]:
+    """The fastest ``encode(message, pad=False) -> bytes`` of a type (see :func:`serialize`), for hot paths."""
+    codec = _codec(typename)
+    return codec.encode if codec is not None else partial(_rosbags_encode, get_message(typename).__msgtype__)
+
+
+def decoder(typename: str) -> Callable[[bytes], Message]:
+    """The fastest ``decode(data: bytes) -> message`` of a type (see :func:`deserialize`; ``bytes`` only)."""
+    codec = _codec(typename)
+    return codec.decode if codec is not None else partial(_rosbags_decode, get_message(typename).__msgtype__)
+
+
+def serialize(message: Message, typename: str | None = None, *, pad: bool = False) -> bytes:
+    """CDR bytes (little endian, with the 4-byte encapsulation header) of ``message``.
+
+    Args:
+        typename: the type to encode as (default: the message's own).
+        pad: add zero bytes up to a multiple of 4, as rmw_cyclonedds sends a payload.
+
+    Raises:
+        MessageError: a field holds a value of the wrong type or size.
+    """
     typename = typename or getattr(message, '__msgtype__', None)
     if typename is None:
         raise MessageError(f'cannot serialise {type(message).__name__}: not a message')
-    get_message(typename)
-    try:
-        return bytes(typestore.serialize_cdr(message, typename, little_endian=True))
-    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
-        # struct.error: rosbags packs a scalar 'byte' as int8, so 128-255 do not fit
-        raise MessageError(f'cannot serialise {typename}: {err}') from err
+    return encoder(typename)(message, pad)
 
 
-def deserialize(data: bytes | memoryview, typename: str) -> Message:
-    """The message of type ``typename`` in CDR bytes ``data``.
+def deserialize(data: bytes | bytearray | memoryview, typename: str) -> Message:
+    """The message of type ``typename`` in CDR bytes ``data`` (either byte order).
+
+    Numeric arrays of the message are read-only views of the bytes.
 
     Raises:
         MessageError: on truncated or malformed bytes.
     """
-    full = get_message(typename).__msgtype__
+    return decoder(typename)(data if type(data) is bytes else bytes(data))
+
+
+def _rosbags_encode(full: str, message: Message, pad: bool = False) -> bytes:
     try:
+        data = bytes(typestore.serialize_cdr(message, full, little_endian=True))
+    except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
+        raise MessageError(f'cannot serialise {full}: {err}') from err
+    return data + b'\0' * (-len(data) % 4) if pad else data
+
+
+def _rosbags_decode(full: str, data: bytes) -> Message:
+    try:  # big endian, or a type without a generated codec
         return typestore.deserialize_cdr(data, full)
     except (SerdeError, IndexError, ValueError, TypeError) as err:
         raise MessageError(f'cannot deserialise {len(data)} bytes as {full}: {err}') from err

@@ -100,9 +100,11 @@ class WaitSet:
     def wait(self, timeout_ns: int) -> list[int]:
         """The keys of the triggered attachments (the guard's is 0 and is reset), or [] on timeout."""
         n = _waitset_wait(self.ref, self._buffer, self._capacity, timeout_ns)
-        if n < 0:
-            raise DDSException(n, 'Occurred in dds_waitset_wait')
-        keys = [int(self._buffer[i]) for i in range(min(n, self._capacity))]
+        if n <= 0:
+            if n < 0:
+                raise DDSException(n, 'Occurred in dds_waitset_wait')
+            return []
+        keys = self._buffer[:min(n, self._capacity)]  # ints (ctypes converts c_ssize_t items)
         if self.GUARD in keys:
             _set_guard(self.guard, False)
         return keys

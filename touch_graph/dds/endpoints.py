@@ -36,6 +36,9 @@ __all__ = ['DdsReader', 'DdsWriter', 'pad4', 'writer_type']
 
 #: Samples taken from a reader per call.
 TAKE_BATCH = 256
+#: A writer that had a remote reader asks DDS again after this long, s (a write to no reader only costs its encoding;
+#: asking on every write costs a C call).
+MATCH_RECHECK_S = 0.25
 _ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 _RETCODE_TIMEOUT = -10
 
@@ -77,7 +80,9 @@ class DdsWriter:
         self.ref = self.writer._ref
         self.gid = self.writer.get_guid().bytes
         self.latched = publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
-        self._now_ns = publisher.node.context.now_ns
+        self._now_ns = publisher.node.context.time_source.now_ns  # the context's ROS time (fixed per context)
+        self._encode = messages.encoder(self.type_name)
+        self._matched_until = 0.0  # time.monotonic() until which a remote reader counts as matched
         self.written = self.skipped = self.failed = 0
 
     def matched(self) -> int:
@@ -85,11 +90,16 @@ class DdsWriter:
         return matched_readers(self.ref)
 
     def write(self, msg: Any, raw: bytes | None) -> None:
-        """Send ``msg`` (or its CDR bytes ``raw``) to the remote readers, if there are any."""
-        if not self.latched and matched_readers(self.ref) == 0:
-            self.skipped += 1
-            return
-        data = pad4(raw if raw is not None else messages.serialize(msg, self.type_name))
+        """Send ``msg`` (or its CDR bytes ``raw``) to the remote readers, if there are any.
+
+        Once a remote reader is matched, DDS is asked again only every :data:`MATCH_RECHECK_S`.
+        """
+        if not self.latched and time.monotonic() >= self._matched_until:
+            if matched_readers(self.ref) == 0:
+                self.skipped += 1
+                return
+            self._matched_until = time.monotonic() + MATCH_RECHECK_S
+        data = pad4(raw) if raw is not None else self._encode(msg, True)
         ret = ddspy_write_ts(self.ref, data, self._now_ns())
         if ret < 0:
             self.failed += 1
@@ -119,6 +129,7 @@ class DdsReader:
         self.condition_ref = self.condition._ref
         self.ref = self.reader._ref
         self.gid = self.reader.get_guid().bytes
+        self._decode = messages.decoder(self.type_name)
         self.received = 0
         self.undecodable = 0
         self.waker: Any = None  # the DdsWaker of the executor taking from this reader
@@ -127,7 +138,9 @@ class DdsReader:
     def drain(self) -> bool:
         """Take everything DDS holds for this reader onto the subscription's queue; True if anything came."""
         sub = self.subscription
-        raw, with_info = sub.raw, sub.with_info
+        decode = None if sub.raw else self._decode
+        with_info = sub.with_info
+        enqueue = sub._enqueue_local
         took = False
         while True:
             samples = ddspy_take(self.ref, _ANY_STATE, TAKE_BATCH)
@@ -138,17 +151,15 @@ class DdsReader:
                 if not info.valid_data:
                     continue  # a writer went away (no data, only an instance state change)
                 self.received += 1
-                if raw:
-                    item: Any = data
-                else:
+                item: Any = data
+                if decode is not None:
                     try:
-                        item = messages.deserialize(data, self.type_name)
+                        item = decode(data)
                     except MessageError as err:
                         self._undecodable(info.publication_handle, err)
                         continue
-                if with_info:
-                    item = (item, {'source_timestamp': info.source_timestamp, 'received_timestamp': now})
-                sub._enqueue_local(item)
+                enqueue((item, {'source_timestamp': info.source_timestamp, 'received_timestamp': now})
+                        if with_info else item)
                 took = True
             if len(samples) < TAKE_BATCH:
                 return took

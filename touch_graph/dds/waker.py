@@ -68,6 +68,7 @@ class DdsWaker:
             keys = self._waitset.wait(timeout_ns)
         except DDSException:  # the participant was deleted (the context shut down): nothing to wait for
             return True
+        self._last_poll = time.monotonic()  # a wait is a poll: take() need not ask again at once
         self._note(keys)
         return bool(keys) or self._flag
 

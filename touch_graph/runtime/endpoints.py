@@ -153,15 +153,6 @@ class QueuedEntity:
                 self._ready = True
                 executor._ready.append(self)
 
-    def _take(self) -> Any:
-        """Pop the oldest item; keep the executor's ready list in step."""
-        item = self._queue.popleft()
-        if self._queue:
-            self._executor._ready.append(self)
-        else:
-            self._ready = False
-        return item
-
 
 class Subscription(QueuedEntity):
     """``node.create_subscription(MsgType, 'topic', callback, qos)``.

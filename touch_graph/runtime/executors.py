@@ -242,11 +242,22 @@ class Executor:
                 return True
         if self._ready:
             sub = self._ready.popleft()
-            if not sub._queue or sub._executor is not self:
+            queue = sub._queue
+            if not queue or sub._executor is not self:
                 sub._ready = False
                 return True
-            item = sub._take()
-            self._guarded(sub._handler, item if sub._packs else (item,), sub.node, sub._what)
+            item = queue.popleft()
+            if queue:
+                self._ready.append(sub)
+            else:
+                sub._ready = False
+            self.callbacks_run += 1
+            try:  # _guarded inlined: this is every subscription's path
+                sub._handler(*item) if sub._packs else sub._handler(item)
+            except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
+                raise
+            except Exception as err:  # a failing callback must not stop the graph
+                self._report(err, sub.node, sub._what)
             return True
         return False
 
@@ -273,8 +284,12 @@ class Executor:
         if isinstance(source, SimTimeSource) and math.isinf(source.rate) and deadline is None:
             # Nothing scheduled in a fast simulation: only another thread can bring work.
             self._wake.wait(timeout_sec if timeout_sec is not None else 0.5)
-            return
-        source.wait_until(deadline, self._wake, timeout_sec)
+        else:
+            source.wait_until(deadline, self._wake, timeout_sec)
+        # Run what woke us (a sample, a due timer) in this call, as rclpy's spin_once does,
+        # rather than returning to the caller's loop for another round first.
+        if self.context.ok():
+            self._run_ready_work()
 
     def _guarded(self, fn: Callable[..., Any], args: tuple, node: Node | None, what: str) -> None:
         self.callbacks_run += 1
@@ -283,21 +298,25 @@ class Executor:
         except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
             raise
         except Exception as err:  # a failing callback must not stop the graph
-            self.context.callback_errors += 1
-            logger = node.get_logger() if node is not None else None
-            if node is not None:
-                node.callback_errors += 1
-                first = node.callback_errors == 1
-            else:
-                first = self.context.callback_errors == 1
-            detail = ''.join(traceback.format_exception(err)) if first else f'{type(err).__name__}: {err}'
-            text = f'{what} callback raised ({node.callback_errors if node else self.context.callback_errors} ' \
-                   f'so far); the graph goes on: {detail}'
-            if logger is not None:
-                logger.error(text.rstrip(), throttle_duration_sec=None if first else 1.0)
-            else:
-                import sys
-                sys.stderr.write(text + '\n')
+            self._report(err, node, what)
+
+    def _report(self, err: Exception, node: Node | None, what: str) -> None:
+        """Count and log a callback's exception (its traceback the first time)."""
+        self.context.callback_errors += 1
+        logger = node.get_logger() if node is not None else None
+        if node is not None:
+            node.callback_errors += 1
+            first = node.callback_errors == 1
+        else:
+            first = self.context.callback_errors == 1
+        detail = ''.join(traceback.format_exception(err)) if first else f'{type(err).__name__}: {err}'
+        text = f'{what} callback raised ({node.callback_errors if node else self.context.callback_errors} ' \
+               f'so far); the graph goes on: {detail}'
+        if logger is not None:
+            logger.error(text.rstrip(), throttle_duration_sec=None if first else 1.0)
+        else:
+            import sys
+            sys.stderr.write(text + '\n')
 
 
 class SingleThreadedExecutor(Executor):

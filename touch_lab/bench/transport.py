@@ -4,19 +4,27 @@ For each kind of message (bear frame, patch frame, skin frame, gesture event, sy
 content of the real sizes) the bench starts two echo processes (:mod:`touch_lab.bench.transport_echo`): one
 runs a runtime node that sends each message back, the other plain cyclonedds that sends
 each sample's bytes back. In this process a runtime node and a raw cyclonedds
-participant ping them, alternating in blocks, so both paths see the same machine load:
+participant ping them. Both sides have the same processes, threads and waits; what
+differs is ours (the runtime's publish, executor, encoding and decoding):
 
-- **latency**: one message in flight, half the round trip (wall clock,
-  ``time.perf_counter``); median and 99th percentile over every ping of every repeat.
-  ``ours`` is ``publish(msg)`` to the pong callback with decoded messages on both ends
-  (encoding and decoding twice per round trip); ``ours_cdr`` publishes CDR bytes and
-  subscribes raw (the transport without (de)serialisation); ``raw`` writes and takes bytes
-  with cyclonedds. ``overhead_ratio`` is ours / raw of the median latencies
-  (``overhead_ratio_cdr`` likewise for ``ours_cdr``).
+- **latency**: one message in flight, half the round trip (``time.perf_counter``), from the
+  ping's publish (raw: write) to the pong's callback (raw: take), each timed in the thread
+  that runs it (the bench's hand-over to its main thread is not the transport's and is not
+  counted, for either path). ``ours`` is ``publish(msg)`` to the pong callback with decoded
+  messages on both ends (encoding and decoding twice per round trip); ``ours_cdr``
+  publishes CDR bytes and subscribes raw (the transport without (de)serialisation);
+  ``raw`` writes and takes bytes with cyclonedds. The paths take turns in blocks of
+  :data:`BLOCK` pings, in an order that rotates every round, so that all see the same
+  machine (a shared machine's speed changes within seconds). Reported: the median and 99th
+  percentile over every ping of every round, the lowest and highest round median, and
+  ``overhead_ratio`` = ours / raw of the medians (``overhead_ratio_cdr`` likewise for
+  ``ours_cdr``) with the lowest and highest ratio of a round.
 - **throughput**: one-second bursts paced at rising rates (from a quarter of the goal, 10x
   the sensor's rate, doubling up to 8x the goal, ``rate_ramp_top_hz``) on a reliable topic
   until a burst loses a message on the round trip (ping and pong) or cannot be sent at the
   rate; the highest lossless rate is reported, per path.
+- **load**: what the machine did meanwhile (:class:`touch_lab.bench.load.MachineLoad`): its CPU
+  use, the bench's own, everyone else's, stolen time, load averages.
 
 Runs in ``$SOCIAL_TOUCH_BENCH_DOMAIN`` (default 231) with discovery on this host only,
 so it never disturbs a robot's graph.
@@ -35,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph import messages
+from touch_lab.bench.load import MachineLoad
 from touch_lab.bench.timing import gc_paused
 from touch_lab.bench.transport_echo import BENCH_QOS, KINDS
 
@@ -50,6 +59,8 @@ SENSOR_RATES_HZ = {'bear_frame': 25.0, 'patch_frame': 100.0, 'skin_frame': 150.0
 DEFAULT_DOMAIN = 231
 #: Steps of the rate ramp: goal/4 doubling up to 8 x the goal.
 RAMP_STEPS = 6
+#: Pings a path sends before the next path takes its turn.
+BLOCK = 20
 
 
 def sample_message(kind: str) -> Any:
@@ -101,6 +112,7 @@ class _OursPath:
         suffix = '_cdr' if cdr else ''
         self.pub = node.create_publisher(cls, f'/bench/{kind}/ping{suffix}', BENCH_QOS)
         self.got = 0
+        self.arrived_at = 0.0  # time.perf_counter() when the last pong arrived, in the receiving thread
         self.arrived = threading.Event()
         node.create_subscription(cls, f'/bench/{kind}/pong{suffix}', self._on_pong, BENCH_QOS, raw=cdr)
         self.payload = messages.serialize(sample_message(kind)) if cdr else sample_message(kind)
@@ -110,6 +122,7 @@ class _OursPath:
         self.thread.start()
 
     def _on_pong(self, _msg: Any) -> None:
+        self.arrived_at = time.perf_counter()  # the moment a node's callback sees the message
         self.got += 1
         self.arrived.set()
 
@@ -154,6 +167,7 @@ class _RawPath:
         self.waitset.attach(self.condition._ref, 1)
         self.payload = messages.serialize(sample_message(kind))
         self.got = 0
+        self.arrived_at = 0.0  # time.perf_counter() when the last pong arrived, in the receiving thread
         self.arrived = threading.Event()
         self.stopping = False
         self.thread = threading.Thread(target=self._receive, daemon=True)
@@ -165,6 +179,7 @@ class _RawPath:
             if self.waitset.wait(50_000_000):
                 samples = ddspy_take(self.reader._ref, self.mask, 256)
                 if isinstance(samples, list) and samples:
+                    self.arrived_at = time.perf_counter()  # the moment the bytes are taken
                     self.got += len(samples)
                     self.arrived.set()
 
@@ -189,7 +204,7 @@ def _latencies(path: Any, count: int) -> list[float]:
         path.send()
         if not path.arrived.wait(2.0):
             continue  # lost on a reliable topic would be a bug; it is visible as fewer samples
-        out.append((time.perf_counter() - start) / 2)
+        out.append((path.arrived_at - start) / 2)
     return out
 
 
@@ -227,12 +242,12 @@ def _wait_ready(paths: list[Any], timeout_s: float = 15.0) -> None:
     time.sleep(0.2)
 
 
-def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None = None,
+def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None = None,
                     ramp_steps: int = RAMP_STEPS) -> dict:
     """Per kind: latency median/p99 (us) of ours, ours_cdr and raw, overhead ratios, lossless rates (Hz).
 
-    ``kinds`` (default all of :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a
-    short run (tests).
+    ``repeats`` rounds of ``pings`` pings per path; ``kinds`` (default all of
+    :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a short run (tests).
     """
     from cyclonedds.domain import DomainParticipant
 
@@ -245,8 +260,10 @@ def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None 
     env = {**os.environ}
     echoes = []
     results: dict[str, Any] = {}
+    load = MachineLoad()
     try:
         echoes = [_Echo('ours', env), _Echo('raw', env)]
+        load.start(echo.proc.pid for echo in echoes)
         acquire_domain(domain, read_discovery())
         participant = DomainParticipant(domain)
         try:
@@ -255,6 +272,7 @@ def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None 
         finally:
             delete_entity(participant)
             release_domain(domain)
+        machine = load.stop()
     finally:
         for echo in echoes:
             echo.close()
@@ -264,7 +282,37 @@ def bench_transport(repeats: int = 5, pings: int = 200, kinds: list[str] | None 
             else:
                 os.environ[key] = value
     return {'message': 'synthetic messages of the real sizes; latency is half the round trip to an echo process',
-            'domain': domain, 'repeats': repeats, 'pings_per_repeat': pings, 'kinds': results}
+            'domain': domain, 'rounds': repeats, 'pings_per_round': pings, 'block': BLOCK,
+            'versions': _versions(), 'load': machine, 'kinds': results}
+
+
+def _versions() -> dict[str, str]:
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for package in ('cyclonedds', 'numpy', 'rosbags'):
+        try:
+            out[package] = version(package)
+        except PackageNotFoundError:  # pragma: no cover - all are dependencies
+            out[package] = 'not installed'
+    return out
+
+
+def _interleaved_latencies(paths: dict[str, Any], rounds: int, pings: int) -> dict[str, list[list[float]]]:
+    """Per path, per round, the latencies (s) of ``pings`` pings sent in turns of :data:`BLOCK`."""
+    names = list(paths)
+    samples: dict[str, list[list[float]]] = {name: [] for name in names}
+    for r in range(rounds):
+        order = names[r % len(names):] + names[:r % len(names)]
+        for name in names:
+            samples[name].append([])
+        for _ in range(max(1, pings // BLOCK)):
+            for name in order:
+                samples[name][-1] += _latencies(paths[name], min(BLOCK, pings))
+    return samples
+
+
+def _us(seconds: float) -> float:
+    return round(seconds * 1e6, 1)
 
 
 def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_steps: int) -> dict:
@@ -272,26 +320,30 @@ def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_step
              'raw': _RawPath(participant, kind)}
     try:
         _wait_ready(list(paths.values()))
-        samples: dict[str, list[float]] = {name: [] for name in paths}
         for path in paths.values():
-            _latencies(path, 20)  # warm up
+            _latencies(path, 50)  # warm up
         with gc_paused():
-            for _ in range(repeats):
-                for name, path in paths.items():
-                    samples[name] += _latencies(path, pings)
+            samples = _interleaved_latencies(paths, repeats, pings)
         goal = 10 * SENSOR_RATES_HZ[kind]
         rates = {name: _lossless_rate(paths[name], goal, max_steps=ramp_steps) for name in ('ours', 'raw')}
     finally:
         for path in paths.values():
             path.close()
     out: dict[str, Any] = {'bytes': len(messages.serialize(sample_message(kind)))}
-    for name, values in samples.items():
-        out[f'{name}_latency_median_us'] = round(statistics.median(values) * 1e6, 1) if values else None
-        out[f'{name}_latency_p99_us'] = round(float(np.percentile(values, 99)) * 1e6, 1) if values else None
-        out[f'{name}_lost_pings'] = repeats * pings - len(values)
+    medians: dict[str, list[float]] = {}
+    sent = repeats * max(1, pings // BLOCK) * min(BLOCK, pings)
+    for name, rounds in samples.items():
+        values = [v for one in rounds for v in one]
+        medians[name] = [statistics.median(one) if one else float('nan') for one in rounds]
+        out[f'{name}_latency_median_us'] = _us(statistics.median(values)) if values else None
+        out[f'{name}_latency_p99_us'] = _us(float(np.percentile(values, 99))) if values else None
+        out[f'{name}_latency_round_medians_us'] = [_us(min(medians[name])), _us(max(medians[name]))]
+        out[f'{name}_lost_pings'] = sent - len(values)
     if out['raw_latency_median_us']:
-        out['overhead_ratio'] = round(out['ours_latency_median_us'] / out['raw_latency_median_us'], 2)
-        out['overhead_ratio_cdr'] = round(out['ours_cdr_latency_median_us'] / out['raw_latency_median_us'], 2)
+        for suffix, name in (('', 'ours'), ('_cdr', 'ours_cdr')):
+            out[f'overhead_ratio{suffix}'] = round(out[f'{name}_latency_median_us'] / out['raw_latency_median_us'], 2)
+            per_round = [a / b for a, b in zip(medians[name], medians['raw'], strict=True)]
+            out[f'overhead_ratio{suffix}_rounds'] = [round(min(per_round), 2), round(max(per_round), 2)]
     out['goal_rate_hz'] = goal
     out['rate_ramp_top_hz'] = goal / 4 * 2 ** (ramp_steps - 1)  # a rate equal to this: lossless all the way up
     out['ours_lossless_rate_hz'] = rates['ours']
