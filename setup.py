@@ -39,7 +39,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
         'demo = touch_sim.demo',
         'eval = touch_lab.cli.targets:EVAL', 'train = touch_lab.cli.targets:TRAIN',
         'codebook = touch_lab.cli.targets:CODEBOOK', 'report = touch_lab.cli.targets:REPORT',
-        'bench = touch_lab.cli.bench', 'lines = touch_lab.lines',
+        'bench = touch_lab.cli.bench', 'lines = touch_lab.lines', 'collect = touch_lab.collect.cli',
     ],
     # Targets of the lab's commands (touch_lab.cli.targets): add_arguments(parser), run(args), HELP.
     'social_touch.eval': ['bear = touch_lab.bear.cli', 'patch = touch_lab.patch.cli:EVAL', 'skin = touch_lab.skin.cli',
