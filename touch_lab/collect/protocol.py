@@ -28,7 +28,8 @@ SENSORS = ('bear', 'patch', 'skin')
 DEFAULT_GESTURES: dict[str, tuple[str, ...]] = {
     'bear': ('poke', 'pat', 'tickle', 'pet', 'hold', 'tap', 'shake', 'rub'),   # knight2009 Table I
     'patch': ('stroke', 'tickle', 'push', 'slap'),                              # sympartner2018 6.3
-    'skin': ('line_right', 'line_left', 'diagonal_down', 'diagonal_up', 'one'),  # cirillo2017 Fig. 8
+    # cirillo2017 Fig. 7-8: the gestures of config/skin_commands.yaml (the node wants a template of each)
+    'skin': ('diagonal_down', 'diagonal_up', 'line_right', 'line_left', 'one', 'two', 'line_down', 'line_up'),
 }
 
 #: How hard a variant is performed by the simulated people, times their usual force (CoST's variants).
