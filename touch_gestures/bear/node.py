@@ -34,6 +34,7 @@ from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_da
 from touch_graph.errors import ParameterError
 from touch_graph.yamlconf import did_you_mean
 
+from ..model_card import card_log_line
 from .features import MIN_COMPONENT
 from .gate import NoTouchGate
 from .pipeline import BearRecogniser
@@ -240,6 +241,7 @@ class BearGesturesNode(Node):
             return rule
         self.classifier_kind = 'model'
         self.loaded_files.append(f'subtype model {path}')
+        self.get_logger().info(card_log_line(path))
         return NoTouchGate(model, p['threshold'])    # no false taps from the short buffers of a (re)start
 
     # ------------------------------------------------------------------ frames

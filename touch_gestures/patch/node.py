@@ -42,6 +42,7 @@ import numpy as np
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 
+from ..model_card import card_log_line
 from .classifier import EventDetector
 from .model_io import ModelFileError, PatchModel, load_model
 
@@ -107,6 +108,7 @@ class PatchGesturesNode(Node):
             f'{self.model_path}: {", ".join(self._classes)} from {origin}; window {self.model.window} frames '
             f'at {self.model.rate_hz:g} Hz, threshold {det.threshold:g}, hold {det.hold} frames, release '
             f'{det.release:g}')
+        self.get_logger().info(card_log_line(self.model_path))
 
     # ------------------------------------------------------------------ parameters
     #: Parameters applied at once when set: the event rule. The others are read at start (read-only).

@@ -47,6 +47,7 @@ from typing import Any
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
 
+from ..model_card import card_log_line
 from .base import Match, TemplateRecogniser
 from .codebook import load_codebook
 from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
@@ -141,6 +142,7 @@ class HapticCommandsNode(Node):
             f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands from '
             f'{self.commands_path}'
             + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
+        self.get_logger().info(card_log_line(self.codebook_path))
 
     # ------------------------------------------------------------------ parameters
     #: Parameters applied at once when set: rejection and screening. The others are read at start (read-only).

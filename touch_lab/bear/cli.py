@@ -52,6 +52,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
     parser.add_argument('--reps', type=positive_int, default=2,
                         help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
+    parser.add_argument('--bags', nargs='+', metavar='BAG',
+                        help='session bags (social-touch collect bear): leave-one-person-out on them instead of '
+                        'simulated scenes')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 
@@ -120,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
     """Run the evaluation; 0 on success, 2 on a configuration error (message on stderr)."""
     from touch_graph.errors import SocialTouchError
 
+    if args.bags:
+        return _run_bags(args)
     try:
         result = evaluate(_config(args), progress=None if args.quiet else stderr_progress)
     except (SocialTouchError, ValueError) as err:
@@ -131,3 +136,27 @@ def run(args: argparse.Namespace) -> int:
         print(format_text(result))
     return 0
 
+
+
+def _run_bags(args: argparse.Namespace) -> int:
+    """``eval bear --bags``: leave-one-person-out on recorded sessions (:mod:`.sessions`)."""
+    from touch_graph.errors import SocialTouchError
+
+    from .sessions import format_lopo, leave_one_person_out, load_runs
+    say = (lambda _m: None) if args.quiet else stderr_progress
+    try:
+        runs = load_runs(args.bags, args.rate, args.buffer, say)
+        result = leave_one_person_out(runs, seed=args.seed, progress=say)
+    except (SocialTouchError, ValueError) as err:
+        print(f'social-touch eval bear: error: {err}', file=sys.stderr)
+        return 2
+    synthetic = any(r.session.synthetic for r in runs)
+    if args.json:
+        print(json.dumps({**result, 'synthetic': synthetic, 'bags': list(args.bags)}, default=_plain))
+    else:
+        print(format_lopo(result, synthetic))
+    return 0
+
+
+def _plain(value):
+    return value.tolist() if hasattr(value, 'tolist') else str(value)

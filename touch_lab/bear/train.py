@@ -14,6 +14,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.model_card import attach_card, make_card
+from touch_lab.cards import session_data
+
 from .cli import positive_float, positive_int
 from .evaluate import EvalConfig, stderr_progress, train_subtype_model
 
@@ -29,13 +33,72 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20)')
     parser.add_argument('--people', type=positive_int, default=8, help='simulated people to train on (8)')
     parser.add_argument('--seed', type=int, default=0, help='training scene seed is seed + 1000 (0)')
+    parser.add_argument('--bags', nargs='+', metavar='BAG',
+                        help='train on these session bags (social-touch collect bear) instead of simulated people')
+    parser.add_argument('--evaluate', action='store_true',
+                        help="also measure the model's figures (bags: leave-one-person-out; simulated: held-out "
+                        "simulated people, `eval bear`) and record them in the file's card")
 
 
 def run(args: argparse.Namespace) -> int:
     """Train and write the model; progress on stderr."""
+    if args.bags:
+        return _run_bags(args)
     config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed)
     model = train_subtype_model(config, progress=stderr_progress)
     model.save(args.out, rate_hz=args.rate, buffer_len=args.buffer)
+    reps = config.subtype_reps + 1   # train_subtype_model's scene
+    data = {'synthetic': True, 'source': 'simulated people (touch_sim/bear/people.py, knight2009 Table II '
+            f'statistics), scene seed {args.seed + 1000}, through the virtual bear and bear_driver',
+            'people': args.people, 'trials_per_class': {s: reps * args.people for s in TOUCH_SUBTYPES},
+            'rate_hz': args.rate, 'buffer_cycles': args.buffer}
+    evaluation = None
+    if args.evaluate:
+        from .evaluate import evaluate
+        result = evaluate(config, progress=stderr_progress)
+        m = result['model']
+        evaluation = {'method': f'held-out simulated people (scene seed {args.seed}), `social-touch eval bear '
+                      f'--seed {args.seed} --rate {args.rate} --buffer {args.buffer} --train-people {args.people}`',
+                      'synthetic': True, 'subtype_accuracy': m['subtype']['accuracy'],
+                      'subtype_frame_accuracy': m['subtype']['frame_accuracy'],
+                      'median_subtype_latency_s': m['subtype']['median_latency_s'],
+                      'symbolic_accuracy': m['symbolic']['accuracy'],
+                      'median_symbolic_latency_s': m['symbolic']['median_latency_s'],
+                      'paper_rule_subtype_accuracy': result['rule']['subtype']['accuracy']}
+    attach_card(args.out, make_card('bear_subtype_model', data=data, evaluation=evaluation))
     print(f'wrote {args.out}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
           f'on {args.people} simulated people (synthetic)', file=sys.stderr)
+    return 0
+
+
+def _run_bags(args: argparse.Namespace) -> int:
+    """``train bear --bags``: the subtype model from recorded sessions (:mod:`.sessions`)."""
+    from touch_graph.errors import SocialTouchError
+
+    from .sessions import fit_model, load_runs
+    try:
+        runs = load_runs(args.bags, args.rate, args.buffer, stderr_progress)
+        stderr_progress(f'fitting the subtype model on {sum(len(r.labels) for r in runs)} trials')
+        model = fit_model(runs, seed=args.seed)
+    except (SocialTouchError, ValueError) as err:
+        print(f'social-touch train bear: error: {err}', file=sys.stderr)
+        return 2
+    model.save(args.out, rate_hz=args.rate, buffer_len=args.buffer)
+    synthetic = any(r.session.synthetic for r in runs)
+    card_data = session_data(((lab.person, lab.gesture) for r in runs for lab in r.labels), synthetic=synthetic,
+                             bags=args.bags)
+    evaluation = None
+    if args.evaluate:
+        from .sessions import leave_one_person_out
+        result = leave_one_person_out(runs, seed=args.seed, progress=stderr_progress)
+        evaluation = {'method': 'leave-one-person-out on the training bags (`social-touch eval bear --bags ...`)',
+                      'synthetic': synthetic, 'subtype_accuracy': result['model']['accuracy'],
+                      'median_subtype_latency_s': result['model']['median_latency_s'],
+                      'paper_rule_subtype_accuracy': result['rule']['accuracy'], 'people': len(result['people'])}
+    attach_card(args.out, make_card('bear_subtype_model', data={**card_data, 'rate_hz': args.rate,
+                                                                'buffer_cycles': args.buffer},
+                                    evaluation=evaluation))
+    data = 'SYNTHETIC (simulated people)' if synthetic else 'recorded'
+    print(f'wrote {args.out}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
+          f'on {len(args.bags)} session bags ({data})', file=sys.stderr)
     return 0

@@ -62,6 +62,7 @@ class TargetCommand:
 
 EVAL = TargetCommand('evaluate recognisers on simulated people or recorded data', 'social_touch.eval')
 TRAIN = TargetCommand('train a recogniser from recordings or simulated people', 'social_touch.train')
-CODEBOOK = TargetCommand('record a haptic-command codebook from the skin (live or simulated)', 'social_touch.codebook')
+CODEBOOK = TargetCommand('record, inspect and edit haptic-command codebooks of the skin (record, info, add, remove, '
+                          'merge)', 'social_touch.codebook')
 REPORT = TargetCommand('regenerate the evaluation reports in docs/ (bear, patch, skin) from measurements',
                        'social_touch.report')

@@ -22,8 +22,11 @@ import sys
 
 import numpy as np
 
+from touch_gestures.model_card import attach_card, make_card
+from touch_lab.cards import session_data
 from touch_lab.cli.targets import Target
 from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv, render_session
+from touch_lab.patch.session_bags import common_rate
 
 __all__ = ['EVAL', 'TRAIN', 'add_eval_arguments', 'add_train_arguments', 'load_sessions', 'run_eval', 'run_train']
 
@@ -58,7 +61,9 @@ def _grid(text: str) -> tuple[int, int]:
 def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
     src = parser.add_mutually_exclusive_group(required=True)
     src.add_argument('--csv', metavar='FILE', help='CoST-layout CSV: subject,variant,gesture,frame,ch1..chN')
-    src.add_argument('--bags', metavar='MANIFEST', help='YAML manifest of rosbag2 recordings of /patch/frame')
+    src.add_argument('--bags', metavar='BAG', nargs='+',
+                     help='session bags (social-touch collect patch: labels on /touch/label), or one YAML manifest '
+                     'of single-gesture recordings of /patch/frame')
     src.add_argument('--simulate', metavar='PEOPLE', type=int, help='simulated people (SYNTHETIC data)')
     parser.add_argument('--grid', type=_grid, help='activation map ROWSxCOLS (CSV: required, e.g. 8x8 for CoST; '
                         'bags: 16x16)')
@@ -85,9 +90,13 @@ def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
             raise SystemExit('--csv needs --grid ROWSxCOLS and --rate HZ (CoST: --grid 8x8 --rate 135)')
         say(f'reading {args.csv}')
         return read_cost_csv(args.csv, grid=args.grid, rate_hz=args.rate, values=args.values, gain=args.gain)
+    if args.bags and len(args.bags) == 1 and args.bags[0].endswith(('.yaml', '.yml')):
+        say(f'reading bags listed in {args.bags[0]}')
+        return read_bag_manifest(args.bags[0], grid=args.grid or (16, 16))
     if args.bags:
-        say(f'reading bags listed in {args.bags}')
-        return read_bag_manifest(args.bags, grid=args.grid or (16, 16))
+        from touch_lab.collect.coverage import read_checked
+        from touch_lab.patch.session_bags import trial_sessions
+        return trial_sessions(read_checked(args.bags, 'patch', say), say)
     from touch_sim.patch.people import simulate_people
     if args.simulate < 2:
         raise SystemExit('--simulate needs at least 2 people (leave-one-subject-out)')
@@ -106,6 +115,9 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--output', '-o', required=True, help='model file to write (.npz)')
     parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
     parser.add_argument('--threshold', type=float, default=0.99, help='posterior threshold for events (paper: 0.99)')
+    parser.add_argument('--evaluate', action='store_true',
+                        help="also evaluate leave-one-person-out with these settings and record the figures in "
+                        "the model's card")
     parser.add_argument('--hold-s', type=float, default=0.4,
                         help='time a class must stay above the threshold before an event, s (default 0.4; '
                         'one frame is the paper rule)')
@@ -119,10 +131,10 @@ def run_train(args: argparse.Namespace) -> int:
 
     say = _progress(args)
     sessions = load_sessions(args, say)
-    rates = {round(s.rate_hz, 6) for s in sessions}
-    if len(rates) != 1:
-        raise SystemExit(f'sessions have different frame rates {sorted(rates)}; train on one rate at a time')
-    rate = sessions[0].rate_hz
+    try:
+        rate = common_rate([s.rate_hz for s in sessions], [s.source for s in sessions])
+    except ValueError as err:
+        raise SystemExit(f'train patch: {err}') from None
     window = max(1, round(args.window_s * rate))
     grids = {s.grid for s in sessions}
     if len(grids) != 1:
@@ -130,6 +142,11 @@ def run_train(args: argparse.Namespace) -> int:
     say(f'features of {len(sessions)} sessions, window {window} frames at {rate:g} Hz')
     X = np.concatenate([window_features(s.activations, window) for s in sessions])
     y = np.concatenate([[s.gesture] * s.n_frames for s in sessions])
+    for name, count in zip(*np.unique(y, return_counts=True), strict=True):
+        if count < args.components:  # a mixture cannot have more components than points
+            raise SystemExit(f'train patch: class {name!r} has {count} frames, fewer than --components '
+                             f'{args.components}; record more trials of {name!r} or give --components '
+                             f'{max(1, count // 10)} (about ten frames per component)')
     say(f'fitting {args.components} components per class on {len(X)} frames')
     try:
         clf = PatchGestureClassifier(n_components=args.components, threshold=args.threshold,
@@ -140,6 +157,23 @@ def run_train(args: argparse.Namespace) -> int:
     model = PatchModel(clf, window=window, rate_hz=rate, grid=sessions[0].grid, release=args.release,
                        hold=max(1, round(args.hold_s * rate)), metadata=_training_metadata(args, sessions, len(X)))
     save_model(args.output, model)
+    synthetic = any(s.synthetic for s in sessions)
+    rows = [(s.subject, s.gesture) for s in sessions for _ in range(len(s.events) if s.events else 1)]
+    data = session_data(rows, synthetic=synthetic, bags=args.bags,
+                        source=model.metadata['data'] if not args.bags else '')
+    evaluation = None
+    if args.evaluate:
+        from touch_lab.patch.evaluate import leave_one_subject_out
+        result = leave_one_subject_out(sessions, n_components=[args.components], thresholds=[args.threshold],
+                                       holds_s=[args.hold_s], window_s=args.window_s, release=args.release,
+                                       covariance_type=args.covariance, reg_covar=args.reg_covar,
+                                       random_state=args.seed, progress=say).as_dict()
+        evaluation = {'method': 'leave-one-person-out on the training data with these settings (sympartner2018 '
+                      'Fig. 6 figures)', 'synthetic': synthetic,
+                      **{k: result[k] for k in ('event_correct_rate', 'false_detection_rate', 'miss_rate',
+                                                'median_detection_latency_s', 'tpr_all_samples', 'n_events')}}
+    attach_card(args.output, make_card('patch_gesture_model', data={**data, 'frames': len(X)},
+                                       evaluation=evaluation))
     synthetic = ' (SYNTHETIC data)' if any(s.synthetic for s in sessions) else ''
     say(f'wrote {args.output}: classes {", ".join(model.classes)}, components {clf.n_components_.tolist()}'
         f'{synthetic}')
@@ -152,7 +186,7 @@ def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_fram
     import shlex
     from pathlib import Path
     if args.csv or args.bags:
-        data = f"{'CSV' if args.csv else 'bags'} {args.csv or args.bags}"
+        data = f"{'CSV' if args.csv else 'bags'} {args.csv or ' '.join(args.bags)}"
     else:
         data = (f'simulated people (SYNTHETIC): {args.simulate} people x {args.events} events per gesture, seed '
                 f'{args.seed}, through the virtual patch and patch_driver (touch_sim/patch/people.py)')
@@ -193,7 +227,7 @@ def run_eval(args: argparse.Namespace) -> int:
     except ValueError as err:  # too few subjects or classes, mixed rates: say so, no traceback
         raise SystemExit(f'eval patch: {err}') from err
     report = result.as_dict()
-    report['source'] = args.csv or args.bags or \
+    report['source'] = args.csv or (args.bags and ' '.join(args.bags)) or \
         f'simulated people: {args.simulate} (seed {args.seed}, virtual patch and patch_driver node)'
     if args.json:
         print(json.dumps(_jsonable(report), indent=2))

@@ -25,7 +25,7 @@ import sys
 import time
 from typing import Any
 
-from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
+from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
@@ -39,8 +39,12 @@ HELP = 'evaluate the skin recognisers on real traces through the virtual skin, l
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the options of ``social-touch eval skin`` to ``parser``."""
-    parser.add_argument('--traces', required=True, help='trace CSV (.csv or .csv.gz): '
-                        'subject,variant,gesture,sample,stroke,x,y,t_ms')
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument('--traces', help='trace CSV (.csv or .csv.gz): subject,variant,gesture,sample,stroke,x,y,t_ms')
+    source.add_argument('--bags', nargs='+', metavar='BAG', help='session bags (social-touch collect skin): '
+                        'leave-one-person-out with the first of --recognisers (touch_lab.skin.sessions)')
+    parser.add_argument('--codebook', metavar='FILE', help='with --bags: score this codebook on every trial instead of '
+                        'leave-one-person-out (people it has not seen)')
     parser.add_argument('--json', action='store_true', help='print one JSON object instead of text')
     parser.add_argument('--recognisers', default=','.join(RECOGNISERS),
                         help=f'comma-separated names (default: all: {",".join(RECOGNISERS)})')
@@ -171,6 +175,9 @@ def _confusion_lines(confusion: dict[str, dict[str, int]]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``social-touch eval skin``; returns the exit status."""
     names = [n.strip() for n in str(args.recognisers).split(',') if n.strip()]
+    if args.bags:
+        from .sessions import run_eval_bags
+        return run_eval_bags(args, names[0] if len(names) == 1 else DEFAULT_RECOGNISER)
     if args.limit is not None and args.limit < 1:
         print('eval skin: --limit must be a positive number of samples', file=sys.stderr)
         return 2

@@ -38,6 +38,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from touch_gestures.model_card import attach_card, make_card
 from touch_gestures.skin.codebook import CodebookRecorder, save_codebook
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
@@ -298,6 +299,12 @@ def run(args: argparse.Namespace) -> int:
             return 1
         model = recorder.fit(make_recogniser(args.recogniser))
         path = save_codebook(args.output, model, description=description)
+        people = f'{args.simulate} simulated performers (seed {args.seed})' if args.simulate is not None else None
+        attach_card(path, make_card('skin_codebook', data={
+            'synthetic': args.simulate is not None, 'source': description, 'recogniser': args.recogniser,
+            **({'people': args.simulate} if args.simulate is not None else {}),
+            'trials_per_class': dict(sorted(Counter(recorder.labels).items())), 'templates': len(model.templates_)},
+            notes=f'people: {people}' if people else ''))
     except (SocialTouchError, ValueError) as err:
         _say(f'codebook record: {err}')
         return 2

@@ -28,14 +28,14 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
 __all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'BearScene', 'Contact', 'GesturePerformance', 'Label', 'Person',
-           'SubtypeStats', 'make_scene']
+           'SubtypeStats', 'make_scene', 'trial_scene']
 
 N_CHANNELS = 64
 
@@ -395,3 +395,44 @@ def _perform_gesture(person: Person, perf: GesturePerformance, t: float, attempt
                                        duration_s=None if perf.subtype == 'tap' else duration - delay))
     end = max(c.end_s for c in contacts)
     return contacts, tuple(touched), end
+
+
+def trial_scene(person_index: int, trials: list[tuple[str, float]], seed: int = 0, lead_in_s: float = 4.0,
+                pause_s: tuple[float, float] = (2.0, 5.0), person_share: float = 0.25, body_map=None) -> BearScene:
+    """One person's recording session of single-sensor subtypes (``social-touch collect bear --simulate``),
+    SYNTHETIC.
+
+    Args:
+        person_index: the person (their style is drawn from ``(seed, person_index)``).
+        trials: ``(subtype, amplitude_scale)`` in the order the protocol prompts them; the scale
+            multiplies the contact's peak proximity (a "gentle" or "rough" variant), clipped to 1.
+        seed: the session's randomness.
+        lead_in_s: untouched seconds first (the calibrator learns its baseline there).
+        pause_s: (min, max) pause between trials, s.
+        person_share: share of Table II variance between people.
+        body_map: a ``BodyMap`` (default: the package's); each trial touches one fitted sensor.
+
+    Returns: the scene; one ``'subtype'`` :class:`Label` per trial, in order.
+    """
+    unknown = sorted({name for name, _ in trials} - set(SUBTYPE_STATS))
+    if unknown:
+        raise ValueError(f'unknown subtypes {unknown}; expected some of: {", ".join(SUBTYPE_STATS)}')
+    if body_map is None:
+        from touch_driver.bear.body_map import BodyMap
+        body_map = BodyMap.default()
+    rng = np.random.default_rng((seed, person_index))
+    person = Person(person_index, rng, person_share=person_share)
+    channels = np.array([s.channel for s in body_map.sensors])
+    contacts: list[Contact] = []
+    labels: list[Label] = []
+    t = float(lead_in_s)
+    for name, scale in trials:
+        if not (math.isfinite(scale) and scale > 0):
+            raise ValueError(f'amplitude scale must be a positive number; got {scale}')
+        ch = int(rng.choice(channels))
+        c = person.contact(name, ch, t)
+        c = replace(c, amplitude=min(1.0, c.amplitude * scale))
+        contacts.append(c)
+        labels.append(Label(t, c.end_s, 'subtype', name, (body_map.by_channel(ch).name,), person_index))
+        t = c.end_s + float(rng.uniform(*pause_s))
+    return BearScene(contacts, labels, t + pause_s[1], f'synthetic: simulated person {person_index} (seed {seed})')

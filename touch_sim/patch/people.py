@@ -43,7 +43,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 __all__ = ['GESTURES', 'PatchScene', 'PersonStyle', 'TouchEvent', 'demo_scene', 'make_people', 'people_scene',
-           'simulate_people', 'simulate_session']
+           'simulate_people', 'simulate_session', 'trial_scene']
 
 #: The four gesture classes of sympartner2018 6.3.
 GESTURES: tuple[str, ...] = ('stroke', 'tickle', 'push', 'slap')
@@ -461,4 +461,37 @@ def people_scene(n_people: int = 2, seed: int = 0, gestures: tuple[str, ...] = G
                 grab = rng.uniform(*grab_s)
                 holds.append(_PanelHold(int(rng.choice(GRAB_PANELS)), t, t + grab, float(rng.uniform(0.8, 1.0))))
                 t += grab + rng.uniform(*pause_s) / 2
+    return PatchScene(duration_s=t, events=events, tracks=tracks, holds=holds)
+
+
+def trial_scene(person: PersonStyle, trials: list[tuple[str, float]], seed: int = 0, lead_s: float = 3.0,
+                pause_s: tuple[float, float] = (4.0, 6.0)) -> PatchScene:
+    """One person's recording session (``social-touch collect patch --simulate``), SYNTHETIC.
+
+    Args:
+        person: who touches.
+        trials: ``(gesture, force_scale)`` in the order the protocol prompts them; ``force_scale``
+            multiplies the person's force for the trial (a "gentle" or "rough" variant, as in CoST).
+        seed: randomness of this session.
+        lead_s: untouched seconds first (the driver's minima start there).
+        pause_s: (min, max) seconds from the end of one gesture to the next.
+
+    Returns: the scene; its ``events`` are the trials' contact intervals, in order.
+    """
+    unknown = sorted({g for g, _ in trials} - set(_MAKERS))
+    if unknown:
+        raise ValueError(f"unknown gestures {unknown}; expected some of {', '.join(GESTURES)}")
+    rng = np.random.default_rng((seed, 0x7A1))
+    tracks: list[_Track] = []
+    holds: list[_PanelHold] = []
+    events: list[TouchEvent] = []
+    t = float(lead_s)
+    for gesture, scale in trials:
+        if not (math.isfinite(scale) and scale > 0):
+            raise ValueError(f'force scale must be a positive number; got {scale}')
+        first = len(tracks)
+        t = _add_event(tracks, holds, events, rng, person, gesture, t)
+        for track in tracks[first:]:
+            track.force = track.force * scale
+        t += rng.uniform(*pause_s)
     return PatchScene(duration_s=t, events=events, tracks=tracks, holds=holds)

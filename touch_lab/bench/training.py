@@ -1,0 +1,84 @@
+"""``social-touch bench training``: how long training on an hour of sessions takes, per sensor (SYNTHETIC data).
+
+Two simulated people record a session each (``collect --simulate``, default protocol, 3 repetitions);
+the session bags are then listed again and again until they hold an hour of sensor frames, and the
+whole training path of ``train SENSOR --bags`` runs on the list: reading and checking every bag,
+features (patch windows, bear buffers, skin segmentation), fitting (mixtures, logistic regression,
+codebook). The hour repeats two people's data, so it costs what an hour costs, not what an hour of
+many people would teach. Run it on one core::
+
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 social-touch bench training --repeats 1
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from touch_lab.collect.protocol import DEFAULT_GESTURES, Protocol
+from touch_lab.collect.session_bag import read_session
+from touch_lab.collect.simulate import simulate_session
+
+__all__ = ['bench_training']
+
+HOUR_S = 3600.0
+
+
+def _say(msg: str) -> None:
+    print(f'[bench training] {msg}', file=sys.stderr, flush=True)
+
+
+def _train_patch(bags: list[str]) -> None:
+    import numpy as np
+
+    from touch_gestures.patch.classifier import PatchGestureClassifier
+    from touch_gestures.patch.features import window_features
+    from touch_lab.collect.coverage import read_checked
+    from touch_lab.patch.session_bags import trial_sessions
+    sessions = trial_sessions(read_checked(bags, 'patch', lambda _m: None))
+    window = round(3.0 * sessions[0].rate_hz)
+    X = np.concatenate([window_features(s.activations, window) for s in sessions])
+    y = np.concatenate([[s.gesture] * s.n_frames for s in sessions])
+    PatchGestureClassifier(n_components=5).fit(X, y)
+
+
+def _train_bear(bags: list[str]) -> None:
+    from touch_lab.bear.sessions import fit_model, load_runs
+    fit_model(load_runs(bags, 3.4, 20, lambda _m: None), drop_thin=lambda _m: None)
+
+
+def _train_skin(bags: list[str]) -> None:
+    from touch_lab.skin.sessions import fit_codebook, load_trials
+    fit_codebook(load_trials(bags, lambda _m: None)[0], 'trace')
+
+
+_TRAIN = {'bear': _train_bear, 'patch': _train_patch, 'skin': _train_skin}
+
+
+def bench_training(repeats: int = 1, sensors: tuple[str, ...] = ('bear', 'patch', 'skin')) -> dict:
+    """Median seconds (wall and CPU) to train on an hour of session bags, per sensor (module doc)."""
+    out: dict = {'synthetic': True, 'hour_of_frames_s': HOUR_S}
+    with tempfile.TemporaryDirectory(prefix='bench-training-') as tmp:
+        for sensor in sensors:
+            gestures = DEFAULT_GESTURES[sensor] if sensor != 'bear' else tuple(
+                g for g in DEFAULT_GESTURES['bear'] if g != 'tap')
+            bags = [str(simulate_session(sensor, Protocol(gestures, repetitions=3, pause_s=2.0), i, 2,
+                                         Path(tmp) / f'{sensor}_{i}', progress=_say)) for i in range(2)]
+            seconds = sum(read_session(b, sensor).duration_s for b in bags)
+            hour = bags * math.ceil(HOUR_S / seconds)
+            times, cpu = [], []
+            for r in range(repeats):
+                _say(f'{sensor}: training on {len(hour)} session bags ({len(hour) * seconds / len(bags) / 60:.0f} '
+                     f'min of frames), run {r + 1}/{repeats}')
+                t0, c0 = time.perf_counter(), time.process_time()
+                _TRAIN[sensor](hour)
+                times.append(time.perf_counter() - t0)
+                cpu.append(time.process_time() - c0)   # what the work took of the CPU, on a shared machine too
+            out[sensor] = {'train_s': statistics.median(times), 'cpu_s': statistics.median(cpu), 'bags': len(hour),
+                           'minutes_of_frames': len(hour) * seconds / len(bags) / 60, 'runs': repeats}
+            _say(f'{sensor}: {out[sensor]["train_s"]:.1f} s wall, {out[sensor]["cpu_s"]:.1f} s CPU')
+    return out
