@@ -56,7 +56,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
         'bear = touch_lab.bear.bench:bench_cycle',
         'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
         'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
-        'stack = touch_lab.bench.stack:bench_stack',
+        'stack = touch_lab.bench.stack:bench_stack', 'framing = touch_lab.bench.framing:bench_framing',
     ],
     # `generator: NAME` in a scene file (touch_sim.scenes): a function returning a stimulus.
     'social_touch.scene_generators': ['bear_people = touch_sim.bear.people:make_scene',
