@@ -17,8 +17,9 @@ import os
 from typing import Any
 
 __all__ = [
-    'USING_ROS', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile', 'SetParametersResult',
-    'Time', 'get_message', 'get_service', 'qos_profile_sensor_data', 'rclpy', 'sensor_data_qos', 'stamp_now',
+    'USING_ROS', 'Duration', 'FloatingPointRange', 'IntegerRange', 'Node', 'Parameter', 'ParameterDescriptor',
+    'QoSProfile', 'SetParametersResult', 'Time', 'get_message', 'get_service', 'qos_profile_sensor_data', 'rclpy',
+    'sensor_data_qos', 'stamp_now',
 ]
 
 
@@ -36,7 +37,7 @@ USING_ROS = _want_ros()
 
 if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
     import rclpy
-    from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
     from rclpy.duration import Duration
     from rclpy.node import Node
     from rclpy.parameter import Parameter
@@ -57,6 +58,8 @@ else:
     from .messages import get_message
     from .runtime import (
         Duration,
+        FloatingPointRange,
+        IntegerRange,
         Node,
         Parameter,
         ParameterDescriptor,
