@@ -41,6 +41,7 @@ import numpy as np
 
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
+from touch_graph.subscriber_drops import DropReporter
 
 from .classifier import EventDetector
 from .model_io import ModelFileError, PatchModel, load_model
@@ -99,6 +100,7 @@ class PatchGesturesNode(Node):
         self.gesture_pub = self.create_publisher(GestureEvent, '/touch/gesture', 20)
         self.posteriors_pub = self.create_publisher(GesturePosteriors, 'posteriors', 20)
         self.create_subscription(PatchFrame, 'frame', self._on_frame, sensor_data_qos(20))
+        self.drops = DropReporter(self)      # frames lost when this node falls behind: warned in its log
         det = self.detector
         meta = self.model.metadata
         origin = ('SYNTHETIC data (simulated people)' if self.model.synthetic else
