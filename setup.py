@@ -48,6 +48,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
     'social_touch.codebook': ['record = touch_lab.skin.record_cli'],
     'social_touch.report': ['bear = touch_lab.bear.report', 'patch = touch_lab.patch.report',
                             'skin = touch_lab.skin.report', 'view-screenshot = touch_view.screenshot',
+                            'robustness = touch_lab.robustness.report',
                             'foxglove-layout = touch_view.foxglove_layout'],
     # `social-touch bench NAME`: a function bench(repeats=N) -> dict.
     'social_touch.bench': [
