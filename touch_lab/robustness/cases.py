@@ -202,6 +202,18 @@ PTY_CASES = ('garbage only', '20 % frames with bits 10-15 set', 'only frames wit
              'a protocol-1 device', 'truncated frames between whole ones', 'handler raises')
 
 
+EVAL_EXPRESSIONS = ("str([[0]*99999]*99999)", "'%*d' % (2000000000, 1)", "max([[0]*99999]*99999)", "2**2**30",
+                    "__import__('os')", "(1).__class__")
+
+
+def _eval(expression: str) -> Callable[[], Any]:
+    def run() -> Any:
+        from touch_graph.launch.safe_eval import safe_eval
+        safe_eval(expression)
+        return False                # evaluating any of these is wrong: each hangs, exhausts memory or escapes
+    return run
+
+
 def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
     """``(area, case, callable or CLI argv)`` of every case the report runs."""
     cases: list[tuple[str, str, Any]] = []
@@ -222,6 +234,8 @@ def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
                  ['play', 'nowhere', '--rate', '0'], ['play', 'no_such_bag'], ['bag', 'info', 'no_such_bag'],
                  ['launch', 'no_such.launch.yaml'], ['bench', 'framing', '--repeats', '0']):
         cases.append(('command line', 'social-touch ' + ' '.join(argv), argv))
+    for expression in EVAL_EXPRESSIONS:
+        cases.append(('launch $(eval)', f'$(eval {expression})', _eval(expression)))
     for kind in PTY_CASES:
         cases.append(('driver faults (real pty)', f'bear_driver: {kind}', _pty(kind)))
     for level in (3e38, 1.0001, -0.5):
