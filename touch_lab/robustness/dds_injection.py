@@ -61,11 +61,10 @@ def _run_intruder(executor: Any, env: dict[str, str], messages: int, timeout_s: 
 
 
 def dds_injection(domain: int | None = None, messages: int = 40, timeout_s: float = 30.0) -> dict[str, Any]:
-    """Run the intruder as uid 65534 and count what our subscription receives. Needs root (to switch user)."""
+    """Run the intruder as uid 65534 (as root; otherwise, or when that user cannot run the interpreter, a
+    process of our own uid stands in, and the result says so) and count what our subscription receives."""
     from touch_graph.messages import get_message
     from touch_graph.runtime import Context, Node, SingleThreadedExecutor
-    if os.geteuid() != 0:
-        return {'measured': False, 'why': 'needs root to start a process as another user'}
     domain = domain if domain is not None else 150 + os.getpid() % 60
     env = {**os.environ, 'ROS_DOMAIN_ID': str(domain), 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'HOME': '/tmp'}
     env.pop('CYCLONEDDS_URI', None)
@@ -86,7 +85,9 @@ def dds_injection(domain: int | None = None, messages: int = 40, timeout_s: floa
         executor.add_node(node)
         note = ''
         intruder_uid = INTRUDER_UID
-        proc, stderr = _run_intruder(executor, env, messages, timeout_s, switch_user=True)
+        can_switch = os.geteuid() == 0
+        proc, stderr = _run_intruder(executor, env, messages, timeout_s, switch_user=can_switch) if can_switch \
+            else ('only root can start a process as another user', '')
         if isinstance(proc, str) or (proc.returncode != 0 and not got):
             # That user cannot run this interpreter or read the installed package here (e.g. under /root,
             # mode 0700): a process of our own uid stands in. DDS over UDP carries no user id.
