@@ -32,7 +32,7 @@ from touch_driver.bear.body_map import BodyMap
 from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
-from touch_graph.subscriber_drops import DropReporter
+from touch_graph.node_health import NodeHealth
 from touch_graph.yamlconf import did_you_mean
 
 from .features import MIN_COMPONENT
@@ -110,7 +110,9 @@ class BearGesturesNode(Node):
         self.symbolic_pub = (self.create_publisher(SymbolicGesture, '/touch/symbolic', 20)
                              if self.publish_symbolic else None)
         self.create_subscription(BearFrame, 'frame', self._on_frame, sensor_data_qos(10))
-        self.drops = DropReporter(self)      # frames lost when this node falls behind: warned in its log
+        # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
+        self.health = NodeHealth(self)
+        self.drops = self.health.drops
         self.create_timer(p['max_gap_s'] / 2, self._watchdog)   # ends things within 1.5 max_gap_s
         outputs = (('subtypes', self.publish_subtypes), ('symbolic gestures', self.publish_symbolic))
         what = [name for name, on in outputs if on]
