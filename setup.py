@@ -54,6 +54,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
                               'merge = touch_lab.skin.codebook_cli:MERGE'],
     'social_touch.report': ['bear = touch_lab.bear.report', 'patch = touch_lab.patch.report',
                             'skin = touch_lab.skin.report', 'view-screenshot = touch_view.screenshot',
+                            'robustness = touch_lab.robustness.report',
                             'foxglove-layout = touch_view.foxglove_layout'],
     # `social-touch bench NAME`: a function bench(repeats=N) -> dict.
     'social_touch.bench': [
@@ -63,6 +64,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
         'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
         'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
         'stack = touch_lab.bench.stack:bench_stack', 'training = touch_lab.bench.training:bench_training',
+        'framing = touch_lab.bench.framing:bench_framing',
     ],
     # `generator: NAME` in a scene file (touch_sim.scenes): a function returning a stimulus.
     'social_touch.scene_generators': ['bear_people = touch_sim.bear.people:make_scene',

@@ -36,7 +36,7 @@ def test_payload_byte_literal() -> None:
 
 def test_whole_frame_literal() -> None:
     wire = encode_scan(0x1234, np.zeros(64, dtype=np.uint16))
-    assert wire[:7] == bytes.fromhex('a55a 42 8000 3412')
+    assert wire[:8] == bytes.fromhex('a55a 02 42 8000 3412')   # sync, version 2, id, length, seq
     assert len(wire) == PAYLOAD_SIZE + OVERHEAD
 
 

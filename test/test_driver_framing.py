@@ -7,7 +7,7 @@ import itertools
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from touch_driver.framing import OVERHEAD, SYNC, Frame, FrameDecoder, crc16, encode_frame
+from touch_driver.framing import HEADER_SIZE, OVERHEAD, SYNC, Frame, FrameDecoder, crc16, crc32, encode_frame
 
 SIZES = {0x01: 3, 0x02: 10}  # two ids with different payload lengths; small, so hypothesis stays fast
 # Zero bytes after the last frame: a false header met earlier may claim more bytes than remain, and the
@@ -35,27 +35,31 @@ def make_frames(specs) -> list[tuple[int, int, bytes]]:
 
 
 # ---------------------------------------------------------------------- byte literals
-def test_crc_check_value_and_known_frame() -> None:
+def test_crc_check_values_and_known_frame() -> None:
     assert crc16(b'123456789') == 0x29B1
+    assert crc32(b'123456789') == 0xCBF43926          # CRC-32/ISO-HDLC check value
     wire = encode_frame(0x01, 0x0102, b'\x00\x01\x02')
-    assert wire == bytes.fromhex('a55a 01 0300 0201 000102') + wire[-2:]
-    assert int.from_bytes(wire[-2:], 'little') == crc16(wire[2:-2])
+    assert wire[:8] == bytes.fromhex('a55a 02 01 0300 0201')   # sync, version 2, id, length, seq
+    assert int.from_bytes(wire[8:10], 'little') == crc16(wire[2:8])
+    assert wire[10:13] == b'\x00\x01\x02'
+    assert int.from_bytes(wire[-4:], 'little') == crc32(wire[2:-4])
+    assert len(wire) == 3 + OVERHEAD == 17
 
 
 def test_resync_after_garbage_and_false_sync() -> None:
     good = encode_frame(0x01, 5, b'abc')
     # a false sync whose header claims an unknown id, then a stray half sync, then the frame
-    stream = b'\x00\xff' + SYNC + b'\x07\x03\x00' + b'\xa5' + good
+    stream = b'\x00\xff' + SYNC + b'\x07\x03\x00\x00\x00\x00\x00' + b'\xa5' + good
     dec = FrameDecoder(SIZES)
     frames = dec.update(stream)
     assert frames == [Frame(0x01, 5, b'abc')]
-    assert dec.stats.length_errors >= 1
+    assert dec.stats.header_errors == 1
     check_accounting(dec, frames, len(stream))
 
 
 def test_checksum_error_counted_and_next_frame_kept() -> None:
     bad = bytearray(encode_frame(0x01, 1, b'xyz'))
-    bad[8] ^= 0x10
+    bad[HEADER_SIZE + 1] ^= 0x10                      # a payload bit: the header still checks
     good = encode_frame(0x01, 2, b'abc')
     dec = FrameDecoder(SIZES)
     frames = dec.update(bytes(bad) + good)
@@ -142,16 +146,18 @@ def test_truncated_frames_lose_only_themselves(specs, data) -> None:
     pieces = [w[:data.draw(st.integers(0, len(w) - 1))] if truncate else w
               for w, truncate in zip(wires, cut, strict=True)]
     stream = b''.join(pieces) + FLUSH
-    # A frame cut just before its last CRC byte, when that byte is 0xA5 and the next byte on the wire is a
-    # sync (0xA5), cannot be told from a whole frame: it arrives, and the frame whose sync it took is lost.
+    # A frame cut short whose missing tail happens to be the bytes that follow it on the wire (e.g. a last CRC
+    # byte 0xA5 before the next sync, or 0x00 before the zero flush) cannot be told from a whole frame: it
+    # arrives, and the frames whose bytes completed it are lost.
     owner = [k for k, piece in enumerate(pieces) for _ in piece]      # which frame each byte came from
     kept_index = {k for k, truncate in enumerate(cut) if not truncate}
     end = 0
     for k, (wire, piece) in enumerate(zip(wires, pieces, strict=True)):
         end += len(piece)
-        if cut[k] and len(piece) == len(wire) - 1 and wire[-1] == SYNC[0] and stream[end:end + 1] == SYNC[:1]:
+        tail = wire[len(piece):]
+        if cut[k] and stream[end:end + len(tail)] == tail:
             kept_index.add(k)
-            kept_index.discard(owner[end] if end < len(owner) else -1)
+            kept_index.difference_update(owner[end:end + len(tail)])
     kept = [f for k, f in enumerate(frames) if k in kept_index]
     dec = FrameDecoder(SIZES)
     got = dec.update(stream)
@@ -205,8 +211,54 @@ def test_a_frame_ending_in_the_first_sync_byte_is_not_counted_as_dropped():
     from touch_driver.framing import FrameDecoder as Decoder
     from touch_driver.framing import encode_frame as encode
     decoder = Decoder({0x42: 4})
-    for seq in range(300):
-        wire = encode(0x42, seq, bytes([seq % 256, 1, 2, 3]))
+    for seq in range(3000):
+        wire = encode(0x42, seq, bytes([seq % 256, seq // 256, 2, 3]))
         assert len(decoder.update(wire)) == 1
         assert decoder.stats.dropped_bytes == 0
-    assert any(encode(0x42, s, bytes([s % 256, 1, 2, 3]))[-1] == 0xA5 for s in range(300))
+    assert any(encode(0x42, s, bytes([s % 256, s // 256, 2, 3]))[-1] == 0xA5 for s in range(3000))
+
+
+# ---------------------------------------------------------------------- protocol version 2
+def test_a_version_1_frame_is_counted_as_a_version_error_not_read() -> None:
+    # Version 1: sync, id, length, seq, payload, CRC-16 over bytes 2.. (what old firmware sends).
+    body = bytes([0x01]) + (3).to_bytes(2, 'little') + (9).to_bytes(2, 'little') + b'abc'
+    v1 = SYNC + body + crc16(body).to_bytes(2, 'little')
+    good = encode_frame(0x01, 10, b'abc')
+    dec = FrameDecoder(SIZES)
+    frames = dec.update(v1 + good)
+    assert frames == [Frame(0x01, 10, b'abc')]
+    assert dec.stats.version_errors == 1 and dec.stats.checksum_errors == 0
+    check_accounting(dec, frames, len(v1) + len(good))
+
+
+def test_a_checked_header_of_another_version_is_refused() -> None:
+    wire = bytearray(encode_frame(0x01, 1, b'abc'))
+    wire[2] = 3                                                 # version 3, header check recomputed
+    wire[8:10] = crc16(wire[2:8]).to_bytes(2, 'little')
+    dec = FrameDecoder(SIZES)
+    assert dec.update(bytes(wire) + FLUSH) == []
+    assert dec.stats.version_errors == 1
+
+
+@FUZZ
+@given(frame_specs, st.lists(st.tuples(st.sampled_from(sorted(SIZES)), st.integers(0, 0xFFFF), st.integers(0, 0xFFFF),
+                                       st.integers(0, 0xFFFF)), max_size=30), st.randoms())
+def test_fake_headers_between_frames_neither_pass_nor_hide_a_frame(specs, fakes, rnd) -> None:
+    """A flood of plausible headers (right sync, version, id and length; random seq and check) between real frames."""
+    frames = make_frames(specs)
+    units = [SYNC + bytes([2, sid]) + SIZES[sid].to_bytes(2, 'little') + seq.to_bytes(2, 'little')
+             + check.to_bytes(2, 'little') for sid, seq, check, _ in fakes] + [encode_frame(*f) for f in frames]
+    order = list(range(len(units)))
+    rnd.shuffle(order)
+    # real frames keep their order among themselves
+    real_positions = sorted(k for k in order if k >= len(fakes))
+    placed, real_iter = [], iter(real_positions)
+    for k in order:
+        placed.append(units[next(real_iter)] if k >= len(fakes) else units[k])
+    stream = b''.join(placed) + FLUSH
+    dec = FrameDecoder(SIZES)
+    got = dec.update(stream)
+    fake_checks = sum(crc16(u[2:8]) == int.from_bytes(u[8:10], 'little') for u in units[:len(fakes)])
+    if fake_checks == 0:        # a fake whose random check is right (1 in 65,536) leaves only the CRC-32
+        assert [(f.sensor_id, f.seq, f.payload) for f in got] == frames
+    check_accounting(dec, got, len(stream))

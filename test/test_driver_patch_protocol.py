@@ -78,7 +78,7 @@ def test_decoder_reads_both_frame_kinds_and_resyncs() -> None:
     cells = np.arange(256, dtype=np.uint16).reshape(16, 16)
     raw_frame = encode_scan(1, cells, ZERO_PANELS, raw_scan=True)
     avg_frame = encode_scan(1, cells, ZERO_PANELS + 7, raw_scan=False)
-    assert raw_frame[2] == PATCH_SCAN_ID and avg_frame[2] == PATCH_FRAME_ID
+    assert raw_frame[3] == PATCH_SCAN_ID and avg_frame[3] == PATCH_FRAME_ID
     broken = bytearray(encode_scan(2, cells, ZERO_PANELS))
     broken[100] ^= 4
     stream = b'\x00garbage\xa5' + raw_frame + bytes(broken) + avg_frame + encode_scan(3, cells, ZERO_PANELS)

@@ -110,7 +110,7 @@ def test_long_run_through_a_faulty_port_has_bounded_memory():
         forget_devices()
         forget_stimuli()
     assert frames > 15000 and dec.stats.dropped_bytes > 0 and dec.stats.checksum_errors > 0
-    assert dec.buffered < 2 * 297
+    assert dec.buffered < 2 * 302
     assert _state_bytes(cal) == sizes[0]
     assert after - before < 64 * 1024 and peak - before < 512 * 1024
     assert contacts > 0

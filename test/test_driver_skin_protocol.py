@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from touch_driver.framing import encode_frame
+from touch_driver.framing import OVERHEAD, encode_frame
 from touch_driver.skin.protocol import (
     MODULE_TAXELS,
     N_TAXELS,
@@ -23,7 +23,7 @@ from touch_driver.skin.protocol import (
     module_of_taxel,
 )
 
-FRAME_SIZE = PAYLOAD_SIZE + 9
+FRAME_SIZE = PAYLOAD_SIZE + OVERHEAD
 
 
 def test_module_geometry_matches_skinframe_msg():
@@ -72,10 +72,10 @@ def test_whole_frame_byte_literal():
     raw = np.zeros(144, dtype=np.uint16)
     raw[111] = 0x1234
     wire = encode_skin_frame(0x0102, raw)
-    assert len(wire) == FRAME_SIZE == 297
-    assert wire[:7] == b'\xa5\x5a\x53\x20\x01\x02\x01'   # sync, id 'S', length 288 LE, seq 0x0102 LE
-    assert wire[7 + 46:7 + 48] == b'\x34\x12'
-    assert wire[-2:] == b'\xe9\x74'                      # CRC-16/CCITT-FALSE, LE
+    assert len(wire) == FRAME_SIZE == 302
+    assert wire[:8] == b'\xa5\x5a\x02\x53\x20\x01\x02\x01'   # sync, version 2, id 'S', length 288 LE, seq 0x0102 LE
+    assert wire[10 + 46:10 + 48] == b'\x34\x12'
+    assert wire[-4:] == b'\xe8\xec)o'                # CRC-32, LE
     frames = SkinStreamDecoder().update(wire)
     assert len(frames) == 1 and frames[0].seq == 0x0102 and np.array_equal(frames[0].raw, raw)
 

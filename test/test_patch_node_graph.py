@@ -129,7 +129,7 @@ def test_the_people_scene_loads_from_yaml_through_the_generator_hook():
     port.attach_clock(lambda: now[0])
     port.open()
     now[0] = 1.0
-    assert len(port.read(100_000)) == 101 * 351   # scans 0..100 of the first second, 351 bytes each
+    assert len(port.read(100_000)) == 101 * 356   # scans 0..100 of the first second, 356 bytes each
     port.close()
 
 

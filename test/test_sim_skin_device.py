@@ -9,6 +9,7 @@ import pytest
 import serial
 
 import touch_sim  # noqa: F401  (registers the skinsim:// URL handler)
+from touch_driver.framing import HEADER_SIZE
 from touch_driver.skin.calibration import SkinCalibrator, calibrate_frames
 from touch_driver.skin.protocol import MODULE_TAXELS, SkinStreamDecoder, decode_payload
 from touch_graph.errors import ConfigError
@@ -163,8 +164,8 @@ def test_device_is_deterministic_and_frames_decode_to_raw():
     assert np.array_equal(a, b) and not np.array_equal(a, c)
     dev = SkinDevice(stim, seed=5)
     wire = dev.frame_bytes(70000, 0.0)
-    assert wire[5:7] == (70000 & 0xFFFF).to_bytes(2, 'little')
-    assert np.array_equal(decode_payload(wire[7:-2]), a[0])
+    assert wire[6:8] == (70000 & 0xFFFF).to_bytes(2, 'little')
+    assert np.array_equal(decode_payload(wire[HEADER_SIZE:-4]), a[0])
 
 
 def test_device_faults_and_saturation():

@@ -8,11 +8,21 @@ in :meth:`SerialDriverNode.handle_frame`. This base
   :meth:`~touch_driver.serial_driver.SerialDriver.read_frame`, so a frame is published at most
   half a period after it arrives, on the graph's clock (a virtual device on a simulated clock
   then runs as fast as the graph);
+- checks every parameter at start against its range (``ParameterError`` naming the range and,
+  for a value from a file, the file and line) and refuses a port that can never open (unknown
+  URL scheme, an option the device lacks, a virtual device of another sensor, a bad baud rate):
+  such a node does not start;
 - survives an unplugged port: it logs once, reports ``connected: false``, and tries to
   reopen every ``reconnect_period_s`` until the device is back;
+- counts a frame once its message is published; a frame whose handling raises is counted in
+  ``handle_errors`` and its reason reported, never silently;
 - publishes a ``DriverStatus`` on ``~/status`` and a ``diagnostic_msgs/DiagnosticArray`` on
-  ``/diagnostics`` every ``status_period_s`` (frames, dropped bytes, checksum errors,
-  sequence gaps, reconnects, rate), the latter for rqt_robot_monitor and aggregators.
+  ``/diagnostics`` every ``status_period_s`` (frames published, every kind of bad or lost
+  frame, reconnects, rate), the latter for rqt_robot_monitor and aggregators. The level is
+  ERROR when disconnected, when frames arrive but none is published, or when no frame came in a
+  period that should hold two or more; WARN or ERROR when the
+  share of bad or lost frames in the period passes ``warn_error_fraction`` /
+  ``error_error_fraction``, WARN when the rate falls below ``min_rate_fraction`` of the expected.
 
 Parameters set while it runs (``ros2 param set``, ``social-touch param set``): those in
 :attr:`SerialDriverNode.live_parameters` take effect at once; every other one is read when
@@ -24,12 +34,22 @@ from __future__ import annotations
 
 from typing import Any, Generic
 
-from touch_graph.compat import USING_ROS, Node, ParameterDescriptor, SetParametersResult, get_message
+from touch_graph.compat import (
+    USING_ROS,
+    FloatingPointRange,
+    IntegerRange,
+    Node,
+    ParameterDescriptor,
+    SetParametersResult,
+    get_message,
+)
+from touch_graph.errors import ParameterError
+from touch_graph.subscriber_drops import dropped_by_topic
 
 from .framing import ScanT, SensorStreamDecoder
-from .serial_driver import DecodedFrame, DriverError, SerialDriver
+from .serial_driver import DecodedFrame, DriverError, PortURLError, SerialDriver, url_handler_packages
 
-__all__ = ['SerialDriverNode']
+__all__ = ['SerialDriverNode', 'ranged']
 
 DriverStatus = get_message('social_touch_msgs/msg/DriverStatus')
 DiagnosticArray = get_message('diagnostic_msgs/msg/DiagnosticArray')
@@ -39,6 +59,23 @@ KeyValue = get_message('diagnostic_msgs/msg/KeyValue')
 _OK, _WARN, _ERROR = 0, 1, 2
 # diagnostic_msgs/DiagnosticStatus.level is a `byte`: an int in our classes, bytes under rclpy.
 _BYTE_LEVEL = USING_ROS
+#: Bad or lost frames counted in a status period's error fraction (DriverStatus fields).
+_BAD_FRAME_COUNTERS = ('frames_missed', 'checksum_errors', 'decode_errors', 'length_errors', 'handle_errors')
+_DIAGNOSTIC_KEYS = ('frames', 'dropped_bytes', 'header_errors', 'version_errors', 'length_errors', 'checksum_errors',
+                    'decode_errors', 'sequence_gaps', 'frames_missed', 'handle_errors', 'subscriber_drops',
+                    'reconnects', 'error_fraction', 'rate_hz')
+
+
+def ranged(description: str, low: float, high: float, *, integer: bool = False,
+           read_only: bool = False) -> ParameterDescriptor:
+    """A descriptor whose value must lie in ``[low, high]`` (rcl_interfaces ranges; the runtime refuses
+    others, and NaN, at declaration with the range and the value's file and line in the message)."""
+    if integer:
+        return ParameterDescriptor(description=description, read_only=read_only,
+                                   integer_range=[IntegerRange(from_value=int(low), to_value=int(high), step=0)])
+    return ParameterDescriptor(description=description, read_only=read_only,
+                               floating_point_range=[FloatingPointRange(from_value=float(low), to_value=float(high),
+                                                                        step=0.0)])
 
 
 class SerialDriverNode(Node, Generic[ScanT]):
@@ -63,16 +100,34 @@ class SerialDriverNode(Node, Generic[ScanT]):
             'port', self.default_port,
             ParameterDescriptor(description='serial device or pyserial URL, e.g. /dev/ttyACM0 or '
                                             f'{self.default_port}', read_only=True)).value
-        self.baudrate = self.declare_parameter('baudrate', 115200).value
+        self.baudrate = self.declare_parameter(
+            'baudrate', 115200, ranged('UART baud rate (ignored by USB CDC and virtual ports)', 50, 12_000_000,
+                                       integer=True)).value
         self.frame_id = self.declare_parameter('frame_id', f'{self.sensor}_link').value
-        expected = self.declare_parameter('expected_rate_hz', float(self.frame_rate_hz)).value
-        poll_rate = self.declare_parameter('poll_rate_hz', 2.0 * expected).value
-        self.reconnect_period_s = self.declare_parameter('reconnect_period_s', 1.0).value
-        status_period = self.declare_parameter('status_period_s', 1.0).value
-        for name, value in (('expected_rate_hz', expected), ('poll_rate_hz', poll_rate),
-                            ('reconnect_period_s', self.reconnect_period_s), ('status_period_s', status_period)):
-            if not value > 0:
-                raise ValueError(f"parameter '{name}' of {self.get_fully_qualified_name()} must be > 0, got {value}")
+        expected = self.declare_parameter(
+            'expected_rate_hz', float(self.frame_rate_hz), ranged('frames/s the sensor sends', 0.01, 10_000.0)).value
+        poll_rate = self.declare_parameter(
+            'poll_rate_hz', 2.0 * expected, ranged('port reads per second', 0.01, 100_000.0)).value
+        self.reconnect_period_s = self.declare_parameter(
+            'reconnect_period_s', 1.0, ranged('s between attempts to reopen a lost port', 0.001, 3600.0)).value
+        status_period = self.declare_parameter(
+            'status_period_s', 1.0, ranged('s between status and diagnostics messages', 0.001, 3600.0)).value
+        self.warn_error_fraction = self.declare_parameter(
+            'warn_error_fraction', 0.01, ranged('share of bad or lost frames in a status period that is WARN',
+                                                0.0, 1.0)).value
+        self.error_error_fraction = self.declare_parameter(
+            'error_error_fraction', 0.2, ranged('share of bad or lost frames in a status period that is ERROR',
+                                                0.0, 1.0)).value
+        self.min_rate_fraction = self.declare_parameter(
+            'min_rate_fraction', 0.8, ranged('rate below this share of expected_rate_hz is WARN', 0.0, 1.0)).value
+        if not isinstance(self.port, str) or not self.port.strip():
+            raise ParameterError(f"parameter 'port' of {self.get_fully_qualified_name()} must be a device path or "
+                                 f"URL (e.g. /dev/ttyACM0 or {self.default_port}); got {self.port!r}")
+        if self.warn_error_fraction > self.error_error_fraction:
+            raise ParameterError(f'warn_error_fraction ({self.warn_error_fraction:g}) must not exceed '
+                                 f'error_error_fraction ({self.error_error_fraction:g}) of '
+                                 f'{self.get_fully_qualified_name()}')
+        self._check_port_is_ours()
         self.expected_rate_hz = expected
 
         self.driver: SerialDriver[ScanT] = SerialDriver(self.port, self.make_decoder(), baudrate=self.baudrate,
@@ -80,13 +135,16 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self.status_pub = self.create_publisher(DriverStatus, '~/status', 10)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.frames = 0
+        self.handle_errors = 0
         self.reconnects = 0
         self.last_error = ''
         self._frames_at_status = 0
+        self._bad_at_status = 0
+        self._arrived_at_status = 0
         self._status_period = status_period
         self._next_attempt_s = 0.0
         self._was_connected = False
-        self._try_open()
+        self._try_open(at_start=True)
         self.create_timer(1.0 / poll_rate, self._poll)
         self.create_timer(status_period, self._publish_status)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -125,9 +183,24 @@ class SerialDriverNode(Node, Generic[ScanT]):
     def _clock_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _try_open(self) -> None:
+    def _check_port_is_ours(self) -> None:
+        """Refuse a virtual device of another sensor (``bearsim://`` given to the skin driver)."""
+        scheme = self.port.split('://', 1)[0] if '://' in self.port else ''
+        if scheme in url_handler_packages() and scheme != f'{self.sensor}sim':
+            raise PortURLError(f"{self.port} is a virtual device of another sensor; the {self.sensor} driver reads "
+                               f"{self.sensor}sim:// URLs or a real port (parameter 'port' of "
+                               f'{self.get_fully_qualified_name()})')
+
+    def _try_open(self, at_start: bool = False) -> None:
         try:
             self.driver.open()
+        except PortURLError as err:
+            if at_start:
+                raise               # a configuration that can never work: the node does not start
+            self.last_error = str(err)
+            self._next_attempt_s = float('inf')     # not retried; reported as ERROR on /diagnostics
+            self.get_logger().error(str(err), once=True)
+            return
         except DriverError as err:
             self.last_error = str(err)
             self._next_attempt_s = self._clock_s() + self.reconnect_period_s
@@ -158,30 +231,71 @@ class SerialDriverNode(Node, Generic[ScanT]):
                 return
             if frame is None:
                 return
-            self.frames += 1
-            self.handle_frame(frame)
+            try:
+                self.handle_frame(frame)
+            except Exception as err:  # a frame the node cannot handle is counted and reported, never fatal
+                self.handle_errors += 1
+                self.last_error = f'cannot handle a frame: {type(err).__name__}: {err}'
+                self.get_logger().error(self.last_error, throttle_duration_sec=10.0)
+                continue
+            self.frames += 1                 # counted once its message went out
+
+    def counters(self) -> dict[str, int]:
+        """Every counter of :class:`DriverStatus` since the driver started (frames = published)."""
+        stats = self.driver.stats
+        return {'frames': self.frames, 'dropped_bytes': stats.dropped_bytes, 'header_errors': stats.header_errors,
+                'version_errors': stats.version_errors, 'length_errors': stats.length_errors,
+                'checksum_errors': stats.checksum_errors, 'decode_errors': self.driver.decoder.corrupt_frames,
+                'sequence_gaps': stats.sequence_gaps, 'frames_missed': stats.frames_missed,
+                'handle_errors': self.handle_errors, 'reconnects': self.reconnects}
 
     def status(self) -> Any:
-        """The current :class:`DriverStatus` message."""
-        stats = self.driver.stats
-        rate = (self.frames - self._frames_at_status) / self._status_period
-        return DriverStatus(header=self.header(), port=self.port, connected=self.driver.is_open,
-                            frames=self.frames, dropped_bytes=stats.dropped_bytes,
-                            checksum_errors=stats.checksum_errors, sequence_gaps=stats.sequence_gaps,
-                            reconnects=self.reconnects, rate_hz=rate, last_error=self.last_error)
+        """The current :class:`DriverStatus` message (rate and error fraction over the period so far)."""
+        counts = self.counters()
+        published = counts['frames'] - self._frames_at_status
+        bad = sum(counts[key] for key in _BAD_FRAME_COUNTERS) - self._bad_at_status
+        fraction = bad / (bad + published) if bad + published else 0.0
+        return DriverStatus(header=self.header(), port=self.port, connected=self.driver.is_open, **counts,
+                            error_fraction=fraction, rate_hz=published / self._status_period,
+                            last_error=self.last_error)
+
+    def _level(self, status: Any) -> tuple[int, str]:
+        """Diagnostic level and message of one status (thresholds are parameters)."""
+        if not status.connected:
+            return _ERROR, f'disconnected: {status.last_error}'
+        if status.error_fraction >= 1.0 and status.rate_hz == 0:
+            return _ERROR, f'frames arrive but none is published: {status.last_error or "all bad"}'
+        bad = (f'{100 * status.error_fraction:.1f} % of frames bad or lost '
+               f'(missed {status.frames_missed}, checksum {status.checksum_errors}, decode {status.decode_errors}, '
+               f'length {status.length_errors}, handle {status.handle_errors} since start)')
+        if status.error_fraction > self.error_error_fraction:
+            return _ERROR, bad
+        if status.version_errors and status.frames == 0:
+            return _ERROR, (f'{status.version_errors} frames of another protocol version and none of version 2: '
+                            'update the sensor firmware')
+        if status.error_fraction > self.warn_error_fraction:
+            return _WARN, bad
+        if status.rate_hz == 0 and self._status_period * self.expected_rate_hz >= 2:
+            # Connected, at least two frames due, none published: a dead sensor, not a slow one.
+            return _ERROR, (f'no frame in {self._status_period:g} s (expected {self.expected_rate_hz:g} Hz); '
+                            f'{status.dropped_bytes} bytes dropped since start')
+        if status.rate_hz < self.min_rate_fraction * self.expected_rate_hz:
+            return _WARN, f'{status.rate_hz:.1f} Hz, expected {self.expected_rate_hz:g} Hz'
+        return _OK, f'{status.rate_hz:.1f} Hz'
+
+    def subscriber_drops(self) -> int:
+        """Messages this node's subscriptions dropped with a full queue (none unless a subclass subscribes)."""
+        return sum(dropped_by_topic(self).values())
 
     def _publish_status(self) -> None:
         status = self.status()
-        self._frames_at_status = self.frames
+        counts = self.counters()
+        self._frames_at_status = counts['frames']
+        self._bad_at_status = sum(counts[key] for key in _BAD_FRAME_COUNTERS)
         self.status_pub.publish(status)
-        if not status.connected:
-            level, text = _ERROR, f'disconnected: {status.last_error}'
-        elif status.rate_hz < 0.8 * self.expected_rate_hz:
-            level, text = _WARN, f'{status.rate_hz:.1f} Hz, expected {self.expected_rate_hz:g} Hz'
-        else:
-            level, text = _OK, f'{status.rate_hz:.1f} Hz'
-        values = [KeyValue(key=key, value=str(getattr(status, key))) for key in
-                  ('frames', 'dropped_bytes', 'checksum_errors', 'sequence_gaps', 'reconnects', 'rate_hz')]
+        level, text = self._level(status)
+        values = [KeyValue(key=key, value=str(getattr(status, key) if key != 'subscriber_drops'
+                                              else self.subscriber_drops())) for key in _DIAGNOSTIC_KEYS]
         self.diagnostics_pub.publish(DiagnosticArray(header=status.header, status=[DiagnosticStatus(
             level=bytes([level]) if _BYTE_LEVEL else level,
             name=f'social_touch: {self.get_fully_qualified_name()}', message=text, hardware_id=self.port,

@@ -1,14 +1,21 @@
-"""Byte framing shared by the three sensors' serial protocols (see docs/protocols.md).
+"""Byte framing shared by the three sensors' serial protocols, protocol version 2 (docs/protocols.md).
 
 Every frame on the wire is::
 
     offset  size  field
     0       2     sync, 0xA5 0x5A
-    2       1     sensor id (0x42 'B' bear, 0x50 'P' patch, 0x51 'Q' patch raw scan, 0x53 'S' skin)
-    3       2     payload length n, uint16 little endian
-    5       2     sequence counter, uint16 little endian, +1 per frame, wraps at 65536
-    7       n     payload, as the sensor's firmware sends it
-    7+n     2     CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF) over bytes 2..7+n-1, little endian
+    2       1     protocol version, 2
+    3       1     sensor id (0x42 'B' bear, 0x50 'P' patch, 0x51 'Q' patch raw scan, 0x53 'S' skin)
+    4       2     payload length n, uint16 little endian
+    6       2     sequence counter, uint16 little endian, +1 per frame, wraps at 65536
+    8       2     header check: CRC-16/CCITT-FALSE over bytes 2..7, little endian
+    10      n     payload, as the sensor's firmware sends it
+    10+n    4     CRC-32 (ISO-HDLC, as zlib.crc32) over bytes 2..10+n-1, little endian
+
+Version 1 (no version byte, no header check, one CRC-16 over the frame) accepted bogus frames under
+a flood of fake headers: every fake sync made the decoder wait for and checksum a whole payload, and
+one in 65,536 of those passed. In version 2 a fake header is refused by its own check (all but one
+in 65,536) before any payload is awaited, and a payload must then pass a 32-bit CRC.
 
 :class:`FrameDecoder` is a Packetizer in the manner of ``serial.threaded``: it is fed
 arbitrary chunks of bytes and returns whole, checked frames. It never raises on bad
@@ -17,7 +24,7 @@ it resynchronises on the next sync pattern.
 
 >>> wire = encode_frame(0x53, 7, b'hi')
 >>> wire.hex(' ')
-'a5 5a 53 02 00 07 00 68 69 ba 66'
+'a5 5a 02 53 02 00 07 00 4f 0a 68 69 d3 07 2a a4'
 >>> dec = FrameDecoder({0x53: 2})
 >>> dec.update(b'junk' + wire[:5]), dec.update(wire[5:])
 ([], [Frame(sensor_id=83, seq=7, payload=b'hi')])
@@ -31,14 +38,18 @@ import struct
 from binascii import crc_hqx
 from dataclasses import dataclass, field
 from typing import Generic, TypeVar
+from zlib import crc32
 
-__all__ = ['HEADER_SIZE', 'OVERHEAD', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'ScanT', 'SensorStreamDecoder',
-           'crc16', 'encode_frame']
+__all__ = ['HEADER_SIZE', 'OVERHEAD', 'PROTOCOL_VERSION', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'ScanT',
+           'SensorStreamDecoder', 'crc16', 'crc32', 'encode_frame']
 
 SYNC = b'\xa5\x5a'
-_HEADER = struct.Struct('<2sBHH')
-HEADER_SIZE = _HEADER.size  # 7
-OVERHEAD = HEADER_SIZE + 2  # header + CRC
+PROTOCOL_VERSION = 2
+_HEADER = struct.Struct('<2sBBHHH')   # sync, version, id, length, seq, header check
+HEADER_SIZE = _HEADER.size            # 10
+_CRC = struct.Struct('<I')
+OVERHEAD = HEADER_SIZE + _CRC.size    # 14: header + CRC-32
+_V1_HEADER = struct.Struct('<2sBH')   # version 1: sync, id, length (told apart to name an old firmware)
 #: What a sensor's stream decoder yields per frame (BearScan, PatchScan, SkinScan).
 ScanT = TypeVar('ScanT')
 
@@ -53,14 +64,14 @@ def crc16(data: bytes | bytearray | memoryview) -> int:
 
 
 def encode_frame(sensor_id: int, seq: int, payload: bytes) -> bytes:
-    """One wire frame carrying ``payload``; ``seq`` is taken modulo 65536."""
+    """One version-2 wire frame carrying ``payload``; ``seq`` is taken modulo 65536."""
     if not 0 <= sensor_id <= 255:
         raise ValueError(f'sensor_id must be 0..255, got {sensor_id}')
     if len(payload) > 0xFFFF:
         raise ValueError(f'payload of {len(payload)} bytes exceeds the 65535-byte limit')
-    head = _HEADER.pack(SYNC, sensor_id, len(payload), seq & 0xFFFF)
-    body = head[2:] + payload
-    return head + payload + struct.pack('<H', crc16(body))
+    fields = struct.pack('<BBHH', PROTOCOL_VERSION, sensor_id, len(payload), seq & 0xFFFF)
+    head = SYNC + fields + struct.pack('<H', crc16(fields))
+    return head + payload + _CRC.pack(crc32(payload, crc32(head[2:])))
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,8 +89,10 @@ class DecoderStats:
 
     frames: int = 0            # good frames returned
     dropped_bytes: int = 0     # bytes discarded: garbage, bad frames, overflow
-    checksum_errors: int = 0   # frames whose CRC did not match
-    length_errors: int = 0     # headers with a length the sensor never sends
+    header_errors: int = 0     # a sync whose header failed its check (a false sync in garbage or payload)
+    version_errors: int = 0    # headers of another protocol version (version 1: a firmware to update)
+    length_errors: int = 0     # checked headers with an id this port does not carry, or a length that id never has
+    checksum_errors: int = 0   # frames with a good header whose CRC-32 did not match
     sequence_gaps: int = 0     # times the counter jumped (frames lost on the way)
     frames_missed: int = 0     # frames lost, summed over the gaps
     last_seq: dict[int, int] = field(default_factory=dict)
@@ -88,9 +101,14 @@ class DecoderStats:
 class FrameDecoder:
     """Split a byte stream into checked frames, resynchronising after garbage.
 
+    A sync is trusted only once the header after it passes its own check, so a fake header costs
+    a CRC over 6 bytes, not a wait for and a CRC over a payload. After a bad header or a bad
+    frame the search resumes at the byte after the sync (the real next frame may start inside
+    the bad one; the sync's second byte, 0x5A, cannot start a sync).
+
     Args:
         payload_sizes: sensor id -> the payload length that id always carries. Frames of
-            other ids, or with another length, are treated as garbage (a false sync).
+            other ids, or with another length, are treated as garbage (``length_errors``).
         max_buffer: bytes kept while waiting for the rest of a frame; beyond that the
             oldest bytes are dropped (and counted), so memory stays bounded on any input.
     """
@@ -114,6 +132,18 @@ class FrameDecoder:
         """Bytes held while waiting for the rest of a frame."""
         return len(self._buf)
 
+    def _header_fault(self, buf: bytearray, pos: int) -> str | None:
+        """Which counter a header at ``pos`` (``HEADER_SIZE`` bytes available) fails, or None if it is good."""
+        _, version, sensor_id, length, _, check = _HEADER.unpack_from(buf, pos)
+        if crc16(memoryview(buf)[pos + 2:pos + 8]) != check:
+            _, v1_id, v1_length = _V1_HEADER.unpack_from(buf, pos)
+            return 'version_errors' if self.payload_sizes.get(v1_id) == v1_length else 'header_errors'
+        if version != PROTOCOL_VERSION:
+            return 'version_errors'
+        if self.payload_sizes.get(sensor_id) != length:
+            return 'length_errors'
+        return None
+
     def update(self, data: bytes | bytearray | memoryview) -> list[Frame]:
         """Add bytes; return the frames completed by them, in order."""
         buf = self._buf
@@ -135,23 +165,26 @@ class FrameDecoder:
             pos = start
             if n - pos < HEADER_SIZE:
                 break
-            _, sensor_id, length, seq = _HEADER.unpack_from(buf, pos)
-            if self.payload_sizes.get(sensor_id) != length:
-                stats.length_errors += 1
-                stats.dropped_bytes += 1
-                pos += 1
+            fault = self._header_fault(buf, pos)
+            if fault is not None:
+                setattr(stats, fault, getattr(stats, fault) + 1)
+                stats.dropped_bytes += 2
+                pos += 2
                 continue
-            end = pos + HEADER_SIZE + length + 2
+            _, _, sensor_id, length, seq, _ = _HEADER.unpack_from(buf, pos)
+            end = pos + HEADER_SIZE + length + _CRC.size
             if end > n:
                 break
-            crc = buf[end - 2] | (buf[end - 1] << 8)
-            if crc16(memoryview(buf)[pos + 2:end - 2]) != crc:
-                # Drop only the sync byte: the real next frame may start inside this one.
+            view = memoryview(buf)
+            if crc32(view[pos + 2:end - _CRC.size]) != _CRC.unpack_from(buf, end - _CRC.size)[0]:
+                view.release()
+                # Drop only the sync: the real next frame may start inside this one.
                 stats.checksum_errors += 1
-                stats.dropped_bytes += 1
-                pos += 1
+                stats.dropped_bytes += 2
+                pos += 2
                 continue
-            out.append(Frame(sensor_id, seq, bytes(buf[pos + HEADER_SIZE:end - 2])))
+            out.append(Frame(sensor_id, seq, bytes(view[pos + HEADER_SIZE:end - _CRC.size])))
+            view.release()
             stats.frames += 1
             last = stats.last_seq.get(sensor_id)
             if last is not None:

@@ -59,7 +59,8 @@ class PortDisconnected(DriverError):
 
 
 class PortURLError(DriverError, ValueError):
-    """A port URL that can never open here: its scheme's handler package cannot be imported."""
+    """A port that can never open here: an unknown URL scheme, a handler package that cannot be imported,
+    an option the device does not have, a baud rate no port takes. Not retried: fix the configuration."""
 
 
 @functools.cache
@@ -147,7 +148,10 @@ class SerialDriver(Generic[ScanT]):
             if hasattr(port, 'attach_clock') and self._clock_given:
                 port.attach_clock(self._clock)  # a virtual device runs on our clock from its first byte
             port.open()
-        except (serial.SerialException, OSError, ValueError) as err:
+        except ValueError as err:
+            # pyserial's unknown scheme or bad baud rate, a virtual device's bad option: retrying cannot help.
+            raise PortURLError(f'{self.port} can never open: {err}') from err
+        except (serial.SerialException, OSError) as err:
             raise DriverError(f'cannot open {self.port}: {err}. Is the sensor plugged in, and is the '
                               'URL right (e.g. /dev/ttyACM0, loop://, bearsim://, patchsim://, skinsim://)?') from err
         self._serial = port

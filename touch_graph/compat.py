@@ -17,8 +17,9 @@ import os
 from typing import Any
 
 __all__ = [
-    'USING_ROS', 'DurabilityPolicy', 'Duration', 'Node', 'Parameter', 'ParameterDescriptor', 'QoSProfile',
-    'SetParametersResult', 'Time', 'get_message', 'get_service', 'latched_qos', 'qos_profile_sensor_data', 'rclpy',
+    'USING_ROS', 'DurabilityPolicy', 'Duration', 'FloatingPointRange', 'IntegerRange', 'Node', 'Parameter',
+    'ParameterDescriptor', 'QoSProfile', 'SetParametersResult', 'Time', 'get_message', 'get_service', 'latched_qos',
+    'qos_profile_sensor_data', 'rclpy',
     'sensor_data_qos', 'stamp_now',
 ]
 
@@ -37,7 +38,7 @@ USING_ROS = _want_ros()
 
 if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
     import rclpy
-    from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
     from rclpy.duration import Duration
     from rclpy.node import Node
     from rclpy.parameter import Parameter
@@ -59,6 +60,8 @@ else:
     from .runtime import (
         DurabilityPolicy,
         Duration,
+        FloatingPointRange,
+        IntegerRange,
         Node,
         Parameter,
         ParameterDescriptor,

@@ -33,8 +33,8 @@ from typing import Any, Protocol
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
-__all__ = ['DeviceModel', 'DeviceState', 'VirtualSerial', 'device_state', 'forget_device', 'forget_devices',
-           'parse_url']
+__all__ = ['DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state', 'forget_device',
+           'forget_devices', 'parse_url']
 
 
 class DeviceModel(Protocol):
@@ -103,6 +103,11 @@ def forget_devices() -> None:
         _registry.clear()
 
 
+class PortOptionError(SerialException, ValueError):
+    """A virtual device URL that can never open (bad option, unknown scene): a SerialException for
+    pyserial's callers, and a ValueError so a driver tells it from a device that is merely absent."""
+
+
 def parse_url(url: str, scheme: str) -> tuple[str, dict[str, str]]:
     """``scheme://name?k=v&...`` -> ``(name, {k: v})``; the name defaults to ``'default'``.
 
@@ -111,12 +116,12 @@ def parse_url(url: str, scheme: str) -> tuple[str, dict[str, str]]:
     """
     parts = urllib.parse.urlsplit(url)
     if parts.scheme != scheme:
-        raise SerialException(f'expected a URL of the form {scheme}://NAME?option=value&...; got {url!r}')
+        raise PortOptionError(f'expected a URL of the form {scheme}://NAME?option=value&...; got {url!r}')
     query = urllib.parse.parse_qs(parts.query, keep_blank_values=True)
     options = {}
     for key, values in query.items():
         if len(values) != 1:
-            raise SerialException(f'option {key!r} given {len(values)} times in {url!r}')
+            raise PortOptionError(f'option {key!r} given {len(values)} times in {url!r}')
         options[key] = values[0]
     name = (parts.netloc + parts.path).strip('/') or 'default'
     return name, options
@@ -160,11 +165,11 @@ class VirtualSerial(SerialBase):
                 model_options = {k: v for k, v in options.items() if k not in _FAULT_OPTIONS}
                 seed = faults.get('seed', 0)
                 if seed != int(seed):
-                    raise SerialException(f'option seed={options["seed"]!r} must be an integer')
+                    raise PortOptionError(f'option seed={options["seed"]!r} must be an integer')
                 try:
                     model = self.make_model(name, model_options, seed=int(seed))
                 except (ValueError, KeyError, OSError) as err:
-                    raise SerialException(f'cannot open {self.port}: {err}') from err
+                    raise PortOptionError(f'cannot open {self.port}: {err}') from err
                 state = DeviceState(name, model, faults)
                 state.rng.seed(int(faults.get('seed', 0)))
                 _registry[name] = state
@@ -301,4 +306,4 @@ def _float_option(options: dict[str, str], key: str) -> float:
     try:
         return float(options[key])
     except ValueError as err:
-        raise SerialException(f'option {key}={options[key]!r} is not a number') from err
+        raise PortOptionError(f'option {key}={options[key]!r} is not a number') from err

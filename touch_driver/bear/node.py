@@ -12,7 +12,7 @@ from typing import Any
 
 from touch_graph.compat import get_message, sensor_data_qos
 
-from ..driver_node import SerialDriverNode
+from ..driver_node import SerialDriverNode, ranged
 from ..serial_driver import DecodedFrame
 from .body_map import BodyMap
 from .calibration import BearCalibrator
@@ -35,12 +35,16 @@ class BearDriverNode(SerialDriverNode[BearScan]):
         self.get_logger().info(f'body map {self.body_map.source}')
         self.calibrator = BearCalibrator(
             self.body_map,
-            threshold=self.declare_parameter('threshold', 0.3).value,
-            baseline_frames=self.declare_parameter('baseline_frames', 10).value,
+            threshold=self.declare_parameter('threshold', 0.3, ranged('activation level, 0..1', 0.001, 0.999)).value,
+            baseline_frames=self.declare_parameter('baseline_frames', 10, ranged('scans averaged into the baseline',
+                                                                                 1, 100_000, integer=True)).value,
             rate_hz=self.expected_rate_hz,
-            drift_tau_s=self.declare_parameter('drift_tau_s', 120.0).value,
-            fault_after_s=self.declare_parameter('fault_after_s', 60.0).value,
-            saturated_after_s=self.declare_parameter('saturated_after_s', 300.0).value)
+            drift_tau_s=self.declare_parameter('drift_tau_s', 120.0, ranged('baseline drift time constant, s',
+                                                                            0.1, 1e6)).value,
+            fault_after_s=self.declare_parameter('fault_after_s', 60.0, ranged('s stuck before a fault', 0.1,
+                                                                               1e6)).value,
+            saturated_after_s=self.declare_parameter('saturated_after_s', 300.0, ranged('s saturated before a fault',
+                                                                                        0.1, 1e6)).value)
         self.frame_pub = self.create_publisher(BearFrame, 'frame', sensor_data_qos())
 
     def make_decoder(self) -> BearDecoder:

@@ -19,11 +19,11 @@ import numpy as np
 from touch_graph.compat import get_message, sensor_data_qos
 from touch_graph.paths import share_file
 
-from ..driver_node import SerialDriverNode
+from ..driver_node import SerialDriverNode, ranged
 from ..serial_driver import DecodedFrame
 from .calibration import PatchCalibrator
 from .panels import PanelCalibrator
-from .protocol import PatchDecoder, PatchScan
+from .protocol import N_PANELS, PatchDecoder, PatchScan
 
 __all__ = ['PatchDriverNode', 'main']
 
@@ -46,15 +46,21 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
         outline = self.declare_parameter('outline', '').value
         self.calibrator = PatchCalibrator(
             outline or None,
-            gain=self.declare_parameter('gain', 1.0 / 400.0).value,
-            tau=self.declare_parameter('tau', 0.001).value,
-            k=self.declare_parameter('k', 0.08).value,
-            average_window=self.declare_parameter('average_window', 5).value,
-            decimation=self.declare_parameter('decimation', 5).value)
-        self._panels_config = self.declare_parameter('panels', '').value or None
+            gain=self.declare_parameter('gain', 1.0 / 400.0, ranged('eq. (2) gain g, 1/counts', 1e-9, 1e3)).value,
+            tau=self.declare_parameter('tau', 0.001, ranged('eq. (1) minimum tracking rate, per frame',
+                                                            0.0, 1.0)).value,
+            k=self.declare_parameter('k', 0.08, ranged('eq. (2) activation floor', 0.0, 0.99)).value,
+            average_window=self.declare_parameter('average_window', 5, ranged('scans in the moving average', 1,
+                                                                              1000, integer=True)).value,
+            decimation=self.declare_parameter('decimation', 5, ranged('scans per published frame', 1, 1000,
+                                                                      integer=True)).value)
+        panels_config = self.declare_parameter('panels', '').value or None
         self.get_logger().info(f"outline {outline or share_file('config', 'patch_outline.yaml')}, panels "
-                               f"{self._panels_config or share_file('config', 'panels.yaml')}")
-        self._panel_calibrators: dict[int, PanelCalibrator] = {}
+                               f"{panels_config or share_file('config', 'panels.yaml')}")
+        # Both streams' calibrators are built now, so a wrong panels file stops the node at start
+        # (file and line in the error) instead of failing on every frame.
+        self._panel_calibrators = {int(raw): PanelCalibrator.from_yaml(panels_config, rate_hz=rate, n_panels=N_PANELS)
+                                   for raw, rate in ((True, SCAN_RATE_HZ), (False, FRAME_RATE_HZ))}
         self._last_contact: np.ndarray | None = None
         self.frame_pub = self.create_publisher(PatchFrame, 'frame', sensor_data_qos())
         self.panels_pub = self.create_publisher(PanelContact, 'panels', sensor_data_qos())
@@ -64,11 +70,7 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
 
     def _panel_calibrator(self, raw_scan: bool) -> PanelCalibrator:
         # Panels are sampled with every frame of the stream: 100 Hz scans or 20 Hz averages.
-        rate = SCAN_RATE_HZ if raw_scan else FRAME_RATE_HZ
-        key = int(raw_scan)
-        if key not in self._panel_calibrators:
-            self._panel_calibrators[key] = PanelCalibrator.from_yaml(self._panels_config, rate_hz=rate)
-        return self._panel_calibrators[key]
+        return self._panel_calibrators[int(raw_scan)]
 
     def handle_frame(self, frame: DecodedFrame[PatchScan]) -> None:
         scan = frame.scan

@@ -26,6 +26,7 @@ against a couch) is absorbed instead of reading as contact for ever.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +35,11 @@ import numpy as np
 from touch_driver.patch.protocol import N_PANELS
 from touch_graph.paths import share_file
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, load_yaml, typed
+
+#: Allowed ranges of the file's scalars: (low, high], as shown in the error.
+_SCALAR_RANGES = {'threshold': (0.0, math.inf, '(0, inf) counts (positive)'), 'release_fraction': (0.0, 1.0, '(0, 1]'),
+                  'freeze_fraction': (0.0, 1.0, '(0, 1]'), 'window_s': (0.0, 3600.0, '(0, 3600] s'),
+                  'max_freeze_s': (0.0, math.inf, '(0, inf) s (positive)')}
 
 __all__ = ['PanelCalibrator', 'PanelState']
 
@@ -94,13 +100,18 @@ class PanelCalibrator:
         self.reset()
 
     @classmethod
-    def from_yaml(cls, path: str | Path | None = None, rate_hz: float = 20.0, **overrides) -> PanelCalibrator:
-        """Build from ``config/panels.yaml`` (default) or another file of that layout."""
+    def from_yaml(cls, path: str | Path | None = None, rate_hz: float = 20.0, n_panels: int | None = None,
+                  **overrides) -> PanelCalibrator:
+        """Build from ``config/panels.yaml`` (default) or another file of that layout; ``n_panels``, when
+        given, is the number of panel signals the sensor sends, which the file must list."""
         path = share_file('config', 'panels.yaml') if path is None else Path(path)
         doc = load_yaml(path)
         scalars = ('threshold', 'release_fraction', 'freeze_fraction', 'window_s', 'max_freeze_s')
         check_keys(doc, required=('panels',), optional=('format', *scalars, 'polarity'), what='panel config')
         kwargs: dict = {k: typed(doc, k, float, 'panel config') for k in scalars if k in doc}
+        for key, (low, high, shown) in _SCALAR_RANGES.items():
+            if key in kwargs and not low < kwargs[key] <= high:
+                raise doc.error(f'{key} must be in {shown}; got {kwargs[key]!r}', key)
         if 'polarity' in doc:
             kwargs['polarity'] = typed(doc, 'polarity', int, 'panel config')
         panels = doc['panels']
@@ -113,8 +124,13 @@ class PanelCalibrator:
             check_keys(item, required=('name',), optional=('threshold',), what=f'panel #{i + 1}')
             names.append(typed(item, 'name', str, f'panel #{i + 1}'))
             thresholds.append(typed(item, 'threshold', float, f'panel #{i + 1}', default=kwargs.get('threshold', 40.0)))
+            if not 0 < thresholds[-1] < math.inf:
+                raise item.error(f'threshold of panel #{i + 1} must be in (0, inf) counts (positive); '
+                                 f'got {thresholds[-1]!r}', 'threshold' if 'threshold' in item else None)
         if len(set(names)) != len(names):
             raise panels.error('panel names must be unique')
+        if n_panels is not None and len(names) != n_panels:
+            raise doc.error(f'the sensor sends {n_panels} panel signals; panels lists {len(names)}', 'panels')
         kwargs.update(threshold=np.array(thresholds), names=tuple(names), rate_hz=rate_hz)
         kwargs.update(overrides)
         try:

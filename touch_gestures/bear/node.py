@@ -9,7 +9,7 @@ Subscribes to ``frame`` (``/bear/frame`` in the ``bear`` namespace, ``BearFrame`
 
 Time is the frame's header stamp (so a replayed bag gives the same events as the live run).
 Faulty channels (``faults != 0``) and channels the frame says are unfitted read as untouched. A
-frame with NaN levels, wrong array sizes or a stamp not after the previous one is counted in
+frame with NaN levels or levels outside [0, 1], wrong array sizes or a stamp not after the previous one is counted in
 :attr:`BearGesturesNode.skipped` and skipped. When time jumps back (a looped bag) or no frame
 arrives for ``max_gap_s``, the node ends what is under way (END for started gestures, 'none' for
 sensors with a subtype) and starts afresh.
@@ -32,6 +32,7 @@ from touch_driver.bear.body_map import BodyMap
 from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
+from touch_graph.node_health import NodeHealth
 from touch_graph.yamlconf import did_you_mean
 
 from ..model_card import card_log_line
@@ -118,6 +119,9 @@ class BearGesturesNode(Node):
         self.symbolic_pub = (self.create_publisher(SymbolicGesture, '/touch/symbolic', 20)
                              if self.publish_symbolic else None)
         self.create_subscription(BearFrame, 'frame', self._on_frame, sensor_data_qos(10))
+        # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
+        self.health = NodeHealth(self)
+        self.drops = self.health.drops
         self.create_timer(p['max_gap_s'] / 2, self._watchdog)   # ends things within 1.5 max_gap_s
         outputs = (('subtypes', self.publish_subtypes), ('symbolic gestures', self.publish_symbolic))
         what = [name for name, on in outputs if on]
@@ -262,6 +266,11 @@ class BearGesturesNode(Node):
         if not np.isfinite(levels).all():
             self._skip('non_finite', f'{int((~np.isfinite(levels)).sum())} NaN/inf levels (a calibrated frame '
                                      'never has any)')
+            return
+        if (levels < 0.0).any() or (levels > 1.0).any():
+            # The driver clips levels to [0, 1] (its calibrated range); anything else is not a reading.
+            self._skip('out_of_range', f'{int(((levels < 0) | (levels > 1)).sum())} levels outside [0, 1] '
+                                       f'(max {float(levels.max()):.3g}; a calibrated level is in [0, 1])')
             return
         stamp_ns = msg.header.stamp.sec * _NS + msg.header.stamp.nanosec
         if self._last_ns is not None:

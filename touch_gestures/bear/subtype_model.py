@@ -23,6 +23,7 @@ True
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -147,7 +148,14 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
     @classmethod
     def load(cls, path: str | Path) -> SubtypeClassifier:
         """Read a model written by :meth:`save`; ValueError when the format, features or classes do not match."""
-        with np.load(path, allow_pickle=False) as data:
+        try:
+            archive = np.load(path, allow_pickle=False)
+        except FileNotFoundError as err:
+            raise ValueError(f'{path}: model file not found; train one with `social-touch train bear`') from err
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
+            raise ValueError(f'{path}: not a readable .npz model (truncated or empty?): {type(err).__name__}: '
+                             f'{err}') from err
+        with archive as data:
             try:
                 version = int(data['format'])
                 features = tuple(str(s) for s in data['feature_names'])
@@ -168,6 +176,12 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         shapes = [(f,), (f,), (n, f), (n,)]
         if [a.shape for a in arrays] != shapes:
             raise ValueError(f'{path}: array shapes {[a.shape for a in arrays]} do not match {shapes}')
+        for name, array in zip(('mean', 'scale', 'coef', 'intercept'), arrays, strict=True):
+            if not np.isfinite(array).all():
+                raise ValueError(f'{path}: {int((~np.isfinite(array)).sum())} non-finite values in {name!r}; '
+                                 'the model is damaged: retrain it')
+        if not (arrays[1] > 0).all():
+            raise ValueError(f'{path}: feature scales must be > 0; the model is damaged: retrain it')
         model = cls()
         model._set(classes, *arrays)
         #: scan rate (Hz) and buffer length (cycles) the model was trained at; None when unknown

@@ -41,6 +41,7 @@ import numpy as np
 
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
+from touch_graph.node_health import NodeHealth
 
 from ..model_card import card_log_line
 from .classifier import EventDetector
@@ -100,6 +101,9 @@ class PatchGesturesNode(Node):
         self.gesture_pub = self.create_publisher(GestureEvent, '/touch/gesture', 20)
         self.posteriors_pub = self.create_publisher(GesturePosteriors, 'posteriors', 20)
         self.create_subscription(PatchFrame, 'frame', self._on_frame, sensor_data_qos(20))
+        # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
+        self.health = NodeHealth(self)
+        self.drops = self.health.drops
         det = self.detector
         meta = self.model.metadata
         origin = ('SYNTHETIC data (simulated people)' if self.model.synthetic else

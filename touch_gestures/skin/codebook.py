@@ -27,6 +27,7 @@ holds so a recording can be resumed.
 from __future__ import annotations
 
 import json
+import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -89,8 +90,9 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
             data = {k: z[k] for k in z.files}
     except FileNotFoundError as err:
         raise CodebookError('codebook file not found; record one with `social-touch codebook record`', where) from err
-    except (OSError, ValueError) as err:
-        raise CodebookError(f'not a readable codebook (.npz without pickled objects): {err}', where) from err
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
+        raise CodebookError(f'not a readable codebook (.npz without pickled objects; truncated or empty?): '
+                            f'{type(err).__name__}: {err}', where) from err
     missing = [k for k in _KEYS if k not in data]
     if missing:
         raise CodebookError(f'missing array(s) {", ".join(missing)}; is this a skin codebook?', where)

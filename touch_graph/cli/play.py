@@ -15,6 +15,7 @@ import argparse
 import sys
 
 from ..runtime import Parameter
+from .service import positive_number
 
 __all__ = ['add_arguments', 'run']
 
@@ -23,7 +24,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')
     parser.add_argument('bag', help='bag directory (or a .mcap / .db3 file)')
     speed = parser.add_mutually_exclusive_group()
-    speed.add_argument('-r', '--rate', type=float, default=1.0, help='speed factor (default 1.0)')
+    speed.add_argument('-r', '--rate', type=positive_number, default=1.0, help='speed factor, > 0 (default 1.0)')
     speed.add_argument('--fast', action='store_true', help='do not wait between messages')
     parser.add_argument('-l', '--loop', action='store_true', help='play again and again until Ctrl-C')
     parser.add_argument('--topics', nargs='+', help='play only these topics')

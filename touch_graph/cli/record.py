@@ -18,6 +18,7 @@ import time
 from typing import Any
 
 from ..errors import GraphError, SocialTouchError
+from .service import positive_number
 
 __all__ = ['add_arguments', 'format_size', 'run']
 
@@ -40,8 +41,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('topics', nargs='*', help='topics to record')
     parser.add_argument('-a', '--all', action='store_true', help='record every published topic, also later ones')
     parser.add_argument('-o', '--output', help='bag directory to create (default rosbag2_<date>)')
-    parser.add_argument('--duration', type=float, help='stop after SECONDS (wall time)')
-    parser.add_argument('--flush-period', type=float, default=1.0,
+    parser.add_argument('--duration', type=positive_number, metavar='SECONDS',
+                        help='stop after SECONDS (wall time, > 0)')
+    parser.add_argument('--flush-period', type=positive_number, default=1.0, metavar='SECONDS',
                         help='seconds between flushes to disk (default 1; what a kill -9 can lose)')
     parser.add_argument('--quiet', action='store_true', help='no progress lines on stderr')
 

@@ -232,13 +232,25 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
         printed[0] += 1
         last[0] = time.monotonic()
 
-    _subscribe(tool, args.topic, type_name, show)
+    sub = _subscribe(tool, args.topic, type_name, show)
+    reported = [0, time.monotonic()]       # drops reported, when
+
+    def report_drops(final: bool = False) -> None:
+        # A paused echo (Ctrl-Z, a full pipe) loses messages in its queue: say so on stderr, at most once a second.
+        dropped = getattr(sub, 'dropped', 0)
+        if dropped > reported[0] and (final or time.monotonic() - reported[1] >= 1.0):
+            print(f"social-touch topic echo: {dropped - reported[0]} messages on '{args.topic}' dropped "
+                  f'({dropped} in all): the echo fell behind and its queue was full', file=sys.stderr)
+            reported[:] = [dropped, time.monotonic()]
+
     with StopSignals(tool.executor.wake) as stop:
         while not stop.requested and not closed[0] and (limit is None or printed[0] < limit):
             if args.timeout is not None and time.monotonic() - last[0] > args.timeout:
                 print(f"social-touch topic echo: no message on '{args.topic}' for {args.timeout} s", file=sys.stderr)
                 return 1
             tool.executor.spin_once(0.1)
+            report_drops()
+    report_drops(final=True)
     return 0
 
 

@@ -306,6 +306,7 @@ class Executor:
         logger = node.get_logger() if node is not None else None
         if node is not None:
             node.callback_errors += 1
+            node.last_callback_error = f'{what}: {type(err).__name__}: {err}'  # for its diagnostics
             first = node.callback_errors == 1
         else:
             first = self.context.callback_errors == 1

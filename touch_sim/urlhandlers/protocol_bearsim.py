@@ -14,8 +14,8 @@ Options (all optional):
 >>> import serial, touch_sim
 >>> port = serial.serial_for_url('bearsim://doc?rate=25&scan=parallel&seed=1', do_not_open=True)
 >>> port.attach_clock(lambda: 0.0); port.open()
->>> len(port.read(1000))  # frame 0 is due at t = 0: 9 bytes of framing + 128 of payload
-137
+>>> len(port.read(1000))  # frame 0 is due at t = 0: 14 bytes of framing + 128 of payload
+142
 >>> port.close(); touch_sim.virtual_port.forget_devices()
 """
 

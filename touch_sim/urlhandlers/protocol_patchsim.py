@@ -16,8 +16,8 @@ Options (all optional):
 >>> import serial, touch_sim
 >>> port = serial.serial_for_url('patchsim://doc?mode=averaged', do_not_open=True)
 >>> port.attach_clock(lambda: 0.0); port.open()
->>> len(port.read(1000))  # 9 bytes of framing + 342 of payload
-351
+>>> len(port.read(1000))  # 14 bytes of framing + 342 of payload
+356
 >>> port.close(); touch_sim.virtual_port.forget_devices()
 """
 

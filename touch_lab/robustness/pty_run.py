@@ -1,0 +1,81 @@
+"""A bear driver node reading a real pseudo-terminal, fed bytes written by the caller (synthetic frames).
+
+Used by the report's driver-fault cases and by ``test/test_robustness_diagnostics.py``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from touch_driver.bear.node import BearDriverNode
+from touch_driver.bear.protocol import BEAR_ID, encode_payload
+from touch_driver.framing import crc16, encode_frame
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.bench.replay import PtyPort
+
+__all__ = ['ERROR', 'OK', 'RAW', 'WARN', 'FailingBearDriver', 'bad_bits_frame', 'level_of', 'run_bear', 'v1_frame']
+
+OK, WARN, ERROR = 0, 1, 2
+#: A quiet bear scan: every channel at 300 counts, (64,) uint16.
+RAW = np.full(64, 300, dtype=np.uint16)
+
+
+class FailingBearDriver(BearDriverNode):
+    """A stand-in for a run-time fault (a calibration that raises on every frame), named as such."""
+
+    def handle_frame(self, frame: Any) -> None:
+        raise FloatingPointError('calibration diverged')
+
+
+def bad_bits_frame(seq: int) -> bytes:
+    """A bear frame with a good CRC whose channel 0 has bit 12 set: no 10-bit converter sends it."""
+    payload = bytearray(encode_payload(RAW))
+    payload[1] |= 0x10
+    return encode_frame(BEAR_ID, seq, bytes(payload))
+
+
+def v1_frame(seq: int) -> bytes:
+    """A bear scan in protocol version 1 (old firmware): sync, id, length, seq, payload, CRC-16."""
+    body = bytes([BEAR_ID]) + (128).to_bytes(2, 'little') + seq.to_bytes(2, 'little') + encode_payload(RAW)
+    return b'\xa5\x5a' + body + crc16(body).to_bytes(2, 'little')
+
+
+def level_of(diagnostic: Any) -> int:
+    """A DiagnosticStatus level as an int (a ``byte`` is bytes under rclpy)."""
+    level = diagnostic.level
+    return level[0] if isinstance(level, bytes) else int(level)
+
+
+def run_bear(wire: bytes, seconds: float = 2.5, node_class: type = BearDriverNode,
+             **params: Any) -> tuple[Any, list, list]:
+    """A bear driver on a pty carrying ``wire``, simulated time; returns the node, its DriverStatus
+    messages and its /diagnostics statuses."""
+    port = PtyPort()
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        node = node_class(context=ctx, namespace='bear', parameter_overrides=[
+            Parameter(k, value=v) for k, v in {'port': port.path, **params}.items()])
+        listener = Node('listener', context=ctx)
+        statuses: list = []
+        diagnostics: list = []
+        listener.create_subscription(get_message('DriverStatus'), '/bear/bear_driver/status', statuses.append, 100)
+        listener.create_subscription(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics',
+                                     diagnostics.append, 100)
+        executor = SingleThreadedExecutor(context=ctx)
+        executor.add_node(node)
+        executor.add_node(listener)
+        # The driver flushes its port when it opens it, and a pty holds 4 KiB: write in pieces while it
+        # reads, all within the first status period.
+        for start in range(0, len(wire), 2048):
+            port.write(wire[start:start + 2048])
+            executor.spin_for(0.2)
+        executor.spin_for(seconds)
+        node.destroy_node()
+    finally:
+        ctx.shutdown()
+        port.close()
+    return node, statuses, [d.status[0] for d in diagnostics]
