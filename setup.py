@@ -120,6 +120,9 @@ setup(
         # MCAP writing (the recorder, with chunk CRCs; Writer.flush() is public from 1.5.0) and
         # reading and rewriting torn files (bag reindex).
         'mcap>=1.5.0,<1.7',
+        # The figures of the evaluation reports (touch_lab.figures, Agg, loaded only by `social-touch report`;
+        # the runtime never imports it). 3.9.0 is the first release built for numpy 2; 3.10 tested too.
+        'matplotlib>=3.9.0,<3.11',
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6.80', 'ruff>=0.5', 'colcon-core', 'colcon-ros',

@@ -4,7 +4,8 @@ The runtime (``touch_graph``, ``touch_driver``, ``touch_gestures``: what a robot
 nothing of the simulation (``touch_sim``) or the lab (``touch_lab``), and the simulation nothing of
 the lab. Checked twice: by importing every node module and every runtime module in a fresh
 interpreter and looking at ``sys.modules``, and by reading every import statement (function-level
-ones too, which a fresh import would not run).
+ones too, which a fresh import would not run). matplotlib (the reports' figures) is the lab's
+alone: only ``touch_lab.figures`` imports it.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import serial
 nodes = sorted({ep.value.split(':')[0] for ep in entry_points(group='social_touch.nodes')})
 for name in nodes:
     importlib.import_module(name)
-after_nodes = sorted(m for m in sys.modules if m.split('.')[0] in ('touch_sim', 'touch_lab'))
+after_nodes = sorted(m for m in sys.modules if m.split('.')[0] in ('touch_sim', 'touch_lab', 'matplotlib'))
 runtime = []
 for top in ('touch_graph', 'touch_driver', 'touch_gestures'):
     package = importlib.import_module(top)
@@ -39,7 +40,7 @@ for top in ('touch_graph', 'touch_driver', 'touch_gestures'):
     for info in pkgutil.walk_packages(package.__path__, top + '.'):
         importlib.import_module(info.name)
         runtime.append(info.name)
-after_all = sorted(m for m in sys.modules if m.split('.')[0] in ('touch_sim', 'touch_lab'))
+after_all = sorted(m for m in sys.modules if m.split('.')[0] in ('touch_sim', 'touch_lab', 'matplotlib'))
 print(json.dumps({'nodes': nodes, 'runtime': runtime, 'after_nodes': after_nodes, 'after_all': after_all,
                   'handlers': [p for p in serial.protocol_handler_packages if p.startswith('touch')]}))
 '''
@@ -88,3 +89,10 @@ def test_the_layer_check_sees_a_function_level_import(tmp_path):
     path.write_text('def f():\n    from touch_sim.harness import Harness\n'
                     '    importlib.import_module("touch_lab.lines")\n')
     assert [m for _, m in _imports(path)] == ['touch_sim.harness', 'touch_lab.lines']
+
+
+def test_only_the_lab_figures_import_matplotlib():
+    wrong = [f'{path.relative_to(ROOT)}:{line}' for top in (*LAYER_OF, 'touch_view', 'social_touch_msgs')
+             for path in sorted((ROOT / top).rglob('*.py')) if path.parent != ROOT / 'touch_lab' / 'figures'
+             for line, module in _imports(path) if module.split('.')[0] == 'matplotlib']
+    assert wrong == [], f'matplotlib imported outside touch_lab/figures: {wrong}'

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Collection
 from pathlib import Path
 
 import numpy as np
@@ -115,8 +116,11 @@ def _rows(config: EvalConfig, seed: int, people: int) -> tuple[np.ndarray, np.nd
 
 
 def compare_models(rate_hz: float = 3.4, buffer_len: int = 20, train_people: int = 8, test_people: int = 6,
-                   seed: int = 0) -> list[dict]:
-    """Frame-level accuracy of candidate subtype models on held-out people, and their predict cost."""
+                   seed: int = 0, only: Collection[str] | None = None) -> list[dict]:
+    """Frame-level accuracy of candidate subtype models on held-out people, and their predict cost.
+
+    ``only``: names of the candidates to run (default: all of them).
+    """
     from sklearn.ensemble import HistGradientBoostingClassifier, RandomForestClassifier
     from sklearn.metrics import accuracy_score, balanced_accuracy_score
     from sklearn.naive_bayes import GaussianNB
@@ -140,6 +144,8 @@ def compare_models(rate_hz: float = 3.4, buffer_len: int = 20, train_people: int
     out = []
     sample = Xte[:56]
     for name, model in candidates.items():
+        if only is not None and name not in only:
+            continue
         model.fit(Xtr, ytr)
         if hasattr(model, 'predict_codes'):
             pred = model.predict_codes(Xte)[0]
@@ -178,8 +184,10 @@ def gap_sweep(gaps=(0.5, 1.0, 1.5, 2.0), rates=(3.4, 25.0), n_people: int = 6, s
 
 # ---------------------------------------------------------------------------------------------- documents
 def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: list[dict], gaps: list[dict],
-                  command: str) -> str:
+                  command: str, figures: dict[str, str] | None = None) -> str:
+    """The Markdown of docs/bear-evaluation.md; ``figures``: key -> image line (touch_lab.figures.bear)."""
     m, r = main_result['model'], main_result['rule']
+    fig = {k: ['', v] for k, v in (figures or {}).items()}
     cfg = main_result['config']
     lines = [
         '# Sensate Bear recognisers: evaluation',
@@ -217,6 +225,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         '## Touch subtypes, per interaction: trained model',
         '',
         _matrix_md(m['subtype']['labels'], m['subtype']['confusion']),
+        *fig.get('subtype_confusion', []),
         '',
         '| subtype | precision | recall | median latency, s |',
         '|---|---|---|---|',
@@ -232,6 +241,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         '## Symbolic gestures: trained-model subtypes',
         '',
         _matrix_md(m['symbolic']['labels'], m['symbolic']['confusion']),
+        *fig.get('symbolic_confusion', []),
         '',
         '| gesture | precision | recall | median latency, s |',
         '|---|---|---|---|',
@@ -276,6 +286,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
           f"{_fmt(row['symbolic_accuracy'])} | "
           f"{_fmt(row['symbolic_latency_s'])} | {_fmt(row['subtype_latency_s'])} | {row['us_per_cycle']:.0f} |"
           for row in sweep],
+        *fig.get('speed_error', []),
         '',
         '## Choice of the subtype model',
         '',
@@ -398,8 +409,12 @@ def run(args: argparse.Namespace) -> int:
     say('aliasing')
     aliases = alias_table(rates=rates)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / 'bear-evaluation.md').write_text(evaluation_md(main_result, bench, sweep, models, gaps, command),
-                                                encoding='utf-8')
+    say('figures')
+    from touch_lab.figures.bear import bear_figures  # matplotlib: loaded only to write the report
+
+    figures = bear_figures(out_dir, main_result, sweep, models, say)
+    (out_dir / 'bear-evaluation.md').write_text(evaluation_md(main_result, bench, sweep, models, gaps, command,
+                                                              figures), encoding='utf-8')
     (out_dir / 'bear-rates.md').write_text(rates_md(sweep, aliases, command), encoding='utf-8')
     say(f'wrote {out_dir / "bear-evaluation.md"} and {out_dir / "bear-rates.md"}')
     return 0

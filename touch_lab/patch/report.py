@@ -68,6 +68,10 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
     say('benchmark')
     bench = bench_frame(repeats=5)
     frames = sum(s.n_frames for s in sessions)
+    say('figures')
+    from touch_lab.figures.patch import patch_figures  # matplotlib: loaded only to write the report
+
+    figures = patch_figures(Path(path).parent, best, rows, sessions, say)
     lines = [
         '# Textile patch gestures: evaluation (SYNTHETIC data)',
         '',
@@ -106,6 +110,12 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         *_matrix('event confusion (rows: truth, columns: detected)', best['event_confusion']),
         '```',
         '',
+        figures['event_confusion'],
+        '',
+        figures['sample_confusion'],
+        '',
+        figures['posteriors'],
+        '',
         'The whole grid (hold 1 frame = the paper\'s event rule read literally):',
         '',
         '| components | threshold | hold (frames) | correct | false | misses | median latency (s) |',
@@ -132,6 +142,8 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         lines.append(f'| {window_s:g} | {n} | {_pct(d["event_correct_rate"])} | {_pct(d["false_detection_rate"])} | '
                      f'{_pct(d["miss_rate"])} | {d["median_detection_latency_s"]:.2f} | {us:.1f} |')
     lines += [
+        '',
+        figures['speed_error'],
         '',
         '## Per-frame cost (`social-touch bench patch`)',
         '',

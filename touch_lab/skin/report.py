@@ -69,7 +69,9 @@ def _main_section(report: dict) -> list[str]:
     return rows
 
 
-def _speed_error_section(rendered: list, lengths: tuple[int, ...], sizes: tuple[int | None, ...]) -> list[str]:
+def _speed_error_section(rendered: list, lengths: tuple[int, ...], sizes: tuple[int | None, ...],
+                         points: list | None = None) -> list[str]:
+    """The table's rows; ``points`` (if given) gets (name, length, templates, accuracy, us) of each."""
     rows = ['| recogniser | resample length | templates per gesture | accuracy % | us per recognition |',
             '|---|---|---|---|---|']
     for name, param in (('trace', 'n_points'), ('centroid', 'length')):
@@ -82,6 +84,8 @@ def _speed_error_section(rendered: list, lengths: tuple[int, ...], sizes: tuple[
                 rows.append(f"| {name} | {n} | {'all (~120)' if m is None else m} | {_pct(res.accuracy)} | "
                             f'{res.us_per_recognition:.1f} |')
                 _say(rows[-1])
+                if points is not None:
+                    points.append((name, n, m, res.accuracy, res.us_per_recognition))
     return rows
 
 
@@ -158,13 +162,18 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
     lengths = (16, 32) if quick else (8, 16, 32, 64)
     sizes = (5, 30) if quick else (5, 10, 30, None)
     _say('speed against error ...')
-    speed = _speed_error_section(rendered, lengths, sizes)
+    speed_points: list = []
+    speed = _speed_error_section(rendered, lengths, sizes, speed_points)
     _say('generalisation on synthetic gesture sets ...')
     general, scores = _generalisation_section(names if not quick else ['centroid', 'trace'], cache)
     _say('rejection operating points ...')
     rejection = _rejection_section(rendered, randoms)
     _say('speed benchmark ...')
     bench = bench_recognition(names)
+    _say('figures ...')
+    from touch_lab.figures.skin import skin_figures  # matplotlib: loaded only to write the report
+
+    figures = skin_figures(Path(out).parent, report, samples, speed_points, _say)
     n_subj = len(report['subjects'])
     lines = [
         '# Skin gesture recognisers: evaluation', '',
@@ -183,12 +192,13 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
         "paper's recognition rate, no rejection); the rejection columns use each recogniser's default rule "
         '(per-class threshold 2.0 x the 90th percentile of the codebook\'s leave-one-out distances, margin '
         '>= 0.1 x distance); random touches are 150 synthetic scribbles, zigzags and dabs.', '',
-        *_main_section(report), '',
+        *_main_section(report), '', figures['confusion'], '', figures['traces'], '',
         "Sensor cost (accuracy before the sensor minus through it, points): "
         + ', '.join(f'{k} {100 * v:+.2f}' for k, v in report['sensor_cost'].items()) + '.', '',
         '## 2. Speed against error', '',
         'Through the skin, leave-one-subject-out, nearest class (no rejection); us per recognition is the median '
         'of one `predict` during the evaluation (16 gestures x m templates).', '', *speed, '',
+        figures['speed_error'], '',
         '## 3. Other gesture sets and other people (synthetic)', '',
         'Synthetic performers (`touch_sim.skin.synthetic`: 6 people x 8 repetitions, each with their own size, '
         'position, slant, proportions, speed, corner style and shake) trace the gestures of cirillo2017 Fig. 7-8 '
