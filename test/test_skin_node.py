@@ -293,3 +293,41 @@ def test_an_unusable_default_codebook_says_how_it_is_made(monkeypatch, tmp_path)
             HapticCommandsNode(context=ctx)
     finally:
         ctx.shutdown()
+
+
+def test_the_segmenter_takes_the_vocabularys_gap_from_the_codebook_unless_set(tmp_path):
+    lines = [TouchGesture.from_trajectory(path([6.0, y], [41.0, y], 0.5)) for y in (10.0, 20.0, 30.0)]
+    model = make_recogniser('trace').fit(lines, ['line_right'] * 3)
+    codebook = save_codebook(tmp_path / 'symbols.npz', model, vocabulary='symbols', gap_s=1.5)
+    commands = tmp_path / 'commands.yaml'
+    commands.write_text('format_version: 1\ncommands:\n  line_right: move_right\n')
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        given = [Parameter('codebook', value=str(codebook)), Parameter('commands', value=str(commands))]
+        node = HapticCommandsNode(context=ctx, parameter_overrides=given)
+        assert node.stream.segmenter.gap_s == 1.5 and node.get_parameter('gap_s').value == 1.5
+        node.destroy_node()
+        node = HapticCommandsNode(context=ctx, parameter_overrides=[*given, Parameter('gap_s', value=0.4)])
+        assert node.stream.segmenter.gap_s == 0.4
+        node.destroy_node()
+    finally:
+        ctx.shutdown()
+
+
+def test_candidates_come_while_the_finger_moves_and_settle_on_the_gesture(harness):
+    SkinCandidate = get_message('social_touch_msgs/msg/SkinCandidate')
+    h = harness(candidate_period_s=0.1)
+    got = []
+    h.io.create_subscription(SkinCandidate, '/skin/candidate', got.append, 100)
+    for _ in range(30):
+        h.frame()
+    h.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert 6 <= len(got) <= 9 and h.node.candidates_published == len(got)  # every 0.1 s of 0.8 s traced
+    assert all(0 <= c.confidence <= 1 and 0 < c.progress <= 1 and c.strokes == 1 for c in got)
+    assert [c.elapsed_s for c in got] == sorted(c.elapsed_s for c in got)
+    assert got[-1].gesture == 'line_right' == h.commands[0].gesture
+    assert all(c.header.frame_id == 'skin_link' for c in got)   # the frame's own header
+    quiet = harness(candidate_period_s=0.0)
+    quiet.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert quiet.node.candidates_published == 0 and quiet.commands[0].gesture == 'line_right'

@@ -10,7 +10,10 @@ Subscribes to ``frame`` (``/skin/frame`` in the ``skin`` namespace: ``SkinFrame`
    press, a tap) are no command;
 3. **recognition** against the codebook (default recogniser ``trace``, docs/skin-evaluation.md),
    with its rejection rule (distance over the class's threshold, or too small a margin);
-4. **the command map**: an accepted gesture with a command is published on
+4. **early candidates**: while a gesture is traced, every ``candidate_period_s`` the best
+   candidate for the part traced so far (:class:`~.early.PrefixMatcher`) is published on
+   ``candidate`` (``/skin/candidate``, ``SkinCandidate``: gesture, confidence, distance, progress);
+5. **the command map**: an accepted gesture with a command is published on
    ``/touch/haptic_command`` (``HapticCommand``: gesture, command, recogniser, distance, margin,
    duration_s, frames; the header stamp is the end of the gesture, frame_id ``skin``).
 
@@ -26,9 +29,9 @@ Parameters (read once at start, except rejection and screening: ``max_distance``
 - ``commands``: the gesture -> command map (default: ``config/skin_commands.yaml``); a mapped
   gesture the codebook does not know stops the node at start, naming the file and line;
 - ``recogniser``: must match the codebook's (empty: whatever the codebook was made with);
-- segmentation: ``off_hysteresis_s``, ``max_duration_s``, ``min_frames``, ``map_threshold``,
-  ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction`` (see
-  GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
+- segmentation: ``gap_s`` (default: the codebook's, i.e. its vocabulary's), ``max_duration_s``,
+  ``min_frames``, ``map_threshold``, ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction``
+  (see GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
 - screening: ``min_extent_mm``;
 - rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds,
   ``auto_scale`` x the ``auto_quantile`` quantile of the codebook's own spread; a number >= 0:
@@ -50,6 +53,7 @@ from touch_graph.errors import ConfigError, ParameterError
 from .base import Match, TemplateRecogniser
 from .codebook import load_codebook
 from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
+from .early import PrefixMatcher
 from .frames import SkinFrameStream
 from .gesture import TouchGesture
 from .screening import MIN_EXTENT_MM, gesture_extent_mm, screen_gesture
@@ -59,6 +63,7 @@ __all__ = ['CODEBOOK_COMMAND', 'DEFAULT_CODEBOOK', 'DEFAULT_COMMANDS', 'HapticCo
 
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
+SkinCandidate = get_message('social_touch_msgs/msg/SkinCandidate')
 TimeMsg = get_message('builtin_interfaces/msg/Time')
 
 #: The shipped codebook and command map, relative to the package's share directory.
@@ -70,7 +75,8 @@ CODEBOOK_COMMAND = ('social-touch codebook record --simulate 10 --seed 2026 --re
 _NS = 1_000_000_000
 #: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
 _SEGMENTER_DOC = {
-    'off_hysteresis_s': 'a lift must last this long (s) to end a gesture (not in cirillo2017)',
+    'gap_s': "a lift must last this long (s) to end a gesture; shorter lifts separate its strokes (default: the "
+             "codebook's vocabulary's, 0.15 s single-stroke, 1.5 s multi-stroke; not in cirillo2017)",
     'max_duration_s': 'a touch is cut after this long (s) and gives no command (a hand resting on the skin)',
     'min_frames': 'contacts with fewer frames are dropped as taps or noise',
     'map_threshold': 'pressure (1 = full scale) a taxel must reach to enter the map (cirillo2017 3.1)',
@@ -130,6 +136,7 @@ class HapticCommandsNode(Node):
             raise self._bad('min_extent_mm', self.min_extent_mm, 'a size >= 0 mm')
         self.outcomes: Counter[str] = Counter()
         self.last_match: Match | None = None
+        self._setup_candidates()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -137,7 +144,8 @@ class HapticCommandsNode(Node):
         unmapped = [c for c in classes if c not in self.commands.commands]
         origin = self.recogniser.description_ or 'a codebook without a description'
         self.get_logger().info(
-            f'{self.codebook_path.name} ({origin}): {len(self.recogniser.templates_)} templates of {len(classes)} '
+            f'{self.codebook_path.name} ({origin}): vocabulary {getattr(self.recogniser, "vocabulary_", "?")}, '
+            f'{len(self.recogniser.templates_)} templates of {len(classes)} '
             f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands'
             + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
 
@@ -233,8 +241,11 @@ class HapticCommandsNode(Node):
         return SetParametersResult(successful=True)
 
     def _make_stream(self) -> SkinFrameStream:
+        # The gap is the vocabulary's: the codebook file carries it (longer for multi-stroke symbols).
+        gap_s = float(getattr(self.recogniser, 'gap_s_', _SEGMENTER_DEFAULTS['gap_s']))
+        defaults = {**_SEGMENTER_DEFAULTS, 'gap_s': gap_s}
         seg = {name: self._param(name, default, f'{_SEGMENTER_DOC[name]} (see GestureSegmenter)')
-               for name, default in _SEGMENTER_DEFAULTS.items()}
+               for name, default in defaults.items()}
         max_gap_s = self._param('max_gap_s', 0.5, 'no frame for this long (s): the gesture under way is dropped')
         try:
             return SkinFrameStream(GestureSegmenter(**seg), max_gap_s=max_gap_s)
@@ -254,6 +265,44 @@ class HapticCommandsNode(Node):
                                       'is dropped, starting afresh')
         for gesture in gestures:
             self._on_gesture(gesture)
+            self._next_candidate_t = -math.inf
+        self._publish_candidate(msg)
+
+    def _setup_candidates(self) -> None:
+        self.candidate_period_s = self._param('candidate_period_s', 0.1, 'publish the candidate for a gesture under '
+                                              'way this often, s (0: never)')
+        if not (math.isfinite(self.candidate_period_s) and self.candidate_period_s >= 0):
+            raise self._bad('candidate_period_s', self.candidate_period_s, 'a period >= 0 s')
+        self.prefix_matcher: PrefixMatcher | None = None
+        if self.candidate_period_s > 0:
+            try:
+                self.prefix_matcher = PrefixMatcher(self.recogniser)
+            except ValueError as err:   # a recogniser without ordered points (the paper's maps)
+                self.get_logger().info(f'no early candidates: {err}')
+        self.candidate_pub = self.create_publisher(SkinCandidate, 'candidate', 20)
+        self._next_candidate_t = -math.inf
+        self.candidates_published = 0
+
+    def _publish_candidate(self, msg: Any) -> None:
+        """The best candidate for the gesture under way, at most every candidate_period_s of its time."""
+        seg = self.stream.segmenter
+        if self.prefix_matcher is None or not seg.active:
+            self._next_candidate_t = -math.inf
+            return
+        partial = seg.partial()
+        if partial is None or partial.times[-1] < self._next_candidate_t:
+            return
+        if self._next_candidate_t == -math.inf:  # a new gesture: its first candidate one period in
+            self._next_candidate_t = partial.start_s + self.candidate_period_s
+            if partial.times[-1] < self._next_candidate_t:
+                return
+        self._next_candidate_t = partial.times[-1] + self.candidate_period_s
+        cand = self.prefix_matcher.candidate(partial)
+        self.candidates_published += 1
+        self.candidate_pub.publish(SkinCandidate(
+            header=copy.copy(msg.header), gesture=cand.label or '', confidence=cand.confidence,
+            distance=cand.distance if math.isfinite(cand.distance) else -1.0, progress=cand.progress,
+            elapsed_s=float(partial.times[-1] - partial.start_s), strokes=partial.strokes))
 
     def _on_gesture(self, gesture: TouchGesture) -> None:
         log = self.get_logger()
