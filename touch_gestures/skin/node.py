@@ -13,7 +13,12 @@ Subscribes to ``frame`` (``/skin/frame`` in the ``skin`` namespace: ``SkinFrame`
 4. **early candidates**: while a gesture is traced, every ``candidate_period_s`` the best
    candidate for the part traced so far (:class:`~.early.PrefixMatcher`) is published on
    ``candidate`` (``/skin/candidate``, ``SkinCandidate``: gesture, confidence, distance, progress);
-5. **the command map**: an accepted gesture with a command is published on
+5. **contacts and collisions** (:class:`~.collisions.CollisionDetector`): every frame in contact
+   (and the one that ends it) on ``contact`` (``/skin/contact``, ``SkinContact``: start/end, point
+   in m, force vector in N, rise rate); a ``SkinCollision`` on ``collision`` from the frame whose
+   normal force or rise rate crosses ``collision_force_n`` / ``collision_rate_n_s``. The gesture
+   under way is then no command (outcome ``'collision'``);
+6. **the command map**: an accepted gesture with a command is published on
    ``/touch/haptic_command`` (``HapticCommand``: gesture, command, recogniser, distance, margin,
    duration_s, frames; the header stamp is the end of the gesture, frame_id ``skin``).
 
@@ -47,11 +52,14 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
 
 from .base import Match, TemplateRecogniser
 from .codebook import load_codebook
+from .collisions import COLLISION_FORCE_N, COLLISION_RATE_N_S, CollisionDetector
 from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
 from .early import PrefixMatcher
 from .frames import SkinFrameStream
@@ -64,6 +72,8 @@ __all__ = ['CODEBOOK_COMMAND', 'DEFAULT_CODEBOOK', 'DEFAULT_COMMANDS', 'HapticCo
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
 SkinCandidate = get_message('social_touch_msgs/msg/SkinCandidate')
+SkinContact = get_message('social_touch_msgs/msg/SkinContact')
+SkinCollision = get_message('social_touch_msgs/msg/SkinCollision')
 TimeMsg = get_message('builtin_interfaces/msg/Time')
 
 #: The shipped codebook and command map, relative to the package's share directory.
@@ -137,6 +147,7 @@ class HapticCommandsNode(Node):
         self.outcomes: Counter[str] = Counter()
         self.last_match: Match | None = None
         self._setup_candidates()
+        self._setup_collisions()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -257,6 +268,8 @@ class HapticCommandsNode(Node):
         stream = self.stream
         skipped, restarts = sum(stream.skipped.values()), stream.restarts
         gestures = stream.update(msg)
+        if stream.frames and sum(stream.skipped.values()) == skipped:   # a frame the stream took
+            self._contact(msg)
         if sum(stream.skipped.values()) != skipped:
             self.get_logger().warning(f'skipped a frame: its pressure must be 144 finite values; frames skipped so '
                                       f'far: {dict(stream.skipped)}', throttle_duration_sec=5.0)
@@ -283,6 +296,40 @@ class HapticCommandsNode(Node):
         self._next_candidate_t = -math.inf
         self.candidates_published = 0
 
+    def _setup_collisions(self) -> None:
+        force = self._param('collision_force_n', COLLISION_FORCE_N, 'normal force (N) from which a contact is a '
+                            'collision (.inf: never)')
+        rate = self._param('collision_rate_n_s', COLLISION_RATE_N_S, 'normal force rise (N/s) from which a contact '
+                           'is a collision (.inf: never)')
+        window = self._param('rate_window_s', 0.02, 'the force rise rate is measured over this window, s')
+        try:
+            self.collisions = CollisionDetector(force, rate, window)
+        except ValueError as err:
+            raise ParameterError(f'collision parameters of {self._fqn}: {err}') from err
+        self.contact_pub = self.create_publisher(SkinContact, 'contact', 50)
+        self.collision_pub = self.create_publisher(SkinCollision, 'collision', 20)
+        self._collision_in_gesture = False
+
+    def _contact(self, msg: Any) -> None:
+        """Contact state and collision of one frame (the detector counts NaN forces as 0)."""
+        t = int(msg.header.stamp.sec) + int(msg.header.stamp.nanosec) / _NS
+        point = (float(msg.contact_x), float(msg.contact_y))
+        state = self.collisions.update(bool(msg.contact), point, np.asarray(msg.force, dtype=np.float64), t)
+        if state is None:
+            return
+        fx, fy, fz = (float(v) for v in state.force_n)
+        self.contact_pub.publish(SkinContact(
+            header=copy.copy(msg.header), start=state.start, end=state.end, x_m=state.x_m, y_m=state.y_m, z_m=0.0,
+            fx_n=fx, fy_n=fy, fz_n=fz, force_rate_n_s=state.force_rate_n_s, duration_s=state.duration_s))
+        if state.collision is None:
+            return
+        self._collision_in_gesture = True
+        self.collision_pub.publish(SkinCollision(
+            header=copy.copy(msg.header), reason=state.collision, x_m=state.x_m, y_m=state.y_m, z_m=0.0,
+            fx_n=fx, fy_n=fy, fz_n=fz, force_rate_n_s=state.force_rate_n_s, frames_since_start=state.frames))
+        self.get_logger().warning(f'collision ({state.collision}): {fz:.1f} N, rising {state.force_rate_n_s:.0f} '
+                                  f'N/s, at ({1000 * state.x_m:.0f}, {1000 * state.y_m:.0f}) mm')
+
     def _publish_candidate(self, msg: Any) -> None:
         """The best candidate for the gesture under way, at most every candidate_period_s of its time."""
         seg = self.stream.segmenter
@@ -306,6 +353,11 @@ class HapticCommandsNode(Node):
 
     def _on_gesture(self, gesture: TouchGesture) -> None:
         log = self.get_logger()
+        if self._collision_in_gesture or self.collisions.in_collision:
+            self._collision_in_gesture = False
+            self.outcomes['collision'] += 1   # an impact is never a gesture
+            log.debug(f'no command: a collision during {gesture!r}')
+            return
         reason = screen_gesture(gesture, self.min_extent_mm)
         if reason is not None:
             self.outcomes[reason] += 1
