@@ -116,3 +116,11 @@ def test_bumps_presses_and_traces_through_the_virtual_skin():
     assert r['bump_latency_frames']['max'] <= 3
     with pytest.raises(ValueError, match='unknown contact kind'):
         make_contact('slap', np.random.default_rng(0))
+
+
+def test_the_early_summary_says_the_figures():
+    from touch_lab.skin.early_eval import summary
+    text = summary({'gestures': 8, 'final_right': 0.875, 'right_by_half': 0.5,
+                    'stable_fraction': {'p50': 0.4, 'p75': 0.6, 'p90': 0.8}})
+    assert '8 gestures' in text and '87.50 %' in text and 'median 0.40' in text and '90th 0.80' in text
+    assert 'median' not in summary({'gestures': 1, 'final_right': 0.0, 'right_by_half': 0.0, 'stable_fraction': {}})

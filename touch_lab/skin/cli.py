@@ -35,6 +35,7 @@ from touch_gestures.skin.segmentation import default_gap_s
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
+from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
@@ -183,13 +184,7 @@ def format_text(report: dict) -> str:
                   f"{_pct(recs[report['default']]['accuracy']).strip()} %, chose "
                   + ', '.join(f'{k} in {v} folds' for k, v in chosen.items())]
     if report.get('early'):
-        e = report['early']
-        st = e['stable_fraction']
-        lines += ['', f"early decisions ({DEFAULT}, {e['gestures']} gestures): final answer right "
-                  f"{_pct(e['final_right']).strip()} %, right and stable by half traced "
-                  f"{_pct(e['right_by_half']).strip()} %"
-                  + (f"; traced when stable and right: median {st['p50']:.2f}, p75 {st['p75']:.2f}, p90 {st['p90']:.2f}"
-                     if st else '')]
+        lines += ['', f"early decisions ({DEFAULT}), {early_summary(report['early'])}"]
     lines += ['', f"best: {report['best']}", '(acc: nearest class right, rejection off; before: same before the '
               'sensor; acc+rej, rej, err: with the rejection rule; random: synthetic random touches that fired '
               'a command)']

@@ -30,7 +30,7 @@ from touch_sim.skin.render import RenderedSample
 
 from .evaluate import choose_codebook
 
-__all__ = ['STEPS', 'early_decisions', 'prefix']
+__all__ = ['STEPS', 'early_decisions', 'prefix', 'summary']
 
 #: The fractions of a gesture at which the candidate is taken.
 STEPS = tuple(np.round(np.arange(1, 11) / 10, 2))
@@ -79,3 +79,14 @@ def early_decisions(rendered: Sequence[RenderedSample], make: Callable[[], Templ
         'right_by_half': float(np.sum(right <= 0.5)) / n if n else float('nan'),
         'stable_fraction': ({f'p{q}': float(np.percentile(right, q)) for q in (50, 75, 90)} if len(right) else {}),
     }
+
+
+def summary(early: dict) -> str:
+    """One sentence of the figures of :func:`early_decisions`, for the text and Markdown reports."""
+    st = early['stable_fraction']
+    text = (f"{early['gestures']} gestures: final answer right {100 * early['final_right']:.2f} %; right and stable "
+            f"once half the gesture is traced: {100 * early['right_by_half']:.2f} %")
+    if st:
+        text += (f"; fraction traced when the candidate became right for good: median {st['p50']:.2f}, 75th "
+                 f"percentile {st['p75']:.2f}, 90th {st['p90']:.2f}")
+    return text + '.'

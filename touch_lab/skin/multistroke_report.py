@@ -18,6 +18,7 @@ from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
+from touch_lab.skin.early_eval import summary as early_summary
 
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
@@ -64,13 +65,8 @@ def _vocabulary_section(r: dict) -> list[str]:
                 '|---|' + '---|' * len(r['samples_whole_per_gap']),
                 '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
     if r.get('early'):
-        e = r['early']
-        st = e['stable_fraction']
-        out += ['', f"Early decisions (`{DEFAULT}`, one held-out gesture in {r['early_every']}, {e['gestures']} "
-                f"gestures): final answer right {_pct(e['final_right'])} %; right and stable once half the gesture "
-                f"is traced: {_pct(e['right_by_half'])} %"
-                + (f"; fraction traced when the candidate became right for good: median {st['p50']:.2f}, 75th "
-                   f"percentile {st['p75']:.2f}, 90th {st['p90']:.2f}." if st else '.')]
+        out += ['', f"Early decisions (`{DEFAULT}`, one held-out gesture in {r['early_every']}), "
+                f"{early_summary(r['early'])}"]
     return [*out, '']
 
 
