@@ -97,15 +97,22 @@ def test_a_collision_fires_once_per_contact_from_the_crossing_frame():
 
 
 def test_rate_nan_forces_and_bad_parameters():
-    det = CollisionDetector(force_n=math.inf, rate_n_s=100.0, rate_window_s=0.02)
+    det = CollisionDetector(force_n=math.inf, rate_n_s=100.0, rate_frames=3)
     slow = [det.update(True, None, forces(0.1 * k), k / RATE) for k in range(1, 30)]   # 15 N/s
     assert all(s.collision is None for s in slow) and all(math.isnan(s.x_m) for s in slow)
     assert slow[-1].force_rate_n_s == pytest.approx(15.0, rel=1e-6)
     bad = forces(np.nan)
     assert det.update(True, None, bad, 1.0).force_n[2] == 0.0       # NaN counts as 0
-    for kwargs in ({'force_n': 0.0}, {'rate_n_s': float('nan')}, {'rate_window_s': 0.0}):
+    for kwargs in ({'force_n': 0.0}, {'rate_n_s': float('nan')}, {'rate_frames': 0}, {'frame_rate_hz': 0.0}):
         with pytest.raises(ValueError):
             CollisionDetector(**kwargs)
+
+
+def test_the_rate_counts_frames_not_stamps():
+    """Frames read in one poll carry nearly equal stamps: the rate must not explode."""
+    det = CollisionDetector(force_n=math.inf, rate_n_s=120.0)
+    states = [det.update(True, None, forces(0.2 * k), 1.0 + 1e-6 * k) for k in range(1, 6)]
+    assert all(s.collision is None for s in states) and states[-1].force_rate_n_s == pytest.approx(30.0)
 
 
 def test_bumps_presses_and_traces_through_the_virtual_skin():

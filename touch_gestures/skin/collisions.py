@@ -8,8 +8,11 @@ m, the force vector summed over the modules in N, the normal force's rise rate i
 collision when
 
 - the normal force reaches ``force_n`` (a press far harder than any finger needs), or
-- it rises faster than ``rate_n_s``, measured over ``rate_window_s`` (a finger landing
-  ramps up over ~50 ms: about 30 N/s at 1.5 N; an impact does it in one or two frames),
+- it rises faster than ``rate_n_s``, measured over the last ``rate_frames`` frames at the
+  skin's frame rate (a finger landing ramps up over ~50 ms: about 30 N/s at 1.5 N; an impact
+  does it in one or two frames). Frames, not header stamps: the driver stamps frames when its
+  poll reads them, so frames read together carry nearly equal stamps and a rate over stamps
+  would explode (a dropped frame makes the rate over-estimated by at most one frame's worth),
 
 on the frame that crosses, once per contact (the contact must end before another fires).
 The gesture under way when a collision fires is never a gesture (the node drops it), and
@@ -79,19 +82,21 @@ class CollisionDetector:
     Args:
         force_n: normal force threshold, N (inf: never on force).
         rate_n_s: normal force rise-rate threshold, N/s (inf: never on rate).
-        rate_window_s: the rate is the rise over this window, s (at least one frame).
+        rate_frames: the rate is the rise over this many frames (>= 1)...
+        frame_rate_hz: ...at this frame rate (the skin's 150 Hz).
     """
 
     def __init__(self, force_n: float = COLLISION_FORCE_N, rate_n_s: float = COLLISION_RATE_N_S,
-                 rate_window_s: float = 0.02) -> None:
+                 rate_frames: int = 3, frame_rate_hz: float = 150.0) -> None:
         for name, value in (('force_n', force_n), ('rate_n_s', rate_n_s)):
             if math.isnan(value) or value <= 0:
                 raise ValueError(f'{name} must be > 0 (inf: never), got {value}')
-        if not (math.isfinite(rate_window_s) and rate_window_s > 0):
-            raise ValueError(f'rate_window_s must be a finite time > 0 s, got {rate_window_s}')
-        self.force_n, self.rate_n_s, self.rate_window_s = float(force_n), float(rate_n_s), float(rate_window_s)
+        if int(rate_frames) < 1 or not (math.isfinite(frame_rate_hz) and frame_rate_hz > 0):
+            raise ValueError(f'need rate_frames >= 1 and a frame rate > 0 Hz; got {rate_frames}, {frame_rate_hz}')
+        self.force_n, self.rate_n_s = float(force_n), float(rate_n_s)
+        self.rate_frames, self.frame_rate_hz = int(rate_frames), float(frame_rate_hz)
         self.collisions = 0
-        self._history: deque[tuple[float, float]] = deque(maxlen=64)   # (t, fz): bounded
+        self._history: deque[float] = deque(maxlen=self.rate_frames + 1)   # fz of the last frames, N
         self._in_contact = False
         self._last: ContactState | None = None
 
@@ -117,10 +122,11 @@ class CollisionDetector:
         if start:
             self._in_contact, self._fired, self._t0, self._frames = True, False, float(t), 0
             self._history.clear()
-            self._history.append((float(t) - self.rate_window_s, 0.0))  # a contact rises from nothing
+            self._history.extend([0.0] * self.rate_frames)   # a contact rises from nothing
         else:
             self._frames += 1
-        rate = self._rate(float(t), float(f[2]))
+        self._history.append(float(f[2]))
+        rate = (self._history[-1] - self._history[0]) * self.frame_rate_hz / (len(self._history) - 1)
         xy = np.full(2, np.nan) if point_mm is None else np.asarray(point_mm, dtype=np.float64).reshape(2) / 1000.0
         reasons = [name for name, hit in (('force', f[2] >= self.force_n), ('rate', rate >= self.rate_n_s)) if hit]
         collision = None
@@ -130,15 +136,3 @@ class CollisionDetector:
         self._last = ContactState(start, False, float(xy[0]), float(xy[1]), f, rate, float(t) - self._t0,
                                   self._frames, collision)
         return self._last
-
-    def _rate(self, t: float, fz: float) -> float:
-        """Rise of fz (N/s) since the oldest sample within the window (one frame at least)."""
-        self._history.append((t, fz))
-        t_old, f_old = self._history[0]
-        for t_h, f_h in self._history:
-            if t - t_h <= self.rate_window_s + 1e-9:
-                t_old, f_old = t_h, f_h
-                break
-        if t_old >= t:
-            return 0.0
-        return (fz - f_old) / (t - t_old)

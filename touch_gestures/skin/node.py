@@ -301,9 +301,9 @@ class HapticCommandsNode(Node):
                             'collision (.inf: never)')
         rate = self._param('collision_rate_n_s', COLLISION_RATE_N_S, 'normal force rise (N/s) from which a contact '
                            'is a collision (.inf: never)')
-        window = self._param('rate_window_s', 0.02, 'the force rise rate is measured over this window, s')
+        frames = self._param('rate_frames', 3, 'the force rise rate is measured over this many frames (150 Hz)')
         try:
-            self.collisions = CollisionDetector(force, rate, window)
+            self.collisions = CollisionDetector(force, rate, frames)
         except ValueError as err:
             raise ParameterError(f'collision parameters of {self._fqn}: {err}') from err
         self.contact_pub = self.create_publisher(SkinContact, 'contact', 50)
