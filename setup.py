@@ -46,15 +46,16 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
     ],
     # Targets of the lab's commands (touch_lab.cli.targets): add_arguments(parser), run(args), HELP.
     'social_touch.eval': ['bear = touch_lab.bear.cli', 'patch = touch_lab.patch.cli:EVAL', 'skin = touch_lab.skin.cli',
-                          'skin-sessions = touch_lab.skin.session_eval', 'adapt = touch_lab.adapt_measure'],
+                          'skin-sessions = touch_lab.skin.session_eval', 'adapt = touch_lab.adapt_measure',
+                          'skin-collisions = touch_lab.skin.collision_eval'],
     'social_touch.train': ['bear = touch_lab.bear.train', 'patch = touch_lab.patch.cli:TRAIN',
                            'skin = touch_lab.skin.train_cli'],
     'social_touch.codebook': ['record = touch_lab.skin.record_cli', 'info = touch_lab.skin.codebook_cli:INFO',
                               'add = touch_lab.skin.codebook_cli:ADD', 'remove = touch_lab.skin.codebook_cli:REMOVE',
                               'merge = touch_lab.skin.codebook_cli:MERGE'],
     'social_touch.report': ['bear = touch_lab.bear.report', 'patch = touch_lab.patch.report',
-                            'skin = touch_lab.skin.report', 'view-screenshot = touch_view.screenshot',
-                            'robustness = touch_lab.robustness.report',
+                            'skin = touch_lab.skin.report', 'skin-multistroke = touch_lab.skin.multistroke_report',
+                            'view-screenshot = touch_view.screenshot', 'robustness = touch_lab.robustness.report',
                             'foxglove-layout = touch_view.foxglove_layout'],
     # `social-touch bench NAME`: a function bench(repeats=N) -> dict.
     'social_touch.bench': [

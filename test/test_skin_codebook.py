@@ -25,7 +25,7 @@ def test_round_trip_gives_the_same_answers(tmp_path, name):
     path = save_codebook(tmp_path / 'book', model)
     assert path.suffix == '.npz'
     with np.load(path, allow_pickle=False) as z:  # nothing in it needs pickle
-        assert str(z['recogniser']) == name and int(z['format_version']) == 1
+        assert str(z['recogniser']) == name and int(z['format_version']) == 2
     back = load_codebook(path)
     assert type(back) is type(model) and back.get_params() == model.get_params()
     queries, _ = gestures(seed=1, performers=1)
@@ -45,7 +45,8 @@ def _tamper(tmp_path, **changes):
 
 
 @pytest.mark.parametrize('changes, message', [
-    ({'format_version': np.array(2)}, 'format_version 2 is not supported'),
+    ({'format_version': np.array(3)}, 'format_version 3 is not supported'),
+    ({'gap_s': np.array(-1.0)}, 'gap_s must be >= 0'),
     ({'format': np.array('something.else')}, "expected 'social_touch.skin_codebook'"),
     ({'recogniser': np.array('trase')}, "did you mean 'trace'"),
     ({'params': np.array(json.dumps({'n_points': 16}))}, 'templates have 64 features but trace'),
@@ -58,6 +59,28 @@ def test_a_bad_codebook_is_refused_with_a_reason(tmp_path, changes, message):
     with pytest.raises(CodebookError, match=message) as info:
         load_codebook(path)
     assert str(path) in str(info.value)
+
+
+def test_vocabulary_and_gap_round_trip_and_version_1_still_reads(tmp_path):
+    train, labels = gestures()
+    model = make_recogniser('trace').fit(train, labels)
+    assert model.max_strokes_ == 1
+    back = load_codebook(save_codebook(tmp_path / 'symbols', model, vocabulary='symbols', gap_s=1.5))
+    assert (back.vocabulary_, back.gap_s_, back.max_strokes_) == ('symbols', 1.5, 1)
+    default = load_codebook(save_codebook(tmp_path / 'commands', model))
+    assert (default.vocabulary_, default.gap_s_) == ('commands', 0.15)
+    # A version 1 file (no vocabulary arrays): the single-stroke commands, as the skin shipped them.
+    path = tmp_path / 'commands.npz'
+    with np.load(path, allow_pickle=False) as z:
+        data = {k: z[k] for k in z.files if k not in ('vocabulary', 'gap_s', 'max_strokes')}
+    np.savez(tmp_path / 'v1.npz', **{**data, 'format_version': np.array(1)})
+    old = load_codebook(tmp_path / 'v1.npz')
+    assert (old.vocabulary_, old.gap_s_, old.max_strokes_) == ('commands', 0.15, 1)
+    np.savez(tmp_path / 'v2bad.npz', **data)
+    with pytest.raises(CodebookError, match='needs vocabulary, gap_s and max_strokes'):
+        load_codebook(tmp_path / 'v2bad.npz')
+    with pytest.raises(ValueError, match='vocabulary name and a gap'):
+        save_codebook(tmp_path / 'x', model, gap_s=float('nan'))
 
 
 def test_missing_wrong_kind_and_pickled_files(tmp_path):

@@ -53,7 +53,7 @@ class Harness:
         self.executor.add_node(self.io)
         self.i = 0
 
-    def frame(self, point=None, stamp_ns=None, pressure=None):
+    def frame(self, point=None, stamp_ns=None, pressure=None, fz_n=None):
         """Publish one frame: a finger at ``point`` (mm) or an untouched skin; returns its stamp."""
         stamp_ns = T0_NS + self.i * PERIOD_NS if stamp_ns is None else stamp_ns
         sec, nanosec = divmod(stamp_ns, NS)
@@ -65,6 +65,10 @@ class Harness:
                         contact_y=float(point[1]) if touched else float('nan'))
         if pressure is not None:
             msg.pressure = pressure   # assigned after construction: the message class would refuse it
+        if fz_n is not None:          # a normal force on module 14 (near the centre), N
+            force = np.zeros(108, np.float32)
+            force[14 * 3 + 2] = fz_n
+            msg.force = force
         self.pub.publish(msg)
         for _ in range(3):
             self.executor.spin_once(0)
@@ -293,3 +297,73 @@ def test_an_unusable_default_codebook_says_how_it_is_made(monkeypatch, tmp_path)
             HapticCommandsNode(context=ctx)
     finally:
         ctx.shutdown()
+
+
+def test_the_segmenter_takes_the_vocabularys_gap_from_the_codebook_unless_set(tmp_path):
+    lines = [TouchGesture.from_trajectory(path([6.0, y], [41.0, y], 0.5)) for y in (10.0, 20.0, 30.0)]
+    model = make_recogniser('trace').fit(lines, ['line_right'] * 3)
+    codebook = save_codebook(tmp_path / 'symbols.npz', model, vocabulary='symbols', gap_s=1.5)
+    commands = tmp_path / 'commands.yaml'
+    commands.write_text('format_version: 1\ncommands:\n  line_right: move_right\n')
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        given = [Parameter('codebook', value=str(codebook)), Parameter('commands', value=str(commands))]
+        node = HapticCommandsNode(context=ctx, parameter_overrides=given)
+        assert node.stream.segmenter.gap_s == 1.5 and node.get_parameter('gap_s').value == 1.5
+        node.destroy_node()
+        node = HapticCommandsNode(context=ctx, parameter_overrides=[*given, Parameter('gap_s', value=0.4)])
+        assert node.stream.segmenter.gap_s == 0.4
+        node.destroy_node()
+    finally:
+        ctx.shutdown()
+
+
+def test_candidates_come_while_the_finger_moves_and_settle_on_the_gesture(harness):
+    SkinCandidate = get_message('social_touch_msgs/msg/SkinCandidate')
+    h = harness(candidate_period_s=0.1)
+    got = []
+    h.io.create_subscription(SkinCandidate, '/skin/candidate', got.append, 100)
+    for _ in range(30):
+        h.frame()
+    h.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert 6 <= len(got) <= 9 and h.node.candidates_published == len(got)  # every 0.1 s of 0.8 s traced
+    assert all(0 <= c.confidence <= 1 and 0 < c.progress <= 1 and c.strokes == 1 for c in got)
+    assert [c.elapsed_s for c in got] == sorted(c.elapsed_s for c in got)
+    assert got[-1].gesture == 'line_right' == h.commands[0].gesture
+    assert all(c.header.frame_id == 'skin_link' for c in got)   # the frame's own header
+    quiet = harness(candidate_period_s=0.0)
+    quiet.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    assert quiet.node.candidates_published == 0 and quiet.commands[0].gesture == 'line_right'
+
+
+def test_a_bump_is_a_collision_from_the_frame_that_crosses_and_never_a_gesture(harness):
+    SkinContact = get_message('social_touch_msgs/msg/SkinContact')
+    SkinCollision = get_message('social_touch_msgs/msg/SkinCollision')
+    h = harness(collision_force_n=6.0, collision_rate_n_s=120.0)
+    contacts, collisions = [], []
+    h.io.create_subscription(SkinContact, '/skin/contact', contacts.append, 500)
+    h.io.create_subscription(SkinCollision, '/skin/collision', collisions.append, 50)
+    for _ in range(30):
+        h.frame()
+    # A finger traced at 1.5 N, landing over 50 ms: contacts, no collision, its command.
+    line = path([6.0, 23.0], [41.0, 23.0], 0.8)
+    ramp = np.minimum(np.arange(len(line)) / 7.5, 1.0) * 1.5
+    for p, fz in zip(line, ramp, strict=True):
+        h.frame(p, fz_n=float(fz))
+    for _ in range(45):
+        h.frame()
+    assert collisions == [] and [c.command for c in h.commands] == ['move_right']
+    assert contacts[0].start and contacts[-1].end and sum(c.start for c in contacts) == 1
+    assert contacts[5].x_m == pytest.approx(line[5][0] / 1000, abs=2e-3) and contacts[-2].fz_n == pytest.approx(1.5)
+    # A bump along the same path: 8 N within two frames. Collision on the frame that crosses the rate.
+    first = len(contacts)
+    for k, p in enumerate(line[:40]):
+        h.frame(p, fz_n=[3.0, 8.0][min(k, 1)])
+    for _ in range(45):
+        h.frame()
+    (hit,) = collisions
+    assert hit.frames_since_start == 0 and 'rate' in hit.reason and hit.fz_n == pytest.approx(3.0)
+    assert contacts[first].start and contacts[first].force_rate_n_s >= 120.0
+    assert [c.command for c in h.commands] == ['move_right']          # the bump gave no command
+    assert h.node.outcomes['collision'] == 1 and h.node.collisions.collisions == 1

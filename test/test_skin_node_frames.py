@@ -53,7 +53,7 @@ def test_any_frame_stream_is_counted_and_never_raises(items):
 
 
 def test_stamps_map_back_to_header_time():
-    stream = SkinFrameStream(GestureSegmenter(off_hysteresis_s=0.05, min_frames=2))
+    stream = SkinFrameStream(GestureSegmenter(gap_s=0.05, min_frames=2))
     with pytest.raises(ValueError, match='no frame has been fed yet'):
         stream.stamp_ns(0.0)
     t0 = 1_700_000_123 * NS + 456

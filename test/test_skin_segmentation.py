@@ -33,7 +33,7 @@ def line(n, y=20.0):
 
 
 def test_one_touch_is_one_gesture_after_the_hysteresis():
-    seg = GestureSegmenter(off_hysteresis_s=0.1)
+    seg = GestureSegmenter(gap_s=0.1)
     got, t = feed_path(seg, line(60))
     assert got == [] and seg.active
     early, t = lift(seg, 0.05, t)
@@ -48,7 +48,7 @@ def test_one_touch_is_one_gesture_after_the_hysteresis():
 
 
 def test_strokes_closer_than_the_hysteresis_join_longer_gaps_split():
-    seg = GestureSegmenter(off_hysteresis_s=0.15)
+    seg = GestureSegmenter(gap_s=0.15)
     a, t = feed_path(seg, line(30, y=10.0))
     b, t = lift(seg, 0.08, t)
     c, t = feed_path(seg, line(30, y=30.0), t)
@@ -56,7 +56,7 @@ def test_strokes_closer_than_the_hysteresis_join_longer_gaps_split():
     assert a == b == c == []
     (joined,) = d
     assert joined.strokes == 2 and joined.stroke.tolist() == [0] * 30 + [1] * 30
-    seg2 = GestureSegmenter(off_hysteresis_s=0.15)
+    seg2 = GestureSegmenter(gap_s=0.15)
     first, t = feed_path(seg2, line(30))
     first += lift(seg2, 0.3, t)[0]
     second, t = feed_path(seg2, line(30), t + 0.3)
@@ -143,7 +143,7 @@ def test_taps_shorter_than_min_frames_are_dropped():
     assert got == [] and seg.stats.too_short == 1
 
 
-@pytest.mark.parametrize('kwargs', [{'off_hysteresis_s': -1}, {'max_duration_s': 0}, {'min_frames': 0},
+@pytest.mark.parametrize('kwargs', [{'gap_s': -1}, {'max_duration_s': 0}, {'min_frames': 0},
                                     {'map_threshold': float('nan')}, {'map_relative': 1.0},
                                     {'multi_fraction': 2.0}])
 def test_bad_parameters_are_refused(kwargs):
@@ -155,7 +155,7 @@ def test_bad_parameters_are_refused(kwargs):
 @given(st.lists(st.tuples(st.booleans(), st.floats(0, 47), st.floats(0, 47), st.sampled_from([0.0, 0.3, np.nan])),
                 min_size=1, max_size=300))
 def test_any_frame_stream_gives_consistent_gestures(frames):
-    seg = GestureSegmenter(off_hysteresis_s=0.05, max_duration_s=0.5, min_frames=2, max_frames=40)
+    seg = GestureSegmenter(gap_s=0.05, max_duration_s=0.5, min_frames=2, max_frames=40)
     out = []
     for k, (contact, x, y, level) in enumerate(frames):
         pressure = ideal_frame(np.array([x, y])) * (1.0 if np.isnan(level) else level + 0.1)

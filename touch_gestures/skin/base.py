@@ -122,6 +122,8 @@ class TemplateRecogniser(BaseEstimator):
                              'trajectories?); record the codebook again')
         self.set_codebook(np.stack(feats), names)
         self.n_dropped_ = dropped
+        # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
+        self.max_strokes_ = max(int(getattr(g, 'strokes', 1)) for g in gestures)
         return self
 
     def set_codebook(self, templates: np.ndarray, labels: Sequence[str],

@@ -5,7 +5,7 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
 
     key                 shape       dtype     what
     format              ()          str       'social_touch.skin_codebook'
-    format_version      ()          int64     1
+    format_version      ()          int64     2 (1 is still read)
     recogniser          ()          str       registry name, e.g. 'trace'
     params              ()          str       JSON of the recogniser's parameters
     classes             (n,)        str       gesture names, sorted
@@ -13,6 +13,14 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     template_labels     (T,)        int64     index into classes
     class_thresholds    (n,)        float64   rejection distance per class (inf: none)
     description         ()          str       optional: how it was recorded (synthetic or not)
+    vocabulary          ()          str       v2: the vocabulary's name ('commands', 'symbols', 'digits'...)
+    gap_s               ()          float64   v2: the segmenter's gap for it, s (a lift this long ends a gesture)
+    max_strokes         ()          int64     v2: most strokes of a template (1: single-stroke vocabulary)
+
+A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
+``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
+``gap_s_`` and ``max_strokes_``; the scene chooses the vocabulary by the codebook it gives
+the ``haptic_commands`` node, and the node's segmenter takes the file's gap unless set.
 
 At load the format, version, recogniser name and parameters are checked, and so is the
 feature dimension (against the features the named recogniser computes with those
@@ -41,24 +49,37 @@ from .errors import CodebookError
 from .gesture import TouchGesture
 from .registry import RECOGNISERS, make_recogniser
 from .screening import MIN_EXTENT_MM, MIN_POINTS, gesture_extent_mm, screen_gesture
+from .segmentation import default_gap_s
 
 __all__ = ['FORMAT', 'FORMAT_VERSION', 'CodebookRecorder', 'load_codebook', 'save_codebook']
 
 FORMAT = 'social_touch.skin_codebook'
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions this code reads.
+READABLE_VERSIONS = (1, 2)
+#: What a version 1 file is.
+_V1_VOCABULARY = ('commands', 1)
 _KEYS = ('format', 'format_version', 'recogniser', 'params', 'classes', 'templates', 'template_labels',
          'class_thresholds')
 
 
-def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description: str | None = None) -> Path:
+def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description: str | None = None,
+                  vocabulary: str = 'commands', gap_s: float | None = None) -> Path:
     """Write a fitted recogniser's codebook to ``path`` (``.npz`` is appended if missing).
 
     ``description`` (optional, e.g. how it was recorded and whether the data are synthetic) is
-    kept in the file and comes back as the loaded recogniser's ``description_``."""
+    kept in the file and comes back as the loaded recogniser's ``description_``. ``gap_s``
+    defaults to the vocabulary's (:func:`~.segmentation.default_gap_s` of the most strokes
+    a template has)."""
+    recogniser = getattr(recogniser, 'chosen_', recogniser)  # 'auto': the file holds the recogniser it chose
     if not hasattr(recogniser, 'templates_'):
         raise ValueError('the recogniser has no codebook yet: fit it (or record one) before saving')
     if recogniser.name not in RECOGNISERS:
         raise ValueError(f'recogniser {recogniser.name!r} is not in the registry; cannot name it in a file')
+    max_strokes = int(getattr(recogniser, 'max_strokes_', 1))
+    gap_s = default_gap_s(max_strokes) if gap_s is None else float(gap_s)
+    if not (np.isfinite(gap_s) and gap_s >= 0) or not str(vocabulary).strip():
+        raise ValueError(f'a codebook needs a vocabulary name and a gap >= 0 s; got {vocabulary!r}, {gap_s}')
     path = Path(path)
     if path.suffix != '.npz':
         path = path.with_name(path.name + '.npz')
@@ -69,6 +90,8 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
         classes=np.asarray(recogniser.classes_, dtype=str), templates=recogniser.templates_.astype(np.float32),
         template_labels=recogniser.template_labels_.astype(np.int64),
         class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64),
+        vocabulary=np.array(str(vocabulary)), gap_s=np.array(gap_s, dtype=np.float64),
+        max_strokes=np.array(max_strokes, dtype=np.int64),
         **({} if description is None else {'description': np.array(str(description))}))
     return path
 
@@ -99,9 +122,11 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
     if str(data['format']) != FORMAT:
         raise CodebookError(f"format is {str(data['format'])!r}, expected {FORMAT!r}", where)
     version = int(data['format_version'])
-    if version != FORMAT_VERSION:
-        raise CodebookError(f'format_version {version} is not supported (this code reads {FORMAT_VERSION}); '
-                            'record the codebook again', where)
+    if version not in READABLE_VERSIONS:
+        raise CodebookError(f'format_version {version} is not supported (this code reads '
+                            f'{", ".join(map(str, READABLE_VERSIONS))}); record the codebook again', where)
+    if version >= 2 and not all(k in data for k in ('vocabulary', 'gap_s', 'max_strokes')):
+        raise CodebookError('a version 2 codebook needs vocabulary, gap_s and max_strokes', where)
     name = str(data['recogniser'])
     if name not in RECOGNISERS:
         raise CodebookError(f'recogniser {name!r} is unknown; known: {", ".join(RECOGNISERS)}'
@@ -131,6 +156,15 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None
+    if version == 1:
+        model.vocabulary_, model.max_strokes_ = _V1_VOCABULARY
+        model.gap_s_ = default_gap_s(model.max_strokes_)
+    else:
+        model.vocabulary_, model.max_strokes_ = str(data['vocabulary']), int(data['max_strokes'])
+        model.gap_s_ = float(data['gap_s'])
+        if not (np.isfinite(model.gap_s_) and model.gap_s_ >= 0 and model.max_strokes_ >= 1):
+            raise CodebookError(f'gap_s must be >= 0 s and max_strokes >= 1; got {model.gap_s_}, '
+                                f'{model.max_strokes_}', where)
     return model
 
 

@@ -106,18 +106,25 @@ def minmax_normalise(values: np.ndarray, axis: int = 0, eps: float = 1e-6) -> np
     return np.where(flat, 0.5, out).astype(values.dtype, copy=False)
 
 
-def arc_length_resample(points: np.ndarray, n: int) -> np.ndarray:
+def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = None) -> np.ndarray:
     """``n`` points equally spaced along the path (the $1 recogniser's resampling), (m, 2) -> (n, 2).
 
-    A path of one point, or one that never moves, gives ``n`` copies of its first point.
+    With ``stroke`` ((m,) stroke index of each point) the length is measured along the ink
+    only, as $P does: the jump from the end of one stroke to the start of the next adds
+    nothing, so no resampled point lies in the air between strokes. A path of one point, or
+    one that never moves, gives ``n`` copies of its first point.
 
     >>> arc_length_resample(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]]), 5).tolist()
     [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0]]
+    >>> arc_length_resample(np.array([[0.0, 0], [2, 0], [0, 5], [2, 5]]), 4, np.array([0, 0, 1, 1])).round(3).tolist()
+    [[0.0, 0.0], [1.333, 0.0], [0.667, 5.0], [2.0, 5.0]]
     """
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) == 0:
         raise ValueError('cannot resample an empty path')
     step = np.hypot(*np.diff(pts, axis=0).T)
+    if stroke is not None:
+        step[np.diff(np.asarray(stroke)) != 0] = 0.0  # the finger is lifted: no ink between strokes
     cum = np.concatenate([[0.0], np.cumsum(step)])
     total = cum[-1]
     if not total > 0:

@@ -10,7 +10,15 @@ Subscribes to ``frame`` (``/skin/frame`` in the ``skin`` namespace: ``SkinFrame`
    press, a tap) are no command;
 3. **recognition** against the codebook (default recogniser ``trace``, docs/skin-evaluation.md),
    with its rejection rule (distance over the class's threshold, or too small a margin);
-4. **the command map**: an accepted gesture with a command is published on
+4. **early candidates**: while a gesture is traced, every ``candidate_period_s`` the best
+   candidate for the part traced so far (:class:`~.early.PrefixMatcher`) is published on
+   ``candidate`` (``/skin/candidate``, ``SkinCandidate``: gesture, confidence, distance, progress);
+5. **contacts and collisions** (:class:`~.collisions.CollisionDetector`): every frame in contact
+   (and the one that ends it) on ``contact`` (``/skin/contact``, ``SkinContact``: start/end, point
+   in m, force vector in N, rise rate); a ``SkinCollision`` on ``collision`` from the frame whose
+   normal force or rise rate crosses ``collision_force_n`` / ``collision_rate_n_s``. The gesture
+   under way is then no command (outcome ``'collision'``);
+6. **the command map**: an accepted gesture with a command is published on
    ``/touch/haptic_command`` (``HapticCommand``: gesture, command, recogniser, distance, margin,
    duration_s, frames; the header stamp is the end of the gesture, frame_id ``skin``).
 
@@ -26,9 +34,9 @@ Parameters (read once at start, except rejection and screening: ``max_distance``
 - ``commands``: the gesture -> command map (default: ``config/skin_commands.yaml``); a mapped
   gesture the codebook does not know stops the node at start, naming the file and line;
 - ``recogniser``: must match the codebook's (empty: whatever the codebook was made with);
-- segmentation: ``off_hysteresis_s``, ``max_duration_s``, ``min_frames``, ``map_threshold``,
-  ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction`` (see
-  GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
+- segmentation: ``gap_s`` (default: the codebook's, i.e. its vocabulary's), ``max_duration_s``,
+  ``min_frames``, ``map_threshold``, ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction``
+  (see GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
 - screening: ``min_extent_mm``;
 - rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds,
   ``auto_scale`` x the ``auto_quantile`` quantile of the codebook's own spread; a number >= 0:
@@ -44,13 +52,17 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
 
 from ..model_card import card_log_line
 from .base import Match, TemplateRecogniser
 from .codebook import load_codebook
+from .collisions import COLLISION_FORCE_N, COLLISION_RATE_N_S, CollisionDetector
 from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
+from .early import PrefixMatcher
 from .frames import SkinFrameStream
 from .gesture import TouchGesture
 from .screening import MIN_EXTENT_MM, gesture_extent_mm, screen_gesture
@@ -60,6 +72,9 @@ __all__ = ['CODEBOOK_COMMAND', 'DEFAULT_CODEBOOK', 'DEFAULT_COMMANDS', 'HapticCo
 
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
+SkinCandidate = get_message('social_touch_msgs/msg/SkinCandidate')
+SkinContact = get_message('social_touch_msgs/msg/SkinContact')
+SkinCollision = get_message('social_touch_msgs/msg/SkinCollision')
 TimeMsg = get_message('builtin_interfaces/msg/Time')
 
 #: The shipped codebook and command map, relative to the package's share directory.
@@ -71,7 +86,8 @@ CODEBOOK_COMMAND = ('social-touch codebook record --simulate 10 --seed 2026 --re
 _NS = 1_000_000_000
 #: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
 _SEGMENTER_DOC = {
-    'off_hysteresis_s': 'a lift must last this long (s) to end a gesture (not in cirillo2017)',
+    'gap_s': "a lift must last this long (s) to end a gesture; shorter lifts separate its strokes (default: the "
+             "codebook's vocabulary's, 0.15 s single-stroke, 1.5 s multi-stroke; not in cirillo2017)",
     'max_duration_s': 'a touch is cut after this long (s) and gives no command (a hand resting on the skin)',
     'min_frames': 'contacts with fewer frames are dropped as taps or noise',
     'map_threshold': 'pressure (1 = full scale) a taxel must reach to enter the map (cirillo2017 3.1)',
@@ -131,6 +147,8 @@ class HapticCommandsNode(Node):
             raise self._bad('min_extent_mm', self.min_extent_mm, 'a size >= 0 mm')
         self.outcomes: Counter[str] = Counter()
         self.last_match: Match | None = None
+        self._setup_candidates()
+        self._setup_collisions()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -138,7 +156,8 @@ class HapticCommandsNode(Node):
         unmapped = [c for c in classes if c not in self.commands.commands]
         origin = self.recogniser.description_ or 'a codebook without a description'
         self.get_logger().info(
-            f'{self.codebook_path} ({origin}): {len(self.recogniser.templates_)} templates of {len(classes)} '
+            f'{self.codebook_path} ({origin}): vocabulary {getattr(self.recogniser, "vocabulary_", "?")}, '
+            f'{len(self.recogniser.templates_)} templates of {len(classes)} '
             f'gestures, recogniser {self.recogniser_name}; {len(self.commands.commands)} commands from '
             f'{self.commands_path}'
             + (f'; recognised without a command: {", ".join(unmapped)}' if unmapped else ''))
@@ -237,8 +256,11 @@ class HapticCommandsNode(Node):
         return SetParametersResult(successful=True)
 
     def _make_stream(self) -> SkinFrameStream:
+        # The gap is the vocabulary's: the codebook file carries it (longer for multi-stroke symbols).
+        gap_s = float(getattr(self.recogniser, 'gap_s_', _SEGMENTER_DEFAULTS['gap_s']))
+        defaults = {**_SEGMENTER_DEFAULTS, 'gap_s': gap_s}
         seg = {name: self._param(name, default, f'{_SEGMENTER_DOC[name]} (see GestureSegmenter)')
-               for name, default in _SEGMENTER_DEFAULTS.items()}
+               for name, default in defaults.items()}
         max_gap_s = self._param('max_gap_s', 0.5, 'no frame for this long (s): the gesture under way is dropped')
         try:
             return SkinFrameStream(GestureSegmenter(**seg), max_gap_s=max_gap_s)
@@ -250,6 +272,8 @@ class HapticCommandsNode(Node):
         stream = self.stream
         skipped, restarts = sum(stream.skipped.values()), stream.restarts
         gestures = stream.update(msg)
+        if stream.frames and sum(stream.skipped.values()) == skipped:   # a frame the stream took
+            self._contact(msg)
         if sum(stream.skipped.values()) != skipped:
             self.get_logger().warning(f'skipped a frame: its pressure must be 144 finite values; frames skipped so '
                                       f'far: {dict(stream.skipped)}', throttle_duration_sec=5.0)
@@ -258,9 +282,86 @@ class HapticCommandsNode(Node):
                                       'is dropped, starting afresh')
         for gesture in gestures:
             self._on_gesture(gesture)
+            self._next_candidate_t = -math.inf
+        self._publish_candidate(msg)
+
+    def _setup_candidates(self) -> None:
+        self.candidate_period_s = self._param('candidate_period_s', 0.1, 'publish the candidate for a gesture under '
+                                              'way this often, s (0: never)')
+        if not (math.isfinite(self.candidate_period_s) and self.candidate_period_s >= 0):
+            raise self._bad('candidate_period_s', self.candidate_period_s, 'a period >= 0 s')
+        self.prefix_matcher: PrefixMatcher | None = None
+        if self.candidate_period_s > 0:
+            try:
+                self.prefix_matcher = PrefixMatcher(self.recogniser)
+            except ValueError as err:   # a recogniser without ordered points (the paper's maps)
+                self.get_logger().info(f'no early candidates: {err}')
+        self.candidate_pub = self.create_publisher(SkinCandidate, 'candidate', 20)
+        self._next_candidate_t = -math.inf
+        self.candidates_published = 0
+
+    def _setup_collisions(self) -> None:
+        force = self._param('collision_force_n', COLLISION_FORCE_N, 'normal force (N) from which a contact is a '
+                            'collision (.inf: never)')
+        rate = self._param('collision_rate_n_s', COLLISION_RATE_N_S, 'normal force rise (N/s) from which a contact '
+                           'is a collision (.inf: never)')
+        frames = self._param('rate_frames', 3, 'the force rise rate is measured over this many frames (150 Hz)')
+        try:
+            self.collisions = CollisionDetector(force, rate, frames)
+        except ValueError as err:
+            raise ParameterError(f'collision parameters of {self._fqn}: {err}') from err
+        self.contact_pub = self.create_publisher(SkinContact, 'contact', 50)
+        self.collision_pub = self.create_publisher(SkinCollision, 'collision', 20)
+        self._collision_in_gesture = False
+
+    def _contact(self, msg: Any) -> None:
+        """Contact state and collision of one frame (the detector counts NaN forces as 0)."""
+        t = int(msg.header.stamp.sec) + int(msg.header.stamp.nanosec) / _NS
+        point = (float(msg.contact_x), float(msg.contact_y))
+        state = self.collisions.update(bool(msg.contact), point, np.asarray(msg.force, dtype=np.float64), t)
+        if state is None:
+            return
+        fx, fy, fz = (float(v) for v in state.force_n)
+        self.contact_pub.publish(SkinContact(
+            header=copy.copy(msg.header), start=state.start, end=state.end, x_m=state.x_m, y_m=state.y_m, z_m=0.0,
+            fx_n=fx, fy_n=fy, fz_n=fz, force_rate_n_s=state.force_rate_n_s, duration_s=state.duration_s))
+        if state.collision is None:
+            return
+        self._collision_in_gesture = True
+        self.collision_pub.publish(SkinCollision(
+            header=copy.copy(msg.header), reason=state.collision, x_m=state.x_m, y_m=state.y_m, z_m=0.0,
+            fx_n=fx, fy_n=fy, fz_n=fz, force_rate_n_s=state.force_rate_n_s, frames_since_start=state.frames))
+        self.get_logger().warning(f'collision ({state.collision}): {fz:.1f} N, rising {state.force_rate_n_s:.0f} '
+                                  f'N/s, at ({1000 * state.x_m:.0f}, {1000 * state.y_m:.0f}) mm')
+
+    def _publish_candidate(self, msg: Any) -> None:
+        """The best candidate for the gesture under way, at most every candidate_period_s of its time."""
+        seg = self.stream.segmenter
+        if self.prefix_matcher is None or not seg.active:
+            self._next_candidate_t = -math.inf
+            return
+        partial = seg.partial()
+        if partial is None or partial.times[-1] < self._next_candidate_t:
+            return
+        if self._next_candidate_t == -math.inf:  # a new gesture: its first candidate one period in
+            self._next_candidate_t = partial.start_s + self.candidate_period_s
+            if partial.times[-1] < self._next_candidate_t:
+                return
+        self._next_candidate_t = partial.times[-1] + self.candidate_period_s
+        cand = self.prefix_matcher.candidate(partial)
+        self.candidates_published += 1
+        self.candidate_pub.publish(SkinCandidate(
+            header=copy.copy(msg.header), gesture=cand.label or '', confidence=cand.confidence,
+            distance=cand.distance if math.isfinite(cand.distance) else -1.0, progress=cand.progress,
+            elapsed_s=float(partial.times[-1] - partial.start_s), strokes=partial.strokes))
 
     def _on_gesture(self, gesture: TouchGesture) -> None:
         log = self.get_logger()
+        if self._collision_in_gesture or self.collisions.in_collision:
+            self._collision_in_gesture = False
+            self.outcomes['collision'] += 1   # an impact is never a gesture
+            log.debug(f'no command: a collision during {gesture!r}')
+            return
         reason = screen_gesture(gesture, self.min_extent_mm)
         if reason is not None:
             self.outcomes[reason] += 1

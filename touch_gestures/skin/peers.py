@@ -203,8 +203,8 @@ class PointCloudRecogniser(TemplateRecogniser):
         path = _path(gesture)
         if path is None:
             return None
-        # $P resamples along the whole multi-stroke path; strokes only matter as a cloud.
-        pts = arc_length_resample(path, self.n_points)
+        # $P resamples along the ink of every stroke, not across the lifts between them.
+        pts = arc_length_resample(path, self.n_points, gesture.stroke)
         size = float(np.ptp(pts, axis=0).max())
         pts = (pts - pts.mean(axis=0)) / (size if size > 1e-9 else 1.0)
         return pts.reshape(-1).astype(np.float32)

@@ -5,10 +5,13 @@ deformable layer is detected. The gesture data are collected until the contact e
 :class:`GestureSegmenter` does this one calibrated frame at a time, with three additions
 the paper leaves open:
 
-- **hysteresis**: a lift shorter than ``off_hysteresis_s`` does not end the gesture (a
-  finger skipping between taxels, or the strokes of a multi-stroke gesture traced in
-  quick succession). The points of each stroke keep their stroke index; a longer lift
-  ends the gesture, so a multi-stroke sample with slow pen-ups becomes several gestures.
+- **strokes and the gap**: a lift shorter than ``gap_s`` does not end the gesture: the
+  next contact starts a new stroke of the same gesture (a finger skipping between taxels,
+  or the strokes of an X, a T, a star). The points of each stroke keep their stroke index;
+  a lift of ``gap_s`` or more ends the gesture, so one command fires per gesture, ``gap_s``
+  after the last lift. The default (0.15 s) suits single-stroke vocabularies (the skin's
+  commands); a vocabulary with multi-stroke templates uses :data:`MULTISTROKE_GAP_S`
+  (chosen on the pauses between strokes, see there; the codebook file carries it).
 - **a limit**: a touch that never ends (a hand resting on the skin) is cut at
   ``max_duration_s`` and emitted with ``truncated=True``; the segmenter then waits for the
   release before it starts another gesture, so a resting hand yields one gesture, not
@@ -40,7 +43,25 @@ from scipy import ndimage
 
 from .gesture import GRID, TouchGesture
 
-__all__ = ['GestureSegmenter', 'SegmenterStats']
+__all__ = ['MULTISTROKE_GAP_S', 'SINGLE_STROKE_GAP_S', 'GestureSegmenter', 'SegmenterStats', 'default_gap_s']
+
+#: Gap (s) for vocabularies of single-stroke gestures: joins a finger skipping between taxels.
+SINGLE_STROKE_GAP_S = 0.15
+#: Gap (s) for vocabularies with multi-stroke gestures. Chosen on the pauses between the strokes
+#: of the Mixed Multistroke Gestures traces (10 people, 3 speeds; `social-touch eval skin
+#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which 0.25 s more keeps fewer
+#: than 0.5 % more samples whole (1.25 s: 95.3 %, 1.5 s: 96.0 %, 1.75 s: 96.3 %). It is also the
+#: latency every command pays after the last lift, so the knee, not the tail (8 s keeps 98.4 %).
+MULTISTROKE_GAP_S = 1.5
+
+
+def default_gap_s(max_strokes: int) -> float:
+    """The gap for a vocabulary whose templates have at most ``max_strokes`` strokes.
+
+    >>> default_gap_s(1), default_gap_s(3)
+    (0.15, 1.5)
+    """
+    return MULTISTROKE_GAP_S if max_strokes > 1 else SINGLE_STROKE_GAP_S
 
 _EIGHT = np.ones((3, 3), dtype=bool)
 
@@ -64,8 +85,9 @@ class GestureSegmenter:
     """Feed calibrated frames, get completed :class:`TouchGesture` objects.
 
     Args:
-        off_hysteresis_s: a lift must last this long (s) to end the gesture. Not in the
-            paper; 0.15 s joins the gaps of a finger skipping taxels and quick pen-ups.
+        gap_s: a lift must last this long (s) to end the gesture; shorter lifts separate
+            strokes. Not in the paper; 0.15 s joins the gaps of a finger skipping taxels
+            (single-stroke vocabularies), :data:`MULTISTROKE_GAP_S` the strokes of symbols.
         max_duration_s: a touch is cut after this long (s). Not in the paper; 10 s is
             longer than any traced gesture of the $1 logs (7.5 s, slow).
         min_frames: contacts with fewer frames are dropped as taps or noise.
@@ -80,7 +102,7 @@ class GestureSegmenter:
         multi_fraction: ...and the fraction of its contact frames they must make up.
         max_frames: capacity of the per-gesture buffers; the gesture is cut when full.
 
-    >>> seg = GestureSegmenter(off_hysteresis_s=0.05, min_frames=2)
+    >>> seg = GestureSegmenter(gap_s=0.05, min_frames=2)
     >>> touch = np.zeros((12, 12), np.float32); touch[3, 4] = 1.0
     >>> out = [seg.update(touch, True, np.array([17.0, 13.7]), i / 150) for i in range(5)]
     >>> out += [seg.update(np.zeros((12, 12), np.float32), False, None, (5 + i) / 150) for i in range(10)]
@@ -88,11 +110,11 @@ class GestureSegmenter:
     [TouchGesture(points=5, frames=5, duration_s=0.027, taxels=1, strokes=1)]
     """
 
-    def __init__(self, off_hysteresis_s: float = 0.15, max_duration_s: float = 10.0, min_frames: int = 3,
+    def __init__(self, gap_s: float = SINGLE_STROKE_GAP_S, max_duration_s: float = 10.0, min_frames: int = 3,
                  map_threshold: float = 0.02, map_relative: float = 0.3, merge_gap_taxels: int = 2,
                  min_multi_frames: int = 3, multi_fraction: float = 0.25, max_frames: int = 3000) -> None:
-        if not off_hysteresis_s >= 0:
-            raise ValueError(f'off_hysteresis_s must be >= 0 s, got {off_hysteresis_s}')
+        if not gap_s >= 0:
+            raise ValueError(f'gap_s must be >= 0 s, got {gap_s}')
         if not max_duration_s > 0:
             raise ValueError(f'max_duration_s must be > 0 s, got {max_duration_s}')
         if min_frames < 1 or max_frames < 1 or min_multi_frames < 1:
@@ -105,7 +127,7 @@ class GestureSegmenter:
         if not 0 <= multi_fraction <= 1 or merge_gap_taxels < 0:
             raise ValueError(f'need 0 <= multi_fraction <= 1 and merge_gap_taxels >= 0; got {multi_fraction}, '
                              f'{merge_gap_taxels}')
-        self.off_hysteresis_s = float(off_hysteresis_s)
+        self.gap_s = float(gap_s)
         self.max_duration_s = float(max_duration_s)
         self.min_frames = int(min_frames)
         self.map_threshold = float(map_threshold)
@@ -181,7 +203,7 @@ class GestureSegmenter:
             elif self._active:
                 if not self._lifted:
                     self._lifted = True
-                if t - self._last_contact_t >= self.off_hysteresis_s:
+                if t - self._last_contact_t >= self.gap_s:
                     self._finish(out, truncated=False)
             return out
         if self._suppressed:
@@ -198,6 +220,17 @@ class GestureSegmenter:
             self._finish(out, truncated=True)
             self._suppressed = True
         return out
+
+    def partial(self) -> TouchGesture | None:
+        """The gesture under way so far (a copy), for decisions before the finger lifts; None when
+        no gesture is under way or it has no trajectory point yet."""
+        if not self._active or self._suppressed or self._n == 0:
+            return None
+        n = self._n
+        return TouchGesture(
+            binary_map=self._binary.copy(), peak_map=self._peak.copy(), trajectory=self._points[:n].copy(),
+            times=self._times[:n].copy(), stroke=self._strokes[:n].copy(), frames=self._frames,
+            start_s=self._start_t, duration_s=self._last_contact_t - self._start_t, strokes=self._stroke + 1)
 
     def flush(self) -> list[TouchGesture]:
         """End any gesture in progress as if the finger had lifted (e.g. at the end of a recording)."""

@@ -2,7 +2,7 @@
 
     social-touch eval skin --traces ../shared/data/unistroke_dev.csv.gz [--json]
         [--recognisers trace,centroid,...] [--limit N] [--templates-per-gesture M (default: all)]
-        [--mode sensor|direct|both] [--random-touches N] [--seed S] [--no-cache]
+        [--mode sensor|direct|both] [--random-touches N] [--seed S] [--no-cache] [--gap S]
 
 Each trace of the file goes through the virtual skin, the real driver decode and
 calibration and the segmenter (:mod:`.render`), then every recogniser is evaluated
@@ -11,9 +11,13 @@ as text or, with ``--json``, as one object::
 
     {"recognisers": {NAME: {"accuracy": ..., "us_per_recognition": ..., ...}}, "best": NAME, ...}
 
-Multi-stroke samples are traced with the finger lifted between strokes; strokes closer
-than the segmenter's hysteresis (0.15 s) join into one gesture, a longer pen-up splits the
-sample into several gestures, which counts as a segmentation failure (wrong).
+Multi-stroke samples are traced with the finger lifted between strokes, the pauses as they
+are in the file; strokes closer than the segmenter's gap join into one gesture, a longer
+pen-up splits the sample into several gestures, which counts as a segmentation failure
+(wrong). The gap is the vocabulary's default (:func:`~touch_gestures.skin.segmentation.default_gap_s`:
+1.5 s when the file has multi-stroke samples, else 0.15 s) unless ``--gap`` sets it; the
+report gives the pauses between strokes and, per gap, the samples that stay whole
+(:mod:`.gaps`), the measurement the default comes from.
 """
 
 from __future__ import annotations
@@ -23,17 +27,25 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
+from touch_gestures.skin.segmentation import default_gap_s
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
+from touch_lab.skin.early_eval import early_decisions
+from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
+from touch_lab.skin.gaps import gap_table, pause_percentiles_s
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
 __all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
 
+#: The recogniser the report calls the default: whichever the vocabulary's codebook picks
+#: (touch_gestures.skin.vocabulary).
+DEFAULT = 'auto'
 HELP = 'evaluate the skin recognisers on real traces through the virtual skin, leave-one-subject-out'
 
 
@@ -57,6 +69,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--random-touches', type=int, default=150,
                         help='synthetic touches that are no gesture, for the random-touch acceptance (0: none)')
     parser.add_argument('--seed', type=int, default=0, help='noise and codebook-choice seed')
+    parser.add_argument('--early', type=int, default=0, metavar='EVERY',
+                        help='also measure early decisions of the default recogniser (auto) on one held-out '
+                             'gesture in EVERY (0: no; touch_lab.skin.early_eval)')
+    parser.add_argument('--vocabulary', default=None,
+                        help="the vocabulary's name in the report (default: the file's name without extensions)")
+    parser.add_argument('--gap', type=float, default=None,
+                        help="segmenter's gap, s: a lift this long ends a gesture (default: the vocabulary's, "
+                             '1.5 s if the file has multi-stroke samples, else 0.15 s)')
     parser.add_argument('--no-cache', action='store_true', help='render every trace again (cache: '
                         f'{default_cache_dir()})')
 
@@ -67,34 +87,43 @@ def _progress(line: str) -> None:
 
 def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None, templates_per_gesture: int = 0,
                   mode: str = 'sensor', random_count: int = 150, seed: int = 0, cache: bool = True,
-                  progress: Any = _progress) -> dict:
+                  progress: Any = _progress, gap_s: float | None = None, vocabulary: str | None = None,
+                  early_every: int = 0) -> dict:
     """Run the whole evaluation and return the report object (see the module doc)."""
     for name in recognisers:
         make_recogniser(name)  # unknown names fail before minutes of rendering
     say = progress or (lambda line: None)
     trace_set = read_traces(traces, limit=limit)
     samples = trace_set.samples
+    if gap_s is None:
+        gap_s = default_gap_s(max(s.n_strokes for s in samples))
+    if not (math.isfinite(gap_s) and gap_s >= 0):
+        raise ValueError(f'--gap must be a finite number of seconds >= 0, got {gap_s}')
     cache_dir = default_cache_dir() if cache else None
     per_gesture = templates_per_gesture if templates_per_gesture > 0 else None
     factories = {name: (lambda name=name: make_recogniser(name)) for name in recognisers}
     modes = ('direct', 'sensor') if mode == 'both' else (mode,)
     report: dict[str, Any] = {
-        'traces': str(traces), 'samples': len(samples), 'subjects': trace_set.subjects,
+        'traces': str(traces), 'vocabulary': vocabulary or Path(str(traces)).name.split('.')[0],
+        'samples': len(samples), 'subjects': trace_set.subjects,
         'gestures': trace_set.gestures, 'multi_stroke_samples': trace_set.multi_stroke_samples,
-        'skipped_rows': trace_set.skipped_rows, 'templates_per_gesture': per_gesture or 'all', 'seed': seed,
+        'skipped_rows': trace_set.skipped_rows, 'gap_s': gap_s,
+        'pauses_between_strokes_s': pause_percentiles_s(samples), 'samples_whole_per_gap': gap_table(samples),
+        'templates_per_gesture': per_gesture or 'all', 'seed': seed,
         'protocol': 'leave-one-subject-out; accuracy = nearest class right (rejection off, as the paper); '
                     'accuracy_with_rejection, rejection_rate, error_rate with the rejection rule on',
     }
     for m in modes:
         t0 = time.perf_counter()
         say(f'rendering {len(samples)} samples ({m}) ...')
-        settings = RenderSettings(mode=m, seed=seed)
+        settings = RenderSettings(mode=m, seed=seed, gap_s=gap_s)
         rendered = render_samples(samples, settings, cache_dir,
                                   progress=lambda done, total: say(f'  {done}/{total} samples'))
         randoms = []
         if random_count > 0:
             touches = random_touches(random_count, seed=seed + 1)
-            randoms = render_samples(touches, RenderSettings(mode=m, placement='mm', seed=seed + 10**6), cache_dir)
+            randoms = render_samples(touches, RenderSettings(mode=m, placement='mm', seed=seed + 10**6, gap_s=gap_s),
+                                     cache_dir)
         say(f'rendered in {time.perf_counter() - t0:.1f} s; evaluating {", ".join(recognisers)}')
         results = leave_one_subject_out(rendered, factories, per_gesture, seed, randoms, progress=say)
         block = {
@@ -102,8 +131,11 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
             else 'true finger path and perfect maps (before the sensor)',
             'gestures_per_sample': _histogram(len(r.gestures) for r in rendered),
             'random_touches': len(randoms), 'recognisers': {k: v.to_dict() for k, v in results.items()},
-            'best': _best(results),
+            'best': _best(results), 'default': DEFAULT if DEFAULT in results else None,
         }
+        if early_every > 0:
+            block['early'] = early_decisions(rendered, lambda: make_recogniser(DEFAULT), per_gesture, seed,
+                                             early_every, progress=say)
         if m == modes[-1]:
             report.update(block)
         else:
@@ -133,12 +165,15 @@ def _pct(x: float | None) -> str:
 def format_text(report: dict) -> str:
     """The report as text: summary table, then per recogniser eq. 8-9 and the confusion matrix."""
     recs = report['recognisers']
-    lines = [f"skin recognisers, leave-one-subject-out on {report['traces']} ({report['samples']} samples, "
+    lines = [f"vocabulary {report['vocabulary']}: skin recognisers, leave-one-subject-out on {report['traces']} "
+             f"({report['samples']} samples, "
              f"subjects {', '.join(report['subjects'])}, {len(report['gestures'])} gestures)",
              f"mode: {report['mode']} ({report['data']}); codebook: {report['templates_per_gesture']} templates "
              f"per gesture per fold; random touches (synthetic): {report['random_touches']}",
              f"multi-stroke samples: {report['multi_stroke_samples']}; gestures per sample after segmentation: "
-             f"{report['gestures_per_sample']}", '',
+             f"{report['gestures_per_sample']}; gap {report['gap_s']} s",
+             'samples kept whole per gap (from the pauses of the file): '
+             + ', '.join(f"{r['gap_s']:g} s: {100 * r['whole']:.1f} %" for r in report['samples_whole_per_gap']), '',
              f"{'recogniser':12s} {'acc %':>6s} {'before':>6s} {'acc+rej':>7s} {'rej %':>6s} {'err %':>6s} "
              f"{'random':>6s} {'us/rec':>8s} {'us p90':>8s}"]
     before = report.get('before_sensor', {}).get('recognisers', {})
@@ -147,6 +182,13 @@ def format_text(report: dict) -> str:
         lines.append(f"{name:12s} {_pct(r['accuracy'])} {_pct(b)} {_pct(r['accuracy_with_rejection']):>7s} "
                      f"{_pct(r['rejection_rate'])} {_pct(r['error_rate'])} {_pct(r['random_touch_acceptance'])} "
                      f"{r['us_per_recognition']:8.1f} {r['us_p90']:8.1f}")
+    if report.get('default'):
+        chosen = recs[report['default']].get('choices', {})
+        lines += ['', f"default ({report['default']}, the vocabulary's rule): accuracy "
+                  f"{_pct(recs[report['default']]['accuracy']).strip()} %, chose "
+                  + ', '.join(f'{k} in {v} folds' for k, v in chosen.items())]
+    if report.get('early'):
+        lines += ['', f"early decisions ({DEFAULT}), {early_summary(report['early'])}"]
     lines += ['', f"best: {report['best']}", '(acc: nearest class right, rejection off; before: same before the '
               'sensor; acc+rej, rej, err: with the rejection rule; random: synthetic random touches that fired '
               'a command)']
@@ -183,7 +225,8 @@ def run(args: argparse.Namespace) -> int:
         return 2
     try:
         report = evaluate_file(args.traces, names, args.limit, args.templates_per_gesture, args.mode,
-                               args.random_touches, args.seed, cache=not args.no_cache)
+                               args.random_touches, args.seed, cache=not args.no_cache, gap_s=args.gap,
+                               vocabulary=args.vocabulary, early_every=args.early)
     except (SocialTouchError, ValueError) as err:
         print(f'eval skin: {err}', file=sys.stderr)
         return 2

@@ -54,6 +54,7 @@ class RecogniserResult:
     per_performer: dict[str, dict[str, float]] = field(default_factory=dict)
     random_touches: int = 0
     random_accepted: int = 0
+    choices: dict[str, int] = field(default_factory=dict)   # 'auto': the recogniser its rule chose, per fold
 
     @property
     def accuracy(self) -> float:
@@ -96,7 +97,7 @@ class RecogniserResult:
             'random_touch_acceptance': self.random_acceptance, 'random_touches': self.random_touches,
             'per_gesture': self.gesture_stats(),
             'per_performer': {s: float(np.mean(list(r.values()))) for s, r in self.per_performer.items()},
-            'confusion': self.confusion,
+            'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
         }
 
 
@@ -171,6 +172,8 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             start = time.perf_counter()
             recogniser = make().fit(gestures, names)
             sizes[name].append(len(recogniser.templates_))
+            if hasattr(recogniser, 'choice_'):
+                res.choices[recogniser.choice_] = res.choices.get(recogniser.choice_, 0) + 1
             hits: dict[str, list[bool]] = {}
             for r in test:
                 res.samples += 1

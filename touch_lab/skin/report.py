@@ -182,6 +182,8 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
         '(`touch_driver.skin`), the traces behind them are real ($1 unistroke logs, Wobbrock et al. 2007, '
         f'{n_subj} subjects x 3 speeds x 16 gestures x 10); sections 3-4 also use synthetic performers and '
         'synthetic random touches.', '',
+        'Multi-stroke vocabularies (symbols), the per-vocabulary default, early decisions and collisions: '
+        '[skin-multistroke.md](skin-multistroke.md) (`social-touch report skin-multistroke`).', '',
         '## Conclusion', '', *_conclusion(report, scores, bench), '',
         '## 1. Leave-one-subject-out on the traces', '',
         f"{report['samples']} samples; each is traced across the virtual skin (finger contact model, noise, "

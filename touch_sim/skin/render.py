@@ -63,7 +63,7 @@ class RenderSettings:
         placement: ``'fit'`` (bounding box onto the active area) or ``'mm'`` (x, y are mm already).
         force_n, radius_mm: the finger (TraceStimulus defaults: 1.5 N, 4 mm).
         seed: noise seed of the first sample; sample i uses ``seed + i``.
-        off_hysteresis_s, max_duration_s, min_frames: the segmenter's (see GestureSegmenter).
+        gap_s, max_duration_s, min_frames: the segmenter's (see GestureSegmenter).
     """
 
     mode: str = 'sensor'
@@ -71,7 +71,7 @@ class RenderSettings:
     force_n: float = 1.5
     radius_mm: float = 4.0
     seed: int = 0
-    off_hysteresis_s: float = 0.15
+    gap_s: float = 0.15
     max_duration_s: float = 10.0
     min_frames: int = 3
 
@@ -82,7 +82,7 @@ class RenderSettings:
             raise ValueError(f"placement must be 'fit' or 'mm', got {self.placement!r}")
 
     def segmenter(self) -> GestureSegmenter:
-        return GestureSegmenter(off_hysteresis_s=self.off_hysteresis_s, max_duration_s=self.max_duration_s,
+        return GestureSegmenter(gap_s=self.gap_s, max_duration_s=self.max_duration_s,
                                 min_frames=self.min_frames)
 
 

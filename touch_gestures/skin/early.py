@@ -1,0 +1,139 @@
+"""Deciding before the finger lifts: the best candidate for a gesture still being traced.
+
+cirillo2017 closes with recognition "during the accomplishment of the gesture itself". A
+prefix of a gesture looks like the prefix of its templates, not like the whole of them, so
+:class:`PrefixMatcher` matches what has been traced so far against the templates cut at a
+few fractions of their length (``fractions``): a template's features are its points in
+order (along the ink for :class:`~.clouds.CloudRecogniser`, in time for
+:class:`~.proposed.TraceRecogniser`), so its prefix at fraction f is its first f of them,
+resampled back to the full count and normalised as the features are. The best fraction is
+also the estimate of how much of the gesture is done.
+
+The answer, a :class:`Candidate`, carries a confidence in [0, 1]: the relative margin
+``1 - d1 / d2`` of the best class distance d1 over the runner-up's d2 (0: two classes
+equally close; 1: nothing else near). It is a score for a behaviour to react early on, not a
+probability; the final command still comes after the gap, from the whole gesture.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import TemplateRecogniser
+from .gesture import TouchGesture
+
+__all__ = ['Candidate', 'PrefixMatcher', 'stable_fraction']
+
+#: Recognisers whose features are (n, 2) points in order, with how each normalises its points.
+_ORDERED = ('cloud', 'trace')
+
+
+@dataclass(frozen=True, slots=True)
+class Candidate:
+    """The best class for a gesture under way.
+
+    Attributes:
+        label: the nearest class (None when the prefix is unusable).
+        confidence: ``1 - d1 / d2`` in [0, 1] (module doc).
+        distance: distance to the nearest template prefix (recogniser units).
+        progress: the template fraction that matched best, an estimate of the part traced (0..1].
+    """
+
+    label: str | None
+    confidence: float
+    distance: float
+    progress: float
+
+
+def _normalise(points: np.ndarray, kind: str) -> np.ndarray:
+    """(k, m, 2) -> (k, m, 2): the normalisation of the recogniser's own features."""
+    if kind == 'cloud':
+        centred = points - points.mean(axis=1, keepdims=True)
+        size = np.ptp(centred, axis=1).max(axis=1)
+    else:  # trace: centre of the box, uniform scale by the larger side (aspect_floor 1)
+        lo, hi = points.min(axis=1, keepdims=True), points.max(axis=1, keepdims=True)
+        centred = points - 0.5 * (lo + hi)
+        size = (hi - lo)[:, 0].max(axis=1)
+    size = np.where(size > 1e-9, size, 1.0)
+    return centred / size[:, None, None]
+
+
+class PrefixMatcher:
+    """Candidates for gestures under way, against a fitted ``cloud`` or ``trace`` recogniser's codebook.
+
+    Args:
+        recogniser: the fitted recogniser of the final decision (``auto``: the one it chose).
+        fractions: template prefixes to match, as fractions of the template (sorted, in (0, 1]).
+
+    Raises:
+        ValueError: a recogniser whose features are not ordered points, or bad fractions.
+    """
+
+    def __init__(self, recogniser: TemplateRecogniser, fractions: Sequence[float] = (0.25, 0.5, 0.75, 1.0)) -> None:
+        recogniser = getattr(recogniser, 'chosen_', recogniser)
+        if recogniser.name not in _ORDERED:
+            raise ValueError(f'early decisions need the ordered points of {" or ".join(_ORDERED)}; '
+                             f'{recogniser.name!r} has none')
+        fractions = np.asarray(sorted(fractions), dtype=np.float64)
+        if not len(fractions) or fractions[0] <= 0 or fractions[-1] > 1:
+            raise ValueError(f'fractions must be in (0, 1]; got {fractions.tolist()}')
+        self.recogniser = recogniser
+        self.fractions = fractions
+        n = recogniser.templates_.shape[1] // 2
+        points = recogniser.templates_.reshape(-1, n, 2).astype(np.float64)
+        labels = recogniser.classes_[recogniser.template_labels_]
+        self._matchers = []
+        for f in fractions:
+            m = copy.deepcopy(recogniser)
+            if f < 1:
+                m.set_codebook(self._prefixes(points, f, recogniser.name).reshape(len(points), -1), labels)
+            self._matchers.append(m)
+
+    @staticmethod
+    def _prefixes(points: np.ndarray, fraction: float, kind: str) -> np.ndarray:
+        """(T, n, 2) -> (T, n, 2): each template's first ``fraction`` of points, resampled to n, normalised."""
+        n = points.shape[1]
+        source = np.linspace(0.0, fraction * (n - 1), n)   # positions along the template's point index
+        lo = np.floor(source).astype(np.intp)
+        hi = np.minimum(lo + 1, n - 1)
+        w = (source - lo)[None, :, None]
+        return _normalise(points[:, lo] * (1 - w) + points[:, hi] * w, kind).astype(np.float32)
+
+    def candidate(self, gesture: TouchGesture) -> Candidate:
+        """The best class for ``gesture`` (traced so far) over the template prefixes."""
+        best: tuple[float, int, np.ndarray] | None = None
+        for k, m in enumerate(self._matchers):
+            per_class = m.class_distances(gesture)
+            if per_class is None:
+                return Candidate(None, 0.0, float('inf'), 0.0)
+            d1 = float(per_class.min())
+            if best is None or d1 < best[0]:
+                best = (d1, k, per_class)
+        d1, k, per_class = best
+        label = str(self._matchers[k].classes_[int(np.argmin(per_class))])
+        d2 = float(np.partition(per_class, 1)[1]) if len(per_class) > 1 else float('inf')
+        confidence = 1.0 - d1 / d2 if d2 > 0 and np.isfinite(d2) else (1.0 if np.isinf(d2) else 0.0)
+        return Candidate(label, float(np.clip(confidence, 0.0, 1.0)), d1, float(self.fractions[k]))
+
+
+def stable_fraction(labels: Sequence[str | None], truth: str) -> float | None:
+    """Given the candidates after each of n equal steps of a gesture (the last is the whole
+    gesture), the fraction at which the candidate became right and stayed so; None if it never
+    did (the last one is wrong).
+
+    >>> stable_fraction(['a', 'b', 'b', 'b'], 'b'), stable_fraction(['b', 'a', 'b', 'b'], 'b')
+    (0.5, 0.75)
+    >>> stable_fraction(['b', 'a'], 'b') is None
+    True
+    """
+    n = len(labels)
+    if n == 0 or labels[-1] != truth:
+        return None
+    k = n - 1
+    while k > 0 and labels[k - 1] == truth:
+        k -= 1
+    return (k + 1) / n

@@ -1,0 +1,133 @@
+"""The recogniser a vocabulary needs, decided from its own codebook: :class:`AutoRecogniser`.
+
+Two families answer different vocabularies. An order-free point cloud
+(:class:`~.clouds.CloudRecogniser`) reads symbols people write with their strokes in any
+order and direction (an X, an H, a star: leave-one-person-out on the Mixed Multistroke
+Gestures it is right where the time-ordered trace is not, docs/skin-evaluation.md); a
+direction-aware trace (:class:`~.proposed.TraceRecogniser`) is needed where the direction is
+the meaning (the skin's ``line_left`` and ``line_right`` are one cloud). Which one a
+vocabulary needs follows from its codebook, so the rule is measured there, not fixed per file:
+
+    **the rule**: both recognise every template of the codebook from the others (leave one
+    template out, nearest neighbour, at most ``per_class`` templates per class), giving
+    per-class accuracies.
+
+    1. If the order-free one confuses a class (accuracy below ``confused``) that the ordered
+       one reads (at least ``separated`` better), direction is part of the vocabulary: the
+       ordered recogniser (two lines in opposite directions are one cloud: 50 % each).
+    2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser:
+       people order and direct their strokes differently, which a codebook cannot show
+       (a template's nearest neighbour is mostly its own performer's repetition, traced the
+       same way), and which leave-one-person-out shows (docs/skin-evaluation.md).
+    3. A single-stroke vocabulary gets the one with the higher mean per-class accuracy, the
+       ordered one within ``tie`` (it is cheaper).
+
+The measurement uses the codebook alone, so it holds for any vocabulary and any people, at
+``n_classes x per_class`` recognitions per candidate at fit time.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .base import Match, TemplateRecogniser
+from .gesture import TouchGesture
+
+__all__ = ['AutoRecogniser', 'codebook_accuracy']
+
+
+def codebook_accuracy(recogniser: TemplateRecogniser, per_class: int = 20) -> np.ndarray:
+    """(n_classes,) leave-one-template-out nearest-neighbour accuracy of a fitted recogniser.
+
+    Each of at most ``per_class`` evenly spaced templates per class is matched against all the
+    others; a class with a single template has nothing to be recognised from: NaN."""
+    T = len(recogniser.templates_)
+    bounds = np.r_[recogniser.class_starts_, T]
+    out = np.full(len(recogniser.classes_), np.nan)
+    for c, (lo, hi) in enumerate(itertools.pairwise(bounds)):
+        if hi - lo < 2:
+            continue
+        picks = np.unique(np.linspace(lo, hi - 1, min(hi - lo, per_class)).astype(np.intp))
+        hits = 0
+        for i in picks:
+            d = np.asarray(recogniser._distances(recogniser.templates_[i]), dtype=np.float64).copy()
+            d[i] = np.inf
+            hits += recogniser.template_labels_[int(np.argmin(d))] == c
+        out[c] = hits / len(picks)
+    return out
+
+
+class AutoRecogniser(TemplateRecogniser):
+    """Fits the ordered and the order-free recogniser and keeps the one the rule picks (module doc).
+
+    Args:
+        ordered, order_free: registry names of the direction-aware and the order-free recogniser.
+        per_class: templates per class the rule tries.
+        confused: an order-free accuracy below this confuses the class...
+        separated: ...when the ordered one does at least this much better.
+        tie: in a single-stroke vocabulary, accuracy difference below which the ordered one is kept.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, handed to the chosen one.
+
+    Attributes (after fit):
+        chosen_: the fitted recogniser in use; ``choice_`` its name; ``reason_``: which rule
+        decided; ``evidence_``: per candidate the per-class codebook accuracies (class -> accuracy).
+    """
+
+    name = 'auto'
+
+    def __init__(self, ordered: str = 'trace', order_free: str = 'cloud', per_class: int = 20,
+                 confused: float = 0.75, separated: float = 0.25, tie: float = 0.005,
+                 max_distance: float | str | None = 'auto',
+                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
+        self.ordered = ordered
+        self.order_free = order_free
+        self.per_class = per_class
+        self.confused = confused
+        self.separated = separated
+        self.tie = tie
+        self.max_distance = max_distance
+        self.auto_scale = auto_scale
+        self.auto_quantile = auto_quantile
+        self.min_margin = min_margin
+
+    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> AutoRecogniser:
+        from .registry import make_recogniser
+
+        self._check_params()
+        rejection = {k: getattr(self, k) for k in ('max_distance', 'auto_scale', 'auto_quantile', 'min_margin')}
+        ordered = make_recogniser(self.ordered, **rejection).fit(gestures, labels)
+        free = make_recogniser(self.order_free, **rejection).fit(gestures, labels)
+        acc_o, acc_f = codebook_accuracy(ordered, self.per_class), codebook_accuracy(free, self.per_class)
+        with np.errstate(invalid='ignore'):
+            confused = (acc_f < self.confused) & (acc_o >= acc_f + self.separated)
+        if confused.any():
+            best, reason = ordered, 'direction: ' + ', '.join(map(str, ordered.classes_[confused]))
+        elif ordered.max_strokes_ > 1:
+            best, reason = free, 'multi-stroke vocabulary'
+        else:
+            mean_o = float(np.nanmean(acc_o)) if np.isfinite(acc_o).any() else 0.0
+            mean_f = float(np.nanmean(acc_f)) if np.isfinite(acc_f).any() else 0.0
+            best = free if mean_f > mean_o + self.tie else ordered
+            reason = 'single-stroke vocabulary, codebook accuracy'
+        self.chosen_, self.choice_, self.reason_ = best, best.name, reason
+        self.evidence_ = {m.name: dict(zip(map(str, m.classes_), acc.tolist(), strict=True))
+                          for m, acc in ((ordered, acc_o), (free, acc_f))}
+        for attr in ('classes_', 'templates_', 'template_labels_', 'class_starts_', 'n_features_in_',
+                     'class_thresholds_', 'n_dropped_', 'max_strokes_'):
+            setattr(self, attr, getattr(best, attr))
+        self.direction_aware = best.direction_aware
+        return self
+
+    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+        return self.chosen_._features(gesture)
+
+    def _distances(self, query: np.ndarray) -> np.ndarray:
+        return self.chosen_._distances(query)
+
+    def predict(self, gesture: TouchGesture) -> Match:
+        self._check_fitted()
+        return self.chosen_.predict(gesture)

@@ -1,0 +1,136 @@
+"""``social-touch report skin-multistroke``: regenerate docs/skin-multistroke.md (issue 13).
+
+One section per vocabulary (one trace file each: leave-one-person-out through the virtual skin,
+:func:`~touch_lab.skin.cli.evaluate_file`), the pauses between strokes and the gap, the early
+decisions of the default recogniser, collisions against presses and traces
+(:mod:`.collision_eval`, synthetic) and the cost per recognition (:mod:`.bench`, synthetic
+gestures). Every figure of the file comes from this one command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
+from touch_lab.skin.bench import bench_recognition
+from touch_lab.skin.cli import DEFAULT, evaluate_file
+from touch_lab.skin.collision_eval import evaluate_collisions
+from touch_lab.skin.early_eval import summary as early_summary
+
+__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+
+HELP = 'regenerate docs/skin-multistroke.md: multi-stroke vocabularies, early decisions, collisions, cost'
+#: Evaluated per vocabulary: the default, the two it chooses from, the paper's centroid method.
+RECOGNISERS = ('auto', 'cloud', 'trace', 'centroid')
+
+
+def _say(line: str) -> None:
+    print(f'[report skin-multistroke] {line}', file=sys.stderr, flush=True)
+
+
+def _pct(x: float | None) -> str:
+    return 'n/a' if x is None else f'{100 * x:.2f}'
+
+
+def _vocabulary_section(r: dict) -> list[str]:
+    recs = r['recognisers']
+    out = [f"## Vocabulary `{r['vocabulary']}` ({Path(r['traces']).name})", '',
+           f"{r['samples']} samples of {len(r['gestures'])} gestures by {len(r['subjects'])} people, "
+           f"{r['multi_stroke_samples']} of them multi-stroke; gap {r['gap_s']} s; gestures per sample after "
+           f"segmentation: {r['gestures_per_sample']} (a sample cut into other than one gesture counts as wrong). "
+           f"Codebook per fold: every sample of the other people. {r['data']}.", '',
+           '| recogniser | accuracy % | with rejection: correct % | rejected % | wrong command % | '
+           'random touches firing % | us per recognition (median) |', '|---|---|---|---|---|---|---|']
+    for name, v in recs.items():
+        out.append(f"| {name} | {_pct(v['accuracy'])} | {_pct(v['accuracy_with_rejection'])} | "
+                   f"{_pct(v['rejection_rate'])} | {_pct(v['error_rate'])} | {_pct(v['random_touch_acceptance'])} | "
+                   f"{v['us_per_recognition']:.0f} |")
+    if r.get('default'):
+        choices = recs[r['default']].get('choices', {})
+        out += ['', f"Default (`{DEFAULT}`, the rule of touch_gestures.skin.vocabulary) chose: "
+                + ', '.join(f'{k} in {n} of {sum(choices.values())} folds' for k, n in choices.items()) + '.']
+    best = recs[r['best']]
+    whole = 1 - best['segmentation_failures'] / best['samples']
+    out += ['', f"Samples cut into exactly one gesture: {_pct(whole)} %; accuracy of the best ({r['best']}) on "
+            f"those: {_pct(best['correct'] / max(1, best['samples'] - best['segmentation_failures']))} %."]
+    if r.get('pauses_between_strokes_s'):
+        p = r['pauses_between_strokes_s']
+        out += ['', 'Pauses between strokes (s): ' + ', '.join(f'{k} {v:.2f}' for k, v in p.items()) + '.',
+                'Samples kept whole per gap (from the pauses of the file; the gap is also the latency every '
+                'command pays after the last lift):', '', '| gap s | ' + ' | '.join(
+                    f"{x['gap_s']:g}" for x in r['samples_whole_per_gap']) + ' |',
+                '|---|' + '---|' * len(r['samples_whole_per_gap']),
+                '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
+    if r.get('early'):
+        out += ['', f"Early decisions (`{DEFAULT}`, one held-out gesture in {r['early_every']}), "
+                f"{early_summary(r['early'])}"]
+    return [*out, '']
+
+
+def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md', early_every: int = 8,
+                 per_kind: int = 40) -> Path:
+    """Run everything (module doc) and write the Markdown file."""
+    started = time.perf_counter()
+    command = ('social-touch report skin-multistroke ' + ' '.join(f'--traces {t}' for t in traces)
+               + f' --early {early_every} --per-kind {per_kind}')
+    lines = ['# Skin: multi-stroke vocabularies, early decisions, collisions', '',
+             f'Regenerate with `{command}`.', '',
+             'The traces are real (pen traces of the files named below), the skin is simulated: each trace goes '
+             'through the virtual skin (contact model, noise, hysteresis, 150 Hz), the real decoder and '
+             'calibrator and the segmenter. Collisions and the cost benchmark use synthetic contacts and '
+             'gestures. Leave-one-person-out only.', '',
+             f'Gap: {MULTISTROKE_GAP_S} s for vocabularies with multi-stroke gestures, 0.15 s otherwise '
+             '(touch_gestures.skin.segmentation).', '']
+    for path in traces:
+        _say(f'evaluating {path}')
+        r = evaluate_file(path, list(RECOGNISERS), progress=_say, early_every=early_every)
+        r['early_every'] = early_every
+        lines += _vocabulary_section(r)
+    _say('collisions')
+    c = evaluate_collisions(per_kind)
+    lines += ['## Collisions, presses and traced gestures (synthetic)', '',
+              f"{per_kind} simulated contacts of each kind through the virtual skin; thresholds "
+              f"{c['collision_force_n']} N and {c['collision_rate_n_s']} N/s (touch_lab.skin.collision_eval).", '',
+              '| contact | collision | gesture | nothing |', '|---|---|---|---|']
+    for kind, row in c['confusion'].items():
+        lines.append(f"| {kind} | {row['collision']} | {row['gesture']} | {row['nothing']} |")
+    lat = c['bump_latency_frames']
+    if lat:
+        lines += ['', "Bump detection latency, frames after the contact's first frame "
+                  f"({c['frame_period_ms']:.2f} ms each): median {lat['median']:.0f}, 90th percentile "
+                  f"{lat['p90']:.0f}, max {lat['max']:.0f}."]
+    _say('cost')
+    b = bench_recognition(['trace', 'cloud', 'auto', 'centroid'])
+    lines += ['', '## Cost per recognition (synthetic gestures)', '',
+              f"{b['gestures']} gestures x {b['templates_per_gesture']} templates, median of {b['repeats']} runs over "
+              f"{b['queries']} queries, one `predict` each (`social-touch bench skin`):", '',
+              '| recogniser | us per recognition |', '|---|---|']
+    for name, v in b['recognisers'].items():
+        lines.append(f"| {name} | {v['us_per_recognition']:.0f} |")
+    lines += ['', f'(This run took {(time.perf_counter() - started) / 60:.0f} minutes.)', '']
+    out = Path(out)
+    out.write_text('\n'.join(lines), encoding='utf-8')
+    return out
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch report skin-multistroke``."""
+    parser.add_argument('--traces', action='append', required=True,
+                        help='a trace file per vocabulary (repeat the option), e.g. '
+                             '../shared/data/multistroke_dev.csv.gz')
+    parser.add_argument('--out', default='docs/skin-multistroke.md', help='the Markdown file to write')
+    parser.add_argument('--early', type=int, default=8, help='early decisions on one held-out gesture in EARLY')
+    parser.add_argument('--per-kind', type=int, default=40, help='simulated contacts of each kind for collisions')
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        path = write_report(args.traces, args.out, args.early, args.per_kind)
+    except (ValueError, OSError) as err:
+        print(f'report skin-multistroke: {err}', file=sys.stderr)
+        return 2
+    print(f'wrote {path}')
+    return 0
