@@ -367,3 +367,23 @@ def test_a_bump_is_a_collision_from_the_frame_that_crosses_and_never_a_gesture(h
     assert contacts[first].start and contacts[first].force_rate_n_s >= 120.0
     assert [c.command for c in h.commands] == ['move_right']          # the bump gave no command
     assert h.node.outcomes['collision'] == 1 and h.node.collisions.collisions == 1
+
+
+def test_a_failing_recogniser_reports_error_on_diagnostics_and_the_node_goes_on(harness, monkeypatch):
+    h = harness()
+    got = []
+    mine = 'social_touch: /skin/haptic_commands'
+    h.io.create_subscription(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics',
+                             lambda m: got.extend(s for s in m.status if s.name == mine), 100)
+
+    def diverge(*args, **kwargs):                  # a stand-in for a run-time fault of the recogniser
+        raise FloatingPointError('distance diverged')
+    monkeypatch.setattr(h.node.stream, 'update', diverge)
+    for _ in range(10):
+        h.frame()
+    h.executor.spin_for(5.5)                       # the health period (simulated time)
+    assert h.node.callback_errors == 10            # every frame failed; none stopped the graph
+    assert got and got[0].level == 2 and 'FloatingPointError: distance diverged' in got[0].message
+    monkeypatch.undo()
+    h.executor.spin_for(5.5)                       # no new failure: back to OK
+    assert len(got) == 2 and got[-1].level == 0

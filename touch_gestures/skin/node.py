@@ -56,6 +56,7 @@ import numpy as np
 
 from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ConfigError, ParameterError
+from touch_graph.node_health import NodeHealth
 
 from ..model_card import card_log_line
 from .base import Match, TemplateRecogniser
@@ -151,6 +152,8 @@ class HapticCommandsNode(Node):
         self._setup_collisions()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
+        self.health = NodeHealth(self)   # a callback that raises: ERROR on /diagnostics; dropped frames: WARN
+        self.drops = self.health.drops
         self.add_on_set_parameters_callback(self._on_set_parameters)
         classes = [str(c) for c in self.recogniser.classes_]
         unmapped = [c for c in classes if c not in self.commands.commands]
