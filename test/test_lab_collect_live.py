@@ -3,6 +3,7 @@ of its own (``social-touch launch``), the operator's keys as a script, redo, dro
 
 from __future__ import annotations
 
+import os
 import shutil
 import signal
 import subprocess
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from touch_graph.cli.main import main as cli_main
-from touch_lab.collect.live import PROMPT_TOPIC, live_session
+from touch_lab.collect.live import PROMPT_TOPIC, TerminalLines, live_session
 from touch_lab.collect.protocol import Protocol
 from touch_lab.collect.session_bag import read_session
 
@@ -81,7 +82,7 @@ class _PromptWatcher:
 
 
 def test_live_session_records_frames_and_labels_with_redo_drop_and_quit(tmp_path, patch_graph):
-    protocol = Protocol(('stroke', 'slap'), repetitions=2, seed=3)
+    protocol = Protocol(('stroke', 'slap'), repetitions=2, seed=0)   # stroke, slap, slap, stroke
     trials = protocol.trials()
     keys = ['', '',      # trial 1 performed and kept
             'r',         # ... redone: asked again, its first label never written
@@ -113,6 +114,11 @@ def test_live_session_records_frames_and_labels_with_redo_drop_and_quit(tmp_path
     assert f'trial 1/4: {trials[0].prompt}: press Enter' in watcher.heard[0] or any(
         f'trial 1/4: {trials[0].prompt}' in h for h in watcher.heard), watcher.heard
     assert any(h.startswith(f'trial 2/3: {trials[2].prompt}') for h in watcher.heard), watcher.heard
+    assert watcher.heard[-1] == ''   # the session ended: the view hides its panel
+    # train reads the live bag as it reads simulated sessions (a tiny model: two short trials)
+    model = tmp_path / 'patch.npz'
+    assert cli_main(['train', 'patch', '--bags', str(bag), '--components', '1', '-o', str(model)]) == 0
+    assert model.exists()
 
 
 def test_live_session_cli_refuses_an_existing_bag_a_missing_person_and_a_missing_scene(tmp_path, dds_domain):
@@ -127,3 +133,44 @@ def test_live_session_cli_refuses_an_existing_bag_a_missing_person_and_a_missing
     with pytest.raises(SystemExit, match=no_scene):
         cli_main(['collect', 'patch', '--person', 'ada', '--wait', '1', '--out', str(tmp_path / 'new')])
     assert not (tmp_path / 'new').exists()
+
+
+def test_ctrl_c_ends_the_live_session_with_the_kept_trials_in_a_closed_bag(tmp_path, patch_graph):
+    protocol = Protocol(('stroke', 'slap'), repetitions=2, seed=3)
+    operator = _Operator(['', ''])
+
+    def keys_then_ctrl_c(prompt: str) -> str:
+        if operator.keys:
+            return operator(prompt)
+        time.sleep(0.5)
+        os.kill(os.getpid(), signal.SIGINT)   # the operator's Ctrl-C, during the second trial's prompt
+        time.sleep(30)
+        raise EOFError
+    bag = tmp_path / 'patch_bob'
+    result = live_session('patch', protocol, 'bob', bag, read_line=keys_then_ctrl_c, say=lambda _t: None, wait_s=20.0)
+    assert result['kept'] == 1
+    session = read_session(bag, 'patch')   # closed properly: metadata.yaml and the MCAP summary are there
+    assert [lab.gesture for lab in session.labels] == [protocol.trials()[0].gesture]
+    assert len(session.frames['/patch/frame']) == result['frames']
+
+
+def test_terminal_lines_reads_the_operators_lines_and_lets_go_when_told():
+    stop = threading.Event()
+    read, write = os.pipe()
+    try:
+        os.write(write, b'\nR\nq')
+        os.close(write)
+        lines = TerminalLines(stop, fd=read, poll_s=0.05)
+        assert [lines(''), lines(''), lines('')] == ['', 'R', 'q']
+        with pytest.raises(EOFError):
+            lines('')
+    finally:
+        os.close(read)
+    read, write = os.pipe()
+    try:
+        stop.set()   # the session ended: a reader waiting for a line gives up
+        with pytest.raises(EOFError):
+            TerminalLines(stop, fd=read, poll_s=0.05)('')
+    finally:
+        os.close(read)
+        os.close(write)

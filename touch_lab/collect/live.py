@@ -21,8 +21,11 @@ redone or dropped, so labels go to the bag in start order and never have to be t
 
 from __future__ import annotations
 
+import os
 import queue
+import select
 import shutil
+import sys
 import threading
 import time
 from collections import deque
@@ -33,7 +36,7 @@ from typing import Any
 from .protocol import Protocol, Trial
 from .session_bag import FRAME_TOPIC, SENSOR_TOPICS, SessionWriter
 
-__all__ = ['PROMPT_TOPIC', 'LiveSessionError', 'live_session']
+__all__ = ['PROMPT_TOPIC', 'LiveSessionError', 'TerminalLines', 'live_session']
 
 #: Where the current prompt is published (latched), for the live view.
 PROMPT_TOPIC = '/touch/collect_prompt'
@@ -43,6 +46,36 @@ _KEYS = 'Enter = start, r = redo the last trial, d = drop the last trial, q = en
 
 class LiveSessionError(RuntimeError):
     """The session cannot start: no graph, no publisher of the sensor's topics, no frames."""
+
+
+class TerminalLines:
+    """The operator's lines from standard input, read from its file descriptor (a ``read_line``).
+
+    Unlike ``input()``, a reader blocked here gives up within ``poll_s`` once ``stop`` is set, so no
+    thread is left holding stdin's lock when the process exits (CPython aborts on that).
+    """
+
+    def __init__(self, stop: threading.Event, fd: int | None = None, poll_s: float = 0.2) -> None:
+        self.stop = stop
+        self.fd = sys.stdin.fileno() if fd is None else fd
+        self.poll_s = poll_s
+        self._buffer = b''
+
+    def __call__(self, _prompt: str) -> str:
+        while b'\n' not in self._buffer:
+            if self.stop.is_set():
+                raise EOFError
+            ready, _, _ = select.select([self.fd], [], [], self.poll_s)
+            if ready:
+                chunk = os.read(self.fd, 4096)
+                if not chunk:
+                    if self._buffer:   # a last line without its newline
+                        line, self._buffer = self._buffer, b''
+                        return line.decode(errors='replace')
+                    raise EOFError
+                self._buffer += chunk
+        line, self._buffer = self._buffer.split(b'\n', 1)
+        return line.decode(errors='replace')
 
 
 def _key_reader(read_line: Callable[[str], str], keys: queue.Queue) -> threading.Thread:
@@ -102,7 +135,7 @@ class _Recorder:
 
 
 def live_session(sensor: str, protocol: Protocol, person: str, out: str | Path, *,
-                 read_line: Callable[[str], str] = input, say: Callable[[str], None] = print,
+                 read_line: Callable[[str], str] | None = None, say: Callable[[str], None] = print,
                  wait_s: float = 5.0, synthetic: bool = False) -> dict[str, int]:
     """Run one live session of ``person`` and write it to the bag ``out`` (module doc).
 
@@ -111,7 +144,8 @@ def live_session(sensor: str, protocol: Protocol, person: str, out: str | Path, 
         protocol: the trials to prompt, shuffled by its seed.
         person: the person's name, written into every label.
         out: the bag directory to create (must not exist).
-        read_line: returns the operator's next line (``input``; tests pass a script); EOFError ends the session.
+        read_line: returns the operator's next line (default :class:`TerminalLines`: standard input; tests pass
+            a script); EOFError ends the session.
         say: where prompts and progress go.
         wait_s: how long to wait for the sensor's publisher and its first frame, wall s.
         synthetic: mark the bag synthetic (the running scene plays a virtual device).
@@ -150,7 +184,11 @@ def live_session(sensor: str, protocol: Protocol, person: str, out: str | Path, 
                                            'is the sensor plugged in? see `social-touch topic hz ' + frame_topic + '`')
                 session = _Walk(tool, writer, recorder, protocol, person, stop, say,
                                 lambda text: prompts.publish(string(data=text)))
-                session.run(read_line)
+                finished = threading.Event()
+                try:
+                    session.run(read_line or TerminalLines(finished))
+                finally:
+                    finished.set()   # the terminal reader lets go of stdin
                 # What arrived before the end is still in the executor's inbox: record it too.
                 for _ in range(20):
                     tool.executor.spin_once(0)
