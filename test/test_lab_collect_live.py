@@ -95,14 +95,15 @@ def test_live_session_records_frames_and_labels_with_redo_drop_and_quit(tmp_path
     said: list[str] = []
     bag = tmp_path / 'patch_ada'
     try:
-        result = live_session('patch', protocol, 'ada', bag, read_line=_Operator(keys), say=said.append, wait_s=20.0)
+        result = live_session('patch', protocol, 'ada', bag, read_line=_Operator(keys), say=said.append, wait_s=20.0,
+                              synthetic=True)   # the graph plays the virtual patch
     finally:
         time.sleep(0.5)
         watcher.done.set()
         watcher.thread.join(10)
     assert result['kept'] == 2 and result['trials'] == 3 and result['frames'] > 10, (result, said)
     session = read_session(bag, 'patch')
-    assert not session.synthetic and session.people == ['ada']
+    assert session.synthetic and session.people == ['ada']
     assert [(lab.gesture, lab.variant) for lab in session.labels] == [
         (t.gesture, t.variant) for t in (trials[0], trials[2])]
     stamps = session.stamps_s['/patch/frame']
@@ -150,6 +151,7 @@ def test_ctrl_c_ends_the_live_session_with_the_kept_trials_in_a_closed_bag(tmp_p
     result = live_session('patch', protocol, 'bob', bag, read_line=keys_then_ctrl_c, say=lambda _t: None, wait_s=20.0)
     assert result['kept'] == 1
     session = read_session(bag, 'patch')   # closed properly: metadata.yaml and the MCAP summary are there
+    assert not session.synthetic   # not marked: live sessions record people unless told otherwise
     assert [lab.gesture for lab in session.labels] == [protocol.trials()[0].gesture]
     assert len(session.frames['/patch/frame']) == result['frames']
 
