@@ -73,3 +73,26 @@ def test_the_page_shows_the_scene_live_in_a_real_browser(scene, tmp_path):
         assert 'SILENT' in text_of(browser, '#skin-card .silent-banner')
         assert attribute(browser, '#sensor-bear', 'data-state') == 'live'
         assert [e for e in browser.get_log('browser') if e['level'] == 'SEVERE'] == []  # no script error
+
+
+def test_the_page_shows_a_collect_sessions_prompt_only_while_one_is_published(scene_launch, run_scene):
+    from touch_graph.compat import DurabilityPolicy, QoSProfile, get_message
+    from touch_lab.collect.live import PROMPT_TOPIC
+    scene = run_scene(scene_launch(
+        skin=['line: {from_mm: [6, 23], to_mm: [41, 23], at_s: 3.0, for_s: 0.8, force_n: 1.5}'], serve=['touch_view']))
+    view = scene.node('touch_view')
+    string = get_message('std_msgs/msg/String')
+    # The collect session's publisher, latched as live.py makes it, on the scene's context.
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    prompts = view.create_publisher(string, PROMPT_TOPIC, latched)
+    with headless_chromium(1000, 800) as browser:
+        browser.get(view.url)
+        wait = WebDriverWait(browser, 30, poll_frequency=0.2)
+        wait.until(lambda b: int(attribute(b, 'body', 'data-frames')) > 3)
+        assert attribute(browser, '#collect-prompt', 'hidden') is not None   # no session: no panel
+        prompts.publish(string(data='trial 3/24: pat (gentle): press Enter, perform it, press Enter when done'))
+        wait.until(lambda b: attribute(b, '#collect-prompt', 'hidden') is None)
+        assert text_of(browser, '#collect-prompt') == ('collect: trial 3/24: pat (gentle): press Enter, perform it, '
+                                                       'press Enter when done')
+        prompts.publish(string(data=''))   # the session ended
+        wait.until(lambda b: attribute(b, '#collect-prompt', 'hidden') is not None)

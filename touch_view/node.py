@@ -12,7 +12,8 @@ machine once the graph is on the network) and serves a page on ``http://host:por
 - the skin: the 12x12 map, the contact point's trace of the current and the last gesture, the
   force vector, the last command with its distance and margin (``/skin/frame``,
   ``/touch/haptic_command``);
-- the drivers' diagnostics (``/diagnostics``) and a log of events.
+- the drivers' diagnostics (``/diagnostics``) and a log of events;
+- the prompt of a ``social-touch collect`` session while one runs (``/touch/collect_prompt``).
 
 Only the sensors whose frame topics have publishers (or whose frames arrive) are shown; one
 that sends no frame for ``stale_after_s`` wall seconds is marked SILENT. The graph never
@@ -31,7 +32,7 @@ from typing import Any
 
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.patch.panels import PanelCalibrator
-from touch_graph.compat import Node, QoSProfile, get_message, qos_profile_sensor_data
+from touch_graph.compat import DurabilityPolicy, Node, QoSProfile, get_message, qos_profile_sensor_data
 
 from .body_layout import VIEW_SIZE, sensor_layout
 from .parameters import declare_listen_parameters, declare_read_only
@@ -50,6 +51,9 @@ GesturePosteriors = get_message('social_touch_msgs/msg/GesturePosteriors')
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
 DiagnosticArray = get_message('diagnostic_msgs/msg/DiagnosticArray')
+String = get_message('std_msgs/msg/String')
+#: The prompt of a running ``social-touch collect`` session (latched; empty when it ends).
+PROMPT_TOPIC = '/touch/collect_prompt'
 
 #: How often the node asks the graph which sensors have publishers, s of ROS time.
 PRESENCE_PERIOD_S = 0.5
@@ -105,6 +109,8 @@ class TouchViewNode(Node):
         self.create_subscription(SkinFrame, SENSORS['skin'], state.on_skin_frame, QoSProfile(depth=20))
         self.create_subscription(HapticCommand, '/touch/haptic_command', state.on_command, events)
         self.create_subscription(DiagnosticArray, '/diagnostics', state.on_diagnostics, events)
+        self.create_subscription(String, PROMPT_TOPIC, state.on_prompt,
+                                 QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
 
     def _poll_presence(self) -> None:
         for sensor, topic in SENSORS.items():

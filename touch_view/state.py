@@ -102,6 +102,7 @@ class ViewState:
         self._graph_now = 0.0
         self._log: deque[tuple[int, float, str, str]] = deque(maxlen=LOG_KEPT)
         self._log_id = 0
+        self._prompt = ''   # of a running collect session; '' when none
         # bear
         self._bear: Any = None
         self._gestures: dict[str, tuple[float, list[str]]] = {}
@@ -242,6 +243,11 @@ class ViewState:
                     'hardware_id': status.hardware_id, 'values': {kv.key: kv.value for kv in status.values[:16]},
                     'wall': self._wall()}
 
+    def on_prompt(self, msg: Any) -> None:
+        """The prompt of a ``social-touch collect`` session (std_msgs/String; empty: the session ended)."""
+        with self._lock:
+            self._prompt = str(msg.data)[:300]
+
     # ------------------------------------------------------------------ output (any thread)
     def check_silence(self) -> None:
         """Log a sensor that went silent or came back (the broadcaster calls this every tick)."""
@@ -270,8 +276,9 @@ class ViewState:
             skin, current, last_trace, command = self._skin, list(self._current), self._last_trace, self._command
             drivers = [dict(d) for d in self._drivers.values()]
             log = list(self._log)[-LOG_SENT:]
-            graph_now = self._graph_now
-        out: dict[str, Any] = {'graph_time': _finite(graph_now, 2), 'stale_after_s': self.stale_after_s}
+            graph_now, prompt = self._graph_now, self._prompt
+        out: dict[str, Any] = {'graph_time': _finite(graph_now, 2), 'stale_after_s': self.stale_after_s,
+                               'prompt': prompt}
         out['sensors'] = {name: {'present': present, 'silent': silent, 'frames': frames,
                                  'age_s': None if last is None else _finite(now - last, 2)}
                           for name, (present, silent, frames, last) in sensors.items()}

@@ -1,5 +1,7 @@
 """``social-touch collect bear|patch|skin``: record labelled sessions, one bag per person.
 
+    social-touch launch launch/patch.launch.yaml                          # terminal 1: the scene
+    social-touch collect patch --person ada --out sessions/patch_ada      # terminal 2: a live session
     social-touch collect patch --simulate 8 --out sessions/patch          # SYNTHETIC, simulated time
     social-touch collect bear --simulate 6 --repetitions 2 --variants gentle,normal,rough --out sessions/bear
 
@@ -7,6 +9,11 @@ Each bag holds the sensor driver's topics and ``/touch/label`` (``social_touch_m
 person, gesture, variant, sensor, start, end), so ``social-touch train SENSOR --bags BAG...`` and
 ``social-touch eval SENSOR --bags BAG...`` read whole sessions. The protocol asks for every gesture
 in every variant ``--repetitions`` times, shuffled per person.
+
+A live session joins the running graph (the same ``ROS_DOMAIN_ID``), prompts each trial in the
+terminal and on ``/touch/collect_prompt`` (the live view shows it), and takes the operator's keys:
+Enter (start / end a trial), ``r`` (redo the last), ``d`` (drop the last), ``q`` (end); see
+:mod:`touch_lab.collect.live`.
 
 ``--simulate N`` runs the protocol with N simulated people on the virtual device and the real
 driver node, in simulated time, writing ``OUT/<sensor>_pNN`` for each.
@@ -16,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from touch_lab.bear.cli import positive_int
@@ -50,6 +58,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--repetitions', type=positive_int, default=3, help='trials per gesture and variant (3)')
     parser.add_argument('--pause-s', type=float, default=4.0, help='pause between trials, s (4)')
     parser.add_argument('--seed', type=int, default=0, help='order of the trials and the simulated people (0)')
+    parser.add_argument('--person', help='the name of the person performing (live sessions; required there)')
+    parser.add_argument('--overwrite', action='store_true', help='replace an existing bag --out (live sessions)')
+    parser.add_argument('--synthetic', action='store_true',
+                        help='mark the live bag synthetic: the running scene plays a virtual device, not a person')
+    parser.add_argument('--wait', type=float, default=5.0, metavar='SECONDS',
+                        help="how long a live session waits for the sensor's publisher and first frame (5)")
     parser.add_argument('--rate', type=float, help='bear scan rate of the virtual bear, Hz (--simulate; 3.4)')
 
 
@@ -64,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise SystemExit(f'collect {args.sensor}: {err}') from None
     if args.simulate is None:
-        raise SystemExit(f'collect {args.sensor}: live sessions are not built yet; use --simulate N')
+        return _live(args, protocol, say)
     from .simulate import person_name, simulate_session
     out = Path(args.out)
     bags = [out / f'{args.sensor}_{person_name(i)}' for i in range(args.simulate)]
@@ -79,4 +93,31 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:   # an unknown gesture for this sensor, a bad device option
         raise SystemExit(f'collect {args.sensor}: {err}') from None
     say(f'{len(bags)} sessions in {out} (SYNTHETIC: simulated people)')
+    return 0
+
+
+def _live(args: argparse.Namespace, protocol: Protocol, say: Callable[[str], None]) -> int:
+    """A live session of ``args.person`` on the running graph (:mod:`.live`)."""
+    import shutil
+
+    from .live import LiveSessionError, live_session
+    person = (args.person or '').strip()
+    if not person:
+        raise SystemExit(f'collect {args.sensor}: name the person performing with --person NAME '
+                         '(it goes into every label; train and eval leave one person out)')
+    out = Path(args.out)
+    if out.exists():
+        if not args.overwrite:
+            raise SystemExit(f'collect {args.sensor}: {out} exists already; choose another --out, or pass '
+                             '--overwrite to replace it')
+        if not out.is_dir() or not (out / 'metadata.yaml').exists():
+            raise SystemExit(f'collect {args.sensor}: {out} is not a bag; not overwritten')
+        shutil.rmtree(out)
+    try:
+        result = live_session(args.sensor, protocol, person, out, wait_s=args.wait, synthetic=args.synthetic,
+                              say=lambda text: print(text, flush=True))
+    except LiveSessionError as err:
+        raise SystemExit(f'collect {args.sensor}: {err}') from None
+    say(f"wrote {out}: {result['kept']} labelled trials, {result['frames']} frames"
+        + (' (SYNTHETIC: marked --synthetic)' if args.synthetic else ''))
     return 0

@@ -81,6 +81,10 @@ class SessionWriter:
         """Record one sensor message received at ``stamp_ns`` (ROS time, ns)."""
         self._bag.write(topic, SENSOR_TOPICS[self.sensor][topic], stamp_ns, messages.serialize(message))
 
+    def write_raw(self, topic: str, data: bytes, stamp_ns: int) -> None:
+        """Record one sensor message as received (CDR bytes) at ``stamp_ns`` (ROS time, ns)."""
+        self._bag.write(topic, SENSOR_TOPICS[self.sensor][topic], stamp_ns, data)
+
     def label(self, person: str, gesture: str, variant: str, start_ns: int, end_ns: int, stamp_ns: int) -> Any:
         """Record the label of one kept trial (ROS time, ns); returns the message."""
         if not end_ns > start_ns:

@@ -288,6 +288,9 @@ function renderLog(log) {
 function render(state) {
   document.body.dataset.frames = String(Number(document.body.dataset.frames) + 1);
   renderSensors(state.sensors);
+  const prompt = $('collect-prompt');   // a social-touch collect session's prompt, while one runs
+  prompt.hidden = !state.prompt;
+  prompt.textContent = state.prompt ? `collect: ${state.prompt}` : '';
   if (state.sensors.bear.present) renderBear(state.bear);
   if (state.sensors.patch.present) renderPatch(state.patch);
   if (state.sensors.skin.present) renderSkin(state.skin);
