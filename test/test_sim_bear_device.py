@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import serial
 from serial.serialutil import SerialException
+from sim_testing import open_port
 
 import touch_sim  # noqa: F401  (registers the URL handlers)
 from touch_driver.bear.body_map import BodyMap
@@ -117,22 +118,6 @@ def test_bad_stimulus_output() -> None:
 
 
 # ---------------------------------------------------------------------- through the URL
-class Clock:
-    def __init__(self) -> None:
-        self.t = 0.0
-
-    def __call__(self) -> float:
-        return self.t
-
-
-def open_port(url: str) -> tuple[serial.SerialBase, Clock]:
-    port = serial.serial_for_url(url, do_not_open=True)
-    clock = Clock()
-    port.attach_clock(clock)
-    port.open()
-    return port, clock
-
-
 def test_url_streams_frames_on_the_attached_clock() -> None:
     register_stimulus('bear-step', Step(0.5))
     port, clock = open_port('bearsim://u1?scene=bear-step&rate=25&scan=parallel&seed=4')
