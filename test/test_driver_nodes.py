@@ -96,3 +96,17 @@ def test_patch_driver_publishes_20hz_frames_and_fast_panel_contact():
     assert onsets and onsets[0].any_contact
     onset_s = onsets[0].header.stamp.sec + onsets[0].header.stamp.nanosec * 1e-9 - 1_700_000_000
     assert 5.0 <= onset_s < 5.15  # within a few 10 ms scans of the touch
+
+
+def test_frames_read_in_one_poll_get_their_own_increasing_stamps():
+    # Poll at 15 Hz a 150 Hz skin: about ten frames per poll, each stamped a nominal period apart.
+    register_skin_stimulus('skin-stamps', StaticPress(x_mm=20.0, y_mm=30.0, force_n=2.0, at_s=0.5, for_s=1.0))
+    _node, got = spin_driver(SkinDriverNode, 2.0, {'/skin/frame': 'SkinFrame'},
+                             port='skinsim://t?scene=skin-stamps&seed=1', poll_rate_hz=15.0)
+    stamps = np.array([f.header.stamp.sec * 10**9 + f.header.stamp.nanosec for f in got['/skin/frame']])
+    assert len(stamps) > 200
+    steps = np.diff(stamps)
+    assert (steps > 0).all()
+    period_ns = round(1e9 / 150.0)
+    # Within a poll the step is the nominal period; between polls the rest of the poll's time.
+    assert np.mean(steps == period_ns) > 0.8

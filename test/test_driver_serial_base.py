@@ -4,14 +4,17 @@ The toy sensor sends a 4-byte counter at 50 Hz through the real framing, a real 
 URL handler (``toysim://``) and the real virtual-port plumbing (clock, faults, unplug).
 """
 
+import itertools
 import struct
 import sys
 import types
 
 import pytest
 import serial
+from hypothesis import given
+from hypothesis import strategies as st
 
-from touch_driver.driver_node import SerialDriverNode
+from touch_driver.driver_node import SerialDriverNode, frame_stamps_ns
 from touch_driver.framing import SensorStreamDecoder, encode_frame
 from touch_driver.serial_driver import DriverError, PortDisconnected, SerialDriver
 from touch_graph.messages import get_message
@@ -232,3 +235,16 @@ def test_importing_touch_sim_makes_its_urls_open_with_serial_for_url():
     import touch_sim  # noqa: F401
     port = serial.serial_for_url('skinsim://url-check', do_not_open=True)
     assert type(port).__module__ == 'touch_sim.urlhandlers.protocol_skinsim'
+
+
+@given(count=st.integers(1, 50), now_ns=st.integers(0, 10**12), period_ns=st.integers(1, 10**9),
+       last_ns=st.none() | st.integers(0, 2 * 10**12))
+def test_frame_stamps_increase_and_never_pass_now(count, now_ns, period_ns, last_ns):
+    stamps = frame_stamps_ns(count, now_ns, period_ns, last_ns)
+    assert len(stamps) == count and stamps[-1] <= now_ns and min(stamps) >= 0
+    if now_ns >= count - 1:                 # room for count distinct stamps in [0, now]
+        assert all(b > a for a, b in itertools.pairwise(stamps))
+    if last_ns is not None and last_ns + count <= now_ns:   # room after the previous frame: all after it
+        assert stamps[0] > last_ns
+    if (last_ns is None or last_ns < now_ns - (count - 1) * period_ns) and now_ns >= (count - 1) * period_ns:
+        assert stamps == [now_ns - (count - 1 - i) * period_ns for i in range(count)]

@@ -8,6 +8,10 @@ in :meth:`SerialDriverNode.handle_frame`. This base
   :meth:`~touch_driver.serial_driver.SerialDriver.read_frame`, so a frame is published at most
   half a period after it arrives, on the graph's clock (a virtual device on a simulated clock
   then runs as fast as the graph);
+- stamps every frame of a poll with its own time (:func:`frame_stamps_ns`): the last one read
+  now, the ones before it a nominal period (``1 / expected_rate_hz``) apart, never at or before
+  the previous frame's stamp. A poll that finds several frames (a late timer, a USB burst) thus
+  still gives each its own increasing stamp, which rate and dwell estimates downstream rely on;
 - checks every parameter at start against its range (``ParameterError`` naming the range and,
   for a value from a file, the file and line) and refuses a port that can never open (unknown
   URL scheme, an option the device lacks, a virtual device of another sensor, a bad baud rate):
@@ -41,6 +45,7 @@ from touch_graph.compat import (
     Node,
     ParameterDescriptor,
     SetParametersResult,
+    Time,
     get_message,
 )
 from touch_graph.errors import ParameterError
@@ -49,7 +54,7 @@ from touch_graph.subscriber_drops import dropped_by_topic
 from .framing import ScanT, SensorStreamDecoder
 from .serial_driver import DecodedFrame, DriverError, PortURLError, SerialDriver, url_handler_packages
 
-__all__ = ['SerialDriverNode', 'ranged']
+__all__ = ['SerialDriverNode', 'frame_stamps_ns', 'ranged']
 
 DriverStatus = get_message('social_touch_msgs/msg/DriverStatus')
 DiagnosticArray = get_message('diagnostic_msgs/msg/DiagnosticArray')
@@ -64,6 +69,32 @@ _BAD_FRAME_COUNTERS = ('frames_missed', 'checksum_errors', 'decode_errors', 'len
 _DIAGNOSTIC_KEYS = ('frames', 'dropped_bytes', 'header_errors', 'version_errors', 'length_errors', 'checksum_errors',
                     'decode_errors', 'sequence_gaps', 'frames_missed', 'handle_errors', 'subscriber_drops',
                     'reconnects', 'error_fraction', 'rate_hz')
+
+
+def frame_stamps_ns(count: int, now_ns: int, period_ns: int, last_ns: int | None) -> list[int]:
+    """Stamps (ns) for ``count`` frames read together at ``now_ns``, oldest first.
+
+    The last frame is stamped ``now_ns`` and each earlier one ``period_ns`` before the next (they
+    arrived at the sensor's rate; the read found them together), but no stamp is at or before
+    ``last_ns``, the previous frame's (a burst denser than the nominal rate is squeezed into the time
+    since it). No stamp is after ``now_ns`` either, which wins over ``last_ns`` when the clock went
+    back (a simulated clock restarted): stamps follow the clock, as the header's did before. None is
+    negative (a simulated clock starts at zero).
+
+    >>> frame_stamps_ns(3, 1_000, 100, None)
+    [800, 900, 1000]
+    >>> frame_stamps_ns(3, 1_000, 100, 850)
+    [851, 900, 1000]
+    >>> frame_stamps_ns(2, 1_000, 100, 5_000)     # the clock went back
+    [999, 1000]
+    """
+    floor = -1 if last_ns is None else last_ns
+    stamps = []
+    for i in range(count):
+        left = count - 1 - i                      # frames still to stamp after this one
+        floor = min(max(now_ns - left * period_ns, floor + 1), now_ns - left)
+        stamps.append(max(floor, 0))
+    return stamps
 
 
 def ranged(description: str, low: float, high: float, *, integer: bool = False,
@@ -135,6 +166,8 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self.status_pub = self.create_publisher(DriverStatus, '~/status', 10)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.frames = 0
+        self._last_stamp_ns: int | None = None
+        self._stamping: tuple[DecodedFrame[ScanT] | None, int] = (None, 0)   # the frame being handled, its stamp
         self.handle_errors = 0
         self.reconnects = 0
         self.last_error = ''
@@ -158,9 +191,15 @@ class SerialDriverNode(Node, Generic[ScanT]):
         """Calibrate ``frame.scan`` and publish it."""
         raise NotImplementedError
 
-    def header(self) -> Any:
-        """A header stamped now with this driver's frame id."""
-        return get_message('std_msgs/msg/Header')(stamp=self.get_clock().now().to_msg(), frame_id=self.frame_id)
+    def header(self, frame: DecodedFrame[ScanT] | None = None) -> Any:
+        """A header with this driver's frame id, stamped with ``frame``'s stamp (see :meth:`_poll`), or
+        now without a frame."""
+        stamped, stamp_ns = self._stamping
+        if frame is None or frame is not stamped:
+            stamp = self.get_clock().now()
+        else:
+            stamp = Time(nanoseconds=stamp_ns, clock_type=self.get_clock().clock_type)
+        return get_message('std_msgs/msg/Header')(stamp=stamp.to_msg(), frame_id=self.frame_id)
 
     # ------------------------------------------------------------------ internals
     def _on_set_parameters(self, params: list[Any]) -> Any:
@@ -221,6 +260,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
             if not self.driver.is_open:
                 return
         read_frame = self.driver.read_frame
+        frames: list[DecodedFrame[ScanT]] = []
         while True:
             try:
                 frame = read_frame(0)        # what has arrived; never waits
@@ -228,9 +268,17 @@ class SerialDriverNode(Node, Generic[ScanT]):
                 self.last_error = str(err)
                 self._next_attempt_s = self._clock_s() + self.reconnect_period_s
                 self.get_logger().warning(f'{err}; reconnecting every {self.reconnect_period_s:g} s')
-                return
+                break                        # the frames read before the port went are still published
             if frame is None:
-                return
+                break
+            frames.append(frame)
+        if not frames:
+            return
+        stamps = frame_stamps_ns(len(frames), self.get_clock().now().nanoseconds,
+                                 round(1e9 / self.expected_rate_hz), self._last_stamp_ns)
+        self._last_stamp_ns = stamps[-1]
+        for frame, stamp_ns in zip(frames, stamps, strict=True):
+            self._stamping = (frame, stamp_ns)
             try:
                 self.handle_frame(frame)
             except Exception as err:  # a frame the node cannot handle is counted and reported, never fatal
@@ -238,6 +286,8 @@ class SerialDriverNode(Node, Generic[ScanT]):
                 self.last_error = f'cannot handle a frame: {type(err).__name__}: {err}'
                 self.get_logger().error(self.last_error, throttle_duration_sec=10.0)
                 continue
+            finally:
+                self._stamping = (None, 0)
             self.frames += 1                 # counted once its message went out
 
     def counters(self) -> dict[str, int]:

@@ -53,8 +53,8 @@ class BearDriverNode(SerialDriverNode[BearScan]):
     def handle_frame(self, frame: DecodedFrame[BearScan]) -> None:
         levels = self.calibrator.update(frame.scan.raw)
         self.frame_pub.publish(BearFrame(
-            header=self.header(), sequence=frame.scan.seq, raw=levels.raw, level=levels.level, active=levels.active,
-            fitted=levels.fitted, faults=levels.faults))
+            header=self.header(frame), sequence=frame.scan.seq, raw=levels.raw, level=levels.level,
+            active=levels.active, fitted=levels.fitted, faults=levels.faults))
 
 
 def main(args: list[str] | None = None) -> int:

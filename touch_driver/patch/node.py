@@ -80,7 +80,7 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
         self._last_contact = state.contact
         if not (changed or activation is not None):
             return
-        header = self.header()
+        header = self.header(frame)
         self.panels_pub.publish(PanelContact(header=header, delta=state.delta.astype(np.float32),
                                              contact=state.contact, any_contact=bool(state.any_contact)))
         if activation is not None:

@@ -51,7 +51,7 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
         z = 0.0 if state.contact else math.nan
         fx, fy, _ = (float(v) for v in state.force.sum(axis=0, dtype=np.float64))
         self.frame_pub.publish(SkinFrame(
-            header=self.header(), sequence=scan.seq, raw=scan.raw, pressure=state.pressure.ravel(),
+            header=self.header(frame), sequence=scan.seq, raw=scan.raw, pressure=state.pressure.ravel(),
             contact=bool(state.contact), contact_x=x, contact_y=y, force=state.force.ravel(),
             total_force=float(state.total_force), contact_point=Point(x=x * 1e-3, y=y * 1e-3, z=z),
             net_force=Vector3(x=fx, y=fy, z=float(state.total_force))))
