@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -245,3 +246,17 @@ def test_the_launch_command_says_it_uses_the_checkout(tmp_path) -> None:
     assert result.returncode == 0, result.stderr
     assert f'inside the checkout {checkout}: its config/ and launch/ are used' in result.stderr
     assert '/from_checkout' in result.stdout
+
+
+def test_the_demo_reads_the_checkouts_launch_file_too(tmp_path) -> None:
+    checkout = fake_checkout(tmp_path / 'st')
+    shutil.copytree(paths.package_share() / 'config', checkout / 'config', dirs_exist_ok=True)
+    (checkout / 'launch' / 'demo.launch.yaml').write_text(
+        'launch:\n- node: {pkg: social_touch, exec: touch_state, name: from_checkout}\n')
+    env = {k: v for k, v in os.environ.items() if k != paths.CHECKOUT_ENV}
+    env['SOCIAL_TOUCH_GRAPH_DIR'] = str(tmp_path / 'graph')
+    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'demo', '--fast', '--duration', '1'],
+                            capture_output=True, text=True, timeout=120, cwd=checkout, env=env)
+    assert result.returncode == 0, result.stderr
+    assert f'[demo] inside the checkout {checkout}: its config/ and launch/ are used' in result.stderr
+    assert 'social_touch demo: 1 nodes' in result.stderr      # the checkout's one-node scene, not the package's

@@ -7,6 +7,8 @@ runs on a simulated clock, ``--rate`` times real time, and stops by itself after
 ``--duration`` simulated seconds. While it runs, other terminals can watch it
 (``social-touch topic echo /touch/symbolic``) or record it (``social-touch record -a -o demo``);
 ``--view`` serves the live web view of the scene, ``--foxglove`` every topic to Foxglove.
+Run inside a source checkout, it reads the checkout's config/ and launch/ (as ``social-touch
+launch`` does), so an edited threshold counts without reinstalling.
 """
 
 from __future__ import annotations
@@ -47,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
     rate = math.inf if args.fast else args.rate
     if not rate > 0:
         raise LaunchError(f'--rate must be > 0, got {args.rate}')
-    from touch_graph.launch.cli import parse_launch_arguments
+    from touch_graph.launch.cli import parse_launch_arguments, use_checkout_files
+    use_checkout_files('demo')     # tuning a checkout's config/ counts in the demo as in launch
     arguments = parse_launch_arguments(args.arguments)
     if args.view:
         arguments.update(view='true', view_port=str(args.view_port))

@@ -158,12 +158,18 @@ def format_arguments(arguments: list[DeclaredArgument]) -> str:
     return '\n'.join(lines)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run ``social-touch launch``; errors are raised as :class:`LaunchError` (``main`` prints them)."""
+def use_checkout_files(command: str) -> None:
+    """Inside a source checkout, read its config/ and launch/ rather than the installed copy (tuning
+    without reinstalling, :func:`~touch_graph.paths.prefer_checkout`), and say so on stderr."""
     checkout, installed = prefer_checkout()
     if checkout is not None:
-        print(f"[launch] inside the checkout {checkout}: its config/ and launch/ are used, not the installed "
+        print(f"[{command}] inside the checkout {checkout}: its config/ and launch/ are used, not the installed "
               f'copy in {installed}', file=sys.stderr)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``social-touch launch``; errors are raised as :class:`LaunchError` (``main`` prints them)."""
+    use_checkout_files('launch')
     path, rest = find_launch_file(list(args.words))
     arguments = parse_launch_arguments(rest)
     if args.rate is not None and not args.sim_time:
