@@ -124,3 +124,13 @@ def test_one_person_is_suggested_from_but_not_checked():
     assert result['lopo'] is None and result['suggestions']['head_pat'].min_active == 1
     assert any('needs trials of two people or more' in m for m in said)
     assert 'checked leave-one-person-out' not in format_table(result, GestureLibrary.default(BODY), True)
+
+
+def test_train_refuses_to_write_the_suggestion_over_its_config_before_any_work(tmp_path, capsys):
+    from touch_graph.cli.main import main as cli_main
+    config = tmp_path / 'gestures.yaml'
+    config.write_text(Path(GestureLibrary.default(BODY).source).read_text())
+    assert cli_main(['train', 'bear', '--bags', str(tmp_path / 'no_bag'), '--out', str(tmp_path / 'm.npz'),
+                     '--gestures-config', str(config), '--suggest-out', str(config)]) == 2
+    assert 'is the gesture config the suggestion is made from' in capsys.readouterr().err
+    assert not (tmp_path / 'm.npz').exists()

@@ -197,7 +197,8 @@ def suggest(st: GestureStats, g: GestureFilter) -> Suggestion:
     peaks = np.array(st.peaks)
     if not peaks.any():
         what = f'a sensor carrying {"/".join(g.subtypes)}' if g.subtypes else 'a sensor'
-        return Suggestion(g.name, None, None, n, people, f'no trial of it activated {what} of its filter')
+        sides = ' on both sides' if g.both_sides else ''
+        return Suggestion(g.name, None, None, n, people, f'no trial of it activated {what} of its filter{sides}')
     reached = peaks[peaks > 0]
     m = int(np.clip(math.floor(np.quantile(reached, QUANTILE)), 1, len(g.channels)))
     others = np.array(st.other_peaks, dtype=np.int64)
@@ -206,8 +207,6 @@ def suggest(st: GestureStats, g: GestureFilter) -> Suggestion:
     m += int(np.argmax(gain))
     reach, hold = st.reach_hold(m, g.gap_s)
     ok = ~np.isnan(reach)
-    if not ok.any():   # both_sides never met
-        return Suggestion(g.name, None, None, n, people, f'no trial matched {m} sensors on both sides')
     dwell = min(float(np.quantile(hold[ok], QUANTILE)), REACTION_S - float(np.quantile(reach[ok], 1 - QUANTILE)))
     dwell = max(0.0, math.floor(dwell / DWELL_STEP_S + 1e-9) * DWELL_STEP_S)
     return Suggestion(g.name, m, round(dwell, 2), n, people)

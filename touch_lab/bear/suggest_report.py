@@ -56,8 +56,11 @@ def run_suggestions(runs: list[BearTrials], library: GestureLibrary, body_map: B
     for name, st in stats.items():
         silent = sum(p == 0 for p in st.peaks)
         if 0 < silent < len(st.peaks):
+            g = library[name]
+            what = ' on both sides' if g.both_sides else ''
+            what += f' carrying {"/".join(g.subtypes)}' if g.subtypes else ''
             progress(f"warning: gesture '{name}': {silent} of {len(st.peaks)} trials activated none of its "
-                     'filter sensors (strayed, too light, or between two scans)')
+                     f'filter sensors{what} (strayed, too light, or between two scans)')
     lopo = sg.leave_one_person_out(runs, library, body_map, fold_predictors, progress)
     return {'stats': stats, 'suggestions': suggestions, 'lopo': lopo}
 

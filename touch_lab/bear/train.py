@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.model_card import attach_card, make_card
@@ -94,6 +95,10 @@ def _run_bags(args: argparse.Namespace) -> int:
         body_map = BodyMap.default()
         config = args.gestures_config or share_file('config', 'bear_gestures.yaml')
         library = GestureLibrary.load(config, body_map)
+        out = Path(args.suggest_out or default_output(args.out))
+        if out.resolve() == Path(config).resolve():
+            raise SessionError(f'--suggest-out {out} is the gesture config the suggestion is made from; the '
+                               'suggestion goes to a new file')
         runs = load_runs(args.bags, args.rate, args.buffer, stderr_progress)
         if not any(r.labels for r in runs):
             raise SessionError('the bags hold no touch-subtype trial to fit the subtype model from; record some '
@@ -115,7 +120,6 @@ def _run_bags(args: argparse.Namespace) -> int:
                              synthetic=synthetic, bags=args.bags)
     card_data.update(rate_hz=args.rate, buffer_cycles=args.buffer)
     if suggestion is not None:
-        out = args.suggest_out or default_output(args.out)
         print(format_table(suggestion, library, synthetic))
         header = (f'Suggested by `social-touch train bear --bags` from\n  {config}\nand '
                   f'{sum(len(r.gestures) for r in runs)} labelled gesture trials '
@@ -128,7 +132,7 @@ def _run_bags(args: argparse.Namespace) -> int:
             return 2
         stderr_progress(f'wrote {out}: suggested settings of {changed} gestures (launch with gestures:={out})')
         card_data['symbolic_suggestion'] = card_entry(suggestion, str(config), str(out))
-    elif not args.gestures_config:
+    else:
         stderr_progress('no symbolic/<gesture> trials in the bags: no gesture settings suggested '
                         '(collect bear --symbolic records some)')
     evaluation = None
