@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.symbolic import GestureLibrary
@@ -134,3 +136,28 @@ def test_train_refuses_to_write_the_suggestion_over_its_config_before_any_work(t
                      '--gestures-config', str(config), '--suggest-out', str(config)]) == 2
     assert 'is the gesture config the suggestion is made from' in capsys.readouterr().err
     assert not (tmp_path / 'm.npz').exists()
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.integers(0, 10), min_size=1, max_size=30), min_size=0, max_size=8),
+       st.lists(st.integers(0, 10), max_size=20))
+def test_any_trials_give_settings_the_config_accepts_or_a_reason(counts, other_peaks):
+    """Whatever the counts (cycles at 3.4 Hz, hug's ten-sensor filter), the suggestion loads or says why not."""
+    g = GestureLibrary.default(BODY)['hug']
+    stats = sg.GestureStats('hug', other_peaks=other_peaks)
+    for i, c in enumerate(counts):
+        c = np.minimum(np.array(c), len(g.channels))
+        stats.people.append(f'p{i % 3}')
+        stats.peaks.append(int(c.max()))
+        stats.counts.append(c)
+        stats.times.append(np.arange(len(c)) / RATE)
+        stats.sides.append(np.ones(len(c), dtype=bool))
+    s = sg.suggest(stats, g)
+    if s.min_active is None:
+        assert s.reason and s.dwell_s is None
+    else:
+        assert 1 <= s.min_active <= max(stats.peaks) and 0.0 <= s.dwell_s <= sg.REACTION_S
+        steps = s.dwell_s / sg.DWELL_STEP_S
+        assert abs(steps - round(steps)) < 1e-6   # a whole number of steps (rounded to 2 decimals: 1e-6 is ample)
+        GestureLibrary.loads(f'gestures: {{hug: {{sensors: [{", ".join(g.sensor_names)}], min_active: '
+                             f'{s.min_active}, dwell_s: {s.dwell_s}}}}}', BODY)
