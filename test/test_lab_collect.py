@@ -55,6 +55,25 @@ def test_collect_refuses_a_gesture_the_simulated_sensor_cannot_perform(tmp_path)
         cli_main(['collect', 'patch', '--simulate', '1', '--gestures', 'stroke,hug', '--out', str(tmp_path / 'x')])
 
 
+def test_collect_bear_symbolic_adds_the_gestures_labelled_apart_from_the_subtypes(tmp_path, capsys):
+    out = tmp_path / 'bear'
+    assert cli_main(['collect', 'bear', '--simulate', '1', '--gestures', 'tickle,hold', '--symbolic', 'tickle,hug',
+                     '--repetitions', '1', '--pause-s', '2', '--out', str(out)]) == 0
+    session = read_session(out / 'bear_p01', 'bear')
+    assert sorted(lab.gesture for lab in session.labels) == ['hold', 'symbolic/hug', 'symbolic/tickle', 'tickle']
+    hug = next(lab for lab in session.labels if lab.gesture == 'symbolic/hug')
+    levels = np.array([m.level for m in session.frames['/bear/frame']])
+    during = (session.stamps_s['/bear/frame'] >= hug.start_s) & (session.stamps_s['/bear/frame'] <= hug.end_s)
+    assert ((levels[during] >= 0.3).sum(axis=1) >= 3).any()    # arms around the bear: several sensors at once
+    with pytest.raises(SystemExit, match=r'unknown gestures hugg; the gestures touch can tell are: .*hug'):
+        cli_main(['collect', 'bear', '--simulate', '1', '--symbolic', 'hugg', '--out', str(tmp_path / 'x')])
+    with pytest.raises(SystemExit, match='--symbolic is for the bear'):
+        cli_main(['collect', 'patch', '--simulate', '1', '--symbolic', '--out', str(tmp_path / 'y')])
+    with pytest.raises(SystemExit, match='unknown'):   # a gesture touch cannot tell is not simulated
+        cli_main(['collect', 'bear', '--simulate', '1', '--gestures', 'poke,symbolic/rocking',
+                  '--out', str(tmp_path / 'z')])
+
+
 # ----------------------------------------------------------------------------- bad session bags
 def _bear_bag(path, labels=(), frames=20, rate_hz=3.4, with_label_topic=True):
     """A bear session bag of ``frames`` flat frames and ``labels`` (person, gesture, start_s, end_s)."""

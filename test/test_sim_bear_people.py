@@ -88,3 +88,20 @@ def test_bad_arguments() -> None:
         make_scene(n_people=1, gestures=('rocking',))
     with pytest.raises(ValueError, match='unknown subtype'):
         make_scene(n_people=1, subtypes=('stroke',))
+
+
+def test_trial_scene_performs_symbolic_gestures_between_subtypes_in_the_protocols_order():
+    from touch_sim.bear.people import PERFORMANCES, split_label, symbolic_label, trial_scene
+    trials = [('poke', 1.0), (symbolic_label('hug'), 1.0), ('tickle', 0.6), (symbolic_label('tickle'), 1.4)]
+    scene = trial_scene(0, trials, seed=3)
+    assert [(lab.kind, lab.label) for lab in scene.labels] == [
+        ('subtype', 'poke'), ('symbolic', 'hug'), ('subtype', 'tickle'), ('symbolic', 'tickle')]
+    hug = scene.labels[1]
+    aimed = set(PERFORMANCES['hug'].sensors) | set(PERFORMANCES['hug'].stray)
+    assert 5 <= len(hug.sensors) <= 8 and set(hug.sensors) <= aimed
+    assert split_label('symbolic/hug') == ('symbolic', 'hug') and split_label('hug') == ('subtype', 'hug')
+    # Subtype-only sessions are what they were before gestures could be asked (the stray draw is apart).
+    plain = trial_scene(0, [('poke', 1.0), ('tickle', 0.6)], seed=3)
+    assert plain.labels[0] == scene.labels[0]
+    with pytest.raises(ValueError, match=r"unknown subtypes or gestures \['symbolic/rocking'\]"):
+        trial_scene(0, [('symbolic/rocking', 1.0)])

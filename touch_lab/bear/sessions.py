@@ -27,6 +27,7 @@ from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import SUBTYPES, subtype_index
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
+from touch_sim.bear.people import split_label
 
 __all__ = ['BearTrials', 'bear_trials', 'leave_one_person_out', 'score_trials', 'train_rows']
 
@@ -43,6 +44,9 @@ class BearTrials:
         labels: the subtype trials scored (labels of other names are left out).
         touched: per label, the channels that reached the threshold during it.
         fitted: (64,) bool sensors the body map fits.
+        active: (n, 64) bool sensors active each cycle, as the recogniser sees them (level >= threshold,
+            fitted, not faulty).
+        gestures: the symbolic-gesture trials (labels ``symbolic/<gesture>``), for :mod:`.suggest`.
     """
 
     session: SessionRecording
@@ -52,6 +56,8 @@ class BearTrials:
     labels: list[LabelRow]
     touched: list[np.ndarray]
     fitted: np.ndarray
+    active: np.ndarray
+    gestures: list[LabelRow]
 
 
 def bear_trials(session: SessionRecording, rate_hz: float, buffer_len: int,
@@ -71,6 +77,7 @@ def bear_trials(session: SessionRecording, rate_hz: float, buffer_len: int,
     n = len(times)
     frames = session.frames['/bear/frame']
     levels = np.zeros((n, 64), dtype=np.float32)
+    active = np.zeros((n, 64), dtype=bool)
     features = None
     for i, msg in enumerate(frames):
         levels[i] = np.asarray(msg.level, dtype=np.float32)
@@ -78,9 +85,13 @@ def bear_trials(session: SessionRecording, rate_hz: float, buffer_len: int,
         if features is None:
             features = np.zeros((n, *out.features.table.shape), dtype=np.float32)
         features[i] = out.features.table
+        active[i] = out.active
     truth = np.zeros((n, 64), dtype=np.int8)
-    labels, touched = [], []
+    labels, touched, gestures = [], [], []
     for lab in session.labels:
+        if split_label(lab.gesture)[0] == 'symbolic':
+            gestures.append(lab)
+            continue
         if lab.gesture not in SUBTYPES or lab.gesture == 'none':
             say(f'{session.path} at {lab.start_s:.2f} s: {lab.gesture!r} is not a touch subtype; left out')
             continue
@@ -94,7 +105,7 @@ def bear_trials(session: SessionRecording, rate_hz: float, buffer_len: int,
         truth[np.ix_(inside, channels)] = subtype_index(lab.gesture)
         labels.append(lab)
         touched.append(channels)
-    return BearTrials(session, times, features, truth, labels, touched, rec.fitted)
+    return BearTrials(session, times, features, truth, labels, touched, rec.fitted, active, gestures)
 
 
 def train_rows(runs: list[BearTrials], idle_fraction: float = 0.02, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -164,20 +175,31 @@ def fit_model(runs: list[BearTrials], seed: int = 0, drop_thin: Callable[[str], 
     return SubtypeClassifier().fit(X[keep], y[keep])
 
 
-def leave_one_person_out(runs: list[BearTrials], seed: int = 0,
-                         progress: Callable[[str], None] | None = None) -> dict:
-    """Leave-one-person-out scores of the trained model and of the paper's rule (knight2009 V.D)."""
+def fold_models(runs: list[BearTrials], people: list[str], seed: int = 0,
+                progress: Callable[[str], None] | None = None) -> dict[str, SubtypeClassifier]:
+    """Person -> the subtype model trained on the sessions without that person (leave-one-person-out)."""
+    say = progress or (lambda _m: None)
+    models = {}
+    for i, person in enumerate(people):
+        say(f'person {person} ({i + 1}/{len(people)}): training on the {len(people) - 1} others')
+        others = [r for r in runs if not any(lab.person == person for lab in (*r.labels, *r.gestures))]
+        models[person] = fit_model(others, seed=seed, drop_thin=lambda m, p=person: say(f'warning: {p} held out: {m}'))
+    return models
+
+
+def leave_one_person_out(runs: list[BearTrials], seed: int = 0, progress: Callable[[str], None] | None = None,
+                         models: dict[str, SubtypeClassifier] | None = None) -> dict:
+    """Leave-one-person-out scores of the trained model and of the paper's rule (knight2009 V.D);
+    ``models`` (:func:`fold_models`) when they are trained already."""
     say = progress or (lambda _m: None)
     people = sorted({lab.person for run in runs for lab in run.labels})
     if len(people) < 2:
         raise SessionError(f'leave-one-person-out needs sessions of at least two people; got {people}')
     by_person = {p: [r for r in runs if any(lab.person == p for lab in r.labels)] for p in people}
+    models = models if models is not None else fold_models(runs, people, seed, say)
     results, rule = {}, {}
-    for i, person in enumerate(people):
-        say(f'person {person} ({i + 1}/{len(people)}): training on the {len(people) - 1} others')
-        others = [r for r in runs if r not in by_person[person]]
-        model = fit_model(others, seed=seed, drop_thin=lambda m, p=person: say(f'warning: {p} held out: {m}'))
-        results[person] = score_trials(by_person[person], NoTouchGate(model))
+    for person in people:
+        results[person] = score_trials(by_person[person], NoTouchGate(models[person]))
         rule[person] = score_trials(by_person[person], NoTouchGate(PaperRuleClassifier()))
     return {'people': people, 'model': _pool(results), 'rule': _pool(rule),
             'per_person': {p: results[p]['accuracy'] for p in people}}

@@ -1,6 +1,7 @@
 """``social-touch train bear``: train the eight-subtype model on simulated people and write it as .npz (no pickle).
 
     social-touch train bear --out config/bear_subtype_model.npz [--rate 3.4] [--buffer 20] [--people 8]
+    social-touch train bear --bags sessions/bear/* --out bear.npz   # + bear.gestures.yaml from symbolic trials
 
 The model is tied to the scan rate and buffer length it was trained at (its features are); both are
 stored in the file (``trained_rate_hz_`` and ``trained_buffer_len_`` after ``SubtypeClassifier.load``),
@@ -13,10 +14,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.model_card import attach_card, make_card
 from touch_lab.cards import session_data
+from touch_lab.collect.session_bag import SessionError
 
 from .cli import positive_float, positive_int
 from .evaluate import EvalConfig, stderr_progress, train_subtype_model
@@ -35,6 +38,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--seed', type=int, default=0, help='training scene seed is seed + 1000 (0)')
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='train on these session bags (social-touch collect bear) instead of simulated people')
+    parser.add_argument('--gestures-config', metavar='YAML',
+                        help='--bags: the symbolic gesture config whose min_active / dwell_s are suggested from the '
+                        "bags' symbolic/<gesture> trials (default: the package's config/bear_gestures.yaml)")
+    parser.add_argument('--suggest-out', metavar='YAML',
+                        help='--bags: where to write the suggested gesture config (default: beside --out, '
+                        'MODEL.gestures.yaml; never the config it is made from)')
     parser.add_argument('--evaluate', action='store_true',
                         help="also measure the model's figures (bags: leave-one-person-out; simulated: held-out "
                         "simulated people, `eval bear`) and record them in the file's card")
@@ -72,32 +81,69 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_bags(args: argparse.Namespace) -> int:
-    """``train bear --bags``: the subtype model from recorded sessions (:mod:`.sessions`)."""
+    """``train bear --bags``: the subtype model from recorded sessions (:mod:`.sessions`), and suggested
+    symbolic-gesture settings from their symbolic trials (:mod:`.suggest`)."""
+    from touch_driver.bear.body_map import BodyMap
+    from touch_gestures.bear.gate import NoTouchGate
+    from touch_gestures.bear.symbolic import GestureLibrary
     from touch_graph.errors import SocialTouchError
+    from touch_graph.paths import share_file
 
-    from .sessions import fit_model, load_runs
+    from .sessions import fit_model, fold_models, load_runs
+    from .suggest_report import card_entry, default_output, format_table, run_suggestions, write_config
     try:
+        body_map = BodyMap.default()
+        config = args.gestures_config or share_file('config', 'bear_gestures.yaml')
+        library = GestureLibrary.load(config, body_map)
+        out = Path(args.suggest_out or default_output(args.out))
+        if out.resolve() == Path(config).resolve():
+            raise SessionError(f'--suggest-out {out} is the gesture config the suggestion is made from; the '
+                               'suggestion goes to a new file')
         runs = load_runs(args.bags, args.rate, args.buffer, stderr_progress)
+        if not any(r.labels for r in runs):
+            raise SessionError('the bags hold no touch-subtype trial to fit the subtype model from; record some '
+                               f'(collect bear --gestures {",".join(TOUCH_SUBTYPES)})')
         stderr_progress(f'fitting the subtype model on {sum(len(r.labels) for r in runs)} trials')
         model = fit_model(runs, seed=args.seed)
+        people = sorted({lab.person for r in runs for lab in (*r.labels, *r.gestures)})
+        folds = None
+        if (args.evaluate or any(r.gestures for r in runs)) and len(people) > 1:
+            folds = fold_models(runs, people, seed=args.seed, progress=stderr_progress)
+        suggestion = run_suggestions(runs, library, body_map, NoTouchGate(model),
+                                     {p: NoTouchGate(m) for p, m in (folds or {}).items()}, stderr_progress)
     except (SocialTouchError, ValueError) as err:
         print(f'social-touch train bear: error: {err}', file=sys.stderr)
         return 2
     model.save(args.out, rate_hz=args.rate, buffer_len=args.buffer)
     synthetic = any(r.session.synthetic for r in runs)
-    card_data = session_data(((lab.person, lab.gesture) for r in runs for lab in r.labels), synthetic=synthetic,
-                             bags=args.bags)
+    card_data = session_data(((lab.person, lab.gesture) for r in runs for lab in (*r.labels, *r.gestures)),
+                             synthetic=synthetic, bags=args.bags)
+    card_data.update(rate_hz=args.rate, buffer_cycles=args.buffer)
+    if suggestion is not None:
+        print(format_table(suggestion, library, synthetic))
+        header = (f'Suggested by `social-touch train bear --bags` from\n  {config}\nand '
+                  f'{sum(len(r.gestures) for r in runs)} labelled gesture trials '
+                  f'({"SYNTHETIC: simulated people" if synthetic else "recorded sessions"}); only min_active and '
+                  f'dwell_s differ.\nHow, and the leave-one-person-out figures: the model card of {args.out}.')
+        try:
+            changed = write_config(config, out, suggestion['suggestions'], header, body_map)
+        except SocialTouchError as err:
+            print(f'social-touch train bear: error: {err}', file=sys.stderr)
+            return 2
+        stderr_progress(f'wrote {out}: suggested settings of {changed} gestures (launch with gestures:={out})')
+        card_data['symbolic_suggestion'] = card_entry(suggestion, str(config), str(out))
+    else:
+        stderr_progress('no symbolic/<gesture> trials in the bags: no gesture settings suggested '
+                        '(collect bear --symbolic records some)')
     evaluation = None
     if args.evaluate:
         from .sessions import leave_one_person_out
-        result = leave_one_person_out(runs, seed=args.seed, progress=stderr_progress)
+        result = leave_one_person_out(runs, seed=args.seed, progress=stderr_progress, models=folds)
         evaluation = {'method': 'leave-one-person-out on the training bags (`social-touch eval bear --bags ...`)',
                       'synthetic': synthetic, 'subtype_accuracy': result['model']['accuracy'],
                       'median_subtype_latency_s': result['model']['median_latency_s'],
                       'paper_rule_subtype_accuracy': result['rule']['accuracy'], 'people': len(result['people'])}
-    attach_card(args.out, make_card('bear_subtype_model', data={**card_data, 'rate_hz': args.rate,
-                                                                'buffer_cycles': args.buffer},
-                                    evaluation=evaluation))
+    attach_card(args.out, make_card('bear_subtype_model', data=card_data, evaluation=evaluation))
     data = 'SYNTHETIC (simulated people)' if synthetic else 'recorded'
     print(f'wrote {args.out}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
           f'on {len(args.bags)} session bags ({data})', file=sys.stderr)

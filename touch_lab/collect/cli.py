@@ -4,11 +4,14 @@
     social-touch collect patch --person ada --out sessions/patch_ada      # terminal 2: a live session
     social-touch collect patch --simulate 8 --out sessions/patch          # SYNTHETIC, simulated time
     social-touch collect bear --simulate 6 --repetitions 2 --variants gentle,normal,rough --out sessions/bear
+    social-touch collect bear --simulate 6 --symbolic --out sessions/bear     # + hug, head_pat, tickle, ...
 
 Each bag holds the sensor driver's topics and ``/touch/label`` (``social_touch_msgs/msg/TouchLabel``:
 person, gesture, variant, sensor, start, end), so ``social-touch train SENSOR --bags BAG...`` and
 ``social-touch eval SENSOR --bags BAG...`` read whole sessions. The protocol asks for every gesture
-in every variant ``--repetitions`` times, shuffled per person.
+in every variant ``--repetitions`` times, shuffled per person. The bear's ``--symbolic`` adds its
+symbolic gestures (config/bear_gestures.yaml), labelled ``symbolic/<gesture>`` (the subtype 'tickle'
+and the gesture 'tickle' differ); ``train bear --bags`` suggests their filter settings from them.
 
 A live session joins the running graph (the same ``ROS_DOMAIN_ID``), prompts each trial in the
 terminal and on ``/touch/collect_prompt`` (the live view shows it), and takes the operator's keys:
@@ -52,6 +55,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gestures', type=_names,
                         help='comma-separated classes to prompt (default: ' +
                         '; '.join(f'{s}: {",".join(g)}' for s, g in DEFAULT_GESTURES.items()) + ')')
+    parser.add_argument('--symbolic', nargs='?', const='all', type=str, metavar='GESTURES',
+                        help="bear: also prompt symbolic gestures of config/bear_gestures.yaml, labelled "
+                        "symbolic/NAME (alone: every gesture touch can tell; or comma-separated names)")
     parser.add_argument('--variants', type=_names, default=('normal',),
                         help='comma-separated ways of performing each, e.g. gentle,normal,rough as in CoST '
                         '(default normal)')
@@ -73,8 +79,10 @@ def run(args: argparse.Namespace) -> int:
         print(f'[collect {args.sensor}] {msg}', file=sys.stderr, flush=True)
 
     try:
-        protocol = Protocol(args.gestures or DEFAULT_GESTURES[args.sensor], args.variants, args.repetitions,
-                            args.pause_s, args.seed)
+        gestures = tuple(args.gestures or DEFAULT_GESTURES[args.sensor])
+        if getattr(args, 'symbolic', None):
+            gestures += _symbolic(args.sensor, args.symbolic)
+        protocol = Protocol(gestures, args.variants, args.repetitions, args.pause_s, args.seed)
     except ValueError as err:
         raise SystemExit(f'collect {args.sensor}: {err}') from None
     if args.simulate is None:
@@ -94,6 +102,21 @@ def run(args: argparse.Namespace) -> int:
         raise SystemExit(f'collect {args.sensor}: {err}') from None
     say(f'{len(bags)} sessions in {out} (SYNTHETIC: simulated people)')
     return 0
+
+
+def _symbolic(sensor: str, text: str) -> tuple[str, ...]:
+    """The bear's symbolic gestures to prompt, as session labels ``symbolic/NAME`` (ValueError otherwise)."""
+    if sensor != 'bear':
+        raise ValueError('--symbolic is for the bear (its symbolic gestures of config/bear_gestures.yaml)')
+    from touch_gestures.bear.symbolic import GestureLibrary
+    from touch_sim.bear.people import symbolic_label
+    known = [g.name for g in GestureLibrary.default().detectable]
+    names = known if text == 'all' else list(_names(text))
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise ValueError(f'--symbolic: unknown gestures {", ".join(unknown)}; the gestures touch can tell are: '
+                         f'{", ".join(known)}')
+    return tuple(symbolic_label(n) for n in names)
 
 
 def _live(args: argparse.Namespace, protocol: Protocol, say: Callable[[str], None]) -> int:

@@ -34,8 +34,8 @@ import numpy as np
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
-__all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'BearScene', 'Contact', 'GesturePerformance', 'Label', 'Person',
-           'SubtypeStats', 'make_scene', 'trial_scene']
+__all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'SYMBOLIC_PREFIX', 'BearScene', 'Contact', 'GesturePerformance', 'Label',
+           'Person', 'SubtypeStats', 'make_scene', 'split_label', 'symbolic_label', 'trial_scene']
 
 N_CHANNELS = 64
 
@@ -125,6 +125,27 @@ PERFORMANCES: dict[str, GesturePerformance] = {
     'feeding': GesturePerformance(('mouth', 'snout'), (1, 2), 'hold', (3.0, 6.0), ('chin', 'cheek_left',
                                                                                   'cheek_right')),
 }
+
+
+#: A session label (``/touch/label``) of a symbolic gesture is ``'symbolic/<gesture>'``: the bear's touch
+#: subtypes and its gestures share names ('tickle' is both), and one session holds both kinds.
+SYMBOLIC_PREFIX = 'symbolic/'
+
+
+def symbolic_label(gesture: str) -> str:
+    """The session label of the symbolic gesture ``gesture``: ``symbolic_label('hug') == 'symbolic/hug'``."""
+    return SYMBOLIC_PREFIX + gesture
+
+
+def split_label(label: str) -> tuple[str, str]:
+    """``('symbolic', gesture)`` for a symbolic gesture's session label, else ``('subtype', label)``.
+
+    >>> split_label('symbolic/tickle'), split_label('tickle')
+    (('symbolic', 'tickle'), ('subtype', 'tickle'))
+    """
+    if label.startswith(SYMBOLIC_PREFIX):
+        return 'symbolic', label[len(SYMBOLIC_PREFIX):]
+    return 'subtype', label
 
 
 @dataclass(frozen=True)
@@ -398,30 +419,41 @@ def _perform_gesture(person: Person, perf: GesturePerformance, t: float, attempt
 
 
 def trial_scene(person_index: int, trials: list[tuple[str, float]], seed: int = 0, lead_in_s: float = 4.0,
-                pause_s: tuple[float, float] = (2.0, 5.0), person_share: float = 0.25, body_map=None) -> BearScene:
-    """One person's recording session of single-sensor subtypes (``social-touch collect bear --simulate``),
-    SYNTHETIC.
+                pause_s: tuple[float, float] = (2.0, 5.0), person_share: float = 0.25, body_map=None,
+                stray_prob: tuple[float, float] = (0.0, 0.35)) -> BearScene:
+    """One person's recording session (``social-touch collect bear --simulate``), SYNTHETIC: single-sensor
+    subtypes and symbolic gestures (``'symbolic/<gesture>'``, :func:`symbolic_label`) in the protocol's order.
 
     Args:
         person_index: the person (their style is drawn from ``(seed, person_index)``).
-        trials: ``(subtype, amplitude_scale)`` in the order the protocol prompts them; the scale
-            multiplies the contact's peak proximity (a "gentle" or "rough" variant), clipped to 1.
+        trials: ``(name, amplitude_scale)`` in the order the protocol prompts them: a subtype of
+            :data:`SUBTYPE_STATS` (performed on one random fitted sensor) or a symbolic gesture of
+            :data:`PERFORMANCES` (performed over its sensors, as in :func:`make_scene`); the scale
+            multiplies every contact's peak proximity (a "gentle" or "rough" variant), clipped to 1.
         seed: the session's randomness.
         lead_in_s: untouched seconds first (the calibrator learns its baseline there).
         pause_s: (min, max) pause between trials, s.
         person_share: share of Table II variance between people.
-        body_map: a ``BodyMap`` (default: the package's); each trial touches one fitted sensor.
+        body_map: a ``BodyMap`` (default: the package's).
+        stray_prob: (min, max) of the person's chance that a gesture's contact strays outside its filter
+            (drawn from its own generator, so subtype-only sessions are those of earlier versions).
 
-    Returns: the scene; one ``'subtype'`` :class:`Label` per trial, in order.
+    Returns: the scene; one :class:`Label` per trial, in order (kind ``'subtype'`` or ``'symbolic'``;
+    a symbolic label carries the gesture's name without the prefix).
     """
-    unknown = sorted({name for name, _ in trials} - set(SUBTYPE_STATS))
+    unknown = sorted({name for name, _ in trials if split_label(name)[0] == 'subtype'} - set(SUBTYPE_STATS)
+                     | {name for name, _ in trials if split_label(name)[0] == 'symbolic'
+                        and split_label(name)[1] not in PERFORMANCES})
     if unknown:
-        raise ValueError(f'unknown subtypes {unknown}; expected some of: {", ".join(SUBTYPE_STATS)}')
+        raise ValueError(f'unknown subtypes or gestures {unknown}; the simulated people perform the subtypes '
+                         f'{", ".join(SUBTYPE_STATS)} and the gestures '
+                         f'{", ".join(symbolic_label(g) for g in PERFORMANCES)}')
     if body_map is None:
         from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
     rng = np.random.default_rng((seed, person_index))
     person = Person(person_index, rng, person_share=person_share)
+    person.stray_prob = float(np.random.default_rng((seed, person_index, 1)).uniform(*stray_prob))
     channels = np.array([s.channel for s in body_map.sensors])
     contacts: list[Contact] = []
     labels: list[Label] = []
@@ -429,6 +461,13 @@ def trial_scene(person_index: int, trials: list[tuple[str, float]], seed: int = 
     for name, scale in trials:
         if not (math.isfinite(scale) and scale > 0):
             raise ValueError(f'amplitude scale must be a positive number; got {scale}')
+        kind, label = split_label(name)
+        if kind == 'symbolic':
+            new, touched, end = _perform_gesture(person, PERFORMANCES[label], t, 1, body_map)
+            contacts.extend(replace(c, amplitude=min(1.0, c.amplitude * scale)) for c in new)
+            labels.append(Label(t, end, 'symbolic', label, touched, person_index))
+            t = end + float(rng.uniform(*pause_s))
+            continue
         ch = int(rng.choice(channels))
         c = person.contact(name, ch, t)
         c = replace(c, amplitude=min(1.0, c.amplitude * scale))
