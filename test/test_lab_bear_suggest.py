@@ -161,3 +161,15 @@ def test_any_trials_give_settings_the_config_accepts_or_a_reason(counts, other_p
         assert abs(steps - round(steps)) < 1e-6   # a whole number of steps (rounded to 2 decimals: 1e-6 is ample)
         GestureLibrary.loads(f'gestures: {{hug: {{sensors: [{", ".join(g.sensor_names)}], min_active: '
                              f'{s.min_active}, dwell_s: {s.dwell_s}}}}}', BODY)
+
+
+def test_train_evaluate_with_one_person_saves_the_model_and_says_why_no_evaluation(tmp_path, capsys):
+    from touch_graph.cli.main import main as cli_main
+    bags = tmp_path / 'sessions'
+    assert cli_main(['collect', 'bear', '--simulate', '1', '--gestures', 'pat,rub', '--repetitions', '4',
+                     '--pause-s', '2', '--seed', '3', '--out', str(bags)]) == 0
+    model = tmp_path / 'm.npz'
+    capsys.readouterr()
+    assert cli_main(['train', 'bear', '--bags', *map(str, bags.iterdir()), '--evaluate', '--out', str(model)]) == 0
+    assert '--evaluate holds out one person at a time and the bags hold 1' in capsys.readouterr().err
+    assert model.exists()

@@ -136,7 +136,12 @@ def _run_bags(args: argparse.Namespace) -> int:
         stderr_progress('no symbolic/<gesture> trials in the bags: no gesture settings suggested '
                         '(collect bear --symbolic records some)')
     evaluation = None
-    if args.evaluate:
+    if args.evaluate and len(people) < 2:
+        # The model is trained and saved all the same; only the held-out figures need a second person.
+        print(f'social-touch train bear: warning: --evaluate holds out one person at a time and the bags hold '
+              f'{len(people)} ({", ".join(people) or "none"}); no evaluation in the model card (record a second '
+              'person, or run eval bear --bags on more sessions)', file=sys.stderr)
+    elif args.evaluate:
         from .sessions import leave_one_person_out
         result = leave_one_person_out(runs, seed=args.seed, progress=stderr_progress, models=folds)
         evaluation = {'method': 'leave-one-person-out on the training bags (`social-touch eval bear --bags ...`)',
