@@ -181,3 +181,10 @@ def test_the_skin_frame_gives_the_contact_point_in_metres_and_the_net_force_in_n
     assert (force.x, force.y) == pytest.approx(tuple(module_forces[:2]), abs=1e-5)
     untouched = frames[10]
     assert not untouched.contact and math.isnan(untouched.contact_point.x) and math.isnan(untouched.contact_point.z)
+
+
+def test_extreme_weights_keep_the_centroid_on_the_touched_sensor() -> None:
+    # A subnormal weight alone (hypothesis found 5e-324) and weights whose sum overflows float64.
+    head2 = BODY.by_name('head2')
+    assert BODY.centroid([head2.channel], [5e-324]) == pytest.approx(head2.position, abs=1e-15)
+    assert BODY.centroid([head2.channel, head2.channel], [1e308, 1e308]) == pytest.approx(head2.position, abs=1e-15)

@@ -218,10 +218,13 @@ class BodyMap:
         inside = (index >= 0) & (index < N_CHANNELS)
         index, weights = index[inside], weights[inside]
         weights = np.where(np.isfinite(weights) & (weights > 0) & self._placed[index], weights, 0.0)
-        total = float(weights.sum())
-        if not total > 0.0:
+        largest = float(weights.max(initial=0.0))
+        if not largest > 0.0:
             return None
-        x, y, z = (weights @ self._positions[index]) / total
+        # Scaled to the largest first: a subnormal weight alone would round its product with a position
+        # to 0 (or a huge one overflow the sum), putting the mean outside the touched sensors.
+        weights /= largest
+        x, y, z = (weights @ self._positions[index]) / float(weights.sum())
         return float(x), float(y), float(z)
 
     # ------------------------------------------------------------------ files
