@@ -122,12 +122,20 @@ def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = 
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) == 0:
         raise ValueError('cannot resample an empty path')
-    step = np.hypot(*np.diff(pts, axis=0).T)
+    # Few numpy calls on purpose: this runs once per recognition (us matter, issue 13).
+    delta = pts[1:] - pts[:-1]
+    step = np.hypot(delta[:, 0], delta[:, 1])
     if stroke is not None:
-        step[np.diff(np.asarray(stroke)) != 0] = 0.0  # the finger is lifted: no ink between strokes
-    cum = np.concatenate([[0.0], np.cumsum(step)])
+        stroke = np.asarray(stroke)
+        step[stroke[1:] != stroke[:-1]] = 0.0  # the finger is lifted: no ink between strokes
+    cum = np.empty(len(pts))
+    cum[0] = 0.0
+    np.cumsum(step, out=cum[1:])
     total = cum[-1]
     if not total > 0:
         return np.repeat(pts[:1], n, axis=0)
     target = np.linspace(0.0, total, n)
-    return np.column_stack([np.interp(target, cum, pts[:, 0]), np.interp(target, cum, pts[:, 1])])
+    out = np.empty((n, 2))
+    out[:, 0] = np.interp(target, cum, pts[:, 0])
+    out[:, 1] = np.interp(target, cum, pts[:, 1])
+    return out
