@@ -117,8 +117,8 @@ class CloudRecogniser(TemplateRecogniser):
         """(..., n, 2) normalised points -> (..., n) flat raster cell index (clipped to the raster)."""
         # Truncation is the floor for the points inside the raster; those left of it clip to 0 either way.
         ij = ((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
-        np.clip(ij, 0, self.grid - 1, out=ij)
-        return ij @ np.array([1, self.grid], dtype=np.intp)
+        np.minimum(np.maximum(ij, 0, out=ij), self.grid - 1, out=ij)   # np.clip's checks cost more here
+        return ij[..., 1] * self.grid + ij[..., 0]
 
     def _prepare_codebook(self) -> None:
         n, g = self.n_points, self.grid
