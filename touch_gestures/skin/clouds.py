@@ -146,6 +146,7 @@ class CloudRecogniser(TemplateRecogniser):
             shape=(T, g * g))
         self._cell_counts.sum_duplicates()
         self._visit_labels = self.template_labels_.tolist()
+        self._row_starts = np.arange(0, n * n * min(self.exact, T), n)   # flat start of each (point, template) row
 
     def _query_field(self, cells: np.ndarray) -> np.ndarray:
         """(g*g,) float32 distance from each raster cell's centre to the nearest cell centre occupied
@@ -177,7 +178,7 @@ class CloudRecogniser(TemplateRecogniser):
         pair = cdist(q, self._clouds[closest].reshape(-1, 2)).reshape(n, k, n)
         nearest = pair.argmin(axis=2)                        # (n, k) each query point's nearest template point
         # Their distances gathered by flat index: numpy's min along a short last axis is slower.
-        rows = pair.reshape(-1)[np.arange(0, n * k * n, n).reshape(n, k) + nearest]
+        rows = pair.reshape(-1)[self._row_starts[:n * k].reshape(n, k) + nearest]
         to_template = rows.sum(axis=0) / n                   # (k,) directed Chamfer means, both ways
         chamfer = np.maximum(to_template, pair.min(axis=0).sum(axis=1) / n)   # true lower bounds
         costs = chamfer.copy()
@@ -212,9 +213,7 @@ class CloudRecogniser(TemplateRecogniser):
         """Mean point distance of the optimal one-to-one matching, given the (n, n) ``cost`` matrix
         and each row's argmin ``nearest`` (n,) with its mean: when the nearest points already pair
         one to one, that pairing is optimal and the Hungarian method is not needed."""
-        seen = np.zeros(len(nearest), dtype=bool)
-        seen[nearest] = True
-        if seen.all():
+        if len(set(nearest.tolist())) == len(nearest):
             return nearest_mean
         rows, cols = linear_sum_assignment(cost)
         return float(cost[rows, cols].sum() / len(rows))
