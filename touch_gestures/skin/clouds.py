@@ -84,7 +84,8 @@ class CloudRecogniser(TemplateRecogniser):
     Args:
         n_points: points per cloud ($P's 32).
         grid: side of the distance-field raster (cells of ``2 / grid`` gesture sizes).
-        exact: templates matched one-to-one after the Chamfer ranking (0: Chamfer only).
+        exact: the closest templates (raster Chamfer) considered for one-to-one matching; of those, only
+            the ones that can change the nearest class or the runner-up are solved (0: Chamfer only).
         max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
     """
 
