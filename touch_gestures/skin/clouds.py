@@ -182,18 +182,20 @@ class CloudRecogniser(TemplateRecogniser):
         rows = pair.reshape(-1)[self._row_starts[:n * k].reshape(n, k) + nearest]
         to_template = rows.sum(axis=0) / n                   # (k,) directed Chamfer means, both ways
         chamfer = np.maximum(to_template, pair.min(axis=0).sum(axis=1) / n)   # true lower bounds
-        costs = chamfer.copy()
+        # The visit is over k (6) values: Python lists, not numpy calls.
+        costs = chamfer.tolist()
+        bounds, means, templates = list(costs), to_template.tolist(), closest.tolist()
         labels = self._visit_labels
         settled = [np.inf] * len(self.classes_)   # per class: smallest non-zero matching cost so far
         first = second = np.inf                   # the two smallest of ``settled``
-        for i in np.argsort(chamfer, kind='stable').tolist():
-            bound = float(chamfer[i])
+        for i in sorted(range(k), key=bounds.__getitem__):
+            bound = bounds[i]
             if bound >= second:
                 break      # neither the nearest class nor the runner-up can change
-            c = labels[closest[i]]
+            c = labels[templates[i]]
             if bound >= settled[c]:
                 continue   # its cost is at least its bound: it cannot lower its class's distance
-            cost = self._match(pair[:, i], nearest[:, i], float(to_template[i]))
+            cost = self._match(pair[:, i], nearest[:, i], means[i])
             costs[i] = cost
             if 0.0 < cost < settled[c]:
                 was, settled[c] = settled[c], cost
@@ -205,7 +207,7 @@ class CloudRecogniser(TemplateRecogniser):
                     second = cost
         # The others were ranked farther: none is taken as closer than the farthest of the closest, so
         # a raster bound never beats a matching cost or a true bound.
-        np.maximum(out, costs.max(), out=out)
+        np.maximum(out, max(costs), out=out)
         out[closest] = costs
         return out
 
