@@ -104,7 +104,9 @@ def bench_latency(repeats: int = 1, n_gestures: int = 16, templates_per_gesture:
         for run in range(repeats):
             samples = synthetic_traces(shapes, performers=1, repetitions=gestures_per_class, seed=seed + 1 + run,
                                        rate_hz=FRAME_RATE_HZ)
-            scene = traced_scene(samples, lead_s=1.0, pause_s=(gap_s + 0.3, gap_s + 0.6), seed=run)
+            # The tail outlasts the gap, so that the last gesture ends too.
+            scene = traced_scene(samples, lead_s=1.0, pause_s=(gap_s + 0.3, gap_s + 0.6), seed=run,
+                                 tail_s=gap_s + 0.5)
             published, delivered, counts = _session(scene, params, seed=run)
             for key, count in counts.items():
                 outcomes[key] = outcomes.get(key, 0) + count
