@@ -114,7 +114,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
         lines.append(f"| {name} | {v['us_per_recognition']:.0f} | {v['cpu_us_per_recognition']:.0f} |")
     if 'early' in b:
         lines += ['', f"An early candidate (cloud, template prefixes at four fractions) for the first half of a "
-                  f"gesture: {b['early']['us_per_candidate']:.0f} us ({b['early']['cpu_us_per_candidate']:.0f} CPU us; published at most every 0.1 s of a gesture)."]
+                  f"gesture: {b['early']['us_per_candidate']:.0f} us ({b['early']['cpu_us_per_candidate']:.0f} CPU us; "
+                  'published at most every 0.1 s of a gesture).']
     _say('latency')
     t = bench_latency()
     lines += ['', '## From the end of the gap to the command (synthetic gestures)', '',
