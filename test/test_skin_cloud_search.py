@@ -165,3 +165,18 @@ def test_a_trace_ten_times_longer_than_any_template():
     gesture = TouchGesture.from_trajectory(long_circle)
     assert rec.predict(gesture).nearest == 'circle'
     assert_same_answer(rec, rec._features(gesture))
+
+
+def test_a_raster_too_large_for_the_table_gives_the_same_field():
+    rng = np.random.default_rng(13)
+    templates, labels = random_codebook(rng, 3, 2, 1.0)
+    rec = CloudRecogniser(n_points=N, grid=40)   # 1600 cells: no cell-to-cell table
+    rec.set_codebook(templates, labels)
+    assert rec._cell_table is None
+    cells = rec._cells(templates[0].reshape(N, 2).astype(np.float64))
+    small = CloudRecogniser(n_points=N, grid=40)
+    small.set_codebook(templates, labels)
+    small._cell_table = np.sqrt(((small._raster[:, None] - small._raster[None]) ** 2).sum(axis=2)).astype(np.float32)
+    # The same float64 distances rounded once to float32 (the minimum commutes with sqrt and rounding).
+    np.testing.assert_array_equal(rec._query_field(cells), small._query_field(cells))
+    assert_same_answer(rec, templates[0])

@@ -14,8 +14,9 @@ stroke orders (docs/skin-evaluation.md). The steps:
    fit time each template's distance field is sampled on a ``grid`` x ``grid`` raster;
    a query's points read their distance to every template in one gather, and the
    template points read the query's own distance field the same way. Their mean (the
-   symmetric Chamfer distance) is, up to the raster's half-cell, a lower bound of the
-   matching cost below, and ranks the codebook in one vectorised pass.
+   symmetric Chamfer distance, to within the raster's cells of ``2 / grid``) ranks the
+   codebook in one vectorised pass. At that resolution it is no bound of the matching
+   cost (gestures of a class lie closer than a cell), so step 3 bounds with exact distances.
 3. **One-to-one matching on the closest** (``exact``): the ``exact`` templates with the
    smallest Chamfer distance are matched point to point with the optimal assignment
    (Hungarian method, :func:`scipy.optimize.linear_sum_assignment`), which $P's greedy
@@ -136,7 +137,7 @@ class CloudRecogniser(TemplateRecogniser):
         self._fields = fields
         self._template_cells = self._cells(self._clouds)    # (T, n)
         # Cell-to-cell distances (g*g, g*g): a query's distance field is the minimum of its cells'
-        # rows. Kept for rasters up to _TABLE_CELLS cells (1024: 4 MiB), computed per query above.
+        # rows. Kept for rasters up to _TABLE_CELLS cells (1024: 4 MiB); larger ones compute the rows per query.
         self._cell_table = (np.sqrt(_squared_distances(self._raster, self._raster)).astype(np.float32)
                             if g * g <= _TABLE_CELLS else None)
         # (T, g*g) sparse: how many points of each template fall in each cell; the template-to-query
