@@ -64,6 +64,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
         'bear = touch_lab.bear.bench:bench_cycle',
         'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
         'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
+        'skin-latency = touch_lab.skin.latency:bench_latency',
         'stack = touch_lab.bench.stack:bench_stack', 'training = touch_lab.bench.training:bench_training',
         'framing = touch_lab.bench.framing:bench_framing',
     ],

@@ -14,13 +14,28 @@ stroke orders (docs/skin-evaluation.md). The steps:
    fit time each template's distance field is sampled on a ``grid`` x ``grid`` raster;
    a query's points read their distance to every template in one gather, and the
    template points read the query's own distance field the same way. Their mean (the
-   symmetric Chamfer distance) is, up to the raster's half-cell, a lower bound of the
-   matching cost below, and ranks the codebook in one vectorised pass.
+   symmetric Chamfer distance, to within the raster's cells of ``2 / grid``) ranks the
+   codebook in one vectorised pass. At that resolution it is no bound of the matching
+   cost (gestures of a class lie closer than a cell), so step 3 bounds with exact distances.
 3. **One-to-one matching on the closest** (``exact``): the ``exact`` templates with the
    smallest Chamfer distance are matched point to point with the optimal assignment
    (Hungarian method, :func:`scipy.optimize.linear_sum_assignment`), which $P's greedy
    matching approximates. Its mean point distance is the distance; the other templates
-   keep their Chamfer bound, so the margin over the runner-up class is never overstated.
+   keep their Chamfer bound, raised to the farthest of the closest, so the margin over the
+   runner-up class is never overstated. As in $Q, most assignments are never solved: one
+   point-distance matrix for the ``exact`` closest gives each its true Chamfer distance
+   (the larger of the two directed means, a lower bound of the matching cost); they are
+   visited in that order, and one is solved only if its bound is below both its own
+   class's matched cost (else it cannot lower the class's distance: it keeps the bound) and
+   the runner-up class's (else neither the nearest class nor the runner-up can change).
+   Where each query point's nearest template point is a different one, that pairing is
+   already optimal. A zero cost (the query is that template, as in the leave-one-out
+   calibration, or a duplicate) settles no class, so its nearest *other* template is
+   matched too. The nearest class gets the distance that solving all ``exact`` assignments
+   gives, and so does the runner-up where one of its templates is among the closest (the
+   margin is then the same); no distance is larger than solving all would make it (the
+   templates outside the closest are raised to the largest cost or bound among them), so
+   the margin is never larger either (test/test_skin_cloud_search.py).
 
 Distances are in units of the gesture's size. The cloud is blind to direction: a line
 traced left-to-right and right-to-left are the same cloud. Where a vocabulary tells such
@@ -30,8 +45,9 @@ gestures apart, :func:`~.vocabulary.choose_recogniser` picks a direction-aware r
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
+from scipy import sparse
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial.distance import cdist
 
 from .base import TemplateRecogniser
 from .features import arc_length_resample
@@ -41,6 +57,8 @@ __all__ = ['CloudRecogniser', 'cloud_features']
 
 #: Normalised clouds lie within +-1 of their mean; the raster covers that square.
 _EXTENT = 1.0
+#: Rasters up to this many cells keep a cell-to-cell distance table (4 MiB); larger ones compute it per query.
+_TABLE_CELLS = 1024
 
 
 def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int = 32) -> np.ndarray:
@@ -54,8 +72,8 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
     """
     pts = arc_length_resample(points, n_points, stroke)
-    pts = pts - pts.mean(axis=0)
-    size = float(np.ptp(pts, axis=0).max())
+    pts -= pts.sum(axis=0) / n_points
+    size = float((pts.max(axis=0) - pts.min(axis=0)).max())
     if size > 1e-9:
         pts /= size
     return pts.reshape(-1).astype(np.float32)
@@ -67,7 +85,8 @@ class CloudRecogniser(TemplateRecogniser):
     Args:
         n_points: points per cloud ($P's 32).
         grid: side of the distance-field raster (cells of ``2 / grid`` gesture sizes).
-        exact: templates matched one-to-one after the Chamfer ranking (0: Chamfer only).
+        exact: the closest templates (raster Chamfer) considered for one-to-one matching; of those, only
+            the ones that can change the nearest class or the runner-up are solved (0: Chamfer only).
         max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
     """
 
@@ -98,8 +117,9 @@ class CloudRecogniser(TemplateRecogniser):
 
     def _cells(self, clouds: np.ndarray) -> np.ndarray:
         """(..., n, 2) normalised points -> (..., n) flat raster cell index (clipped to the raster)."""
-        ij = np.floor((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
-        np.clip(ij, 0, self.grid - 1, out=ij)
+        # Truncation is the floor for the points inside the raster; those left of it clip to 0 either way.
+        ij = ((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
+        np.minimum(np.maximum(ij, 0, out=ij), self.grid - 1, out=ij)   # np.clip's checks cost more here
         return ij[..., 1] * self.grid + ij[..., 0]
 
     def _prepare_codebook(self) -> None:
@@ -108,46 +128,103 @@ class CloudRecogniser(TemplateRecogniser):
         self._cell_mm = 2 * _EXTENT / g   # the raster's cell side, gesture sizes
         centres = (np.arange(g) + 0.5) * self._cell_mm - _EXTENT
         cx, cy = np.meshgrid(centres, centres)            # (g, g), row = y
-        raster = np.column_stack([cx.ravel(), cy.ravel()])  # (g*g, 2)
+        self._raster = np.column_stack([cx.ravel(), cy.ravel()])  # (g*g, 2) cell centres
         # (g*g, T): distance from each raster cell to each template's nearest point (its distance
         # field), cells first so that a query's n cells gather n contiguous rows.
         fields = np.empty((g * g, len(self._clouds)), dtype=np.float32)
         for k, cloud in enumerate(self._clouds):
-            dx = raster[:, 0, None] - cloud[None, :, 0]
-            dy = raster[:, 1, None] - cloud[None, :, 1]
-            fields[:, k] = np.sqrt((dx * dx + dy * dy).min(axis=1))
+            fields[:, k] = np.sqrt(_squared_distances(self._raster, cloud).min(axis=1))
         self._fields = fields
         self._template_cells = self._cells(self._clouds)    # (T, n)
+        # Cell-to-cell distances (g*g, g*g): a query's distance field is the minimum of its cells'
+        # rows. Kept for rasters up to _TABLE_CELLS cells (1024: 4 MiB); larger ones compute the rows per query.
+        self._cell_table = (np.sqrt(_squared_distances(self._raster, self._raster)).astype(np.float32)
+                            if g * g <= _TABLE_CELLS else None)
+        # (T, g*g) sparse: how many points of each template fall in each cell; the template-to-query
+        # sums are one sparse product with the query's field (a third of gathering T x n cells).
+        T = len(self._clouds)
+        self._cell_counts = sparse.csr_matrix(
+            (np.ones(T * n, dtype=np.float32), self._template_cells.ravel(), np.arange(0, T * n + 1, n)),
+            shape=(T, g * g))
+        self._cell_counts.sum_duplicates()
+        self._visit_labels = self.template_labels_.tolist()
+        self._row_starts = np.arange(0, n * n * min(self.exact, T), n)   # flat start of each (point, template) row
 
     def _query_field(self, cells: np.ndarray) -> np.ndarray:
-        """(g*g,) float32 distance from each raster cell to the nearest occupied cell of the query, in
-        gesture sizes (a Euclidean distance transform of the query's raster)."""
-        g = self.grid
-        empty = np.ones(g * g, dtype=bool)
-        empty[cells] = False
-        return (ndimage.distance_transform_edt(empty.reshape(g, g)).ravel() * self._cell_mm).astype(np.float32)
+        """(g*g,) float32 distance from each raster cell's centre to the nearest cell centre occupied
+        by the query's (n,) ``cells``, in gesture sizes (the Euclidean distance transform of the
+        query's raster, as one row minimum of a table)."""
+        if self._cell_table is not None:
+            return self._cell_table[cells].min(axis=0)
+        return np.sqrt(_squared_distances(self._raster[cells], self._raster).min(axis=0)).astype(np.float32)
+
+    def _bounds(self, q: np.ndarray) -> np.ndarray:
+        """(T,) float64 symmetric Chamfer distance of the (n, 2) query to every template (module doc, 2)."""
+        cells = self._cells(q)
+        # Query -> templates: each query point reads every template's field at its cell; templates ->
+        # query: every template point reads the query's field at its cell. Sums of n float32 values
+        # below 3 (the raster's diagonal): float32 adds ~1e-7 relative, far under the half-cell.
+        to_templates = self._fields[cells].sum(axis=0)
+        to_templates += self._cell_counts @ self._query_field(cells)
+        return to_templates.astype(np.float64) * (0.5 / self.n_points)
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         n = self.n_points
         q = query.reshape(n, 2).astype(np.float64)
-        cells = self._cells(q)
-        # Query -> templates: each query point reads every template's field at its cell; templates ->
-        # query: every template point reads the query's field at its cell.
-        to_templates = self._fields[cells].sum(axis=0)
-        to_query = np.take(self._query_field(cells), self._template_cells).sum(axis=1)
-        out = (to_templates + to_query).astype(np.float64) * (0.5 / n)
+        out = self._bounds(q)
         k = min(self.exact, len(out))
-        if k:
-            closest = np.argpartition(out, k - 1)[:k] if k < len(out) else np.arange(len(out))
-            exact = np.empty(k)
-            for i, t in enumerate(closest):
-                dx = q[:, 0, None] - self._clouds[t][None, :, 0]
-                dy = q[:, 1, None] - self._clouds[t][None, :, 1]
-                cost = np.sqrt(dx * dx + dy * dy)
-                rows, cols = linear_sum_assignment(cost)
-                exact[i] = cost[rows, cols].mean()
-            # The others were ranked farther: none is taken as closer than the farthest matched one,
-            # so a bound never beats a true matching cost.
-            np.maximum(out, exact.max(), out=out)
-            out[closest] = exact
+        if not k:
+            return out
+        closest = np.argpartition(out, k - 1)[:k] if k < len(out) else np.arange(len(out))
+        # (n, k, n) point distances to the closest templates, in one call; float64, as the assignment's.
+        pair = cdist(q, self._clouds[closest].reshape(-1, 2)).reshape(n, k, n)
+        nearest = pair.argmin(axis=2)                        # (n, k) each query point's nearest template point
+        # Their distances gathered by flat index: numpy's min along a short last axis is slower.
+        rows = pair.reshape(-1)[self._row_starts[:n * k].reshape(n, k) + nearest]
+        to_template = rows.sum(axis=0) / n                   # (k,) directed Chamfer means, both ways
+        chamfer = np.maximum(to_template, pair.min(axis=0).sum(axis=1) / n)   # true lower bounds
+        # The visit is over k (6) values: Python lists, not numpy calls.
+        costs = chamfer.tolist()
+        bounds, means, templates = list(costs), to_template.tolist(), closest.tolist()
+        labels = self._visit_labels
+        settled = [np.inf] * len(self.classes_)   # per class: smallest non-zero matching cost so far
+        first = second = np.inf                   # the two smallest of ``settled``
+        for i in sorted(range(k), key=bounds.__getitem__):
+            bound = bounds[i]
+            if bound >= second:
+                break      # neither the nearest class nor the runner-up can change
+            c = labels[templates[i]]
+            if bound >= settled[c]:
+                continue   # its cost is at least its bound: it cannot lower its class's distance
+            cost = self._match(pair[:, i], nearest[:, i], means[i])
+            costs[i] = cost
+            if 0.0 < cost < settled[c]:
+                was, settled[c] = settled[c], cost
+                if was == first:      # the nearest class got nearer
+                    first = cost
+                elif cost < first:    # a new nearest class; the old one is the runner-up
+                    first, second = cost, first
+                elif cost < second:
+                    second = cost
+        # The others were ranked farther: none is taken as closer than the farthest of the closest, so
+        # a raster bound never beats a matching cost or a true bound.
+        np.maximum(out, max(costs), out=out)
+        out[closest] = costs
         return out
+
+    @staticmethod
+    def _match(cost: np.ndarray, nearest: np.ndarray, nearest_mean: float) -> float:
+        """Mean point distance of the optimal one-to-one matching, given the (n, n) ``cost`` matrix
+        and each row's argmin ``nearest`` (n,) with its mean: when the nearest points already pair
+        one to one, that pairing is optimal and the Hungarian method is not needed."""
+        if len(set(nearest.tolist())) == len(nearest):
+            return nearest_mean
+        rows, cols = linear_sum_assignment(cost)
+        return float(cost[rows, cols].sum() / len(rows))
+
+
+def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(p, 2) and (r, 2) points -> (p, r) squared distances."""
+    dx = a[:, 0, None] - b[None, :, 0]
+    dy = a[:, 1, None] - b[None, :, 1]
+    return dx * dx + dy * dy

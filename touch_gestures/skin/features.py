@@ -7,6 +7,8 @@ along one row (min == max in eq. 6), a trajectory that does not move at all.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = [
@@ -106,6 +108,14 @@ def minmax_normalise(values: np.ndarray, axis: int = 0, eps: float = 1e-6) -> np
     return np.where(flat, 0.5, out).astype(values.dtype, copy=False)
 
 
+@functools.lru_cache(maxsize=16)
+def _steps(n: int) -> np.ndarray:
+    """(n,) float64 0, 1, ..., n - 1, read-only (shared between calls)."""
+    steps = np.arange(n, dtype=np.float64)
+    steps.flags.writeable = False
+    return steps
+
+
 def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = None) -> np.ndarray:
     """``n`` points equally spaced along the path (the $1 recogniser's resampling), (m, 2) -> (n, 2).
 
@@ -122,12 +132,22 @@ def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = 
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) == 0:
         raise ValueError('cannot resample an empty path')
-    step = np.hypot(*np.diff(pts, axis=0).T)
+    # Few numpy calls on purpose: this runs once per recognition (us matter, issue 13).
+    delta = pts[1:] - pts[:-1]
+    step = np.hypot(delta[:, 0], delta[:, 1])
     if stroke is not None:
-        step[np.diff(np.asarray(stroke)) != 0] = 0.0  # the finger is lifted: no ink between strokes
-    cum = np.concatenate([[0.0], np.cumsum(step)])
+        stroke = np.asarray(stroke)
+        step[stroke[1:] != stroke[:-1]] = 0.0  # the finger is lifted: no ink between strokes
+    cum = np.empty(len(pts))
+    cum[0] = 0.0
+    np.cumsum(step, out=cum[1:])
     total = cum[-1]
     if not total > 0:
         return np.repeat(pts[:1], n, axis=0)
-    target = np.linspace(0.0, total, n)
-    return np.column_stack([np.interp(target, cum, pts[:, 0]), np.interp(target, cum, pts[:, 1])])
+    # np.linspace(0, total, n) without its per-call checks: the same numbers.
+    target = _steps(n) * (total / (n - 1)) if n > 1 else np.zeros(1)
+    target[-1] = total if n > 1 else 0.0
+    out = np.empty((n, 2))
+    out[:, 0] = np.interp(target, cum, pts[:, 0])
+    out[:, 1] = np.interp(target, cum, pts[:, 1])
+    return out

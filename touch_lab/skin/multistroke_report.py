@@ -3,8 +3,9 @@
 One section per vocabulary (one trace file each: leave-one-person-out through the virtual skin,
 :func:`~touch_lab.skin.cli.evaluate_file`), the pauses between strokes and the gap, the early
 decisions of the default recogniser, collisions against presses and traces
-(:mod:`.collision_eval`, synthetic) and the cost per recognition (:mod:`.bench`, synthetic
-gestures). Every figure of the file comes from this one command.
+(:mod:`.collision_eval`, synthetic), the cost per recognition (:mod:`.bench`, synthetic
+gestures) and the time from the gap's end to the command through the nodes (:mod:`.latency`,
+synthetic gestures). Every figure of the file comes from this one command.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
 from touch_lab.skin.early_eval import summary as early_summary
+from touch_lab.skin.latency import bench_latency
 
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
@@ -107,9 +109,24 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
     lines += ['', '## Cost per recognition (synthetic gestures)', '',
               f"{b['gestures']} gestures x {b['templates_per_gesture']} templates, median of {b['repeats']} runs over "
               f"{b['queries']} queries, one `predict` each (`social-touch bench skin`):", '',
-              '| recogniser | us per recognition |', '|---|---|']
+              '| recogniser | us per recognition | CPU us (no waits for a core) |', '|---|---|---|']
     for name, v in b['recognisers'].items():
-        lines.append(f"| {name} | {v['us_per_recognition']:.0f} |")
+        lines.append(f"| {name} | {v['us_per_recognition']:.0f} | {v['cpu_us_per_recognition']:.0f} |")
+    if 'early' in b:
+        lines += ['', f"An early candidate (cloud, template prefixes at four fractions) for the first half of a "
+                  f"gesture: {b['early']['us_per_candidate']:.0f} us ({b['early']['cpu_us_per_candidate']:.0f} CPU us; "
+                  'published at most every 0.1 s of a gesture).']
+    _say('latency')
+    t = bench_latency()
+    lines += ['', '## From the end of the gap to the command (synthetic gestures)', '',
+              f"{t['commands']} gestures traced on the virtual skin, read by skin_driver and haptic_commands in one "
+              f"graph, {t['recogniser']} codebook of {t['gestures']} x {t['templates_per_gesture']}, gap "
+              f"{t['gap_s']} s (`social-touch bench skin-latency`): the command comes {t['ms_median']:.1f} ms "
+              f"(median) and {t['ms_p99']:.1f} ms (99th percentile) after the gap ends (goal {t['goal_ms']:.0f} ms): "
+              f"waiting for the first frame after the gap (frames at {t['frame_rate_hz']:.0f} Hz, at most "
+              f"{1e3 / t['frame_rate_hz']:.1f} ms; median {t['wait_for_frame_ms_median']:.1f} ms), then processing "
+              f"that frame to the delivered command, median {t['processing_ms_median']:.2f} ms, 99th percentile "
+              f"{t['processing_ms_p99']:.2f} ms."]
     lines += ['', f'(This run took {(time.perf_counter() - started) / 60:.0f} minutes.)', '']
     out = Path(out)
     out.write_text('\n'.join(lines), encoding='utf-8')
