@@ -301,3 +301,114 @@ def test_bounds_are_enforced_on_decode():
         deserialize(_strings_payload([b'abcd']), 'codec_test_msgs/msg/Strings')
     with pytest.raises(MessageError, match='bound 2'):
         deserialize(_strings_payload([b'a', b'b', b'c']), 'codec_test_msgs/msg/Strings')
+
+
+# ------------------------------------------------------------------ hard cases of the decoder's shortcuts
+# Fixed arrays of one run are decoded as fields of one record view, a sequence of strings the same
+# as the last one is taken from a memo, and arrays are joined into the output without a copy.
+_RUNS_TYPES = {
+    'codec_test_msgs/msg/Runs': ('string s\nuint8[3] a\nfloat64[2] d\nbool[5] f\nint16[1] i\nstring[] words\n'
+                                 'float32[3] tail\nfloat64[] maybe\nuint16[2] last\n'),
+}
+for _name, _text in _RUNS_TYPES.items():
+    typestore.register(get_types_from_msg(_text, _name))
+
+
+def _runs(s: str = '', words: tuple = (), maybe: tuple = ()):
+    return get_message('codec_test_msgs/msg/Runs')(
+        s=s, a=np.array([0, 128, 255], np.uint8), d=np.array([np.nan, -np.inf]), f=np.array([1, 0, 1, 1, 0], bool),
+        i=np.array([-32768], np.int16), words=list(words), tail=np.array([np.nan, 1.5, -0.0], np.float32),
+        maybe=np.array(maybe, np.float64), last=np.array([0, 65535], np.uint16))
+
+
+@pytest.mark.parametrize('length', range(9))  # every alignment of the arrays after the string
+def test_runs_of_fixed_arrays_after_a_string_decode_as_rosbags_does(length):
+    msg = _runs('x' * length, words=['', 'ab', 'abc', 'abcd'][:length % 5], maybe=[np.nan] * (length % 3))
+    _check_against_rosbags(msg)
+    back = deserialize(serialize(msg), 'codec_test_msgs/msg/Runs')
+    for name in ('a', 'd', 'f', 'i', 'tail', 'maybe', 'last'):
+        value = getattr(back, name)
+        assert value.dtype is getattr(msg, name).dtype and not value.flags.writeable, name
+    assert np.isnan(back.d[0]) and np.signbit(back.tail[2])
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(data=st.data())
+def test_the_runs_type_encodes_and_decodes_as_rosbags_does(data):
+    _check_against_rosbags(data.draw(message_of('codec_test_msgs/msg/Runs')))
+
+
+def test_a_truncated_run_of_arrays_is_refused():
+    data = serialize(_runs('abc'))
+    for cut in range(len(data) - 3):  # the last 3 bytes may be padding only
+        with pytest.raises(MessageError):
+            deserialize(data[:cut], 'codec_test_msgs/msg/Runs')
+
+
+def test_arrays_that_are_not_contiguous_encode_as_their_copies():
+    wide = np.linspace(0, 1, 128, dtype=np.float32)
+    frame = get_message('BearFrame')(level=wide[::2])
+    assert not frame.level.flags.c_contiguous
+    expected = serialize(get_message('BearFrame')(level=wide[::2].copy()))
+    assert serialize(frame) == expected
+    frame.level = wide[::-2]
+    assert serialize(frame) == serialize(get_message('BearFrame')(level=wide[::-2].copy()))
+    event = get_message('GestureEvent')(posteriors=np.arange(6.0)[::3])
+    assert deserialize(serialize(event), 'GestureEvent').posteriors.tolist() == [0.0, 3.0]
+
+
+def test_a_repeated_sequence_of_strings_decodes_to_a_fresh_list_each_time():
+    event = get_message('GestureEvent')(classes=['stroke', 'tickle', 'ü', ''])
+    data = serialize(event)
+    first, second = deserialize(data, 'GestureEvent'), deserialize(data, 'GestureEvent')
+    assert first.classes == second.classes == ['stroke', 'tickle', 'ü', ''] and first.classes is not second.classes
+    first.classes.append('changed')
+    assert deserialize(data, 'GestureEvent').classes == ['stroke', 'tickle', 'ü', '']
+
+
+@pytest.mark.parametrize('sequence', [
+    [['a', 'b'], ['a'], ['a', 'b', 'c'], ['a', 'b'], []],  # prefixes of each other, and empty
+    [['ab'], ['a'], ['ab'], ['abcd'], ['abc']],             # the same count, other bytes
+    [['x'] * 3, ['x'] * 3, ['y'] * 3, ['x'] * 3],           # repeated, then changed, then back
+])
+def test_sequences_of_strings_in_turn_encode_and_decode_as_rosbags_does(sequence):
+    for words in sequence:
+        _check_against_rosbags(_runs('s', words=words))
+        _check_against_rosbags(get_message('GestureEvent')(classes=words, posteriors=[0.5] * len(words)))
+
+
+def test_a_list_changed_in_place_after_encoding_encodes_again():
+    event = get_message('GestureEvent')(classes=['a', 'b'])
+    before = serialize(event)
+    event.classes.append('c')
+    after = serialize(event)
+    assert after != before and deserialize(after, 'GestureEvent').classes == ['a', 'b', 'c']
+    event.classes[0] = 'z'
+    assert deserialize(serialize(event), 'GestureEvent').classes == ['z', 'b', 'c']
+
+
+def test_bounds_are_enforced_after_a_sequence_at_its_bound_decoded():
+    assert deserialize(_strings_payload([b'abc', b'xyz']), 'codec_test_msgs/msg/Strings').tiny == ['abc', 'xyz']
+    with pytest.raises(MessageError, match='bound 2'):
+        deserialize(_strings_payload([b'abc', b'xyz', b'a']), 'codec_test_msgs/msg/Strings')
+    with pytest.raises(MessageError, match='bound 3'):
+        deserialize(_strings_payload([b'abc', b'xyzw']), 'codec_test_msgs/msg/Strings')
+
+
+def test_threads_decoding_different_sequences_of_one_type_each_get_their_own():
+    import threading
+    payloads = {words: serialize(get_message('GestureEvent')(classes=list(words)))
+                for words in (('a', 'b'), ('c', 'd'), ('e', 'f', 'g'))}
+    wrong = []
+
+    def decode_many(words: tuple) -> None:
+        for _ in range(3000):
+            if deserialize(payloads[words], 'GestureEvent').classes != list(words):
+                wrong.append(words)
+
+    threads = [threading.Thread(target=decode_many, args=(words,)) for words in payloads]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not wrong

@@ -8,8 +8,11 @@ functions, generated once from its field definitions (Python source compiled wit
 
 - fields whose offsets are known at generation time are packed or unpacked by one
   ``struct.Struct`` per run, padding included (``x`` bytes);
-- arrays of primitives go through ``ndarray.tobytes`` and ``numpy.frombuffer`` (decoded
-  arrays are read-only views of the received bytes, as rosbags gives them);
+- arrays of primitives are joined into the output as they are (their buffer, no
+  ``tobytes`` copy first) and decoded as read-only views of the received bytes, as rosbags
+  gives them; the fixed-size arrays of one run become views of one structured record
+  (one ``numpy.ndarray`` call and a field lookup each, about half the cost of one
+  ``numpy.frombuffer`` each);
 - a runtime alignment step is emitted only after a field of variable size (a string, a
   sequence), where the offset is no longer known;
 - nested messages are inlined; decoded messages are made without ``__init__`` (what the
@@ -49,6 +52,7 @@ _SIZES = {name: struct.calcsize(fmt) for name, fmt in _FORMATS.items()}
 _DTYPES = {'bool': np.dtype(np.bool_), 'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8),
            **{name: np.dtype(name) for name in _FORMATS if name not in ('bool', 'byte', 'char')}}
 _ZEROS = tuple(bytes(n) for n in range(16))
+_COUNT = struct.Struct('<I').pack
 #: Minimum bytes of one element of a sequence (guards a huge count in garbage), as rosbags checks it.
 _MIN_STRING_BYTES = 5
 _ENCODE_ERRORS = (AttributeError, TypeError, ValueError, OverflowError, struct.error, BufferError)
@@ -98,8 +102,8 @@ class _Generator:
         self.fielddefs = fielddefs
         self.get_class = get_class
         self.lines: list[str] = []
-        self.env: dict[str, Any] = {'_ZEROS': _ZEROS, '_frombuffer': np.frombuffer, '_new': object.__new__,
-                                    '_coerce': _coerce, '_bad': _bad}
+        self.env: dict[str, Any] = {'_ZEROS': _ZEROS, '_frombuffer': np.frombuffer, '_ndarray': np.ndarray,
+                                    '_new': object.__new__, '_coerce': _coerce, '_bad': _bad}
         self.indent = 1
         self.off = 0
         self.known = 8
@@ -257,7 +261,7 @@ class _Encoder(_Generator):
             self.emit(f'    {arr} = _coerce({arr}, {dt}, {length}, {field!r})')
             self.pad(size)
             self.flush()
-            self.emit(f'_a({arr}.tobytes())')
+            self.emit(f'_a({arr})')
             self.off += length * size
             return
         self.emit(f'if {arr}.dtype is not {dt} or {arr}.ndim != 1:')
@@ -265,7 +269,7 @@ class _Encoder(_Generator):
         self.scalar('uint32', f'len({arr})')
         self.sync()
         self.align_elements(f'len({arr})', size)
-        self.emit(f'_a({arr}.tobytes())')
+        self.emit(f'_a({arr})')
         self.emit(f'p += len({arr}) * {size}')
         self.known = min(4, size)
 
@@ -279,6 +283,13 @@ class _Encoder(_Generator):
             self.emit(f'if len({seq}) != {length}:')
             self.emit(f'    raise ValueError("field {field} needs {length} items, got %d" % len({seq}))')
         self.sync()
+        if length is None and desc[0] == Nodetype.BASE:  # a sequence of strings: p is 4-aligned after its count
+            run = self.name('c')
+            self.emit(f'{run} = _string_run({seq}, {self.const("M", [([], b"")])})')
+            self.emit(f'_a({run})')
+            self.emit(f'p += len({run})')
+            self.known = 1
+            return
         item = self.name('i')
         self.emit(f'for {item} in {seq}:')
         self.indent += 1
@@ -306,8 +317,12 @@ class _Encoder(_Generator):
         self.sync()
         self.emit('if pad and p % 4:')
         self.emit('    _a(_ZEROS[-p % 4])')
-        self.emit("return b''.join(parts)")
-        self.env.update(_HEADER=HEADER_LE, _ERRORS=_ENCODE_ERRORS, _failed=_failure('serialise', typename))
+        self.emit('try:')
+        self.emit("    return b''.join(parts)")
+        self.emit('except TypeError:  # an array that is not contiguous (a strided view) has no flat buffer')
+        self.emit('    return _join_copies(parts)')
+        self.env.update(_HEADER=HEADER_LE, _ERRORS=_ENCODE_ERRORS, _failed=_failure('serialise', typename),
+                        _join_copies=_join_copies, _string_run=_string_run)
         return ('def encode(m, pad=False):\n    try:\n' + '\n'.join(self.lines) +
                 '\n    except _ERRORS as err:\n        raise _failed(m, err) from err\n')
 
@@ -315,18 +330,40 @@ class _Encoder(_Generator):
 class _Decoder(_Generator):
     """Generates ``decode(data)``; ``p`` indexes ``data``, whose first 4 bytes are the header."""
 
+    def __init__(self, fielddefs: dict, get_class: Callable[[str], type]) -> None:
+        super().__init__(fielddefs, get_class)
+        self.run_views: list[tuple[str, np.dtype, int, int]] = []  # fixed arrays of the run: target, dtype, length, off
+
     def flush(self) -> None:
         if not self.run_fmt:
             return
         fmt = ''.join(self.run_fmt)
         start = self.off - struct.calcsize('<' + fmt)
-        if self.run_items:
+        if self.run_items:  # unpacked first: its struct also checks that the run's arrays are in the data
             unpack = self.const('U', struct.Struct('<' + fmt).unpack_from)
             where = f'p + {start}' if start else 'p'
             targets = ', '.join(self.run_items)
             self.emit(f'{targets}, = {unpack}(data, {where})' if len(self.run_items) == 1
                       else f'{targets} = {unpack}(data, {where})')
+        self.flush_views()
         self.run_fmt, self.run_items = [], []
+
+    def flush_views(self) -> None:
+        """The fixed arrays of the run: one view each, or fields of one record view when there are several."""
+        views, self.run_views = self.run_views, []
+        if len(views) == 1:
+            target, dtype, length, off = views[0]
+            where = f'p + {off}' if off else 'p'
+            self.emit(f'{target} = _frombuffer(data, {self.const("DT", dtype)}, {length}, {where})')
+        elif views:
+            first = views[0][3]
+            record = np.dtype({'names': [f'f{i}' for i in range(len(views))],
+                               'formats': [(dtype, (length,)) for _, dtype, length, _ in views],
+                               'offsets': [off - first for *_, off in views]})
+            rec = self.name('r')
+            self.emit(f'{rec} = _ndarray((), {self.const("RT", record)}, data, p + {first})')
+            for i, (target, *_rest) in enumerate(views):
+                self.emit(f"{target} = {rec}['f{i}']")
 
     def runtime_pad(self, align: int) -> None:
         self.sync()
@@ -364,8 +401,10 @@ class _Decoder(_Generator):
         dt = self.const('DT', dtype)
         if length is not None:
             self.pad(size)
-            where = f'p + {self.off}' if self.off else 'p'
-            self.emit(f'{target} = _frombuffer(data, {dt}, {length}, {where})')
+            if length:
+                self.run_views.append((target, dtype, length, self.off))
+            else:
+                self.emit(f'{target} = _frombuffer(data, {dt}, 0)')
             self.run_fmt.append(f'{length * size}x')  # the pending run's unpack skips the array
             self.off += length * size
             return
@@ -395,6 +434,18 @@ class _Decoder(_Generator):
             n = str(length)
             self.sync()
         items = self.name('l')
+        memo = is_string and length is None  # a sequence of strings: p is 4-aligned after its count
+        if memo:
+            # The last sequence decoded and its bytes: the same bytes decode to the same strings
+            # (a node sends the same labels message after message).
+            last, start = self.const('M', [(b'', ())]), self.name('s')
+            self.emit(f'{start}, {items} = {last}[0]')
+            self.emit(f'if len({items}) == {n} and data.startswith({start}, p):')
+            self.emit(f'    {items} = list({items})')
+            self.emit(f'    p += len({start})')
+            self.emit('else:')
+            self.indent += 1
+            self.emit(f'{start} = p')
         self.emit(f'{items} = []')
         self.emit(f'for _ in range({n}):')
         self.indent += 1
@@ -407,6 +458,9 @@ class _Decoder(_Generator):
         self.sync()
         self.emit(f'{items}.append({value})')
         self.indent -= 1
+        if memo:
+            self.emit(f'{last}[0] = (data[{start}:p], tuple({items}))')
+            self.indent -= 1
         self.emit(f'{target} = {items}')
         self.known = min(self.known, 4)
 
@@ -446,6 +500,32 @@ def _coerce(arr: Any, dtype: np.dtype, length: int | None, field: str) -> np.nda
     if length is not None and arr.shape[0] != length:
         raise ValueError(f'field {field} must hold {length} values; got {arr.shape[0]}')
     return arr
+
+
+def _string_run(texts: list, memo: list) -> bytes:
+    """The CDR of a sequence's strings, from a 4-aligned position: each a uint32 length, UTF-8 and a
+    zero byte, zero bytes up to 4-alignment between them.
+
+    ``memo[0]`` is the last list encoded and its bytes (a node sends the same labels message
+    after message); equal strings encode to equal bytes.
+    """
+    last, run = memo[0]
+    if type(texts) is list and texts == last:
+        return run
+    parts = []
+    for text in texts:
+        data = text.encode()
+        parts += (_COUNT(len(data) + 1), data, _ZEROS[1 + -(len(data) + 1) % 4])
+    if parts:
+        parts[-1] = b'\0'  # no padding after the last: the next field aligns itself
+    run = b''.join(parts)
+    memo[0] = (list(texts), run)
+    return run
+
+
+def _join_copies(parts: list) -> bytes:
+    """``b''.join(parts)`` where some arrays are not contiguous: those are copied to bytes first."""
+    return b''.join(np.ascontiguousarray(part).tobytes() if isinstance(part, np.ndarray) else part for part in parts)
 
 
 def _bad(text: str) -> ValueError:

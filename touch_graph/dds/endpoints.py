@@ -4,7 +4,8 @@ A writer serialises a message only when a remote reader is matched (or when the
 publisher is TRANSIENT_LOCAL: its DDS history must hold the last samples for readers
 that join later) and writes the CDR bytes as they are, padded with zeros to a multiple
 of four as rmw_cyclonedds pads them; the sample's source timestamp is the publishing
-context's ROS time (simulated time in a simulated graph, else the wall clock as in ROS 2).
+context's ROS time (simulated time in a simulated graph, else the wall clock as in ROS 2,
+which Cyclone reads itself when it is not given one).
 
 A reader is taken from by the executor of its subscription, in that executor's thread
 (:mod:`.waker`): each sample is decoded there (raw subscriptions get the bytes) and queued
@@ -15,9 +16,11 @@ once per writer with both type names.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from cyclonedds._clayer import ddspy_take, ddspy_write_ts
+from cyclonedds._clayer import ddspy_take, ddspy_write, ddspy_write_ts
 from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
@@ -80,7 +83,9 @@ class DdsWriter:
         self.ref = self.writer._ref
         self.gid = self.writer.get_guid().bytes
         self.latched = publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
-        self._now_ns = publisher.node.context.time_source.now_ns  # the context's ROS time (fixed per context)
+        clock = publisher.node.context.time_source  # the context's ROS time (fixed per context)
+        # Wall-clock time: Cyclone stamps the sample itself (no Python call per write); else simulated time.
+        self._write = partial(_write_at, clock.now_ns) if clock.simulated else ddspy_write
         self._encode = messages.encoder(self.type_name)
         self._matched_until = 0.0  # time.monotonic() until which a remote reader counts as matched
         self.written = self.skipped = self.failed = 0
@@ -100,7 +105,7 @@ class DdsWriter:
                 return
             self._matched_until = time.monotonic() + MATCH_RECHECK_S
         data = pad4(raw) if raw is not None else self._encode(msg, True)
-        ret = ddspy_write_ts(self.ref, data, self._now_ns())
+        ret = self._write(self.ref, data)
         if ret < 0:
             self.failed += 1
             why = ('a reliable reader did not take a sample within the blocking time' if ret == _RETCODE_TIMEOUT
@@ -108,6 +113,11 @@ class DdsWriter:
             self.publisher.node.get_logger().warn(f"'{self.topic_name}': {why}; dropped", throttle_duration_sec=5.0)
         else:
             self.written += 1
+
+
+def _write_at(now_ns: Callable[[], int], ref: int, data: bytes) -> int:
+    """Write ``data`` stamped with the ROS time ``now_ns()`` (a simulated clock)."""
+    return ddspy_write_ts(ref, data, now_ns())
 
 
 class DdsReader:

@@ -27,6 +27,8 @@ from .node import Node
 
 __all__ = ['Executor', 'MultiThreadedExecutor', 'SingleThreadedExecutor']
 
+_get_ident = threading.get_ident
+
 
 class Executor:
     """Runs the callbacks of the nodes added to it (rclpy.executors.Executor)."""
@@ -220,7 +222,7 @@ class Executor:
 
     def _run_ready_work(self) -> bool:
         """Run one piece of work that is due now; False when there is none."""
-        self._thread_id = threading.get_ident()
+        self._thread_id = _get_ident()
         inbox = self._inbox
         while inbox:
             fn, args = inbox.popleft()
