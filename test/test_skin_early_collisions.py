@@ -51,6 +51,19 @@ def test_the_candidate_of_a_prefix_settles_on_the_gesture(name):
     assert 0 < half.progress <= 1 and math.isfinite(half.distance)
 
 
+@pytest.mark.parametrize('name', ['trace', 'cloud'])
+def test_the_candidate_is_the_nearest_prefix_of_every_matchers_own_answer(name):
+    # Features are computed once for all matchers: the answer must be each matcher's class_distances' best.
+    gestures, labels = lines_codebook()
+    matcher = PrefixMatcher(make_recogniser(name).fit(gestures, labels))
+    for f in (0.3, 0.6, 1.0):
+        c = matcher.candidate(prefix(line((6, 25), (41, 25)), f))
+        per_matcher = [m.class_distances(prefix(line((6, 25), (41, 25)), f)) for m in matcher._matchers]
+        k = int(np.argmin([d.min() for d in per_matcher]))
+        assert c.distance == per_matcher[k].min() and c.progress == matcher.fractions[k]
+        assert c.label == matcher._matchers[k].classes_[int(np.argmin(per_matcher[k]))]
+
+
 def test_a_prefix_of_the_l_matches_the_ls_prefix_with_its_progress():
     gestures, labels = lines_codebook()
     matcher = PrefixMatcher(make_recogniser('trace').fit(gestures, labels))

@@ -105,11 +105,13 @@ class PrefixMatcher:
 
     def candidate(self, gesture: TouchGesture) -> Candidate:
         """The best class for ``gesture`` (traced so far) over the template prefixes."""
+        # The matchers differ in codebook only: the gesture's features are computed once for all of them.
+        query = self.recogniser._features(gesture)
+        if query is None:
+            return Candidate(None, 0.0, float('inf'), 0.0)
         best: tuple[float, int, np.ndarray] | None = None
         for k, m in enumerate(self._matchers):
-            per_class = m.class_distances(gesture)
-            if per_class is None:
-                return Candidate(None, 0.0, float('inf'), 0.0)
+            per_class = np.minimum.reduceat(m._distances(query), m.class_starts_).astype(np.float64, copy=False)
             d1 = float(per_class.min())
             if best is None or d1 < best[0]:
                 best = (d1, k, per_class)
