@@ -5,7 +5,9 @@ the session bags are then listed again and again until they hold an hour of sens
 whole training path of ``train SENSOR --bags`` runs on the list: reading and checking every bag,
 features (patch windows, bear buffers, skin segmentation), fitting (mixtures, logistic regression,
 codebook). The hour repeats two people's data, so it costs what an hour costs, not what an hour of
-many people would teach. Run it on one core::
+many people would teach. ``bear+symbolic`` is the bear with its symbolic gestures in the sessions
+(``collect bear --symbolic``), trained by ``train bear --bags`` itself: the subtype model, a model per
+held-out person and the suggested gesture settings checked leave-one-person-out. Run it on one core::
 
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 social-touch bench training --repeats 1
 """
@@ -56,19 +58,43 @@ def _train_skin(bags: list[str]) -> None:
     fit_codebook(load_trials(bags, lambda _m: None)[0], 'trace')
 
 
-_TRAIN = {'bear': _train_bear, 'patch': _train_patch, 'skin': _train_skin}
+def _train_bear_symbolic(bags: list[str]) -> None:
+    import contextlib
+    import io
+
+    from touch_graph.cli.main import main as cli_main
+    with tempfile.TemporaryDirectory(prefix='bench-training-model-') as out, \
+            contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        code = cli_main(['train', 'bear', '--bags', *bags, '--out', str(Path(out) / 'bear.npz')])
+    if code != 0:
+        raise RuntimeError(f'train bear --bags failed with exit code {code}')
 
 
-def bench_training(repeats: int = 1, sensors: tuple[str, ...] = ('bear', 'patch', 'skin')) -> dict:
+def _protocol_gestures(sensor: str) -> tuple[str, ...]:
+    if sensor == 'patch' or sensor == 'skin':
+        return tuple(DEFAULT_GESTURES[sensor])
+    # At 3.4 Hz the bear misses most taps (docs/learning.md): a session of them would not train.
+    subtypes = tuple(g for g in DEFAULT_GESTURES['bear'] if g != 'tap')
+    if sensor == 'bear':
+        return subtypes
+    from touch_gestures.bear.symbolic import GestureLibrary
+    from touch_sim.bear.people import symbolic_label
+    return subtypes + tuple(symbolic_label(g.name) for g in GestureLibrary.default().detectable)
+
+
+_TRAIN = {'bear': _train_bear, 'bear+symbolic': _train_bear_symbolic, 'patch': _train_patch, 'skin': _train_skin}
+
+
+def bench_training(repeats: int = 1, sensors: tuple[str, ...] = ('bear', 'bear+symbolic', 'patch', 'skin')) -> dict:
     """Median seconds (wall and CPU) to train on an hour of session bags, per sensor (module doc)."""
     out: dict = {'synthetic': True, 'hour_of_frames_s': HOUR_S}
     with tempfile.TemporaryDirectory(prefix='bench-training-') as tmp:
         for sensor in sensors:
-            gestures = DEFAULT_GESTURES[sensor] if sensor != 'bear' else tuple(
-                g for g in DEFAULT_GESTURES['bear'] if g != 'tap')
-            bags = [str(simulate_session(sensor, Protocol(gestures, repetitions=3, pause_s=2.0), i, 2,
-                                         Path(tmp) / f'{sensor}_{i}', progress=_say)) for i in range(2)]
-            seconds = sum(read_session(b, sensor).duration_s for b in bags)
+            device = sensor.split('+')[0]
+            protocol = Protocol(_protocol_gestures(sensor), repetitions=3, pause_s=2.0)
+            bags = [str(simulate_session(device, protocol, i, 2, Path(tmp) / f'{sensor}_{i}', progress=_say))
+                    for i in range(2)]
+            seconds = sum(read_session(b, device).duration_s for b in bags)
             hour = bags * math.ceil(HOUR_S / seconds)
             times, cpu = [], []
             for r in range(repeats):
