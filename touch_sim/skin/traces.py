@@ -129,7 +129,9 @@ class TraceStimulus:
         """Place screen points (x, y px, y downward; t ms) on the skin (see the module doc).
 
         Points with equal times keep the last one. Raises ValueError on empty, mismatched,
-        non-finite or time-reversed input, and on overlapping strokes.
+        non-finite or time-reversed input, and on overlapping strokes. A stroke that starts
+        in the tick the previous one ends (a dot's pen-down logged twice) joins it: a finger cannot lift
+        in no time.
 
         >>> stim = TraceStimulus.from_points([0, 100, 100], [0, 0, 50], [0, 500, 1000])
         >>> stim.strokes[0].round(2).tolist()      # t_s, x_mm, y_mm: 39.17 mm wide, centred vertically
@@ -159,14 +161,20 @@ class TraceStimulus:
         x_mm = (x - cx) * scale + area_mm / 2
         y_mm = (y - cy) * scale + area_mm / 2
         t_s = lead_in_s + ramp_s + (t - t.min()) * (time_scale / 1000.0)
-        strokes = []
+        strokes: list[np.ndarray] = []
         for sid in sorted(set(ids.tolist()), key=lambda s: t_s[ids == s].min()):
             sel = ids == sid
             ts, xs, ys = t_s[sel], x_mm[sel], y_mm[sel]
             if np.any(np.diff(ts) < 0):
                 raise ValueError(f'stroke {sid}: t_ms must not decrease within a stroke')
-            keep = np.r_[np.diff(ts) > 0, True]        # of equal times keep the last point
-            strokes.append(np.stack([ts[keep], xs[keep], ys[keep]], axis=1))
+            rows = np.stack([ts, xs, ys], axis=1)
+            # A stroke that starts in the tick the previous one ended (a logger reporting a dot's pen-down
+            # twice, as some exclamation marks of the Mixed Multistroke Gestures do) is the same touch: a
+            # finger cannot lift in no time. Joined, not refused; a stroke starting earlier still overlaps.
+            if strokes and ts[0] == strokes[-1][-1, 0]:
+                rows = np.concatenate([strokes.pop(), rows])
+            keep = np.r_[np.diff(rows[:, 0]) > 0, True]        # of equal times keep the last point
+            strokes.append(rows[keep])
         return cls(strokes, force_n=force_n, radius_mm=radius_mm, ramp_s=ramp_s, tail_s=tail_s)
 
     def contacts(self, t: float) -> list[Contact]:
