@@ -77,6 +77,9 @@ class TraceSample:
                 f'sample={self.sample!r}, points={len(self.x)}, strokes={self.n_strokes})')
 
 
+#: Strokes closer in time than this (ms, a logger's rounding) are one touch (TraceStimulus.from_points).
+_SAME_INSTANT_MS = 2.0
+
 class TraceStimulus:
     """A finger tracing strokes of (time s, position mm) across the skin; build it with :meth:`from_points`.
 
@@ -130,7 +133,7 @@ class TraceStimulus:
 
         Points with equal times keep the last one. Raises ValueError on empty, mismatched,
         non-finite or time-reversed input, and on overlapping strokes. A stroke that starts
-        in the tick the previous one ends (a dot's pen-down logged twice) joins it: a finger cannot lift
+        when the previous one ends, to 2 ms (a dot's pen-down logged twice), joins it: a finger cannot lift
         in no time.
 
         >>> stim = TraceStimulus.from_points([0, 100, 100], [0, 0, 50], [0, 500, 1000])
@@ -168,11 +171,12 @@ class TraceStimulus:
             if np.any(np.diff(ts) < 0):
                 raise ValueError(f'stroke {sid}: t_ms must not decrease within a stroke')
             rows = np.stack([ts, xs, ys], axis=1)
-            # A stroke that starts in the tick the previous one ended (a logger reporting a dot's pen-down
-            # twice, as some exclamation marks of the Mixed Multistroke Gestures do) is the same touch: a
-            # finger cannot lift in no time. Joined, not refused; a stroke starting earlier still overlaps.
-            if strokes and ts[0] == strokes[-1][-1, 0]:
+            # A stroke that starts when the previous one ends, to the logger's millisecond rounding (a dot's
+            # pen-down reported twice, as in some exclamation marks of the Mixed Multistroke Gestures), is the
+            # same touch: a finger cannot lift in no time. Joined, not refused; a real overlap still fails.
+            if strokes and 0 <= strokes[-1][-1, 0] - ts[0] <= _SAME_INSTANT_MS * time_scale / 1000.0:
                 rows = np.concatenate([strokes.pop(), rows])
+                rows = rows[np.argsort(rows[:, 0], kind='stable')]
             keep = np.r_[np.diff(rows[:, 0]) > 0, True]        # of equal times keep the last point
             strokes.append(rows[keep])
         return cls(strokes, force_n=force_n, radius_mm=radius_mm, ramp_s=ramp_s, tail_s=tail_s)
