@@ -109,7 +109,7 @@ class TemplateRecogniser(BaseEstimator):
         self._check_params()
         if len(gestures) != len(labels):
             raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
-        feats, names, dropped = [], [], 0
+        feats, names, strokes, dropped = [], [], [], 0
         for gesture, label in zip(gestures, labels, strict=True):
             f = self._features(gesture)
             if f is None:
@@ -117,19 +117,21 @@ class TemplateRecogniser(BaseEstimator):
                 continue
             feats.append(f)
             names.append(str(label))
+            strokes.append(int(getattr(gesture, 'strokes', 1)))
         if not feats:
             raise ValueError(f'none of the {len(gestures)} gestures gives a usable template (empty maps or '
                              'trajectories?); record the codebook again')
-        self.set_codebook(np.stack(feats), names)
+        self.set_codebook(np.stack(feats), names, template_strokes=strokes)
         self.n_dropped_ = dropped
         # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
         self.max_strokes_ = max(int(getattr(g, 'strokes', 1)) for g in gestures)
         return self
 
     def set_codebook(self, templates: np.ndarray, labels: Sequence[str],
-                     class_thresholds: np.ndarray | None = None) -> None:
+                     class_thresholds: np.ndarray | None = None, template_strokes: Sequence[int] | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
-        ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration."""
+        ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
+        ``template_strokes`` (T,) gives each template's strokes (``template_strokes_``, else None)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -145,6 +147,13 @@ class TemplateRecogniser(BaseEstimator):
         self.template_labels_ = codes[order]
         self.class_starts_ = np.searchsorted(self.template_labels_, np.arange(len(classes)))
         self.n_features_in_ = templates.shape[1]
+        self.template_strokes_ = None
+        if template_strokes is not None:
+            counts = np.asarray(template_strokes, dtype=np.int64).reshape(-1)
+            if counts.shape != labels.shape or (counts < 1).any():
+                raise ValueError(f'template_strokes must give each of the {len(labels)} templates >= 1 strokes; '
+                                 f'got {counts.shape}')
+            self.template_strokes_ = counts[order]
         self._prepare_codebook()
         if class_thresholds is None:
             self.class_thresholds_ = self._rejection_thresholds()
