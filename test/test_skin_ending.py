@@ -19,8 +19,11 @@ CIRCLE = [[(23.5 + 14 * np.cos(a), 23.5 + 14 * np.sin(a)) for a in np.linspace(0
 @pytest.fixture(scope='module')
 def ending():
     """A rule over a codebook of a 2-stroke X, a 3-stroke H and a 1-stroke circle (synthetic)."""
-    SYMBOLS.setdefault('circle', CIRCLE)
-    gestures, labels = codebook(np.random.default_rng(0), names=('X', 'H', 'circle'), per_class=10)
+    SYMBOLS['circle'] = CIRCLE      # for the codebook only: the other modules' tests iterate over SYMBOLS
+    try:
+        gestures, labels = codebook(np.random.default_rng(0), names=('X', 'H', 'circle'), per_class=10)
+    finally:
+        del SYMBOLS['circle']
     return GestureEnd(CloudRecogniser().fit(gestures, labels))
 
 

@@ -90,7 +90,7 @@ _NS = 1_000_000_000
 #: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
 _SEGMENTER_DOC = {
     'gap_s': "a lift must last this long (s) to end a gesture; shorter lifts separate its strokes (default: the "
-             "codebook's vocabulary's, 0.15 s single-stroke, 0.75 s multi-stroke with wait_s; not in cirillo2017)",
+             "codebook's vocabulary's, 0.15 s single-stroke, 1 s multi-stroke with wait_s; not in cirillo2017)",
     'max_duration_s': 'a touch is cut after this long (s) and gives no command (a hand resting on the skin)',
     'min_frames': 'contacts with fewer frames are dropped as taps or noise',
     'map_threshold': 'pressure (1 = full scale) a taxel must reach to enter the map (cirillo2017 3.1)',
@@ -129,8 +129,8 @@ class HapticCommandsNode(Node):
         stream: frames -> gestures; ``stream.frames``, ``stream.skipped`` (bad frames by reason),
             ``stream.interrupted``, ``stream.restarts``, ``stream.segmenter.stats``.
         outcomes: what became of each gesture: ``'published'``, ``'unmapped'``, ``'rejected_distance'``,
-            ``'rejected_margin'``, ``'rejected_unusable'``, or a screening reason (``'multi_contact'``,
-            ``'truncated'``, ``'too_few_points'``, ``'too_small'``).
+            ``'rejected_margin'``, ``'rejected_strokes'``, ``'rejected_duration'``, ``'rejected_unusable'``, or
+            a screening reason (``'multi_contact'``, ``'truncated'``, ``'too_few_points'``, ``'too_small'``).
         last_match: the recogniser's answer for the latest gesture it saw (None before any).
     """
 

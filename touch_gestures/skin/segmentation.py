@@ -65,7 +65,7 @@ MULTISTROKE_GAP_S = 1.5
 #: With the vocabulary's end of a gesture (:class:`~.ending.GestureEnd`): the lift (s) that ends
 #: strokes that make a whole gesture, and the longest one that still continues strokes that look
 #: like the beginning of a longer gesture (docs/skin-multistroke.md, the end-of-gesture table).
-ENDING_GAP_S = 0.75
+ENDING_GAP_S = 1.0
 ENDING_WAIT_S = 3.0
 
 

@@ -12,7 +12,9 @@ at frame times as the segmenter reads them; only ``multi_contact`` is approximat
 flagged) and a joined gesture longer than ``max_duration_s`` is marked truncated rather than cut.
 
 Each gesture comes with its **latency**: the lift after its last contact at which it ended
-(``gap_s`` for a complete one, ``wait_s`` for one that never was).
+(``gap_s`` for a complete one, ``wait_s`` for one that never was). :func:`ending_table`
+measures whole samples, accuracy and latency per (gap, bound), the table the defaults of
+:mod:`touch_gestures.skin.segmentation` are chosen on.
 """
 
 from __future__ import annotations
@@ -21,9 +23,12 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.gesture import TouchGesture
+from touch_sim.skin.render import RenderedSample
 
-__all__ = ['FRAME_PERIOD_S', 'PIECE_GAP_S', 'join_pieces', 'merge_pieces']
+__all__ = ['ENDING_CONFIGS', 'FRAME_PERIOD_S', 'PIECE_GAP_S', 'ending_table', 'join_pieces', 'merge_pieces']
 
 #: The gap (s) samples are rendered at before joining: no shorter gap can be measured from them.
 PIECE_GAP_S = 0.15
@@ -93,3 +98,45 @@ def join_pieces(pieces: Sequence[TouchGesture], gap_s: float, wait_s: float | No
     if current:
         emit(current, gap_s if complete(current) else wait_s)  # type: ignore[arg-type]
     return out, latencies
+
+
+#: (gap_s, wait_s) the report compares: the fixed gaps of before and the rule at a few bounds.
+ENDING_CONFIGS: tuple[tuple[float, float | None], ...] = ((1.0, None), (1.5, None), (3.0, None), (0.75, 3.0),
+                                                           (1.0, 3.0), (1.0, 5.0))
+
+
+def ending_table(pieces: Sequence[RenderedSample], make: Callable[[], TemplateRecogniser],
+                 configs: Sequence[tuple[float, float | None]] = ENDING_CONFIGS, codebook_gap_s: float = 3.0,
+                 progress: Callable[[str], None] | None = None) -> list[dict[str, float | None]]:
+    """Leave-one-person-out, per (gap_s, wait_s) of ``configs`` (wait None: a fixed gap): the samples
+    cut into one gesture (``whole``), the nearest class right over all samples (``accuracy``, rejection
+    off) and the mean and median latency (s) of the whole ones. The codebook of a fold is the other
+    people's samples cut at ``codebook_gap_s``, the same for every row."""
+    subjects = sorted({r.subject for r in pieces})
+    counts = {c: [0, 0, []] for c in configs}   # whole, correct, latencies
+    for subject in subjects:
+        train = []
+        for r in pieces:
+            if r.subject != subject:
+                cut = join_pieces(r.gestures, codebook_gap_s)[0]
+                if len(cut) == 1 and not cut[0].multi_contact and not cut[0].truncated:
+                    train.append((cut[0], r.label))
+        recogniser = make().fit([g for g, _ in train], [y for _, y in train])
+        rule = GestureEnd(recogniser)
+        for r in pieces:
+            if r.subject != subject:
+                continue
+            for gap_s, wait_s in configs:
+                cut, latency = join_pieces(r.gestures, gap_s, wait_s, rule if wait_s else None)
+                if len(cut) == 1:
+                    row = counts[(gap_s, wait_s)]
+                    row[0] += 1
+                    row[1] += recogniser.predict(cut[0]).nearest == r.label
+                    row[2] += latency
+        if progress is not None:
+            progress(f'end of gesture: fold {subject} done')
+    n = len(pieces)
+    return [{'gap_s': g, 'wait_s': w, 'whole': whole / n, 'accuracy': correct / n,
+             'latency_mean_s': float(np.mean(lat)) if lat else None,
+             'latency_median_s': float(np.median(lat)) if lat else None}
+            for (g, w), (whole, correct, lat) in counts.items()]
