@@ -30,6 +30,10 @@ def test_degenerate_shapes():
     assert line.strokes[0][:, 2].tolist() == pytest.approx([23.5] * 3)
     dup = TraceStimulus.from_points([0, 1, 2], [0, 1, 2], [0, 0, 10])     # equal times keep the last point
     assert len(dup.strokes[0]) == 2
+    # A dot whose pen-down was logged twice in the tick the first one ended is one touch, not an overlap.
+    bang = TraceStimulus.from_points([0, 0, 0, 0, 0], [0, 90, 100, 100, 100], [0, 100, 300, 301, 300],
+                                     stroke=[0, 0, 1, 1, 2])
+    assert [len(s) for s in bang.strokes] == [2, 2]
 
 
 @pytest.mark.parametrize(('args', 'kwargs', 'message'), [

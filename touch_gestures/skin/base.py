@@ -20,7 +20,9 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   tuned to the people who use it. A number is one absolute threshold for every class,
   None disables the rule; or
 - the margin (runner-up class distance minus best) is below ``min_margin`` times the best
-  distance: two classes are about equally close, the touch is ambiguous.
+  distance: two classes are about equally close, the touch is ambiguous; or
+- the touch's strokes or duration are none the nearest class shows in the codebook
+  (:mod:`.evidence`; where the codebook knows its templates' strokes and durations).
 
 Degenerate codebooks: a class with one template has no within-class distance and takes the
 median scale of the other classes; if no class has two templates, every class's scale is
@@ -40,6 +42,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.exceptions import NotFittedError
 
+from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 
 __all__ = ['Match', 'TemplateRecogniser']
@@ -55,8 +58,9 @@ class Match:
         margin: distance of the nearest template of another class minus ``distance``
             (inf when the codebook has one class).
         nearest: the nearest class even when rejected (None if the gesture was unusable).
-        rejected: why there is no label: ``'distance'``, ``'margin'``, ``'unusable'`` (no
-            feature could be computed, e.g. an empty map), or None when accepted.
+        rejected: why there is no label: ``'distance'``, ``'margin'``, ``'strokes'``, ``'duration'``
+            (:mod:`.evidence`), ``'unusable'`` (no feature could be computed, e.g. an empty map), or
+            None when accepted.
     """
 
     label: str | None
@@ -109,7 +113,7 @@ class TemplateRecogniser(BaseEstimator):
         self._check_params()
         if len(gestures) != len(labels):
             raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
-        feats, names, dropped = [], [], 0
+        feats, names, strokes, durations, dropped = [], [], [], [], 0
         for gesture, label in zip(gestures, labels, strict=True):
             f = self._features(gesture)
             if f is None:
@@ -117,19 +121,24 @@ class TemplateRecogniser(BaseEstimator):
                 continue
             feats.append(f)
             names.append(str(label))
+            strokes.append(int(getattr(gesture, 'strokes', 1)))
+            durations.append(float(getattr(gesture, 'duration_s', np.nan)))
         if not feats:
             raise ValueError(f'none of the {len(gestures)} gestures gives a usable template (empty maps or '
                              'trajectories?); record the codebook again')
-        self.set_codebook(np.stack(feats), names)
+        self.set_codebook(np.stack(feats), names, template_strokes=strokes, template_durations=durations)
         self.n_dropped_ = dropped
         # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
         self.max_strokes_ = max(int(getattr(g, 'strokes', 1)) for g in gestures)
         return self
 
     def set_codebook(self, templates: np.ndarray, labels: Sequence[str],
-                     class_thresholds: np.ndarray | None = None) -> None:
+                     class_thresholds: np.ndarray | None = None, template_strokes: Sequence[int] | None = None,
+                     template_durations: Sequence[float] | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
-        ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration."""
+        ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
+        ``template_strokes`` (T,) and ``template_durations`` (T,) s give each template's strokes and
+        duration (``template_strokes_``, ``template_durations_``, else None; :mod:`.evidence`)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -145,6 +154,22 @@ class TemplateRecogniser(BaseEstimator):
         self.template_labels_ = codes[order]
         self.class_starts_ = np.searchsorted(self.template_labels_, np.arange(len(classes)))
         self.n_features_in_ = templates.shape[1]
+        self.template_strokes_ = None
+        if template_strokes is not None:
+            counts = np.asarray(template_strokes, dtype=np.int64).reshape(-1)
+            if counts.shape != labels.shape or (counts < 1).any():
+                raise ValueError(f'template_strokes must give each of the {len(labels)} templates >= 1 strokes; '
+                                 f'got {counts.shape}')
+            self.template_strokes_ = counts[order]
+        self.template_durations_ = None
+        if template_durations is not None:
+            durations = np.asarray(template_durations, dtype=np.float64).reshape(-1)
+            if durations.shape != labels.shape:
+                raise ValueError(f'template_durations must give each of the {len(labels)} templates a duration; '
+                                 f'got {durations.shape}')
+            self.template_durations_ = durations[order]
+        self.codebook_evidence_ = CodebookEvidence(self.template_labels_, len(classes), self.template_strokes_,
+                                          self.template_durations_)
         self._prepare_codebook()
         if class_thresholds is None:
             self.class_thresholds_ = self._rejection_thresholds()
@@ -169,7 +194,13 @@ class TemplateRecogniser(BaseEstimator):
         per_class = self.class_distances(gesture)
         if per_class is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        return self.decide(per_class)
+        match = self.decide(per_class)
+        evidence = getattr(self, 'codebook_evidence_', None)
+        if match.label is not None and evidence is not None:
+            reason = evidence.check(gesture, int(np.argmin(per_class)))
+            if reason is not None:
+                return Match(None, match.distance, match.margin, match.nearest, reason)
+        return match
 
     def decide(self, per_class: np.ndarray) -> Match:
         """Apply the rejection rule to per-class distances (n_classes,)."""

@@ -16,6 +16,8 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     vocabulary          ()          str       v2: the vocabulary's name ('commands', 'symbols', 'digits'...)
     gap_s               ()          float64   v2: the segmenter's gap for it, s (a lift this long ends a gesture)
     max_strokes         ()          int64     v2: most strokes of a template (1: single-stroke vocabulary)
+    template_strokes    (T,)        int64     optional: strokes of each template (the end of a gesture, rejection)
+    template_durations  (T,)        float64   optional: duration of each template, s (rejection)
 
 A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
 ``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
@@ -92,7 +94,11 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
         class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64),
         vocabulary=np.array(str(vocabulary)), gap_s=np.array(gap_s, dtype=np.float64),
         max_strokes=np.array(max_strokes, dtype=np.int64),
-        **({} if description is None else {'description': np.array(str(description))}))
+        **({} if description is None else {'description': np.array(str(description))}),
+        **({} if getattr(recogniser, 'template_strokes_', None) is None
+           else {'template_strokes': np.asarray(recogniser.template_strokes_, dtype=np.int64)}),
+        **({} if getattr(recogniser, 'template_durations_', None) is None
+           else {'template_durations': np.asarray(recogniser.template_durations_, dtype=np.float64)}))
     return path
 
 
@@ -152,7 +158,9 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
         raise CodebookError(f'templates have {templates.shape[1]} features but {name} with these parameters '
                             f'computes {expected}; the file and its parameters disagree', where)
     try:
-        model.set_codebook(templates, classes[codes], class_thresholds=thresholds)
+        model.set_codebook(templates, classes[codes], class_thresholds=thresholds,
+                           template_strokes=data.get('template_strokes'),
+                           template_durations=data.get('template_durations'))
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None

@@ -34,7 +34,8 @@ Parameters (read once at start, except rejection and screening: ``max_distance``
 - ``commands``: the gesture -> command map (default: ``config/skin_commands.yaml``); a mapped
   gesture the codebook does not know stops the node at start, naming the file and line;
 - ``recogniser``: must match the codebook's (empty: whatever the codebook was made with);
-- segmentation: ``gap_s`` (default: the codebook's, i.e. its vocabulary's), ``max_duration_s``,
+- segmentation: ``gap_s`` (default: the codebook's, i.e. its vocabulary's), ``wait_s`` (in a multi-stroke
+  vocabulary, how long strokes that look unfinished wait for the next: touch_gestures.skin.ending), ``max_duration_s``,
   ``min_frames``, ``map_threshold``, ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction``
   (see GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
 - screening: ``min_extent_mm``;
@@ -64,6 +65,7 @@ from .codebook import load_codebook
 from .collisions import COLLISION_FORCE_N, COLLISION_RATE_N_S, CollisionDetector
 from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_map
 from .early import PrefixMatcher
+from .ending import GestureEnd, vocabulary_ending
 from .frames import SkinFrameStream
 from .gesture import TouchGesture
 from .screening import MIN_EXTENT_MM, gesture_extent_mm, screen_gesture
@@ -88,7 +90,7 @@ _NS = 1_000_000_000
 #: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
 _SEGMENTER_DOC = {
     'gap_s': "a lift must last this long (s) to end a gesture; shorter lifts separate its strokes (default: the "
-             "codebook's vocabulary's, 0.15 s single-stroke, 1.5 s multi-stroke; not in cirillo2017)",
+             "codebook's vocabulary's, 0.15 s single-stroke, 1 s multi-stroke with wait_s; not in cirillo2017)",
     'max_duration_s': 'a touch is cut after this long (s) and gives no command (a hand resting on the skin)',
     'min_frames': 'contacts with fewer frames are dropped as taps or noise',
     'map_threshold': 'pressure (1 = full scale) a taxel must reach to enter the map (cirillo2017 3.1)',
@@ -127,8 +129,8 @@ class HapticCommandsNode(Node):
         stream: frames -> gestures; ``stream.frames``, ``stream.skipped`` (bad frames by reason),
             ``stream.interrupted``, ``stream.restarts``, ``stream.segmenter.stats``.
         outcomes: what became of each gesture: ``'published'``, ``'unmapped'``, ``'rejected_distance'``,
-            ``'rejected_margin'``, ``'rejected_unusable'``, or a screening reason (``'multi_contact'``,
-            ``'truncated'``, ``'too_few_points'``, ``'too_small'``).
+            ``'rejected_margin'``, ``'rejected_strokes'``, ``'rejected_duration'``, ``'rejected_unusable'``, or
+            a screening reason (``'multi_contact'``, ``'truncated'``, ``'too_few_points'``, ``'too_small'``).
         last_match: the recogniser's answer for the latest gesture it saw (None before any).
     """
 
@@ -259,14 +261,26 @@ class HapticCommandsNode(Node):
         return SetParametersResult(successful=True)
 
     def _make_stream(self) -> SkinFrameStream:
-        # The gap is the vocabulary's: the codebook file carries it (longer for multi-stroke symbols).
-        gap_s = float(getattr(self.recogniser, 'gap_s_', _SEGMENTER_DEFAULTS['gap_s']))
+        # The end of a gesture is the vocabulary's: in a multi-stroke one the codebook tells a whole gesture
+        # from the beginning of a longer one (touch_gestures.skin.ending); otherwise the codebook file's gap.
+        gap_s, wait_s, rule = vocabulary_ending(self.recogniser)
+        wait = self._param('wait_s', wait_s or 0.0, 'longest lift (s) that continues strokes the codebook calls the '
+                           'beginning of a longer gesture (default: 3 s in a multi-stroke vocabulary read by cloud or '
+                           'trace; 0: every gesture ends at gap_s; see touch_gestures.skin.ending)')
+        if wait > 0 and rule is None:
+            try:
+                rule = GestureEnd(self.recogniser)
+            except ValueError as err:
+                raise ParameterError(f'wait_s of {self._fqn}: {err}') from err
+        if not wait > 0:   # no waiting: the codebook file's gap ends every gesture
+            gap_s, rule = float(getattr(self.recogniser, 'gap_s_', gap_s)), None
         defaults = {**_SEGMENTER_DEFAULTS, 'gap_s': gap_s}
         seg = {name: self._param(name, default, f'{_SEGMENTER_DOC[name]} (see GestureSegmenter)')
                for name, default in defaults.items()}
         max_gap_s = self._param('max_gap_s', 0.5, 'no frame for this long (s): the gesture under way is dropped')
         try:
-            return SkinFrameStream(GestureSegmenter(**seg), max_gap_s=max_gap_s)
+            return SkinFrameStream(GestureSegmenter(**seg, wait_s=wait if rule is not None else None,
+                                                    is_complete=rule), max_gap_s=max_gap_s)
         except ValueError as err:
             raise ParameterError(f'segmentation parameters of {self._fqn}: {err}') from err
 

@@ -12,6 +12,13 @@ the paper leaves open:
   after the last lift. The default (0.15 s) suits single-stroke vocabularies (the skin's
   commands); a vocabulary with multi-stroke templates uses :data:`MULTISTROKE_GAP_S`
   (chosen on the pauses between strokes, see there; the codebook file carries it).
+- **the vocabulary's end of a gesture** (``is_complete``, ``wait_s``): a fixed gap makes
+  every command wait as long as the longest pause people take inside their slowest symbol.
+  With a rule that tells whether the strokes so far are a whole gesture of the vocabulary
+  (:class:`~.ending.GestureEnd`), a lift of ``gap_s`` ends a complete gesture, while one
+  that looks like the beginning of a gesture with more strokes (the first bar of an X, the
+  stem of a P) keeps waiting for its next stroke, up to a lift of ``wait_s``. The rule is
+  asked once per lift, when the lift reaches ``gap_s``.
 - **a limit**: a touch that never ends (a hand resting on the skin) is cut at
   ``max_duration_s`` and emitted with ``truncated=True``; the segmenter then waits for the
   release before it starts another gesture, so a resting hand yields one gesture, not
@@ -36,6 +43,7 @@ hysteresis residue elsewhere pull the pressure-weighted contact point anywhere o
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,7 +51,8 @@ from scipy import ndimage
 
 from .gesture import GRID, TouchGesture
 
-__all__ = ['MULTISTROKE_GAP_S', 'SINGLE_STROKE_GAP_S', 'GestureSegmenter', 'SegmenterStats', 'default_gap_s']
+__all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_GAP_S', 'GestureSegmenter',
+           'SegmenterStats', 'default_gap_s']
 
 #: Gap (s) for vocabularies of single-stroke gestures: joins a finger skipping between taxels.
 SINGLE_STROKE_GAP_S = 0.15
@@ -53,6 +62,11 @@ SINGLE_STROKE_GAP_S = 0.15
 #: than 0.5 % more samples whole (1.25 s: 95.3 %, 1.5 s: 96.0 %, 1.75 s: 96.3 %). It is also the
 #: latency every command pays after the last lift, so the knee, not the tail (8 s keeps 98.4 %).
 MULTISTROKE_GAP_S = 1.5
+#: With the vocabulary's end of a gesture (:class:`~.ending.GestureEnd`): the lift (s) that ends
+#: strokes that make a whole gesture, and the longest one that still continues strokes that look
+#: like the beginning of a longer gesture (docs/skin-multistroke.md, the end-of-gesture table).
+ENDING_GAP_S = 1.0
+ENDING_WAIT_S = 3.0
 
 
 def default_gap_s(max_strokes: int) -> float:
@@ -79,6 +93,9 @@ class SegmenterStats:
     missing_points: int = 0     # contact frames without a finite contact point
     faint_points: int = 0       # contact frames too faint (peak < map_threshold) for a trusted point
     time_reversals: int = 0     # frames whose time was before the previous one, skipped
+    waited: int = 0             # lifts of gap_s whose strokes looked incomplete: kept waiting
+    waited_continued: int = 0   # ...that a next stroke then continued
+    ended_at_bound: int = 0     # gestures ended by a lift of wait_s, never complete
 
 
 class GestureSegmenter:
@@ -101,6 +118,10 @@ class GestureSegmenter:
         min_multi_frames: multi-blob frames needed to flag a gesture multi_contact...
         multi_fraction: ...and the fraction of its contact frames they must make up.
         max_frames: capacity of the per-gesture buffers; the gesture is cut when full.
+        wait_s: with ``is_complete``, the longest lift (s) that may still continue a gesture
+            whose strokes look incomplete; must be >= ``gap_s``. None: ``gap_s`` ends every gesture.
+        is_complete: ``is_complete(gesture_so_far) -> bool``: are these strokes a whole gesture
+            of the vocabulary (:class:`~.ending.GestureEnd`)? None: every lift of ``gap_s`` ends it.
 
     >>> seg = GestureSegmenter(gap_s=0.05, min_frames=2)
     >>> touch = np.zeros((12, 12), np.float32); touch[3, 4] = 1.0
@@ -112,7 +133,8 @@ class GestureSegmenter:
 
     def __init__(self, gap_s: float = SINGLE_STROKE_GAP_S, max_duration_s: float = 10.0, min_frames: int = 3,
                  map_threshold: float = 0.02, map_relative: float = 0.3, merge_gap_taxels: int = 2,
-                 min_multi_frames: int = 3, multi_fraction: float = 0.25, max_frames: int = 3000) -> None:
+                 min_multi_frames: int = 3, multi_fraction: float = 0.25, max_frames: int = 3000,
+                 wait_s: float | None = None, is_complete: Callable[[TouchGesture], bool] | None = None) -> None:
         if not gap_s >= 0:
             raise ValueError(f'gap_s must be >= 0 s, got {gap_s}')
         if not max_duration_s > 0:
@@ -127,7 +149,11 @@ class GestureSegmenter:
         if not 0 <= multi_fraction <= 1 or merge_gap_taxels < 0:
             raise ValueError(f'need 0 <= multi_fraction <= 1 and merge_gap_taxels >= 0; got {multi_fraction}, '
                              f'{merge_gap_taxels}')
+        if wait_s is not None and not (np.isfinite(wait_s) and wait_s >= gap_s):
+            raise ValueError(f'wait_s must be a finite lift >= gap_s ({gap_s} s) or None, got {wait_s}')
         self.gap_s = float(gap_s)
+        self.wait_s = None if wait_s is None else float(wait_s)
+        self.is_complete = is_complete
         self.max_duration_s = float(max_duration_s)
         self.min_frames = int(min_frames)
         self.map_threshold = float(map_threshold)
@@ -156,6 +182,7 @@ class GestureSegmenter:
         self._start_t = 0.0
         self._last_contact_t = 0.0
         self._lifted = False
+        self._verdict: bool | None = None   # the rule's answer for the lift under way
         self._peak.fill(0.0)
         self._binary.fill(False)
 
@@ -201,9 +228,9 @@ class GestureSegmenter:
             if self._suppressed:
                 self._suppressed = False
             elif self._active:
-                if not self._lifted:
-                    self._lifted = True
-                if t - self._last_contact_t >= self.gap_s:
+                self._lifted = True
+                lift = t - self._last_contact_t
+                if lift >= self.gap_s and self._ends(lift):
                     self._finish(out, truncated=False)
             return out
         if self._suppressed:
@@ -212,7 +239,8 @@ class GestureSegmenter:
             self._active, self._start_t, self._stroke = True, t, 0
         elif self._lifted:
             self._stroke += 1
-        self._lifted = False
+            self.stats.waited_continued += self._verdict is False
+        self._lifted, self._verdict = False, None
         self._last_contact_t = t
         self._add(pressure, contact_xy_mm, t)
         if t - self._start_t >= self.max_duration_s or self._n >= self.max_frames \
@@ -220,6 +248,21 @@ class GestureSegmenter:
             self._finish(out, truncated=True)
             self._suppressed = True
         return out
+
+    def _ends(self, lift: float) -> bool:
+        """Whether a lift of ``lift`` s (>= gap_s) ends the gesture (module doc)."""
+        if self.is_complete is None or self.wait_s is None:
+            return True
+        if self._verdict is None:
+            so_far = self.partial()
+            self._verdict = so_far is None or bool(self.is_complete(so_far))
+            self.stats.waited += not self._verdict
+        if self._verdict:
+            return True
+        if lift >= self.wait_s:
+            self.stats.ended_at_bound += 1
+            return True
+        return False
 
     def partial(self) -> TouchGesture | None:
         """The gesture under way so far (a copy), for decisions before the finger lifts; None when

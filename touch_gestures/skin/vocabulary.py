@@ -117,7 +117,8 @@ class AutoRecogniser(TemplateRecogniser):
         self.evidence_ = {m.name: dict(zip(map(str, m.classes_), acc.tolist(), strict=True))
                           for m, acc in ((ordered, acc_o), (free, acc_f))}
         for attr in ('classes_', 'templates_', 'template_labels_', 'class_starts_', 'n_features_in_',
-                     'class_thresholds_', 'n_dropped_', 'max_strokes_'):
+                     'class_thresholds_', 'n_dropped_', 'max_strokes_', 'template_strokes_',
+                     'template_durations_', 'codebook_evidence_'):
             setattr(self, attr, getattr(best, attr))
         self.direction_aware = best.direction_aware
         return self

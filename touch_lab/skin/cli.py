@@ -14,10 +14,13 @@ as text or, with ``--json``, as one object::
 Multi-stroke samples are traced with the finger lifted between strokes, the pauses as they
 are in the file; strokes closer than the segmenter's gap join into one gesture, a longer
 pen-up splits the sample into several gestures, which counts as a segmentation failure
-(wrong). The gap is the vocabulary's default (:func:`~touch_gestures.skin.segmentation.default_gap_s`:
-1.5 s when the file has multi-stroke samples, else 0.15 s) unless ``--gap`` sets it; the
-report gives the pauses between strokes and, per gap, the samples that stay whole
-(:mod:`.gaps`), the measurement the default comes from.
+(wrong). In a vocabulary with multi-stroke gestures the end of a gesture is the codebook's
+(:mod:`touch_gestures.skin.ending`): a lift of ``--gap`` ends strokes that make a whole
+gesture, strokes that look like the beginning of a longer one wait up to ``--wait``; the
+samples are rendered once into pieces and cut per fold and recogniser (:mod:`.ending_eval`),
+and the report gives the latency this adds. ``--wait 0`` ends every gesture at ``--gap``
+(the fixed gap). A single-stroke vocabulary ends gestures at 0.15 s. The report gives the
+pauses between strokes and, per gap, the samples that stay whole (:mod:`.gaps`).
 """
 
 from __future__ import annotations
@@ -30,15 +33,17 @@ import time
 from pathlib import Path
 from typing import Any
 
+from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
-from touch_gestures.skin.segmentation import default_gap_s
+from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
 from touch_lab.skin.early_eval import summary as early_summary
+from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
-from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.render import RenderedSample, RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
 __all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
@@ -75,8 +80,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--vocabulary', default=None,
                         help="the vocabulary's name in the report (default: the file's name without extensions)")
     parser.add_argument('--gap', type=float, default=None,
-                        help="segmenter's gap, s: a lift this long ends a gesture (default: the vocabulary's, "
-                             '1.5 s if the file has multi-stroke samples, else 0.15 s)')
+                        help=f"segmenter's gap, s: a lift this long ends a whole gesture (default: {ENDING_GAP_S} s "
+                             f'if the file has multi-stroke samples, else {SINGLE_STROKE_GAP_S} s)')
+    parser.add_argument('--wait', type=float, default=None,
+                        help='longest lift, s, that continues strokes the codebook calls the beginning of a longer '
+                             f'gesture (default: {ENDING_WAIT_S} s for multi-stroke files; 0: none, every gesture '
+                             'ends at --gap)')
     parser.add_argument('--no-cache', action='store_true', help='render every trace again (cache: '
                         f'{default_cache_dir()})')
 
@@ -88,17 +97,23 @@ def _progress(line: str) -> None:
 def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None, templates_per_gesture: int = 0,
                   mode: str = 'sensor', random_count: int = 150, seed: int = 0, cache: bool = True,
                   progress: Any = _progress, gap_s: float | None = None, vocabulary: str | None = None,
-                  early_every: int = 0) -> dict:
+                  early_every: int = 0, wait_s: float | None = None) -> dict:
     """Run the whole evaluation and return the report object (see the module doc)."""
     for name in recognisers:
         make_recogniser(name)  # unknown names fail before minutes of rendering
     say = progress or (lambda line: None)
     trace_set = read_traces(traces, limit=limit)
     samples = trace_set.samples
+    multi = max(s.n_strokes for s in samples) > 1
     if gap_s is None:
-        gap_s = default_gap_s(max(s.n_strokes for s in samples))
-    if not (math.isfinite(gap_s) and gap_s >= 0):
-        raise ValueError(f'--gap must be a finite number of seconds >= 0, got {gap_s}')
+        gap_s = ENDING_GAP_S if multi else SINGLE_STROKE_GAP_S
+    if wait_s is None:
+        wait_s = ENDING_WAIT_S if multi else 0.0
+    if not (math.isfinite(gap_s) and gap_s >= PIECE_GAP_S):
+        raise ValueError(f'--gap must be a finite number of seconds >= {PIECE_GAP_S}, got {gap_s}')
+    if not (math.isfinite(wait_s) and (wait_s == 0 or wait_s >= gap_s)):
+        raise ValueError(f'--wait must be 0 or a finite number of seconds >= --gap ({gap_s}), got {wait_s}')
+    wait = wait_s if wait_s > 0 else None
     cache_dir = default_cache_dir() if cache else None
     per_gesture = templates_per_gesture if templates_per_gesture > 0 else None
     factories = {name: (lambda name=name: make_recogniser(name)) for name in recognisers}
@@ -107,7 +122,7 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
         'traces': str(traces), 'vocabulary': vocabulary or Path(str(traces)).name.split('.')[0],
         'samples': len(samples), 'subjects': trace_set.subjects,
         'gestures': trace_set.gestures, 'multi_stroke_samples': trace_set.multi_stroke_samples,
-        'skipped_rows': trace_set.skipped_rows, 'gap_s': gap_s,
+        'skipped_rows': trace_set.skipped_rows, 'gap_s': gap_s, 'wait_s': wait,
         'pauses_between_strokes_s': pause_percentiles_s(samples), 'samples_whole_per_gap': gap_table(samples),
         'templates_per_gesture': per_gesture or 'all', 'seed': seed,
         'protocol': 'leave-one-subject-out; accuracy = nearest class right (rejection off, as the paper); '
@@ -116,16 +131,22 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
     for m in modes:
         t0 = time.perf_counter()
         say(f'rendering {len(samples)} samples ({m}) ...')
-        settings = RenderSettings(mode=m, seed=seed, gap_s=gap_s)
-        rendered = render_samples(samples, settings, cache_dir,
-                                  progress=lambda done, total: say(f'  {done}/{total} samples'))
+        # Pieces (every lift of PIECE_GAP_S cuts), joined per rule: touch_lab.skin.ending_eval.
+        settings = RenderSettings(mode=m, seed=seed, gap_s=PIECE_GAP_S, min_frames=1)
+        pieces = render_samples(samples, settings, cache_dir,
+                                progress=lambda done, total: say(f'  {done}/{total} samples'))
+        # The codebook's samples are cut at the longest lift a gesture may have (a recording can wait).
+        rendered = _joined(pieces, wait or gap_s)
         randoms = []
         if random_count > 0:
             touches = random_touches(random_count, seed=seed + 1)
-            randoms = render_samples(touches, RenderSettings(mode=m, placement='mm', seed=seed + 10**6, gap_s=gap_s),
-                                     cache_dir)
+            randoms = _joined(render_samples(touches, RenderSettings(mode=m, placement='mm', seed=seed + 10**6,
+                                                                     gap_s=PIECE_GAP_S, min_frames=1), cache_dir),
+                              gap_s)
         say(f'rendered in {time.perf_counter() - t0:.1f} s; evaluating {", ".join(recognisers)}')
-        results = leave_one_subject_out(rendered, factories, per_gesture, seed, randoms, progress=say)
+        segment = _segmenter(pieces, rendered, gap_s, wait)
+        results = leave_one_subject_out(rendered, factories, per_gesture, seed, randoms, progress=say,
+                                        segment=segment)
         block = {
             'mode': m, 'data': 'synthetic sensor frames (virtual skin) from real traces' if m == 'sensor'
             else 'true finger path and perfect maps (before the sensor)',
@@ -144,6 +165,34 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
         report['sensor_cost'] = {name: report['before_sensor']['recognisers'][name]['accuracy']
                                  - report['recognisers'][name]['accuracy'] for name in recognisers}
     return report
+
+
+def _joined(pieces: list[RenderedSample], gap_s: float) -> list[RenderedSample]:
+    """Each sample's pieces joined at a fixed gap (what a segmenter with ``gap_s`` alone cuts)."""
+    return [RenderedSample(p.subject, p.variant, p.label, p.sample, join_pieces(p.gestures, gap_s)[0])
+            for p in pieces]
+
+
+def _segmenter(pieces: list[RenderedSample], rendered: list[RenderedSample], gap_s: float, wait_s: float | None
+               ) -> Any:
+    """``segment(sample, recogniser)`` for :func:`leave_one_subject_out`: the held-out sample cut by
+    the fold's codebook (:class:`GestureEnd`), or at ``wait_s`` for a recogniser without ordered points."""
+    by_sample = {id(r): p.gestures for r, p in zip(rendered, pieces, strict=True)}
+    last: list[Any] = [None, None]   # the recogniser of the fold and its rule
+
+    def segment(sample: RenderedSample, recogniser: Any) -> tuple[list, list[float]]:
+        if wait_s is None:
+            return join_pieces(by_sample[id(sample)], gap_s)
+        if last[0] is not recogniser:
+            try:
+                last[:] = [recogniser, GestureEnd(recogniser)]
+            except ValueError:   # no ordered points: no rule, the longest lift ends every gesture
+                last[:] = [recogniser, None]
+        if last[1] is None:
+            return join_pieces(by_sample[id(sample)], wait_s)
+        return join_pieces(by_sample[id(sample)], gap_s, wait_s, last[1])
+
+    return segment
 
 
 def _histogram(values: Any) -> dict[str, int]:
@@ -226,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         report = evaluate_file(args.traces, names, args.limit, args.templates_per_gesture, args.mode,
                                args.random_touches, args.seed, cache=not args.no_cache, gap_s=args.gap,
-                               vocabulary=args.vocabulary, early_every=args.early)
+                               vocabulary=args.vocabulary, early_every=args.early, wait_s=args.wait)
     except (SocialTouchError, ValueError) as err:
         print(f'eval skin: {err}', file=sys.stderr)
         return 2

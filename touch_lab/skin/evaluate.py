@@ -17,7 +17,13 @@ recogniser:
 - **us per recognition**: median wall time of one ``predict`` (features + matching + decision),
   with the codebook of the evaluation;
 - **random-touch acceptance** (when random touches are given): the fraction of touches that
-  are no gesture which still fire a command, over all folds' codebooks.
+  are no gesture which still fire a command, over all folds' codebooks. As on the skin node,
+  a touch screened out (:func:`~touch_gestures.skin.screening.screen_gesture`: a dab, two
+  fingers) fires nothing; the held-out samples go through the same screening (a screened
+  sample counts as rejected);
+- with ``segment`` (the end of a gesture decided by the fold's codebook,
+  :mod:`.ending_eval`): the held-out samples are cut per fold and recogniser, and the
+  **latency** of each whole one (the lift after its last contact at which it ended) is kept.
 """
 
 from __future__ import annotations
@@ -29,6 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.screening import screen_gesture
 from touch_sim.skin.render import RenderedSample
 
 __all__ = ['REJECTED', 'SEGMENTATION', 'RecogniserResult', 'choose_codebook', 'leave_one_subject_out']
@@ -55,6 +63,8 @@ class RecogniserResult:
     random_touches: int = 0
     random_accepted: int = 0
     choices: dict[str, int] = field(default_factory=dict)   # 'auto': the recogniser its rule chose, per fold
+    screened: int = 0                                       # held-out samples screened out (counted as rejected)
+    latencies_s: list[float] = field(default_factory=list)  # with ``segment``: per whole sample, s
 
     @property
     def accuracy(self) -> float:
@@ -98,7 +108,16 @@ class RecogniserResult:
             'per_gesture': self.gesture_stats(),
             'per_performer': {s: float(np.mean(list(r.values()))) for s, r in self.per_performer.items()},
             'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
+            'screened': self.screened, 'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
+            **({'latency_s': _summary(self.latencies_s)} if self.latencies_s else {}),
         }
+
+    gestures_per_sample: dict[str, int] = field(default_factory=dict)
+
+
+def _summary(values: Sequence[float]) -> dict[str, float]:
+    v = np.asarray(values, dtype=np.float64)
+    return {'mean': float(v.mean()), 'median': float(np.median(v)), 'p90': float(np.percentile(v, 90))}
 
 
 def _usable(r: RenderedSample) -> bool:
@@ -134,7 +153,10 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
                           factories: Mapping[str, Callable[[], TemplateRecogniser]],
                           templates_per_gesture: int | None = None, seed: int = 0,
                           random_rendered: Sequence[RenderedSample] = (),
-                          progress: Callable[[str], None] | None = None) -> dict[str, RecogniserResult]:
+                          progress: Callable[[str], None] | None = None,
+                          segment: Callable[[RenderedSample, TemplateRecogniser],
+                                            tuple[list[TouchGesture], list[float]]] | None = None,
+                          ) -> dict[str, RecogniserResult]:
     """Evaluate every recogniser of ``factories`` (name -> a new unfitted recogniser).
 
     Args:
@@ -143,6 +165,9 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
         seed: seeds the choice of templates.
         random_rendered: touches that are no gesture, for the random-touch acceptance.
         progress: called with a line of text per fold and recogniser.
+        segment: ``segment(sample, fitted_recogniser) -> (gestures, latencies_s)`` cuts a held-out
+            sample again with the fold's recogniser (the end of a gesture, :mod:`.ending_eval`);
+            None: the sample's own gestures (the codebook always uses those).
 
     Raises:
         ValueError: fewer than two subjects (nothing to leave out), or no recogniser.
@@ -177,16 +202,22 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             hits: dict[str, list[bool]] = {}
             for r in test:
                 res.samples += 1
-                if len(r.gestures) != 1:
+                cut, latencies = segment(r, recogniser) if segment is not None else (r.gestures, [])
+                n = str(len(cut))
+                res.gestures_per_sample[n] = res.gestures_per_sample.get(n, 0) + 1
+                if len(cut) != 1:
                     predicted = SEGMENTATION
                     res.segmentation_failures += 1
                 else:
+                    res.latencies_s += latencies
                     t0 = time.perf_counter()
-                    match = recogniser.predict(r.gestures[0])
+                    match = recogniser.predict(cut[0])
                     times[name].append(time.perf_counter() - t0)
                     predicted = REJECTED if match.nearest is None else match.nearest
-                    res.rejected += match.label is None
-                    res.accepted_correct += match.label == r.label
+                    screened = screen_gesture(cut[0]) is not None
+                    res.screened += screened
+                    res.rejected += match.label is None or screened
+                    res.accepted_correct += match.label == r.label and not screened
                 ok = predicted == r.label
                 res.correct += ok
                 row = res.confusion[r.label]
@@ -195,7 +226,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             res.per_performer[subject] = {lab: float(np.mean(v)) for lab, v in sorted(hits.items())}
             for g in random_gestures:
                 res.random_touches += 1
-                res.random_accepted += recogniser.predict(g).label is not None
+                res.random_accepted += screen_gesture(g) is None and recogniser.predict(g).label is not None
             if progress is not None:
                 acc = np.mean([v for vs in hits.values() for v in vs]) if hits else float('nan')
                 progress(f'fold {fold + 1}/{len(subjects)} (subject {subject}) {name}: accuracy {acc:.4f}, '

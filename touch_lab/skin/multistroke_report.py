@@ -15,12 +15,16 @@ import sys
 import time
 from pathlib import Path
 
-from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
+from touch_gestures.skin.registry import make_recogniser
+from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
+from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import summary as early_summary
+from touch_lab.skin.ending_eval import PIECE_GAP_S, ending_table
 from touch_lab.skin.latency import bench_latency
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
@@ -39,17 +43,27 @@ def _pct(x: float | None) -> str:
 
 def _vocabulary_section(r: dict) -> list[str]:
     recs = r['recognisers']
+    ending = (f"gap {r['gap_s']} s, waiting up to {r['wait_s']} s for strokes the codebook calls the beginning of a "
+              "longer gesture" if r.get('wait_s') else f"gap {r['gap_s']} s")
+    default = recs.get(r.get('default') or '', {})
     out = [f"## Vocabulary `{r['vocabulary']}` ({Path(r['traces']).name})", '',
            f"{r['samples']} samples of {len(r['gestures'])} gestures by {len(r['subjects'])} people, "
-           f"{r['multi_stroke_samples']} of them multi-stroke; gap {r['gap_s']} s; gestures per sample after "
-           f"segmentation: {r['gestures_per_sample']} (a sample cut into other than one gesture counts as wrong). "
-           f"Codebook per fold: every sample of the other people. {r['data']}.", '',
-           '| recogniser | accuracy % | with rejection: correct % | rejected % | wrong command % | '
-           'random touches firing % | us per recognition (median) |', '|---|---|---|---|---|---|---|']
+           f"{r['multi_stroke_samples']} of them multi-stroke; {ending}; gestures per sample after segmentation "
+           f"(`{r.get('default')}`): {default.get('gestures_per_sample', r['gestures_per_sample'])} (a sample cut into "
+           f"other than one gesture counts as wrong). Codebook per fold: every sample of the other people. "
+           f"{r['data']}.", '',
+           'Rejection: distance over the class threshold, too small a margin, or a stroke count or duration the '
+           "nearest class never shows in the codebook (touch_gestures.skin.evidence); touches the node screens out "
+           '(a dab, two fingers) fire nothing. Latency: the lift after the last stroke at which the gesture ended.',
+           '', '| recogniser | accuracy % | with rejection: correct % | rejected % | wrong command % | '
+           'random touches firing % | latency s (mean / median) | us per recognition (median) |',
+           '|---|---|---|---|---|---|---|---|']
     for name, v in recs.items():
+        lat = v.get('latency_s')
+        latency = f"{lat['mean']:.2f} / {lat['median']:.2f}" if lat else f"{r['gap_s']:.2f} / {r['gap_s']:.2f}"
         out.append(f"| {name} | {_pct(v['accuracy'])} | {_pct(v['accuracy_with_rejection'])} | "
                    f"{_pct(v['rejection_rate'])} | {_pct(v['error_rate'])} | {_pct(v['random_touch_acceptance'])} | "
-                   f"{v['us_per_recognition']:.0f} |")
+                   f"{latency} | {v['us_per_recognition']:.0f} |")
     if r.get('default'):
         choices = recs[r['default']].get('choices', {})
         out += ['', f"Default (`{DEFAULT}`, the rule of touch_gestures.skin.vocabulary) chose: "
@@ -66,6 +80,16 @@ def _vocabulary_section(r: dict) -> list[str]:
                     f"{x['gap_s']:g}" for x in r['samples_whole_per_gap']) + ' |',
                 '|---|' + '---|' * len(r['samples_whole_per_gap']),
                 '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
+    if r.get('ending_table'):
+        out += ['', 'The end of a gesture (cloud, leave-one-person-out, codebook cut at 3 s; accuracy over all '
+                'samples, rejection off; a fixed gap has no bound):', '',
+                '| gap s | bound s | whole % | accuracy % | latency s mean | latency s median |',
+                '|---|---|---|---|---|---|']
+        for x in r['ending_table']:
+            bound = 'fixed' if x['wait_s'] is None else f"{x['wait_s']:g}"
+            out.append(f"| {x['gap_s']:g} | {bound} | "
+                       f"{_pct(x['whole'])} | {_pct(x['accuracy'])} | {x['latency_mean_s']:.2f} | "
+                       f"{x['latency_median_s']:.2f} |")
     if r.get('early'):
         out += ['', f"Early decisions (`{DEFAULT}`, one held-out gesture in {r['early_every']}), "
                 f"{early_summary(r['early'])}"]
@@ -84,12 +108,18 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
              'through the virtual skin (contact model, noise, hysteresis, 150 Hz), the real decoder and '
              'calibrator and the segmenter. Collisions and the cost benchmark use synthetic contacts and '
              'gestures. Leave-one-person-out only.', '',
-             f'Gap: {MULTISTROKE_GAP_S} s for vocabularies with multi-stroke gestures, 0.15 s otherwise '
-             '(touch_gestures.skin.segmentation).', '']
+             f'End of a gesture: in a vocabulary with multi-stroke gestures a lift of {ENDING_GAP_S} s ends strokes '
+             f'the codebook calls a whole gesture, strokes that look like the beginning of a longer one wait up to '
+             f'{ENDING_WAIT_S} s (touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every gesture otherwise.',
+             '']
     for path in traces:
         _say(f'evaluating {path}')
         r = evaluate_file(path, list(RECOGNISERS), progress=_say, early_every=early_every)
         r['early_every'] = early_every
+        if r['multi_stroke_samples']:
+            pieces = render_samples(read_traces(path).samples, RenderSettings(gap_s=PIECE_GAP_S, min_frames=1),
+                                    default_cache_dir())
+            r['ending_table'] = ending_table(pieces, lambda: make_recogniser('cloud'), progress=_say)
         lines += _vocabulary_section(r)
     _say('collisions')
     c = evaluate_collisions(per_kind)

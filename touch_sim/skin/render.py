@@ -51,7 +51,7 @@ __all__ = ['RenderSettings', 'RenderedSample', 'TimedGesture', 'default_cache_di
            'render_samples']
 
 _NS = 1_000_000_000
-_CACHE_VERSION = 3  # bump when the segmenter or the sensor path changes what a sample renders to
+_CACHE_VERSION = 5  # bump when the segmenter or the sensor path changes what a sample renders to
 
 
 @dataclass(frozen=True)

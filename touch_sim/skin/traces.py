@@ -77,6 +77,9 @@ class TraceSample:
                 f'sample={self.sample!r}, points={len(self.x)}, strokes={self.n_strokes})')
 
 
+#: Strokes closer in time than this (ms, a logger's rounding) are one touch (TraceStimulus.from_points).
+_SAME_INSTANT_MS = 2.0
+
 class TraceStimulus:
     """A finger tracing strokes of (time s, position mm) across the skin; build it with :meth:`from_points`.
 
@@ -129,7 +132,9 @@ class TraceStimulus:
         """Place screen points (x, y px, y downward; t ms) on the skin (see the module doc).
 
         Points with equal times keep the last one. Raises ValueError on empty, mismatched,
-        non-finite or time-reversed input, and on overlapping strokes.
+        non-finite or time-reversed input, and on overlapping strokes. A stroke that starts
+        when the previous one ends, to 2 ms (a dot's pen-down logged twice), joins it: a finger cannot lift
+        in no time.
 
         >>> stim = TraceStimulus.from_points([0, 100, 100], [0, 0, 50], [0, 500, 1000])
         >>> stim.strokes[0].round(2).tolist()      # t_s, x_mm, y_mm: 39.17 mm wide, centred vertically
@@ -159,14 +164,21 @@ class TraceStimulus:
         x_mm = (x - cx) * scale + area_mm / 2
         y_mm = (y - cy) * scale + area_mm / 2
         t_s = lead_in_s + ramp_s + (t - t.min()) * (time_scale / 1000.0)
-        strokes = []
+        strokes: list[np.ndarray] = []
         for sid in sorted(set(ids.tolist()), key=lambda s: t_s[ids == s].min()):
             sel = ids == sid
             ts, xs, ys = t_s[sel], x_mm[sel], y_mm[sel]
             if np.any(np.diff(ts) < 0):
                 raise ValueError(f'stroke {sid}: t_ms must not decrease within a stroke')
-            keep = np.r_[np.diff(ts) > 0, True]        # of equal times keep the last point
-            strokes.append(np.stack([ts[keep], xs[keep], ys[keep]], axis=1))
+            rows = np.stack([ts, xs, ys], axis=1)
+            # A stroke that starts when the previous one ends, to the logger's millisecond rounding (a dot's
+            # pen-down reported twice, as in some exclamation marks of the Mixed Multistroke Gestures), is the
+            # same touch: a finger cannot lift in no time. Joined, not refused; a real overlap still fails.
+            if strokes and 0 <= strokes[-1][-1, 0] - ts[0] <= _SAME_INSTANT_MS * time_scale / 1000.0:
+                rows = np.concatenate([strokes.pop(), rows])
+                rows = rows[np.argsort(rows[:, 0], kind='stable')]
+            keep = np.r_[np.diff(rows[:, 0]) > 0, True]        # of equal times keep the last point
+            strokes.append(rows[keep])
         return cls(strokes, force_n=force_n, radius_mm=radius_mm, ramp_s=ramp_s, tail_s=tail_s)
 
     def contacts(self, t: float) -> list[Contact]:

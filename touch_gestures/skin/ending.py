@@ -1,0 +1,95 @@
+"""When a gesture is over: the vocabulary tells whether the strokes so far are a whole gesture.
+
+A fixed gap ends every gesture after the same lift, so it must be longer than the pauses
+people take inside their slowest symbol, and every command pays it. After a lift, the
+strokes traced so far either look like a whole gesture of the vocabulary (a line, a
+finished X) or like the beginning of one with more strokes (the first bar of an X, the stem
+of a P, an H with one bar to go). :class:`GestureEnd` asks the codebook:
+
+- **whole or prefix** (``margin``): the strokes are matched against the whole templates and
+  against the templates' prefixes (their first quarter, half, three quarters along the
+  ink: :class:`~.early.PrefixMatcher`, the early decisions' own matcher). The strokes are
+  complete when a whole template is nearer than every prefix, by ``margin`` relative to the
+  prefix's distance (0: nearer at all);
+- **stroke counts** (``strokes``): and the nearest whole class has templates of no more
+  strokes than traced so far (people write a D with one stroke or two; a codebook that has
+  only 2-stroke X's says the first bar is not yet an X). Used where the codebook knows
+  each template's strokes (a codebook fitted from gestures: ``template_strokes_``).
+
+:class:`~.segmentation.GestureSegmenter` asks the rule once a lift reaches its short gap
+and, when the strokes look incomplete, waits for the next stroke up to its longer bound.
+The rule costs one prefix match (a few recognitions) per lift, never per frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import TemplateRecogniser
+from .early import PrefixMatcher
+from .gesture import TouchGesture
+from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S
+
+__all__ = ['GestureEnd', 'vocabulary_ending']
+
+
+class GestureEnd:
+    """``complete(gesture)``: are the strokes so far a whole gesture of the codebook (module doc)?
+
+    Args:
+        recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose).
+        margin: how much nearer (relative) a whole template must be than the best prefix.
+        strokes: also require the nearest class to have templates of at most the strokes traced.
+
+    Raises:
+        ValueError: a recogniser without ordered points (see :class:`~.early.PrefixMatcher`).
+    """
+
+    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True) -> None:
+        if not (np.isfinite(margin) and margin >= 0):
+            raise ValueError(f'margin must be a finite fraction >= 0, got {margin}')
+        self.matcher = PrefixMatcher(recogniser)
+        self.margin = float(margin)
+        chosen = self.matcher.recogniser
+        counts = getattr(chosen, 'template_strokes_', None) if strokes else None
+        # Fewest strokes of each class's templates (n_classes,); None when the codebook does not know them.
+        self.class_min_strokes: np.ndarray | None = None
+        if counts is not None:
+            counts = np.asarray(counts)
+            self.class_min_strokes = np.minimum.reduceat(counts, chosen.class_starts_)
+
+    def complete(self, gesture: TouchGesture) -> bool:
+        """True when ``gesture`` (the strokes so far) is a whole gesture; an unusable one is (nothing to wait for)."""
+        whole_matcher = self.matcher._matchers[-1]
+        whole = whole_matcher.class_distances(gesture)
+        if whole is None:
+            return True
+        best = int(np.argmin(whole))
+        if self.class_min_strokes is not None and self.class_min_strokes[best] > int(gesture.strokes):
+            return False
+        prefix = min((float(m.class_distances(gesture).min()) for m in self.matcher._matchers[:-1]),
+                     default=np.inf)
+        return float(whole[best]) * (1.0 + self.margin) <= prefix
+
+    __call__ = complete
+
+
+def vocabulary_ending(recogniser: TemplateRecogniser, max_strokes: int | None = None
+                      ) -> tuple[float, float | None, GestureEnd | None]:
+    """The segmenter's ``gap_s``, ``wait_s`` and ``is_complete`` for a fitted recogniser's vocabulary.
+
+    A multi-stroke vocabulary (``max_strokes``, default the recogniser's ``max_strokes_``, above 1)
+    read by a recogniser with ordered points gets the rule: :data:`~.segmentation.ENDING_GAP_S`
+    and :data:`~.segmentation.ENDING_WAIT_S`. One without ordered points (the paper's maps) cannot
+    tell a prefix from a whole gesture: the fixed :data:`~.segmentation.MULTISTROKE_GAP_S`. A
+    single-stroke vocabulary has nothing to wait for: :data:`~.segmentation.SINGLE_STROKE_GAP_S`.
+    """
+    if max_strokes is None:
+        max_strokes = int(getattr(recogniser, 'max_strokes_', 1))
+    if max_strokes <= 1:
+        return SINGLE_STROKE_GAP_S, None, None
+    try:
+        rule = GestureEnd(recogniser)
+    except ValueError:
+        return MULTISTROKE_GAP_S, None, None
+    return ENDING_GAP_S, ENDING_WAIT_S, rule

@@ -1,0 +1,75 @@
+"""Cheap evidence a shape match throws away: strokes and duration, checked against the codebook.
+
+The recognisers compare normalised shapes, so a random scribble that happens to look like
+a symbol is as close to it as the symbol itself. Two things the normalisation discards
+still tell them apart, and the codebook says what each class allows:
+
+- **strokes**: a touch of 1 stroke is no X if nobody in the codebook wrote an X with 1
+  stroke (people do write a D with one or two: both are then allowed);
+- **duration**: a touch far faster or slower than any repetition of the class in the
+  codebook (from the ``low`` to the ``high`` quantile of the class's durations, widened by
+  ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). Only
+  for classes with at least ``min_templates`` templates: a few repetitions by a few people
+  do not show how fast others go (a codebook of 2 people x 3 repetitions turned away a
+  third of a new person's gestures).
+
+:class:`CodebookEvidence` is calibrated on the codebook alone (no constant fitted to any
+test file), so it holds for vocabularies and people it has not seen. A codebook that does
+not know its templates' strokes or durations (an older file) skips that check.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .gesture import TouchGesture
+
+__all__ = ['EVIDENCE_REASONS', 'CodebookEvidence']
+
+#: The rejection reasons :meth:`CodebookEvidence.check` gives.
+EVIDENCE_REASONS = ('strokes', 'duration')
+
+
+class CodebookEvidence:
+    """Per class, the stroke counts and durations its templates show (module doc).
+
+    Args:
+        template_labels: (T,) class index of each template.
+        n_classes: number of classes.
+        strokes: (T,) strokes of each template, or None.
+        durations_s: (T,) duration of each template, s, or None.
+        low, high: quantiles of a class's durations that bound it...
+        slack: ...widened by this factor (>= 1)...
+        min_templates: ...for classes with at least this many templates (the others: no bound).
+    """
+
+    def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
+                 durations_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
+                 slack: float = 1.5, min_templates: int = 30) -> None:
+        if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1):
+            raise ValueError(f'need 0 <= low <= high <= 1 and slack >= 1; got {low}, {high}, {slack}')
+        labels = np.asarray(template_labels)
+        self.stroke_counts: list[frozenset[int]] | None = None
+        if strokes is not None:
+            strokes = np.asarray(strokes)
+            self.stroke_counts = [frozenset(strokes[labels == c].tolist()) for c in range(n_classes)]
+        self.duration_bounds_s: np.ndarray | None = None
+        if durations_s is not None:
+            durations_s = np.asarray(durations_s, dtype=np.float64)
+            bounds = np.full((n_classes, 2), [0.0, np.inf])
+            for c in range(n_classes):
+                own = durations_s[(labels == c) & np.isfinite(durations_s)]
+                if own.size >= max(1, min_templates):
+                    lo, hi = np.quantile(own, [low, high])
+                    bounds[c] = lo / slack, hi * slack
+            self.duration_bounds_s = bounds
+
+    def check(self, gesture: TouchGesture, label: int) -> str | None:
+        """Why ``gesture`` cannot be class ``label`` (one of :data:`EVIDENCE_REASONS`), or None."""
+        if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
+            return 'strokes'
+        if self.duration_bounds_s is not None:
+            lo, hi = self.duration_bounds_s[label]
+            if not lo <= float(gesture.duration_s) <= hi:
+                return 'duration'
+        return None
