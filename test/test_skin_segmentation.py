@@ -169,3 +169,25 @@ def test_any_frame_stream_gives_consistent_gestures(frames):
         assert len(g.trajectory) <= g.frames <= 40 and g.duration_s <= 0.5 + 1e-9
         assert np.all(np.diff(g.times) > 0) and np.isfinite(g.trajectory).all() and np.isfinite(g.peak_map).all()
         assert g.frames >= 2 or g.truncated
+
+
+@settings(max_examples=200, deadline=None)
+@given(base_ns=st.integers(0, 2 * 10**18), gap_frames=st.integers(1, 400))
+def test_a_lift_of_exactly_gap_s_ends_the_gesture_on_that_frame(base_ns, gap_frames):
+    # Stamps as the node makes them: integer ns from the header, made float seconds (sec + nanosec / 1e9).
+    # At 100 Hz a gap of k frames is exactly k * 10 ms; float rounding must not make it one frame late.
+    period_ns = 10_000_000
+    seg = GestureSegmenter(gap_s=gap_frames * period_ns / 1e9, min_frames=2)
+    touch = np.zeros((12, 12), np.float32)
+    touch[3, 4] = 1.0
+
+    def t(k):
+        ns = base_ns + k * period_ns
+        return ns // 10**9 + (ns % 10**9) / 1e9
+
+    for k in range(5):
+        assert seg.update(touch, True, np.array([17.0, 13.7]), t(k)) == []
+    last = 4
+    for k in range(last + 1, last + gap_frames):
+        assert seg.update(np.zeros((12, 12), np.float32), False, None, t(k)) == [], k - last
+    assert len(seg.update(np.zeros((12, 12), np.float32), False, None, t(last + gap_frames))) == 1

@@ -78,6 +78,10 @@ def default_gap_s(max_strokes: int) -> float:
     return MULTISTROKE_GAP_S if max_strokes > 1 else SINGLE_STROKE_GAP_S
 
 _EIGHT = np.ones((3, 3), dtype=bool)
+#: Lifts are differences of float64 seconds made from integer-nanosecond stamps (about 0.24 us apart
+#: at today's epoch): a lift of exactly gap_s frames could come out a rounding short and wait one
+#: more frame (6.7 ms at 150 Hz). 1 us covers that rounding and is far below any frame period.
+_LIFT_TOLERANCE_S = 1e-6
 
 
 @dataclass
@@ -229,7 +233,7 @@ class GestureSegmenter:
                 self._suppressed = False
             elif self._active:
                 self._lifted = True
-                lift = t - self._last_contact_t
+                lift = t - self._last_contact_t + _LIFT_TOLERANCE_S
                 if lift >= self.gap_s and self._ends(lift):
                     self._finish(out, truncated=False)
             return out
