@@ -53,10 +53,14 @@ def test_a_call_between_graphs_and_the_parameter_services_over_dds(dds_domain):
         assert target.get_parameter('rate').value == 25.0
 
         def listed():
+            # Discovery reaches the view entity by entity: wait for every one the assertions below read.
             view = b.view()
             info = view.services.get('/switch')
-            return info is not None and info.servers == {'/server'} and info.clients == {'/caller'}
-        wait_until(listed, 10, 'the service with its server and client in the graph view')
+            callers = view.find_nodes('/caller')
+            return (info is not None and info.servers == {'/server'} and info.clients == {'/caller'}
+                    and '/target/get_parameters' in view.services and len(callers) == 1
+                    and '/target/get_parameters' in callers[0].clients)
+        wait_until(listed, 10, 'the services with their servers and clients in the graph view')
         view = b.view()
         assert view.services['/target/get_parameters'].type_name == 'rcl_interfaces/srv/GetParameters'
         [server_info] = view.find_nodes('/server')

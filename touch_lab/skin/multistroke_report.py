@@ -154,9 +154,9 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
               f"{t['gap_s']} s (`social-touch bench skin-latency`): the command comes {t['ms_median']:.1f} ms "
               f"(median) and {t['ms_p99']:.1f} ms (99th percentile) after the gap ends (goal {t['goal_ms']:.0f} ms): "
               f"waiting for the first frame after the gap (frames at {t['frame_rate_hz']:.0f} Hz, at most "
-              f"{1e3 / t['frame_rate_hz']:.1f} ms; median {t['wait_for_frame_ms_median']:.1f} ms), then processing "
-              f"that frame to the delivered command, median {t['processing_ms_median']:.2f} ms, 99th percentile "
-              f"{t['processing_ms_p99']:.2f} ms."]
+              f"{1e3 / t['frame_rate_hz']:.1f} ms; median {abs(t['wait_for_frame_ms_median']):.1f} ms), then "
+              f"processing that frame to the delivered command, median {t['processing_ms_median']:.2f} ms, "
+              f"99th percentile {t['processing_ms_p99']:.2f} ms."]
     lines += ['', f'(This run took {(time.perf_counter() - started) / 60:.0f} minutes.)', '']
     out = Path(out)
     out.write_text('\n'.join(lines), encoding='utf-8')
