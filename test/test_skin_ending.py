@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from skin_testing import command_node_parameters
 from test_skin_multistroke import RATE, SYMBOLS, codebook, feed, polyline
 
 from touch_gestures.skin.clouds import CloudRecogniser
@@ -130,20 +131,16 @@ def test_joined_pieces_are_what_the_segmenter_cuts(ending):
 
 
 def test_the_node_waits_in_a_multistroke_vocabulary_unless_told_not_to(tmp_path):
-    from touch_gestures.skin.codebook import save_codebook
     from touch_gestures.skin.node import HapticCommandsNode
     from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S
     from touch_graph.runtime import Context, Parameter
 
     gestures, labels = codebook(np.random.default_rng(0), names=('X', 'H'), per_class=4)
     model = CloudRecogniser().fit(gestures, labels)
-    path = save_codebook(tmp_path / 'symbols.npz', model, vocabulary='symbols')
-    commands = tmp_path / 'commands.yaml'
-    commands.write_text('format_version: 1\ncommands:\n  X: stop\n')
+    given = command_node_parameters(tmp_path, model, {'X': 'stop'}, vocabulary='symbols')
     ctx = Context('sim')
     ctx.init()
     try:
-        given = [Parameter('codebook', value=str(path)), Parameter('commands', value=str(commands))]
         node = HapticCommandsNode(context=ctx, parameter_overrides=given)
         seg = node.stream.segmenter
         assert (seg.gap_s, seg.wait_s) == (ENDING_GAP_S, ENDING_WAIT_S) and isinstance(seg.is_complete, GestureEnd)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from skin_testing import command_node_parameters
 
 from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.commands import load_command_map
@@ -302,13 +303,10 @@ def test_an_unusable_default_codebook_says_how_it_is_made(monkeypatch, tmp_path)
 def test_the_segmenter_takes_the_vocabularys_gap_from_the_codebook_unless_set(tmp_path):
     lines = [TouchGesture.from_trajectory(path([6.0, y], [41.0, y], 0.5)) for y in (10.0, 20.0, 30.0)]
     model = make_recogniser('trace').fit(lines, ['line_right'] * 3)
-    codebook = save_codebook(tmp_path / 'symbols.npz', model, vocabulary='symbols', gap_s=1.5)
-    commands = tmp_path / 'commands.yaml'
-    commands.write_text('format_version: 1\ncommands:\n  line_right: move_right\n')
+    given = command_node_parameters(tmp_path, model, {'line_right': 'move_right'}, vocabulary='symbols', gap_s=1.5)
     ctx = Context('sim')
     ctx.init()
     try:
-        given = [Parameter('codebook', value=str(codebook)), Parameter('commands', value=str(commands))]
         node = HapticCommandsNode(context=ctx, parameter_overrides=given)
         assert node.stream.segmenter.gap_s == 1.5 and node.get_parameter('gap_s').value == 1.5
         node.destroy_node()
