@@ -60,6 +60,24 @@ def test_simulate_writes_a_loadable_synthetic_codebook_the_same_every_time(tmp_p
     np.testing.assert_array_equal(load_codebook(again).templates_, model.templates_)
 
 
+def test_the_vocabulary_and_its_gap_go_into_the_file(tmp_path):
+    out = tmp_path / 'cb.npz'
+    assert record_cli.run(parse('--simulate', '1', '--gestures', 'line_right,one', '-m', '2', '--vocabulary',
+                                'symbols', '--gap', '1.0', '-o', str(out))) == 0
+    model = load_codebook(out)
+    assert (model.vocabulary_, model.gap_s_) == ('symbols', 1.0)
+
+
+def test_a_live_gap_joins_the_strokes_of_one_symbol():
+    # Two strokes 0.5 s apart: two gestures at the single-stroke gap, one of two strokes with --gap 1.
+    first = frames_of([np.array([10.0 + k, 20.0]) for k in range(20)], 0, lift_frames=75)
+    second = frames_of([np.array([20.0, 10.0 + k]) for k in range(20)], 95 * 6_666_667, lift_frames=200)
+    for gap, expected in ((None, [1, 1]), (1.0, [2])):
+        stream = record_cli.live_stream(gap)
+        got = [g for msg in (*first, *second) for g in stream.update(msg)]
+        assert [g.strokes for g in got] == expected, gap
+
+
 def test_simulate_records_for_another_recogniser_and_the_command_map_gestures(tmp_path):
     commands = tmp_path / 'commands.yaml'
     commands.write_text('format_version: 1\ncommands:\n  diagonal_down: next_task\n  line_up: resume\n')
@@ -76,6 +94,9 @@ def test_simulate_records_for_another_recogniser_and_the_command_map_gestures(tm
     (['--simulate', '1', '--gestures', 'line_right', '-m', '0'], '--repetitions must be >= 1'),
     (['--simulate', '1', '--recogniser', 'trac'], "unknown recogniser 'trac'"),
     (['--resume', 'nowhere.partial.npz'], 'recording file not found'),
+    (['--simulate', '1', '--gestures', 'line_right', '--gap', '-1'], '--gap must be a lift of 0 s or more'),
+    (['--simulate', '1', '--gestures', 'line_right', '--gap', 'nan'], '--gap must be a lift of 0 s or more'),
+    (['--simulate', '1', '--gestures', 'line_right', '--vocabulary', ' '], '--vocabulary needs a name'),
 ])
 def test_bad_arguments_are_clear_errors(tmp_path, capsys, argv, fragment):
     assert record_cli.run(parse(*argv, '-o', str(tmp_path / 'x.npz'))) == 2

@@ -1,7 +1,8 @@
 """``social-touch codebook record``: record a skin codebook, m repetitions of each gesture (cirillo2017 Fig. 5).
 
     social-touch codebook record [-o FILE] [--gestures a,b,...] [--repetitions M] [--recogniser NAME]
-        [--simulate PERFORMERS [--seed S]] [--resume FILE.partial.npz] [--topic /skin/frame]
+        [--vocabulary NAME] [--gap S] [--simulate PERFORMERS [--seed S]] [--resume FILE.partial.npz]
+        [--topic /skin/frame]
 
 Two sources of touches:
 
@@ -20,6 +21,12 @@ Two sources of touches:
   handling and recorder as the live path take them (:func:`record_simulated`). SYNTHETIC data,
   and the file says so. The M repetitions of a gesture come from all performers in turn.
 
+A vocabulary of symbols written with several strokes (an X, an H) needs ``--gap``: the lift (s)
+that ends a gesture, both while recording (shorter lifts join strokes into one gesture) and in the
+file, which the skin node reads (default: 0.15 s for gestures of one stroke; about 1 s suits
+people writing symbols, docs/skin-multistroke.md). ``--vocabulary`` names the codebook
+(default ``commands``): a scene chooses its vocabulary by the codebook it loads.
+
 ``--gestures`` defaults to the gestures of the command map (``--commands``, default the
 package's ``config/skin_commands.yaml``), so the codebook fits the map the skin node loads.
 The shipped ``config/skin_codebook.npz`` is made with ``social-touch codebook record
@@ -30,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import bisect
+import math
 import queue
 import sys
 import threading
@@ -43,6 +51,7 @@ from touch_gestures.skin.codebook import CodebookRecorder, save_codebook
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
+from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_graph.errors import SocialTouchError
 
 __all__ = ['HELP', 'LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
@@ -64,6 +73,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='repetitions per gesture, m of cirillo2017 3.2 (default 10)')
     parser.add_argument('--recogniser', default=DEFAULT_RECOGNISER,
                         help=f'recogniser the codebook is for: {", ".join(RECOGNISERS)} (default {DEFAULT_RECOGNISER})')
+    parser.add_argument('--vocabulary', default='commands',
+                        help='name of the vocabulary the codebook holds (default commands)')
+    parser.add_argument('--gap', type=float, metavar='S',
+                        help='lift (s) that ends a gesture, while recording and in the file (default 0.15 s, gestures '
+                        'of one stroke; about 1 s for symbols of several strokes)')
     parser.add_argument('--simulate', type=int, metavar='PERFORMERS',
                         help='record synthetic performers on a virtual skin instead of the live skin')
     parser.add_argument('--seed', type=int, default=0, help='with --simulate: performers and sensor noise')
@@ -220,6 +234,16 @@ def _stdin_lines(out: queue.Queue) -> None:
         pass
 
 
+def live_stream(gap_s: float | None) -> SkinFrameStream:
+    """Frames -> gestures for a live recording: the skin node's segmentation, with ``gap_s`` (s) as the
+    lift that ends a gesture (None: the single-stroke default)."""
+    if gap_s is None:
+        return SkinFrameStream()
+    if not (math.isfinite(gap_s) and gap_s >= 0):
+        raise ValueError(f'--gap must be a lift of 0 s or more, got {gap_s}')
+    return SkinFrameStream(GestureSegmenter(gap_s=gap_s))
+
+
 def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
     """Record from the running graph; True when the recorder is complete, False when stopped early."""
     from touch_graph.dds.tool import GraphTool
@@ -228,7 +252,7 @@ def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
     from touch_graph.runtime import QoSProfile, ReliabilityPolicy
 
     type_name = 'social_touch_msgs/msg/SkinFrame'
-    session = LiveSession(recorder)
+    session = LiveSession(recorder, live_stream(args.gap))
     with GraphTool('codebook_record') as tool:
         info = tool.require_topic(args.topic, type_name, wait_s=args.wait)
         if not info.publishers:
@@ -269,6 +293,9 @@ def run(args: argparse.Namespace) -> int:
         make_recogniser(args.recogniser)
         if args.repetitions < 1:
             raise ValueError(f'--repetitions must be >= 1, got {args.repetitions}')
+        live_stream(args.gap)       # a bad --gap stops here, before any recording
+        if not args.vocabulary.strip():
+            raise ValueError('--vocabulary needs a name')
         if args.resume:
             recorder = load_recording(args.resume)
             _say(f'[codebook record] resuming {args.resume}: {len(recorder.samples)} repetitions of '
@@ -295,10 +322,12 @@ def run(args: argparse.Namespace) -> int:
                 return 1
             path = save_recording(partial_path(args.output), recorder)
             _say(f'[codebook record] stopped after {len(recorder.samples)} repetitions; saved to {path}. Resume '
-                 f'with: social-touch codebook record --resume {path} -o {args.output} --recogniser {args.recogniser}')
+                 f'with: social-touch codebook record --resume {path} -o {args.output} --recogniser {args.recogniser}'
+                 f' --vocabulary {args.vocabulary}' + ('' if args.gap is None else f' --gap {args.gap:g}'))
             return 1
         model = recorder.fit(make_recogniser(args.recogniser))
-        path = save_codebook(args.output, model, description=description)
+        path = save_codebook(args.output, model, description=description, vocabulary=args.vocabulary,
+                             gap_s=args.gap)
         people = f'{args.simulate} simulated performers (seed {args.seed})' if args.simulate is not None else None
         attach_card(path, make_card('skin_codebook', data={
             'synthetic': args.simulate is not None, 'source': description, 'recogniser': args.recogniser,
