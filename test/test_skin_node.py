@@ -385,3 +385,18 @@ def test_a_failing_recogniser_reports_error_on_diagnostics_and_the_node_goes_on(
     monkeypatch.undo()
     h.executor.spin_for(5.5)                       # no new failure: back to OK
     assert len(got) == 2 and got[-1].level == 0
+
+
+def test_what_became_of_the_gestures_is_on_diagnostics(harness):
+    h = harness()
+    got = []
+    mine = 'social_touch: /skin/haptic_commands'
+    h.io.create_subscription(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics',
+                             lambda m: got.extend(s for s in m.status if s.name == mine), 100)
+    for _ in range(30):
+        h.frame()
+    h.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
+    h.executor.spin_for(5.5)                       # the health period (simulated time)
+    values = {kv.key: kv.value for kv in got[-1].values}
+    assert got[-1].level == 0 and values['outcome_published'] == '1' and values['segmenter_gestures'] == '1'
+    assert values['segmenter_ended_at_bound'] == '0' and values['callback_errors'] == '0'

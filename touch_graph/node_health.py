@@ -4,7 +4,9 @@ The runtime keeps a failing callback from stopping the graph (it logs it and cou
 ``node.callback_errors``); :class:`NodeHealth` also says so where monitors look: every ``period_s`` one
 ``diagnostic_msgs/DiagnosticStatus`` named ``social_touch: <node>``, ERROR with the last error when a
 callback raised in the period, WARN when a subscription dropped messages (and a warning in the log,
-through :class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise.
+through :class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise. A node with a
+``health_counters()`` method (name -> int) adds its own counters to the status's values, so what
+became of its inputs is visible where the monitors look (rqt_robot_monitor, `topic echo /diagnostics`).
 """
 
 from __future__ import annotations
@@ -37,6 +39,9 @@ class NodeHealth:
         new_errors, new_drops = errors - self._errors_seen, drops - self._drops_seen
         self._errors_seen, self._drops_seen = errors, drops
         counters = {'callback_errors': errors, 'subscriber_drops': drops}
+        own = getattr(self.node, 'health_counters', None)
+        if own is not None:
+            counters.update({str(k): int(v) for k, v in own().items()})
         if new_errors:
             last = getattr(self.node, 'last_callback_error', '') or 'see the node log'
             return _ERROR, f'{new_errors} callbacks raised in the last period: {last}', counters

@@ -47,6 +47,7 @@ Parameters (read once at start, except rejection and screening: ``max_distance``
 from __future__ import annotations
 
 import copy
+import dataclasses
 import inspect
 import math
 from collections import Counter
@@ -285,6 +286,14 @@ class HapticCommandsNode(Node):
             raise ParameterError(f'segmentation parameters of {self._fqn}: {err}') from err
 
     # ------------------------------------------------------------------ frames
+    def health_counters(self) -> dict[str, int]:
+        """Counters for /diagnostics (:class:`~touch_graph.node_health.NodeHealth`): what became of each
+        gesture (``outcome_*``) and the segmenter's (``segmenter_*``: waits for a next stroke, gestures
+        ended at the bound or cut at the longest duration, bad frames)."""
+        stats = dataclasses.asdict(self.stream.segmenter.stats)
+        return {**{f'outcome_{k}': v for k, v in sorted(self.outcomes.items())},
+                **{f'segmenter_{k}': v for k, v in stats.items()}}
+
     def _on_frame(self, msg: Any) -> None:
         stream = self.stream
         skipped, restarts = sum(stream.skipped.values()), stream.restarts
