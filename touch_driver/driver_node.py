@@ -36,6 +36,7 @@ reason instead of being accepted and ignored.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Generic
 
 from touch_graph.compat import (
@@ -167,7 +168,6 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.frames = 0
         self._last_stamp_ns: int | None = None
-        self._stamping: tuple[DecodedFrame[ScanT] | None, int] = (None, 0)   # the frame being handled, its stamp
         self.handle_errors = 0
         self.reconnects = 0
         self.last_error = ''
@@ -193,12 +193,11 @@ class SerialDriverNode(Node, Generic[ScanT]):
 
     def header(self, frame: DecodedFrame[ScanT] | None = None) -> Any:
         """A header with this driver's frame id, stamped with ``frame``'s stamp (see :meth:`_poll`), or
-        now without a frame."""
-        stamped, stamp_ns = self._stamping
-        if frame is None or frame is not stamped:
+        now without a frame or before the frame is stamped."""
+        if frame is None or frame.stamp_ns is None:
             stamp = self.get_clock().now()
         else:
-            stamp = Time(nanoseconds=stamp_ns, clock_type=self.get_clock().clock_type)
+            stamp = Time(nanoseconds=frame.stamp_ns, clock_type=self.get_clock().clock_type)
         return get_message('std_msgs/msg/Header')(stamp=stamp.to_msg(), frame_id=self.frame_id)
 
     # ------------------------------------------------------------------ internals
@@ -278,16 +277,13 @@ class SerialDriverNode(Node, Generic[ScanT]):
                                  round(1e9 / self.expected_rate_hz), self._last_stamp_ns)
         self._last_stamp_ns = stamps[-1]
         for frame, stamp_ns in zip(frames, stamps, strict=True):
-            self._stamping = (frame, stamp_ns)
             try:
-                self.handle_frame(frame)
+                self.handle_frame(dataclasses.replace(frame, stamp_ns=stamp_ns))
             except Exception as err:  # a frame the node cannot handle is counted and reported, never fatal
                 self.handle_errors += 1
                 self.last_error = f'cannot handle a frame: {type(err).__name__}: {err}'
                 self.get_logger().error(self.last_error, throttle_duration_sec=10.0)
                 continue
-            finally:
-                self._stamping = (None, 0)
             self.frames += 1                 # counted once its message went out
 
     def counters(self) -> dict[str, int]:

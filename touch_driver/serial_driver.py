@@ -96,10 +96,12 @@ def prepare_port_url(port: str) -> None:
 
 @dataclass(frozen=True, slots=True)
 class DecodedFrame(Generic[ScanT]):
-    """A sensor's decoded scan and the time it was read (``clock()`` seconds)."""
+    """A sensor's decoded scan, the time it was read (``clock()`` seconds) and, once the driver node
+    has stamped it, its header stamp (ns on the graph's clock; None before)."""
 
     scan: ScanT
     received_s: float
+    stamp_ns: int | None = None
 
 
 class SerialDriver(Generic[ScanT]):
