@@ -186,8 +186,12 @@ class TemplateRecogniser(BaseEstimator):
         query = self._features(gesture)
         if query is None:
             return None
-        d = self._distances(query)
-        return np.minimum.reduceat(d, self.class_starts_).astype(np.float64, copy=False)
+        return self.query_class_distances(query)
+
+    def query_class_distances(self, query: np.ndarray) -> np.ndarray:
+        """(n_classes,) float64 distance to the nearest template of each class for a query's features
+        (``_features``' output): one query against recognisers that differ in codebook only."""
+        return np.minimum.reduceat(self._distances(query), self.class_starts_).astype(np.float64, copy=False)
 
     def predict(self, gesture: TouchGesture) -> Match:
         """The nearest class of ``gesture`` with its distance and margin, or a rejection."""

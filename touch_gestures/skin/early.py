@@ -103,20 +103,27 @@ class PrefixMatcher:
         w = (source - lo)[None, :, None]
         return _normalise(points[:, lo] * (1 - w) + points[:, hi] * w, kind).astype(np.float32)
 
-    def candidate(self, gesture: TouchGesture) -> Candidate:
-        """The best class for ``gesture`` (traced so far) over the template prefixes."""
+    def fraction_distances(self, gesture: TouchGesture) -> list[np.ndarray] | None:
+        """Per fraction (in :attr:`fractions` order), the (n_classes,) float64 distance of ``gesture``
+        (traced so far) to each class's nearest template prefix; None when the gesture is unusable."""
         # The matchers differ in codebook only: the gesture's features are computed once for all of them.
         query = self.recogniser._features(gesture)
         if query is None:
+            return None
+        return [m.query_class_distances(query) for m in self._matchers]
+
+    def candidate(self, gesture: TouchGesture) -> Candidate:
+        """The best class for ``gesture`` (traced so far) over the template prefixes."""
+        per_fraction = self.fraction_distances(gesture)
+        if per_fraction is None:
             return Candidate(None, 0.0, float('inf'), 0.0)
         best: tuple[float, int, np.ndarray] | None = None
-        for k, m in enumerate(self._matchers):
-            per_class = np.minimum.reduceat(m._distances(query), m.class_starts_).astype(np.float64, copy=False)
+        for k, per_class in enumerate(per_fraction):
             d1 = float(per_class.min())
             if best is None or d1 < best[0]:
                 best = (d1, k, per_class)
         d1, k, per_class = best
-        label = str(self._matchers[k].classes_[int(np.argmin(per_class))])
+        label = str(self.recogniser.classes_[int(np.argmin(per_class))])
         d2 = float(np.partition(per_class, 1)[1]) if len(per_class) > 1 else float('inf')
         confidence = 1.0 - d1 / d2 if d2 > 0 and np.isfinite(d2) else (1.0 if np.isinf(d2) else 0.0)
         return Candidate(label, float(np.clip(confidence, 0.0, 1.0)), d1, float(self.fractions[k]))

@@ -60,15 +60,14 @@ class GestureEnd:
 
     def complete(self, gesture: TouchGesture) -> bool:
         """True when ``gesture`` (the strokes so far) is a whole gesture; an unusable one is (nothing to wait for)."""
-        whole_matcher = self.matcher._matchers[-1]
-        whole = whole_matcher.class_distances(gesture)
-        if whole is None:
+        per_fraction = self.matcher.fraction_distances(gesture)
+        if per_fraction is None:
             return True
+        whole = per_fraction[-1]             # the matcher's fractions end at 1: the whole templates
         best = int(np.argmin(whole))
         if self.class_min_strokes is not None and self.class_min_strokes[best] > int(gesture.strokes):
             return False
-        prefix = min((float(m.class_distances(gesture).min()) for m in self.matcher._matchers[:-1]),
-                     default=np.inf)
+        prefix = min((float(d.min()) for d in per_fraction[:-1]), default=np.inf)
         return float(whole[best]) * (1.0 + self.margin) <= prefix
 
     __call__ = complete
