@@ -71,7 +71,7 @@ def _train_bear_symbolic(bags: list[str]) -> None:
 
 
 def _protocol_gestures(sensor: str) -> tuple[str, ...]:
-    if sensor == 'patch' or sensor == 'skin':
+    if sensor in ('patch', 'skin'):
         return tuple(DEFAULT_GESTURES[sensor])
     # At 3.4 Hz the bear misses most taps (docs/learning.md): a session of them would not train.
     subtypes = tuple(g for g in DEFAULT_GESTURES['bear'] if g != 'tap')
