@@ -166,9 +166,10 @@ def test_transport_bench_measures_both_paths(dds_domain, monkeypatch):
     result = bench_transport(repeats=1, pings=20, kinds=['gesture_event'], ramp_steps=1)
     figures = result['kinds']['gesture_event']
     assert result['domain'] == dds_domain
-    assert figures['ours_lost_pings'] == figures['ours_cdr_lost_pings'] == figures['raw_lost_pings'] == 0
+    assert (figures['ours_lost_pings'] == figures['ours_cdr_lost_pings'] == figures['raw_lost_pings']
+            == figures['raw_codec_lost_pings'] == 0)
     assert 0 < figures['raw_latency_median_us'] <= figures['raw_latency_p99_us']
-    assert figures['overhead_ratio'] > 0 and figures['overhead_ratio_cdr'] > 0
+    assert figures['overhead_ratio'] > 0 and figures['overhead_ratio_cdr'] > 0 and figures['overhead_ratio_codec'] > 0
     low, high = figures['overhead_ratio_rounds']
     assert 0 < low <= high
     low, high = figures['raw_latency_round_medians_us']

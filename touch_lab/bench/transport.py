@@ -13,12 +13,15 @@ differs is ours (the runtime's publish, executor, encoding and decoding):
   counted, for either path). ``ours`` is ``publish(msg)`` to the pong callback with decoded
   messages on both ends (encoding and decoding twice per round trip); ``ours_cdr``
   publishes CDR bytes and subscribes raw (the transport without (de)serialisation);
-  ``raw`` writes and takes bytes with cyclonedds. The paths take turns in blocks of
+  ``raw`` writes and takes bytes with cyclonedds; ``raw_codec`` is raw plus our codec
+  (encoded on send, decoded on take, decoded and encoded again by the echo: the codec
+  without the runtime). Together they split ours' overhead: the codec's share is
+  ``raw_codec`` over ``raw``, the runtime's ``ours_cdr`` over ``raw``. The paths take turns in blocks of
   :data:`BLOCK` pings, in an order that rotates every round, so that all see the same
   machine (a shared machine's speed changes within seconds). Reported: the median and 99th
   percentile over every ping of every round, the lowest and highest round median, and
   ``overhead_ratio`` = ours / raw of the medians (``overhead_ratio_cdr`` likewise for
-  ``ours_cdr``) with the lowest and highest ratio of a round.
+  ``ours_cdr``, ``overhead_ratio_codec`` for ``raw_codec``) with the lowest and highest ratio of a round.
 - **throughput**: one-second bursts paced at rising rates (from a quarter of the goal, 10x
   the sensor's rate, doubling up to 8x the goal, ``rate_ramp_top_hz``) on a reliable topic
   until a burst loses a message on the round trip (ping and pong) or cannot be sent at the
@@ -146,9 +149,13 @@ class _OursPath:
 
 
 class _RawPath:
-    """Plain cyclonedds: bytes written and taken, a thread waiting on the pong reader."""
+    """Plain cyclonedds: bytes written and taken, a thread waiting on the pong reader.
 
-    def __init__(self, participant: Any, kind: str) -> None:
+    With ``codec``, our codec without the runtime: each ping is a message encoded on send,
+    each pong decoded on take (the echo decodes and encodes again too).
+    """
+
+    def __init__(self, participant: Any, kind: str, codec: bool = False) -> None:
         from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
         from cyclonedds.pub import DataWriter
         from cyclonedds.sub import DataReader
@@ -159,13 +166,16 @@ class _RawPath:
         from touch_graph.dds.qos import dds_qos
         cls = idl_struct(KINDS[kind])
         qos = dds_qos(BENCH_QOS)
-        self.writer = DataWriter(participant, Topic(participant, f'rt/bench_raw/{kind}/ping', cls), qos)
-        self.reader = DataReader(participant, Topic(participant, f'rt/bench_raw/{kind}/pong', cls), qos)
+        prefix = 'bench_codec' if codec else 'bench_raw'
+        self.writer = DataWriter(participant, Topic(participant, f'rt/{prefix}/{kind}/ping', cls), qos)
+        self.reader = DataReader(participant, Topic(participant, f'rt/{prefix}/{kind}/pong', cls), qos)
         self.mask = SampleState.Any | ViewState.Any | InstanceState.Any
         self.condition = ReadCondition(self.reader, self.mask)
         self.waitset = WaitSet(participant._ref)
         self.waitset.attach(self.condition._ref, 1)
-        self.payload = messages.serialize(sample_message(kind))
+        self.typename = KINDS[kind] if codec else None
+        self.message = sample_message(kind)
+        self.payload = messages.serialize(self.message)
         self.got = 0
         self.arrived_at = 0.0  # time.perf_counter() when the last pong arrived, in the receiving thread
         self.arrived = threading.Event()
@@ -178,8 +188,12 @@ class _RawPath:
         while not self.stopping:
             if self.waitset.wait(50_000_000):
                 samples = ddspy_take(self.reader._ref, self.mask, 256)
-                if isinstance(samples, list) and samples:
-                    self.arrived_at = time.perf_counter()  # the moment the bytes are taken
+                samples = [data for data, info in samples if info.valid_data] if isinstance(samples, list) else []
+                if samples:
+                    if self.typename is not None:
+                        for data in samples:
+                            messages.deserialize(data, self.typename)
+                    self.arrived_at = time.perf_counter()  # the moment the bytes are taken (and decoded)
                     self.got += len(samples)
                     self.arrived.set()
 
@@ -188,7 +202,7 @@ class _RawPath:
 
     def send(self) -> None:
         from cyclonedds._clayer import ddspy_write
-        ddspy_write(self.writer._ref, self.payload)
+        ddspy_write(self.writer._ref, self.payload if self.typename is None else messages.serialize(self.message))
 
     def close(self) -> None:
         self.stopping = True
@@ -317,7 +331,7 @@ def _us(seconds: float) -> float:
 
 def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_steps: int) -> dict:
     paths = {'ours': _OursPath(kind, cdr=False), 'ours_cdr': _OursPath(kind, cdr=True),
-             'raw': _RawPath(participant, kind)}
+             'raw': _RawPath(participant, kind), 'raw_codec': _RawPath(participant, kind, codec=True)}
     try:
         _wait_ready(list(paths.values()))
         for path in paths.values():
@@ -340,7 +354,7 @@ def _bench_kind(participant: Any, kind: str, repeats: int, pings: int, ramp_step
         out[f'{name}_latency_round_medians_us'] = [_us(min(medians[name])), _us(max(medians[name]))]
         out[f'{name}_lost_pings'] = sent - len(values)
     if out['raw_latency_median_us']:
-        for suffix, name in (('', 'ours'), ('_cdr', 'ours_cdr')):
+        for suffix, name in (('', 'ours'), ('_cdr', 'ours_cdr'), ('_codec', 'raw_codec')):
             out[f'overhead_ratio{suffix}'] = round(out[f'{name}_latency_median_us'] / out['raw_latency_median_us'], 2)
             per_round = [a / b for a, b in zip(medians[name], medians['raw'], strict=True)]
             out[f'overhead_ratio{suffix}_rounds'] = [round(min(per_round), 2), round(max(per_round), 2)]

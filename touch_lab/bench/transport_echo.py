@@ -6,7 +6,9 @@
   message on ``/bench/<kind>/pong`` (decoded and encoded again, as a node would), and a
   raw subscription on ``/bench/<kind>/ping_cdr`` republishing the CDR bytes on ``.../pong_cdr``;
 - ``raw``: plain cyclonedds, a wait set on readers of ``rt/bench_raw/<kind>/ping`` that
-  writes the bytes it takes to ``rt/bench_raw/<kind>/pong``.
+  writes the bytes it takes to ``rt/bench_raw/<kind>/pong``, and on readers of
+  ``rt/bench_codec/<kind>/ping`` that decode the bytes with our codec and write them encoded
+  again to ``rt/bench_codec/<kind>/pong`` (plain cyclonedds plus our codec, no runtime).
 
 It prints ``ready`` once its endpoints exist and exits when its stdin closes.
 """
@@ -68,23 +70,29 @@ def _raw(kinds: list[str], stop: threading.Event) -> None:
     participant = DomainParticipant(domain)
     qos = dds_qos(BENCH_QOS)
     waitset = WaitSet(participant._ref)
-    routes = {}
+    routes = {}  # wait set key -> (reader, writer, type name to decode and encode again or None)
     keep = []
     mask = SampleState.Any | ViewState.Any | InstanceState.Any
-    for key, kind in enumerate(kinds, start=1):
+    for kind in kinds:
         cls = idl_struct(KINDS[kind])
-        reader = DataReader(participant, Topic(participant, f'rt/bench_raw/{kind}/ping', cls), qos)
-        writer = DataWriter(participant, Topic(participant, f'rt/bench_raw/{kind}/pong', cls), qos)
-        condition = ReadCondition(reader, mask)
-        waitset.attach(condition._ref, key)
-        routes[key] = (reader._ref, writer._ref)
-        keep += [reader, writer, condition]
+        for prefix, typename in (('bench_raw', None), ('bench_codec', KINDS[kind])):
+            reader = DataReader(participant, Topic(participant, f'rt/{prefix}/{kind}/ping', cls), qos)
+            writer = DataWriter(participant, Topic(participant, f'rt/{prefix}/{kind}/pong', cls), qos)
+            condition = ReadCondition(reader, mask)
+            key = len(routes) + 1
+            waitset.attach(condition._ref, key)
+            routes[key] = (reader._ref, writer._ref, typename)
+            keep += [reader, writer, condition]
     print('ready', flush=True)
     while not stop.is_set():
         for key in waitset.wait(100_000_000):
             if key in routes:
-                reader_ref, writer_ref = routes[key]
-                for data, _info in ddspy_take(reader_ref, mask, 256):
+                reader_ref, writer_ref, typename = routes[key]
+                for data, info in ddspy_take(reader_ref, mask, 256):
+                    if not info.valid_data:
+                        continue  # a writer went away (as the runtime's readers skip it)
+                    if typename is not None:
+                        data = messages.serialize(messages.deserialize(data, typename))
                     ddspy_write(writer_ref, data)
     del keep
     delete_entity(participant)
