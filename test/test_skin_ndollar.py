@@ -139,7 +139,7 @@ def test_start_angle_pruning_and_same_strokes_only_leave_templates_out():
     rng = np.random.default_rng(5)
     train, labels = codebook(rng, per_class=3, shuffle=True)
     # No rotation: within 45 degrees a plus is an X turned (the pruning is what is tested here).
-    pruned = NDollarRecogniser(max_distance=None, max_rotation_deg=0).fit(train, labels)
+    pruned = NDollarRecogniser(max_distance=None, max_rotation_deg=0, same_strokes=False).fit(train, labels)
     full = clone(pruned).set_params(start_angle_deg=None).fit(train, labels)
     counted = clone(pruned).set_params(same_strokes=True).fit(train, labels)
     limit = math.radians(pruned.start_angle_deg)
