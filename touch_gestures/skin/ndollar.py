@@ -49,9 +49,9 @@ virtual skin, :func:`touch_lab.skin.cli.evaluate_file` with the parameters set):
 skin has a fixed frame, and within 45 degrees a plus is an X turned) was more accurate than $N's
 45 degrees in every fold (a few more random touches fire: 1.7 % against 0.6 %). ``same_strokes`` raised
 the accuracy further, but let about six times as many random touches fire (a touch of one stroke
-meets only the classes drawn with one stroke, so no runner-up makes it ambiguous), and it cannot
-read a person who writes a symbol with more or fewer strokes than the codebook's: off by
-default. The start-angle pruning changed the accuracy less than either and saves about three
+meets only the classes drawn with one stroke, so no runner-up makes it ambiguous), and a symbol
+written with a stroke count its class's templates lack is matched against the other classes
+only: off by default. The start-angle pruning changed the accuracy less than either and saves about three
 quarters of the comparisons.
 
 ``_distances`` gives one distance per codebook template: the smallest over its unistrokes
