@@ -84,8 +84,7 @@ def test_each_unistroke_is_the_template_strokes_joined_in_its_order_and_directio
     ids = np.repeat(np.arange(3), 20)
     for order in expansion_orders(3, 3):
         retraced = np.concatenate([strokes[s][::-1] if rev else strokes[s] for s, rev in order])
-        vec, _, k = rec._expand(ink_features(retraced, ids, rec.ink_points), orders=(((0, False), (1, False),
-                                                                                     (2, False)),))
+        vec, _, k = rec._expand(ink_features(retraced, ids, rec.ink_points), as_traced=True)
         assert k == 3
         assert np.abs(stored - vec[0]).max(axis=1).min() < 1e-5   # float32 storage of numbers <= 1
 
@@ -149,7 +148,7 @@ def test_start_angle_pruning_and_same_strokes_only_leave_templates_out():
         d_full = full._distances(features)
         d_pruned = pruned._distances(features)
         # By brute force: the unistrokes that start within 30 degrees of the query (across +-pi too).
-        vec, angles, _ = pruned._expand(features, orders=(tuple((s, False) for s in range(q.strokes)),))
+        vec, angles, _ = pruned._expand(features, as_traced=True)
         turn = np.abs(np.angle(np.exp(1j * (pruned._angles - angles[0]))))
         d_each = full._distances(features)   # per template with all compared: the lower bound
         expected = np.full(len(d_full), np.inf)

@@ -147,6 +147,8 @@ def _resample_paths(paths: np.ndarray, n: int) -> np.ndarray:
     """(U, m, 2) polylines -> (U, n, 2) points equally spaced along each (jumps count); a path
     that never moves gives n copies of its first point. One searchsorted for all rows."""
     U, m, _ = paths.shape
+    if U == 1:   # a query: the single-path resampling has fewer numpy calls (us per recognition)
+        return arc_length_resample(paths[0], n)[None]
     step = np.hypot(*np.moveaxis(np.diff(paths, axis=1), -1, 0))          # (U, m - 1)
     cum = np.concatenate([np.zeros((U, 1)), np.cumsum(step, axis=1)], axis=1)
     total = cum[:, -1:]
@@ -273,10 +275,13 @@ class NDollarRecogniser(TemplateRecogniser):
         cuts = np.flatnonzero(sid[1:] != sid[:-1]) + 1
         return np.split(pts, cuts)
 
-    def _expand(self, features: np.ndarray, orders: tuple | None = None) -> tuple[np.ndarray, np.ndarray, int]:
-        """A template's or query's unistrokes: (U, 2 n) unit vectors, (U,) start angles, its strokes."""
+    def _expand(self, features: np.ndarray, as_traced: bool = False) -> tuple[np.ndarray, np.ndarray, int]:
+        """A template's unistrokes, or with ``as_traced`` the query's one (its strokes in traced order):
+        (U, 2 n) unit vectors, (U,) start angles, and the number of strokes."""
         strokes = self._strokes(features)
-        if orders is None:
+        if as_traced:
+            orders = (tuple((s, False) for s in range(len(strokes))),)
+        else:
             orders = expansion_orders(len(strokes), self.permuted_strokes, self.reverse_strokes)
         backwards = [s[::-1] for s in strokes]
         paths = np.stack([np.concatenate([backwards[s] if rev else strokes[s] for s, rev in order])
@@ -339,8 +344,7 @@ class NDollarRecogniser(TemplateRecogniser):
         return np.where(a >= h * c, h, a * c + np.abs(b) * s)
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
-        k = len(self._strokes(query))
-        vec, angles, _ = self._expand(query, orders=(tuple((s, False) for s in range(k)),))
+        vec, angles, k = self._expand(query, as_traced=True)
         queries = np.empty((2, vec.shape[1]), dtype=np.float32)
         queries[0] = vec[0]
         queries[1, 0::2], queries[1, 1::2] = vec[0, 1::2], -vec[0, 0::2]   # turned by 90 degrees
