@@ -2,8 +2,8 @@
 
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, and ``auto``, which picks it for
-multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
+issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, and ``auto``, which picks
+``cloud`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it
 while a gesture is traced.
@@ -71,7 +71,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         us, cpu_us = _median_us(model.predict, probe, repeats)
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                     'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_)}
-        if name in ('cloud', 'auto'):
+        if name in ('cloud', 'ndollar', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
             halves = [TouchGesture.from_trajectory(g.trajectory[:max(1, len(g.trajectory) // 2)],
