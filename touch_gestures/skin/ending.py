@@ -16,9 +16,20 @@ of a P, an H with one bar to go). :class:`GestureEnd` asks the codebook:
   only 2-stroke X's says the first bar is not yet an X). Used where the codebook knows
   each template's strokes (a codebook fitted from gestures: ``template_strokes_``).
 
+The answer is a :class:`~.segmentation.Verdict`: ``WHOLE`` (the lift ends the gesture),
+``PREFIX`` (whole and prefix compared, the prefix won: wait for a next stroke up to the
+segmenter's bound) or, with ``unfinished``, ``UNFINISHED``: the nearest class was never
+written with so few strokes in the codebook, so the strokes so far can be no whole gesture
+(the rejection's own stroke evidence, :mod:`.evidence`, would turn them away: ending them fires
+nothing). Those wait as long as a gesture may last (the segmenter's ``max_duration_s``): people
+pause longer than the bound inside a symbol now and then, often after a first stroke that
+is no gesture on its own (the first of a six-point star's two triangles; per class:
+``social-touch eval skin-ending``, docs/skin-multistroke.md). What it costs: a touch after such strokes, within
+that time, joins them (a person who gives up half a star and starts an X within 10 s).
+
 :class:`~.segmentation.GestureSegmenter` asks the rule once a lift reaches its short gap
-and, when the strokes look incomplete, waits for the next stroke up to its longer bound.
-The rule costs one prefix match (a few recognitions) per lift, never per frame.
+and, when the strokes look incomplete, waits for the next stroke. The rule costs one prefix
+match (a few recognitions) per lift, never per frame.
 """
 
 from __future__ import annotations
@@ -28,28 +39,33 @@ import numpy as np
 from .base import TemplateRecogniser
 from .early import PrefixMatcher
 from .gesture import TouchGesture
-from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S
+from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S, Verdict
 
 __all__ = ['GestureEnd', 'vocabulary_ending']
 
 
 class GestureEnd:
-    """``complete(gesture)``: are the strokes so far a whole gesture of the codebook (module doc)?
+    """``verdict(gesture)`` (also the call): are the strokes so far a whole gesture of the codebook
+    (module doc)? ``complete(gesture)``: the verdict is ``WHOLE``.
 
     Args:
         recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose).
         margin: how much nearer (relative) a whole template must be than the best prefix.
         strokes: also require the nearest class to have templates of at most the strokes traced.
+        unfinished: strokes fewer than every template of the nearest class has are ``UNFINISHED``
+            (wait as long as a gesture may last) rather than a ``PREFIX`` (needs ``strokes``).
 
     Raises:
         ValueError: a recogniser without ordered points (see :class:`~.early.PrefixMatcher`).
     """
 
-    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True) -> None:
+    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True,
+                 unfinished: bool = True) -> None:
         if not (np.isfinite(margin) and margin >= 0):
             raise ValueError(f'margin must be a finite fraction >= 0, got {margin}')
         self.matcher = PrefixMatcher(recogniser)
         self.margin = float(margin)
+        self.unfinished = bool(unfinished)
         chosen = self.matcher.recogniser
         counts = getattr(chosen, 'template_strokes_', None) if strokes else None
         # Fewest strokes of each class's templates (n_classes,); None when the codebook does not know them.
@@ -58,19 +74,23 @@ class GestureEnd:
             counts = np.asarray(counts)
             self.class_min_strokes = np.minimum.reduceat(counts, chosen.class_starts_)
 
-    def complete(self, gesture: TouchGesture) -> bool:
-        """True when ``gesture`` (the strokes so far) is a whole gesture; an unusable one is (nothing to wait for)."""
+    def verdict(self, gesture: TouchGesture) -> Verdict:
+        """What ``gesture`` (the strokes so far) is (module doc); an unusable one is whole (nothing to wait for)."""
         per_fraction = self.matcher.fraction_distances(gesture)
         if per_fraction is None:
-            return True
+            return Verdict.WHOLE
         whole = per_fraction[-1]             # the matcher's fractions end at 1: the whole templates
         best = int(np.argmin(whole))
         if self.class_min_strokes is not None and self.class_min_strokes[best] > int(gesture.strokes):
-            return False
+            return Verdict.UNFINISHED if self.unfinished else Verdict.PREFIX
         prefix = min((float(d.min()) for d in per_fraction[:-1]), default=np.inf)
-        return float(whole[best]) * (1.0 + self.margin) <= prefix
+        return Verdict.WHOLE if float(whole[best]) * (1.0 + self.margin) <= prefix else Verdict.PREFIX
 
-    __call__ = complete
+    def complete(self, gesture: TouchGesture) -> bool:
+        """True when ``gesture`` (the strokes so far) is a whole gesture (:meth:`verdict` is ``WHOLE``)."""
+        return self.verdict(gesture) is Verdict.WHOLE
+
+    __call__ = verdict
 
 
 def vocabulary_ending(recogniser: TemplateRecogniser, max_strokes: int | None = None
