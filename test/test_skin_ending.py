@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from skin_testing import command_node_parameters
-from test_skin_multistroke import RATE, SYMBOLS, codebook, feed, polyline
+from test_skin_multistroke import RATE, SYMBOLS, codebook, feed, polyline, symbol
 
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.ending import GestureEnd
@@ -58,7 +58,7 @@ def test_a_whole_one_stroke_gesture_ends_at_the_short_gap(ending):
 
 def test_the_bound_ends_a_prefix_that_never_completes(ending):
     rng = np.random.default_rng(5)
-    prefix_rule = GestureEnd(ending.matcher.recogniser, unfinished=False)   # fewer strokes than H's: a prefix
+    prefix_rule = GestureEnd(ending.recogniser, unfinished=False)   # fewer strokes than H's: a prefix
     seg = GestureSegmenter(gap_s=GAP, wait_s=WAIT, is_complete=prefix_rule)
     _, t = feed(seg, polyline(SYMBOLS['H'][0], 60, rng), 0.0)
     _, t = lift(seg, 0.3, t)
@@ -171,7 +171,7 @@ def test_joined_pieces_wait_for_unfinished_strokes_as_the_segmenter_does(ending)
     slow = pieces_with([0.3, 5.0])                          # a 5 s pause after two bars: past the bound
     joined, latency = join_pieces(slow, GAP, WAIT, ending)
     assert [g.strokes for g in joined] == [3] and latency == [GAP]
-    prefix_rule = GestureEnd(ending.matcher.recogniser, unfinished=False)
+    prefix_rule = GestureEnd(ending.recogniser, unfinished=False)
     cuts = list(cut_pieces(slow, GAP, WAIT, prefix_rule))
     assert [(c.gesture.strokes, c.reason, c.verdict) for c in cuts] == [(2, 'bound', Verdict.PREFIX),
                                                                         (1, 'end', Verdict.PREFIX)]
@@ -208,13 +208,13 @@ def test_the_causes_and_the_table_count_what_cut_each_sample():
     def causes(rule):
         return ending_eval.ending_causes(samples, CloudRecogniser, strokes, GAP, WAIT, rule)
 
-    after, before = causes('unfinished'), causes('prefix')
+    after, before = causes('strokes-unfinished'), causes('fractions')
     assert after['per_class']['H']['whole'] == 9 and after['per_class']['H']['pause over the bound'] == 1
     assert before['per_class']['H']['whole'] == 8 and before['per_class']['H']['pause over the bound'] == 2
     assert after['totals']['samples'] == len(samples) and after['per_class']['circle']['whole'] == 8
     assert after['rendering'] == {'circle': {'strokes joined': 1, 'stroke broken': 0}}
     assert sum(after['bound_pauses'].values()) == 1 and after['bound_pauses']['10-inf s'] == 1
-    configs = [(GAP, WAIT, 'prefix'), (GAP, WAIT, 'unfinished'), (GAP, None, None)]
+    configs = [(GAP, WAIT, 'fractions'), (GAP, WAIT, 'strokes-unfinished'), (GAP, None, None)]
     rows = ending_eval.ending_table(samples, CloudRecogniser, configs)
     assert [round(r['whole'] * len(samples)) for r in rows] == [16, 17, 16]
     assert rows[2]['latency_median_s'] == GAP and rows[2]['waits_after'] == 0
@@ -253,3 +253,27 @@ def test_strokes_that_keep_coming_are_cut_at_the_limit_once():
         o, t = lift(seg, 1.0, t)
         out += o
     assert [g.truncated for g in out] == [True] and seg.stats.truncated == 1
+
+
+def test_stroke_prefixes_cut_templates_between_strokes_and_fall_back_to_fractions(ending):
+    from touch_gestures.skin.early import PrefixMatcher
+
+    assert ending.prefixes == 'strokes' and sorted(ending._stroke_prefixes) == [1, 2]
+    # k = 1: the X's and H's (more than one stroke); k = 2: the H's only.
+    assert [len(m.templates_) for m in ending._stroke_prefixes.values()] == [20, 10]
+    assert list(ending._stroke_prefixes[2].classes_) == ['H']
+    rng = np.random.default_rng(12)
+    x = symbol('X', rng)
+    first_bar = TouchGesture.from_trajectory(x.trajectory[x.stroke == 0])
+    assert ending(x) is Verdict.WHOLE and ending(first_bar) is not Verdict.WHOLE
+    # Per-template fractions cut each template as one fraction would.
+    points = rng.normal(size=(3, 16, 2))
+    both = PrefixMatcher._prefixes(points, np.array([0.5, 0.25, 0.5]), 'cloud')
+    np.testing.assert_allclose(both[1], PrefixMatcher._prefixes(points[1:2], 0.25, 'cloud')[0], atol=1e-6)
+    np.testing.assert_allclose(both[[0, 2]], PrefixMatcher._prefixes(points[[0, 2]], 0.5, 'cloud'), atol=1e-6)
+    # A codebook that does not know its templates' strokes (an older file): the fractions.
+    old = CloudRecogniser().fit([x, first_bar], ['X', 'bar'])
+    old.set_codebook(old.templates_, old.classes_[old.template_labels_])
+    assert GestureEnd(old).prefixes == 'fractions' and GestureEnd(old).class_min_strokes is None
+    with pytest.raises(ValueError, match='prefixes'):
+        GestureEnd(old, prefixes='halves')

@@ -1,7 +1,7 @@
 """``social-touch eval skin-ending``: which samples the end of a gesture cuts, and why; the rules side by side.
 
     social-touch eval skin-ending --traces ../shared/data/multistroke_dev.csv.gz [--gap 1] [--wait 3]
-        [--rule unfinished|prefix] [--limit N] [--json]
+        [--rule strokes-unfinished|fractions-unfinished|fractions] [--limit N] [--json]
 
 The samples are rendered through the virtual skin into pieces once (cached, shared with
 ``eval skin``), then cut leave-one-person-out with the cloud codebook of the other people
@@ -21,7 +21,7 @@ from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
-from touch_lab.skin.ending_eval import CAUSES, PIECE_GAP_S, RULES, ending_causes, ending_table
+from touch_lab.skin.ending_eval import CAUSES, DEFAULT_RULE, PIECE_GAP_S, RULES, ending_causes, ending_table
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
 __all__ = ['HELP', 'add_arguments', 'format_text', 'run']
@@ -39,8 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         f'(default {ENDING_GAP_S})')
     parser.add_argument('--wait', type=float, default=ENDING_WAIT_S, help='longest lift that continues a prefix, s '
                         f'(default {ENDING_WAIT_S}; 0: a fixed gap)')
-    parser.add_argument('--rule', choices=tuple(RULES), default='unfinished',
-                        help='the rule of the causes table (default unfinished: touch_gestures.skin.ending)')
+    parser.add_argument('--rule', choices=tuple(RULES), default=DEFAULT_RULE,
+                        help=f'the rule of the causes table (default {DEFAULT_RULE}: touch_gestures.skin.ending; '
+                             'touch_lab.skin.ending_eval.RULES)')
     parser.add_argument('--limit', type=int, default=None, help='use only the first N samples of the file')
     parser.add_argument('--no-table', action='store_true', help='skip the end-of-gesture table (the rules compared)')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
@@ -73,11 +74,11 @@ def format_text(report: dict) -> str:
     if report.get('table'):
         lines += ['', 'the end-of-gesture table (leave-one-person-out, cloud; accuracy over all samples, rejection '
                   'off; waits after: whole samples the segmenter still waited after, of them to the limit):', '',
-                  f"{'gap s':>6s} {'bound s':>8s} {'rule':>11s} {'whole %':>8s} {'acc %':>7s} "
+                  f"{'gap s':>6s} {'bound s':>8s} {'rule':>20s} {'whole %':>8s} {'acc %':>7s} "
                   f"{'lat mean':>9s} {'lat med':>8s} {'waits after %':>14s} {'to limit %':>11s}"]
         for x in report['table']:
             bound = 'fixed' if x['wait_s'] is None else f"{x['wait_s']:g}"
-            lines.append(f"{x['gap_s']:6g} {bound:>8s} {x['rule'] or '-':>11s} {100 * x['whole']:8.2f} "
+            lines.append(f"{x['gap_s']:6g} {bound:>8s} {x['rule'] or '-':>20s} {100 * x['whole']:8.2f} "
                          f"{100 * x['accuracy']:7.2f} {x['latency_mean_s']:9.2f} {x['latency_median_s']:8.2f} "
                          f"{100 * x['waits_after']:14.2f} {100 * x['waits_to_limit']:11.2f}")
     return '\n'.join(lines)

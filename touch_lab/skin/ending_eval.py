@@ -35,8 +35,8 @@ from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.segmentation import Verdict, verdict_of
 from touch_sim.skin.render import RenderedSample
 
-__all__ = ['CAUSES', 'ENDING_CONFIGS', 'FRAME_PERIOD_S', 'PIECE_GAP_S', 'Cut', 'cut_pieces', 'ending_causes',
-           'ending_table', 'join_pieces', 'merge_pieces']
+__all__ = ['CAUSES', 'DEFAULT_RULE', 'ENDING_CONFIGS', 'FRAME_PERIOD_S', 'PIECE_GAP_S', 'RULES', 'Cut', 'cut_pieces',
+           'ending_causes', 'ending_table', 'join_pieces', 'merge_pieces']
 
 #: The gap (s) samples are rendered at before joining: no shorter gap can be measured from them.
 PIECE_GAP_S = 0.15
@@ -147,15 +147,21 @@ def join_pieces(pieces: Sequence[TouchGesture], gap_s: float, wait_s: float | No
     return [c.gesture for c in cuts], [c.latency_s for c in cuts]
 
 
-#: The end-of-gesture rules compared (:class:`GestureEnd` options): ``prefix``, strokes fewer than the
-#: nearest class ever shows wait the bound like any prefix (before); ``unfinished``, they wait until
-#: the gesture's limit (the default).
-RULES: dict[str, dict[str, bool]] = {'prefix': {'unfinished': False}, 'unfinished': {'unfinished': True}}
+#: The end-of-gesture rules compared (:class:`GestureEnd` options). ``fractions``: whole templates against
+#: prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the bound
+#: like any prefix (the rule before); ``fractions-unfinished``: those wait until the gesture's limit;
+#: ``strokes-unfinished`` (the default): prefixes cut between strokes, and the limit.
+RULES: dict[str, dict[str, object]] = {
+    'fractions': {'prefixes': 'fractions', 'unfinished': False},
+    'fractions-unfinished': {'prefixes': 'fractions', 'unfinished': True},
+    'strokes-unfinished': {'prefixes': 'strokes', 'unfinished': True}}
+#: The rule of :class:`GestureEnd`'s defaults.
+DEFAULT_RULE = 'strokes-unfinished'
 
 #: (gap_s, wait_s, rule) the report compares: fixed gaps (wait None) and the rules at a few bounds.
 ENDING_CONFIGS: tuple[tuple[float, float | None, str | None], ...] = (
-    (1.0, None, None), (1.5, None, None), (3.0, None, None), (1.0, 3.0, 'prefix'), (0.75, 3.0, 'unfinished'),
-    (1.0, 3.0, 'unfinished'), (1.0, 5.0, 'unfinished'))
+    (1.0, None, None), (1.5, None, None), (3.0, None, None), (1.0, 3.0, 'fractions'),
+    (1.0, 3.0, 'fractions-unfinished'), (0.75, 3.0, DEFAULT_RULE), (1.0, 3.0, DEFAULT_RULE), (1.0, 5.0, DEFAULT_RULE))
 
 #: Why a sample is not one gesture (:func:`ending_causes`), in table order.
 CAUSES = ('ended as whole', 'pause over the bound', 'pause over the limit', 'longer than the limit',
@@ -197,7 +203,8 @@ def ending_table(pieces: Sequence[RenderedSample], make: Callable[[], TemplateRe
     people's samples cut at ``codebook_gap_s``, the same for every row."""
     counts = {c: [0, 0, [], 0, 0] for c in configs}   # whole, correct, latencies, waits after, ...to the limit
     for subject, recogniser, held_out in _folds(pieces, make, codebook_gap_s):
-        rules = {name: GestureEnd(recogniser, **options) for name, options in RULES.items()}
+        used = {rule for _, wait_s, rule in configs if wait_s and rule}
+        rules = {name: GestureEnd(recogniser, **RULES[name]) for name in used}  # type: ignore[arg-type]
         for r in held_out:
             for gap_s, wait_s, rule in configs:
                 cuts = _kept(list(cut_pieces(r.gestures, gap_s, wait_s, rules[rule] if wait_s and rule else None)))
@@ -220,7 +227,7 @@ def ending_table(pieces: Sequence[RenderedSample], make: Callable[[], TemplateRe
 
 def ending_causes(pieces: Sequence[RenderedSample], make: Callable[[], TemplateRecogniser],
                   file_strokes: Mapping[tuple[str, str, str, str], int] | None = None, gap_s: float = 1.0,
-                  wait_s: float | None = 3.0, rule: str | None = 'unfinished', codebook_gap_s: float = 3.0,
+                  wait_s: float | None = 3.0, rule: str | None = DEFAULT_RULE, codebook_gap_s: float = 3.0,
                   progress: Callable[[str], None] | None = None) -> dict:
     """Why samples are not one gesture, per class, leave-one-person-out (``social-touch eval skin-ending``).
 
@@ -244,7 +251,7 @@ def ending_causes(pieces: Sequence[RenderedSample], make: Callable[[], TemplateR
     bins = (0.0, 3.0, 5.0, 10.0, np.inf)
     pauses = [0] * (len(bins) - 1)
     for subject, recogniser, held_out in _folds(pieces, make, codebook_gap_s):
-        ending = GestureEnd(recogniser, **RULES[rule]) if rule and wait_s else None
+        ending = GestureEnd(recogniser, **RULES[rule]) if rule and wait_s else None  # type: ignore[arg-type]
         for r in held_out:
             row = per_class.setdefault(r.label, {c: 0 for c in ('samples', 'whole', *CAUSES)})
             row['samples'] += 1

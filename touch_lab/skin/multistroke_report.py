@@ -82,10 +82,11 @@ def _vocabulary_section(r: dict) -> list[str]:
                 '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
     if r.get('ending_table'):
         out += ['', 'The end of a gesture (cloud, leave-one-person-out, codebook cut at 3 s; accuracy over all '
-                'samples, rejection off; a fixed gap has no bound; rule `prefix`: strokes fewer than the nearest '
-                'class ever shows wait the bound like any prefix, `unfinished`: they wait until the limit of a '
-                'gesture, 10 s from its start; waits after: whole samples after which the segmenter still waited, '
-                'so that a next touch within the wait would have joined them, of them to the limit):', '',
+                'samples, rejection off; a fixed gap has no bound; rule `fractions`: whole templates against '
+                'prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the '
+                'bound like any prefix; `-unfinished`: those wait until the limit of a gesture, 10 s from its start; '
+                '`strokes-`: prefixes cut between strokes; waits after: whole samples after which the segmenter '
+                'still waited, so that a next touch within the wait would have joined them, of them to the limit):', '',
                 '| gap s | bound s | rule | whole % | accuracy % | latency s mean | latency s median | '
                 'waits after % (to the limit) |', '|---|---|---|---|---|---|---|---|']
         for x in r['ending_table']:
@@ -125,7 +126,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
              'gestures. Leave-one-person-out only.', '',
              f'End of a gesture: in a vocabulary with multi-stroke gestures a lift of {ENDING_GAP_S} s ends strokes '
              f'the codebook calls a whole gesture, strokes that look like the beginning of a longer one wait up to '
-             f'{ENDING_WAIT_S} s, strokes fewer than the nearest class was ever written with wait until the limit of '
+             f'{ENDING_WAIT_S} s (the templates cut between strokes tell which), strokes fewer than the nearest class '
+             'was ever written with wait until the limit of '
              f'a gesture (10 s from its start; touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every '
              'gesture otherwise.',
              '']
