@@ -47,7 +47,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
     # Targets of the lab's commands (touch_lab.cli.targets): add_arguments(parser), run(args), HELP.
     'social_touch.eval': ['bear = touch_lab.bear.cli', 'patch = touch_lab.patch.cli:EVAL', 'skin = touch_lab.skin.cli',
                           'skin-sessions = touch_lab.skin.session_eval', 'adapt = touch_lab.adapt_measure',
-                          'skin-collisions = touch_lab.skin.collision_eval'],
+                          'skin-collisions = touch_lab.skin.collision_eval', 'skin-ending = touch_lab.skin.ending_cli'],
     'social_touch.train': ['bear = touch_lab.bear.train', 'patch = touch_lab.patch.cli:TRAIN',
                            'skin = touch_lab.skin.train_cli'],
     'social_touch.codebook': ['record = touch_lab.skin.record_cli', 'info = touch_lab.skin.codebook_cli:INFO',

@@ -94,14 +94,17 @@ class PrefixMatcher:
             self._matchers.append(m)
 
     @staticmethod
-    def _prefixes(points: np.ndarray, fraction: float, kind: str) -> np.ndarray:
-        """(T, n, 2) -> (T, n, 2): each template's first ``fraction`` of points, resampled to n, normalised."""
+    def _prefixes(points: np.ndarray, fraction: float | np.ndarray, kind: str) -> np.ndarray:
+        """(T, n, 2) -> (T, n, 2): each template's first ``fraction`` of points (one number, or (T,) one
+        per template), resampled to n, normalised."""
         n = points.shape[1]
-        source = np.linspace(0.0, fraction * (n - 1), n)   # positions along the template's point index
+        f = np.broadcast_to(np.asarray(fraction, dtype=np.float64), (len(points),))
+        source = np.linspace(0.0, 1.0, n)[None, :] * (f[:, None] * (n - 1))   # (T, n) positions along the points
         lo = np.floor(source).astype(np.intp)
         hi = np.minimum(lo + 1, n - 1)
-        w = (source - lo)[None, :, None]
-        return _normalise(points[:, lo] * (1 - w) + points[:, hi] * w, kind).astype(np.float32)
+        w = (source - lo)[..., None]
+        rows = np.arange(len(points))[:, None]
+        return _normalise(points[rows, lo] * (1 - w) + points[rows, hi] * w, kind).astype(np.float32)
 
     def fraction_distances(self, gesture: TouchGesture) -> list[np.ndarray] | None:
         """Per fraction (in :attr:`fractions` order), the (n_classes,) float64 distance of ``gesture``

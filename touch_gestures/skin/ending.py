@@ -6,71 +6,129 @@ strokes traced so far either look like a whole gesture of the vocabulary (a line
 finished X) or like the beginning of one with more strokes (the first bar of an X, the stem
 of a P, an H with one bar to go). :class:`GestureEnd` asks the codebook:
 
-- **whole or prefix** (``margin``): the strokes are matched against the whole templates and
-  against the templates' prefixes (their first quarter, half, three quarters along the
-  ink: :class:`~.early.PrefixMatcher`, the early decisions' own matcher). The strokes are
-  complete when a whole template is nearer than every prefix, by ``margin`` relative to the
-  prefix's distance (0: nearer at all);
+- **whole or prefix** (``margin``, ``prefixes``): the k strokes so far are matched against the
+  whole templates and against the prefixes of the templates with more strokes, cut after
+  their first k strokes (``'strokes'``: a template of n strokes cut at k/n of its ink, the
+  codebook keeping each template's stroke count but not where its strokes end), or, where
+  the codebook does not know its templates' strokes (``'fractions'``), cut at a quarter,
+  half and three quarters of their ink (:class:`~.early.PrefixMatcher`, the early decisions'
+  own matcher). The strokes are complete when a whole template is nearer than every prefix,
+  by ``margin`` relative to the prefix's distance (0: nearer at all). A lift comes after a
+  whole stroke, so the prefixes cut between strokes are the ones to compare: measured on the
+  Mixed Multistroke traces (``social-touch eval skin-ending``, docs/skin-multistroke.md) they
+  keep about as many samples whole as the fractions and make far fewer whole gestures wait;
 - **stroke counts** (``strokes``): and the nearest whole class has templates of no more
   strokes than traced so far (people write a D with one stroke or two; a codebook that has
   only 2-stroke X's says the first bar is not yet an X). Used where the codebook knows
   each template's strokes (a codebook fitted from gestures: ``template_strokes_``).
 
+The answer is a :class:`~.segmentation.Verdict`: ``WHOLE`` (the lift ends the gesture),
+``PREFIX`` (whole and prefix compared, the prefix won: wait for a next stroke up to the
+segmenter's bound) or, with ``unfinished``, ``UNFINISHED``: the nearest class was never
+written with so few strokes in the codebook, so the strokes so far can be no whole gesture
+(the rejection's own stroke evidence, :mod:`.evidence`, would turn them away: ending them fires
+nothing). Those wait as long as a gesture may last (the segmenter's ``max_duration_s``): people
+pause longer than the bound inside a symbol now and then, often after a first stroke that
+is no gesture on its own (the first of a six-point star's two triangles; per class:
+``social-touch eval skin-ending``, docs/skin-multistroke.md). What it costs: a touch after such strokes, within
+that time, joins them (a person who gives up half a star and starts an X within 10 s).
+
 :class:`~.segmentation.GestureSegmenter` asks the rule once a lift reaches its short gap
-and, when the strokes look incomplete, waits for the next stroke up to its longer bound.
-The rule costs one prefix match (a few recognitions) per lift, never per frame.
+and, when the strokes look incomplete, waits for the next stroke. The rule costs one prefix
+match (a few recognitions) per lift, never per frame.
 """
 
 from __future__ import annotations
+
+import copy
 
 import numpy as np
 
 from .base import TemplateRecogniser
 from .early import PrefixMatcher
 from .gesture import TouchGesture
-from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S
+from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S, Verdict
 
-__all__ = ['GestureEnd', 'vocabulary_ending']
+__all__ = ['PREFIXES', 'GestureEnd', 'vocabulary_ending']
+
+#: The prefixes the whole templates are compared with (module doc).
+PREFIXES = ('strokes', 'fractions')
 
 
 class GestureEnd:
-    """``complete(gesture)``: are the strokes so far a whole gesture of the codebook (module doc)?
+    """``verdict(gesture)`` (also the call): are the strokes so far a whole gesture of the codebook
+    (module doc)? ``complete(gesture)``: the verdict is ``WHOLE``.
 
     Args:
         recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose).
         margin: how much nearer (relative) a whole template must be than the best prefix.
         strokes: also require the nearest class to have templates of at most the strokes traced.
+        unfinished: strokes fewer than every template of the nearest class has are ``UNFINISHED``
+            (wait as long as a gesture may last) rather than a ``PREFIX`` (needs ``strokes``).
+        prefixes: ``'strokes'`` (cut between strokes; ``'fractions'`` where the codebook does not know its
+            templates' strokes) or ``'fractions'`` (module doc); :attr:`prefixes` is the one used.
 
     Raises:
-        ValueError: a recogniser without ordered points (see :class:`~.early.PrefixMatcher`).
+        ValueError: a recogniser without ordered points (see :class:`~.early.PrefixMatcher`), bad options.
     """
 
-    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True) -> None:
+    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True,
+                 unfinished: bool = True, prefixes: str = 'strokes') -> None:
         if not (np.isfinite(margin) and margin >= 0):
             raise ValueError(f'margin must be a finite fraction >= 0, got {margin}')
+        if prefixes not in PREFIXES:
+            raise ValueError(f'prefixes must be one of {PREFIXES}, got {prefixes!r}')
         self.matcher = PrefixMatcher(recogniser)
+        self.recogniser = chosen = self.matcher.recogniser
         self.margin = float(margin)
-        chosen = self.matcher.recogniser
-        counts = getattr(chosen, 'template_strokes_', None) if strokes else None
+        self.unfinished = bool(unfinished)
+        known = getattr(chosen, 'template_strokes_', None)
+        counts = None if known is None else np.asarray(known)
         # Fewest strokes of each class's templates (n_classes,); None when the codebook does not know them.
         self.class_min_strokes: np.ndarray | None = None
-        if counts is not None:
-            counts = np.asarray(counts)
+        if counts is not None and strokes:
             self.class_min_strokes = np.minimum.reduceat(counts, chosen.class_starts_)
+        self.prefixes = 'fractions' if counts is None else prefixes
+        # k -> a copy of the recogniser whose codebook is the first k strokes of the templates with more.
+        self._stroke_prefixes: dict[int, TemplateRecogniser] = {}
+        if self.prefixes == 'strokes':
+            n = chosen.templates_.shape[1] // 2
+            points = chosen.templates_.reshape(-1, n, 2).astype(np.float64)
+            labels = chosen.classes_[chosen.template_labels_]
+            for k in range(1, int(counts.max())):     # type: ignore[union-attr]
+                longer = counts > k                     # type: ignore[operator]
+                cut = PrefixMatcher._prefixes(points[longer], k / counts[longer], chosen.name)  # type: ignore[index]
+                matcher = copy.deepcopy(chosen)
+                # Only distances are read: no rejection thresholds to calibrate.
+                matcher.set_codebook(cut.reshape(len(cut), -1), labels[longer],
+                                     class_thresholds=np.full(len(np.unique(labels[longer])), np.inf))
+                self._stroke_prefixes[k] = matcher
 
-    def complete(self, gesture: TouchGesture) -> bool:
-        """True when ``gesture`` (the strokes so far) is a whole gesture; an unusable one is (nothing to wait for)."""
-        per_fraction = self.matcher.fraction_distances(gesture)
-        if per_fraction is None:
-            return True
-        whole = per_fraction[-1]             # the matcher's fractions end at 1: the whole templates
+    def verdict(self, gesture: TouchGesture) -> Verdict:
+        """What ``gesture`` (the strokes so far) is (module doc); an unusable one is whole (nothing to wait for)."""
+        if self.prefixes == 'strokes':
+            query = self.recogniser._features(gesture)
+            if query is None:
+                return Verdict.WHOLE
+            whole = self.recogniser.query_class_distances(query)
+            longer = self._stroke_prefixes.get(int(gesture.strokes))
+            prefix = np.inf if longer is None else float(longer.query_class_distances(query).min())
+        else:
+            per_fraction = self.matcher.fraction_distances(gesture)
+            if per_fraction is None:
+                return Verdict.WHOLE
+            whole = per_fraction[-1]             # the matcher's fractions end at 1: the whole templates
+            prefix = min((float(d.min()) for d in per_fraction[:-1]), default=np.inf)
         best = int(np.argmin(whole))
         if self.class_min_strokes is not None and self.class_min_strokes[best] > int(gesture.strokes):
-            return False
-        prefix = min((float(d.min()) for d in per_fraction[:-1]), default=np.inf)
-        return float(whole[best]) * (1.0 + self.margin) <= prefix
+            return Verdict.UNFINISHED if self.unfinished else Verdict.PREFIX
+        return Verdict.WHOLE if float(whole[best]) * (1.0 + self.margin) <= prefix else Verdict.PREFIX
 
-    __call__ = complete
+    def complete(self, gesture: TouchGesture) -> bool:
+        """True when ``gesture`` (the strokes so far) is a whole gesture (:meth:`verdict` is ``WHOLE``)."""
+        return self.verdict(gesture) is Verdict.WHOLE
+
+    __call__ = verdict
 
 
 def vocabulary_ending(recogniser: TemplateRecogniser, max_strokes: int | None = None

@@ -17,7 +17,10 @@ the paper leaves open:
   With a rule that tells whether the strokes so far are a whole gesture of the vocabulary
   (:class:`~.ending.GestureEnd`), a lift of ``gap_s`` ends a complete gesture, while one
   that looks like the beginning of a gesture with more strokes (the first bar of an X, the
-  stem of a P) keeps waiting for its next stroke, up to a lift of ``wait_s``. The rule is
+  stem of a P) keeps waiting for its next stroke, up to a lift of ``wait_s``. Strokes that
+  can be no whole gesture at all (:attr:`Verdict.UNFINISHED`: the nearest class was never
+  written with so few strokes) would fire nothing if ended, so they wait as long as a gesture
+  may last: until ``max_duration_s`` after its start (and at least ``wait_s``). The rule is
   asked once per lift, when the lift reaches ``gap_s``.
 - **a limit**: a touch that never ends (a hand resting on the skin) is cut at
   ``max_duration_s`` and emitted with ``truncated=True``; the segmenter then waits for the
@@ -43,6 +46,7 @@ hysteresis residue elsewhere pull the pressure-weighted contact point anywhere o
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -52,7 +56,7 @@ from scipy import ndimage
 from .gesture import GRID, TouchGesture
 
 __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_GAP_S', 'GestureSegmenter',
-           'SegmenterStats', 'default_gap_s']
+           'SegmenterStats', 'Verdict', 'default_gap_s', 'verdict_of']
 
 #: Gap (s) for vocabularies of single-stroke gestures: joins a finger skipping between taxels.
 SINGLE_STROKE_GAP_S = 0.15
@@ -77,6 +81,26 @@ def default_gap_s(max_strokes: int) -> float:
     """
     return MULTISTROKE_GAP_S if max_strokes > 1 else SINGLE_STROKE_GAP_S
 
+
+class Verdict(enum.Enum):
+    """What the strokes so far are, asked when a lift reaches the gap (:class:`~.ending.GestureEnd`)."""
+
+    WHOLE = 'whole'            # a whole gesture of the vocabulary: the lift ends it
+    PREFIX = 'prefix'          # maybe the beginning of a longer one: wait for a next stroke up to wait_s
+    UNFINISHED = 'unfinished'  # no whole gesture at all: wait until max_duration_s after its start
+
+
+def verdict_of(answer: bool | Verdict) -> Verdict:
+    """A rule's answer as a :class:`Verdict`: ``True`` is whole, ``False`` a prefix.
+
+    >>> verdict_of(True), verdict_of(False), verdict_of(Verdict.UNFINISHED)
+    (<Verdict.WHOLE: 'whole'>, <Verdict.PREFIX: 'prefix'>, <Verdict.UNFINISHED: 'unfinished'>)
+    """
+    if isinstance(answer, Verdict):
+        return answer
+    return Verdict.WHOLE if answer else Verdict.PREFIX
+
+
 _EIGHT = np.ones((3, 3), dtype=bool)
 #: Lifts are differences of float64 seconds made from integer-nanosecond stamps (about 0.24 us apart
 #: at today's epoch): a lift of exactly gap_s frames could come out a rounding short and wait one
@@ -100,6 +124,7 @@ class SegmenterStats:
     waited: int = 0             # lifts of gap_s whose strokes looked incomplete: kept waiting
     waited_continued: int = 0   # ...that a next stroke then continued
     ended_at_bound: int = 0     # gestures ended by a lift of wait_s, never complete
+    ended_unfinished: int = 0   # ...of them, strokes that could be no whole gesture, ended at max_duration_s
 
 
 class GestureSegmenter:
@@ -124,8 +149,10 @@ class GestureSegmenter:
         max_frames: capacity of the per-gesture buffers; the gesture is cut when full.
         wait_s: with ``is_complete``, the longest lift (s) that may still continue a gesture
             whose strokes look incomplete; must be >= ``gap_s``. None: ``gap_s`` ends every gesture.
-        is_complete: ``is_complete(gesture_so_far) -> bool``: are these strokes a whole gesture
-            of the vocabulary (:class:`~.ending.GestureEnd`)? None: every lift of ``gap_s`` ends it.
+        is_complete: ``is_complete(gesture_so_far) -> bool | Verdict``: are these strokes a whole
+            gesture of the vocabulary (:class:`~.ending.GestureEnd`)? ``True``/``WHOLE``: the lift ends
+            it; ``False``/``PREFIX``: wait up to ``wait_s``; ``UNFINISHED``: wait until ``max_duration_s``
+            after its start (at least ``wait_s``). None: every lift of ``gap_s`` ends it.
 
     >>> seg = GestureSegmenter(gap_s=0.05, min_frames=2)
     >>> touch = np.zeros((12, 12), np.float32); touch[3, 4] = 1.0
@@ -138,7 +165,8 @@ class GestureSegmenter:
     def __init__(self, gap_s: float = SINGLE_STROKE_GAP_S, max_duration_s: float = 10.0, min_frames: int = 3,
                  map_threshold: float = 0.02, map_relative: float = 0.3, merge_gap_taxels: int = 2,
                  min_multi_frames: int = 3, multi_fraction: float = 0.25, max_frames: int = 3000,
-                 wait_s: float | None = None, is_complete: Callable[[TouchGesture], bool] | None = None) -> None:
+                 wait_s: float | None = None,
+                 is_complete: Callable[[TouchGesture], bool | Verdict] | None = None) -> None:
         if not gap_s >= 0:
             raise ValueError(f'gap_s must be >= 0 s, got {gap_s}')
         if not max_duration_s > 0:
@@ -186,7 +214,7 @@ class GestureSegmenter:
         self._start_t = 0.0
         self._last_contact_t = 0.0
         self._lifted = False
-        self._verdict: bool | None = None   # the rule's answer for the lift under way
+        self._verdict: Verdict | None = None   # the rule's answer for the lift under way
         self._peak.fill(0.0)
         self._binary.fill(False)
 
@@ -234,7 +262,7 @@ class GestureSegmenter:
             elif self._active:
                 self._lifted = True
                 lift = t - self._last_contact_t + _LIFT_TOLERANCE_S
-                if lift >= self.gap_s and self._ends(lift):
+                if lift >= self.gap_s and self._ends(lift, t):
                     self._finish(out, truncated=False)
             return out
         if self._suppressed:
@@ -243,7 +271,7 @@ class GestureSegmenter:
             self._active, self._start_t, self._stroke = True, t, 0
         elif self._lifted:
             self._stroke += 1
-            self.stats.waited_continued += self._verdict is False
+            self.stats.waited_continued += self._verdict not in (None, Verdict.WHOLE)
         self._lifted, self._verdict = False, None
         self._last_contact_t = t
         self._add(pressure, contact_xy_mm, t)
@@ -253,20 +281,25 @@ class GestureSegmenter:
             self._suppressed = True
         return out
 
-    def _ends(self, lift: float) -> bool:
-        """Whether a lift of ``lift`` s (>= gap_s) ends the gesture (module doc)."""
+    def _ends(self, lift: float, t: float) -> bool:
+        """Whether a lift of ``lift`` s (>= gap_s) at frame time ``t`` ends the gesture (module doc)."""
         if self.is_complete is None or self.wait_s is None:
             return True
         if self._verdict is None:
             so_far = self.partial()
-            self._verdict = so_far is None or bool(self.is_complete(so_far))
-            self.stats.waited += not self._verdict
-        if self._verdict:
+            self._verdict = Verdict.WHOLE if so_far is None else verdict_of(self.is_complete(so_far))
+            self.stats.waited += self._verdict is not Verdict.WHOLE
+        if self._verdict is Verdict.WHOLE:
             return True
-        if lift >= self.wait_s:
-            self.stats.ended_at_bound += 1
-            return True
-        return False
+        if lift < self.wait_s:
+            return False
+        if self._verdict is Verdict.UNFINISHED:
+            # As long as a gesture may last: a next stroke after that would be cut as truncated anyway.
+            if t - self._start_t + _LIFT_TOLERANCE_S < self.max_duration_s:
+                return False
+            self.stats.ended_unfinished += 1
+        self.stats.ended_at_bound += 1
+        return True
 
     def partial(self) -> TouchGesture | None:
         """The gesture under way so far (a copy), for decisions before the finger lifts; None when

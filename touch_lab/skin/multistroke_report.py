@@ -22,7 +22,7 @@ from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import summary as early_summary
-from touch_lab.skin.ending_eval import PIECE_GAP_S, ending_table
+from touch_lab.skin.ending_eval import CAUSES, PIECE_GAP_S, ending_causes, ending_table
 from touch_lab.skin.latency import bench_latency
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
@@ -82,14 +82,30 @@ def _vocabulary_section(r: dict) -> list[str]:
                 '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
     if r.get('ending_table'):
         out += ['', 'The end of a gesture (cloud, leave-one-person-out, codebook cut at 3 s; accuracy over all '
-                'samples, rejection off; a fixed gap has no bound):', '',
-                '| gap s | bound s | whole % | accuracy % | latency s mean | latency s median |',
-                '|---|---|---|---|---|---|']
+                'samples, rejection off; a fixed gap has no bound; rule `fractions`: whole templates against '
+                'prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the '
+                'bound like any prefix; `-unfinished`: those wait until the limit of a gesture, 10 s from its start; '
+                '`strokes-`: prefixes cut between strokes; waits after: whole samples after which the segmenter '
+                'still waited, so that a next touch within the wait would have joined them, of them to the limit):', '',
+                '| gap s | bound s | rule | whole % | accuracy % | latency s mean | latency s median | '
+                'waits after % (to the limit) |', '|---|---|---|---|---|---|---|---|']
         for x in r['ending_table']:
             bound = 'fixed' if x['wait_s'] is None else f"{x['wait_s']:g}"
-            out.append(f"| {x['gap_s']:g} | {bound} | "
+            out.append(f"| {x['gap_s']:g} | {bound} | {x['rule'] or '-'} | "
                        f"{_pct(x['whole'])} | {_pct(x['accuracy'])} | {x['latency_mean_s']:.2f} | "
-                       f"{x['latency_median_s']:.2f} |")
+                       f"{x['latency_median_s']:.2f} | {_pct(x['waits_after'])} ({_pct(x['waits_to_limit'])}) |")
+    if r.get('ending_causes'):
+        c = r['ending_causes']
+        t = c['totals']
+        out += ['', f"Why samples are not one gesture (cloud, gap {c['gap_s']:g} s, bound {c['wait_s']:g} s, rule "
+                f"`{c['rule']}`; per class: `social-touch eval skin-ending`): "
+                + ', '.join(f'{k} {t[k]}' for k in CAUSES if t[k]) + f" of {t['samples']}; strokes taken for a whole "
+                'gesture: ' + ('; '.join(f'{k} ({n})' for k, n in c['prefixes'].items()) or 'none')
+                + '; the lifts that cut at a bound or limit: ' + ', '.join(f'{k}: {n}' for k, n in
+                                                                           c['bound_pauses'].items())
+                + '. Samples the skin traced with fewer strokes than the file (two strokes joined): '
+                f"{sum(v['strokes joined'] for v in c['rendering'].values())}, with more (a stroke broken): "
+                f"{sum(v['stroke broken'] for v in c['rendering'].values())}."]
     if r.get('early'):
         out += ['', f"Early decisions (`{DEFAULT}`, one held-out gesture in {r['early_every']}), "
                 f"{early_summary(r['early'])}"]
@@ -110,16 +126,21 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
              'gestures. Leave-one-person-out only.', '',
              f'End of a gesture: in a vocabulary with multi-stroke gestures a lift of {ENDING_GAP_S} s ends strokes '
              f'the codebook calls a whole gesture, strokes that look like the beginning of a longer one wait up to '
-             f'{ENDING_WAIT_S} s (touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every gesture otherwise.',
+             f'{ENDING_WAIT_S} s (the templates cut between strokes tell which), strokes fewer than the nearest class '
+             'was ever written with wait until the limit of '
+             f'a gesture (10 s from its start; touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every '
+             'gesture otherwise.',
              '']
     for path in traces:
         _say(f'evaluating {path}')
         r = evaluate_file(path, list(RECOGNISERS), progress=_say, early_every=early_every)
         r['early_every'] = early_every
         if r['multi_stroke_samples']:
-            pieces = render_samples(read_traces(path).samples, RenderSettings(gap_s=PIECE_GAP_S, min_frames=1),
-                                    default_cache_dir())
+            samples = read_traces(path).samples
+            pieces = render_samples(samples, RenderSettings(gap_s=PIECE_GAP_S, min_frames=1), default_cache_dir())
             r['ending_table'] = ending_table(pieces, lambda: make_recogniser('cloud'), progress=_say)
+            r['ending_causes'] = ending_causes(pieces, lambda: make_recogniser('cloud'),
+                                               {s.key: s.n_strokes for s in samples}, progress=_say)
         lines += _vocabulary_section(r)
     _say('collisions')
     c = evaluate_collisions(per_kind)
