@@ -10,12 +10,12 @@ from hypothesis.extra.numpy import arrays
 
 from touch_gestures.skin.features import (
     arc_length_resample,
+    arc_length_resample_complex,
     bounding_box,
     minmax_normalise,
     nna_indices,
     nna_resample,
     nna_rescale,
-    resample_complex,
     shift_to_corner,
 )
 from touch_gestures.skin.proposed import time_bin_resample, trace_features
@@ -96,7 +96,7 @@ def test_resampling_as_complex_numbers_is_the_per_coordinate_one(points, strokes
     stroke = np.sort(np.asarray(strokes[: len(points)])) if with_strokes else None
     out = arc_length_resample(points, n, stroke)
     assert out.shape == (n, 2) and out.dtype == np.float64 and out.flags['C_CONTIGUOUS']
-    assert np.array_equal(out, resample_complex(points, n, stroke).view(np.float64).reshape(n, 2))
+    assert np.array_equal(out, arc_length_resample_complex(points, n, stroke).view(np.float64).reshape(n, 2))
     ref = per_coordinate_resample(points, n, stroke)
     # np.interp on complex numbers multiplies by 1 / (xp[j+1] - xp[j]) where the real one divides and may
     # associate differently: each coordinate's slope (at most 1 in size: |dx| <= the step) times the

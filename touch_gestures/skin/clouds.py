@@ -50,7 +50,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from .base import TemplateRecogniser
-from .features import resample_complex
+from .features import arc_length_resample_complex
 from .gesture import TouchGesture
 
 __all__ = ['CloudRecogniser', 'cloud_features']
@@ -71,9 +71,9 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     >>> f.reshape(4, 2).round(2).tolist()   # two strokes of 4: every 8/3 along the ink, none in the air
     [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
     """
-    cloud = resample_complex(points, n_points, stroke)      # (n,) x + 1j * y: fewer numpy calls
+    cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
     cloud -= cloud.sum() / n_points
-    xy = cloud.view(np.float64).reshape(n_points, 2)        # the same memory as (n, 2) x, y
+    xy = cloud.view(np.float64).reshape(n_points, 2)                # the same memory as (n, 2) x, y
     size = float((xy.max(axis=0) - xy.min(axis=0)).max())
     if size > 1e-9:
         xy /= size

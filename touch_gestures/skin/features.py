@@ -13,12 +13,12 @@ import numpy as np
 
 __all__ = [
     'arc_length_resample',
+    'arc_length_resample_complex',
     'bounding_box',
     'minmax_normalise',
     'nna_indices',
     'nna_resample',
     'nna_rescale',
-    'resample_complex',
     'shift_to_corner',
 ]
 
@@ -130,10 +130,10 @@ def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = 
     >>> arc_length_resample(np.array([[0.0, 0], [2, 0], [0, 5], [2, 5]]), 4, np.array([0, 0, 1, 1])).round(3).tolist()
     [[0.0, 0.0], [1.333, 0.0], [0.667, 5.0], [2.0, 5.0]]
     """
-    return resample_complex(points, n, stroke).view(np.float64).reshape(n, 2)
+    return arc_length_resample_complex(points, n, stroke).view(np.float64).reshape(n, 2)
 
 
-def resample_complex(points: np.ndarray, n: int, stroke: np.ndarray | None = None) -> np.ndarray:
+def arc_length_resample_complex(points: np.ndarray, n: int, stroke: np.ndarray | None = None) -> np.ndarray:
     """:func:`arc_length_resample` as (n,) complex128 ``x + 1j * y`` (x and y interleaved in memory).
 
     Few numpy calls on purpose: this runs once per recognition (us matter, issue 13). As complex
