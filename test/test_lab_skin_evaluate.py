@@ -141,6 +141,11 @@ def test_cli_errors_are_clear(tmp_path, capsys):
 
 
 def test_bench_smoke():
-    result = bench_recognition(['centroid', 'trace'], n_gestures=3, templates_per_gesture=2, queries=3, repeats=1)
-    assert set(result['recognisers']) == {'centroid', 'trace'} and result['data'] == 'synthetic gestures'
+    result = bench_recognition(['centroid', 'trace', 'cloud'], n_gestures=3, templates_per_gesture=2, queries=3,
+                               repeats=1)
+    assert set(result['recognisers']) == {'centroid', 'trace', 'cloud'} and result['data'] == 'synthetic gestures'
     assert result['recognisers']['trace']['templates'] == 6
+    # The parts of a recognition, each timed alone; the cloud's raster bounds besides.
+    assert set(result['recognisers']['trace']['steps_cpu_us']) == {'features', 'search', 'decision'}
+    assert set(result['recognisers']['cloud']['steps_cpu_us']) == {'features', 'search', 'decision', 'raster'}
+    assert all(np.isfinite(v) for v in result['recognisers']['cloud']['steps_cpu_us'].values())

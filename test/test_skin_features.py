@@ -10,6 +10,7 @@ from hypothesis.extra.numpy import arrays
 
 from touch_gestures.skin.features import (
     arc_length_resample,
+    arc_length_resample_complex,
     bounding_box,
     minmax_normalise,
     nna_indices,
@@ -74,6 +75,41 @@ def test_resamplers_on_one_point_and_a_finger_that_never_moves():
     assert arc_length_resample(still, 4).tolist() == [[3.0, 4.0]] * 4
     with pytest.raises(ValueError):
         arc_length_resample(np.zeros((0, 2)), 3)
+
+
+def per_coordinate_resample(points: np.ndarray, n: int, stroke: np.ndarray | None) -> np.ndarray:
+    """The definition, x and y interpolated apart along the ink (the resampling before complex numbers)."""
+    step = np.hypot(*np.diff(points, axis=0).T)
+    if stroke is not None:
+        step[np.diff(stroke) != 0] = 0.0
+    cum = np.concatenate([[0.0], np.cumsum(step)])
+    if not cum[-1] > 0:
+        return np.repeat(points[:1], n, axis=0)
+    target = np.linspace(0.0, cum[-1], n)
+    return np.column_stack([np.interp(target, cum, points[:, 0]), np.interp(target, cum, points[:, 1])])
+
+
+@settings(max_examples=80, deadline=None)
+@given(arrays(np.float64, st.tuples(st.integers(1, 60), st.just(2)), elements=finite),
+       st.lists(st.integers(0, 3), min_size=60, max_size=60), st.integers(2, 64), st.booleans())
+def test_resampling_as_complex_numbers_is_the_per_coordinate_one(points, strokes, n, with_strokes):
+    stroke = np.sort(np.asarray(strokes[: len(points)])) if with_strokes else None
+    out = arc_length_resample(points, n, stroke)
+    assert out.shape == (n, 2) and out.dtype == np.float64 and out.flags['C_CONTIGUOUS']
+    assert np.array_equal(out, arc_length_resample_complex(points, n, stroke).view(np.float64).reshape(n, 2))
+    ref = per_coordinate_resample(points, n, stroke)
+    # np.interp on complex numbers multiplies by 1 / (xp[j+1] - xp[j]) where the real one divides and may
+    # associate differently: each coordinate's slope (at most 1 in size: |dx| <= the step) times the
+    # position along the ink (up to the path's length) and plus the coordinate, rounded a few times: a
+    # few ulp of the larger of the coordinates and the ink's length; the path's first point is exact.
+    scale = float(np.abs(points).max()) + float(np.hypot(*np.diff(points, axis=0).T).sum())
+    np.testing.assert_allclose(out, ref, rtol=0, atol=4 * np.finfo(np.float64).eps * max(scale, 1.0))
+    assert np.array_equal(out[0], ref[0])
+
+
+def test_resampling_rejects_what_is_no_path():
+    with pytest.raises(ValueError, match=r'\(m, 2\)'):
+        arc_length_resample(np.zeros((4, 3)), 8)
 
 
 def test_time_bins_fill_empty_bins_and_survive_bad_clocks():

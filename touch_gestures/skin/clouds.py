@@ -50,7 +50,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from .base import TemplateRecogniser
-from .features import arc_length_resample
+from .features import arc_length_resample_complex
 from .gesture import TouchGesture
 
 __all__ = ['CloudRecogniser', 'cloud_features']
@@ -71,12 +71,13 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     >>> f.reshape(4, 2).round(2).tolist()   # two strokes of 4: every 8/3 along the ink, none in the air
     [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
     """
-    pts = arc_length_resample(points, n_points, stroke)
-    pts -= pts.sum(axis=0) / n_points
-    size = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
+    cloud -= cloud.sum() / n_points
+    xy = cloud.view(np.float64).reshape(n_points, 2)                # the same memory as (n, 2) x, y
+    size = float((xy.max(axis=0) - xy.min(axis=0)).max())
     if size > 1e-9:
-        pts /= size
-    return pts.reshape(-1).astype(np.float32)
+        xy /= size
+    return xy.reshape(-1).astype(np.float32)
 
 
 class CloudRecogniser(TemplateRecogniser):

@@ -16,6 +16,13 @@ does not depend on a data file. Each recogniser is timed over ``queries`` gestur
 ``repeats`` times; the median of the repeats is reported (wall time, and the thread's CPU
 time, which on a shared machine leaves out the waits for a core), with its ratio to the goal and to
 the centroid method, measured in the same run: ``social-touch bench skin [--json]``.
+
+``steps_cpu_us`` splits a recognition into its parts, each timed alone on the same queries (CPU
+time, medians): ``features`` (``_features``), ``search`` (``_distances``: the codebook against the
+query's features), ``decision`` (the rejection rule on the per-class distances); for ``cloud``
+also ``raster`` (the distance-field bounds, step 2 of :mod:`~touch_gestures.skin.clouds`, part of
+the search). Timed alone, a part keeps its tables in the cache: the parts add up to less than a
+whole ``predict``.
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ import time
 
 import numpy as np
 
+from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
@@ -70,7 +78,8 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         model = make_recogniser(name).fit(gestures, labels)
         us, cpu_us = _median_us(model.predict, probe, repeats)
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
-                                    'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_)}
+                                    'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_),
+                                    'steps_cpu_us': _steps_cpu_us(model, probe, repeats)}
         if name in ('cloud', 'ndollar', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
@@ -84,6 +93,18 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         for r in out['recognisers'].values():
             r['ratio_to_centroid'] = r['us_per_recognition'] / base
     return out
+
+
+def _steps_cpu_us(model, probe: list[TouchGesture], repeats: int) -> dict[str, float]:
+    """Median CPU us of each part of ``model.predict`` over the ``probe`` gestures (module doc)."""
+    queries = [q for q in map(model._features, probe) if q is not None]
+    steps = {'features': _median_us(model._features, probe, repeats)[1],
+             'search': _median_us(model._distances, queries, repeats)[1],
+             'decision': _median_us(model.decide, [model.query_class_distances(q) for q in queries], repeats)[1]}
+    if isinstance(model, CloudRecogniser):
+        clouds = [q.reshape(-1, 2).astype(np.float64) for q in queries]
+        steps['raster'] = _median_us(model._bounds, clouds, repeats)[1]
+    return steps
 
 
 def _median_us(call, items: list, repeats: int) -> tuple[float, float]:
