@@ -48,13 +48,14 @@ def shuffled_star(rng: np.random.Generator) -> TouchGesture:
 @pytest.fixture(scope='module')
 def fitted():
     """A cloud over the multi-stroke symbols plus a one-stroke star, traced from any tip either way; no
-    distance or margin rule, so that what it turns away is the order evidence's doing."""
+    margin rule and a distance limit too far to matter, so that what it turns away is the order evidence's
+    doing."""
     rng = np.random.default_rng(4)
     gestures, labels = codebook(rng, names=('X', 'H', 'T'), per_class=20)
     for k in range(20):
         gestures.append(traced(STAR, rng, start=k % 5, reverse=k % 2 == 1))
         labels.append('star')
-    return CloudRecogniser(max_distance=None, min_margin=0.0).fit(gestures, labels)
+    return CloudRecogniser(max_distance=1e9, min_margin=0.0).fit(gestures, labels)
 
 
 def test_a_star_from_any_tip_either_way_is_accepted_and_its_shuffled_cloud_is_not(fitted):
@@ -111,6 +112,7 @@ def test_the_paths_travel_in_the_codebook_file_and_an_ordered_recogniser_has_non
     assert loaded.predict(shuffled_star(rng)).rejected == 'order'
     gestures, labels = codebook(rng, names=('X', 'T'), per_class=5)
     assert TraceRecogniser().fit(gestures, labels).order_evidence_ is None   # it reads the order already
+    assert CloudRecogniser(max_distance=None).fit(gestures, labels).order_evidence_ is None   # no limits at all
     with pytest.raises(ValueError, match='template_paths'):
         CloudRecogniser().set_codebook(fitted.templates_, fitted.classes_[fitted.template_labels_],
                                        template_paths=np.zeros((3, 32, 2)))

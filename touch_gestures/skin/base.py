@@ -27,7 +27,7 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   stroke whose path, in the order it was traced, is far from every one-stroke path of its
   nearest class (:mod:`.order_evidence`, calibrated as the distance threshold: ``auto_scale``
   times the ``auto_quantile`` quantile of leave-one-out path distances; where the codebook
-  knows its templates' paths).
+  knows its templates' paths, and not with ``max_distance`` None: no distance limits at all).
 
 **The rule that decides**, in the order it is applied: the nearest class by distance; no
 command if the distance is over the class's threshold (``'distance'``), the margin is too
@@ -166,7 +166,7 @@ class TemplateRecogniser(BaseEstimator):
         duration (``template_strokes_``, ``template_durations_``, else None; :mod:`.evidence`);
         ``template_paths`` (T, n, 2), NaN for templates of several strokes, each template's path
         (:func:`~.order_evidence.one_stroke_path`; ``template_paths_`` and ``order_evidence_`` for an
-        order-free recogniser, else None: no order check)."""
+        order-free recogniser with distance limits, else None: no order check)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -199,7 +199,7 @@ class TemplateRecogniser(BaseEstimator):
         self.codebook_evidence_ = CodebookEvidence(self.template_labels_, len(classes), self.template_strokes_,
                                           self.template_durations_)
         self.template_paths_ = self.order_evidence_ = None
-        if template_paths is not None and not self.direction_aware:
+        if template_paths is not None and not self.direction_aware and self.max_distance is not None:
             paths = np.asarray(template_paths, dtype=np.float64)
             if paths.ndim != 3 or len(paths) != len(labels):
                 raise ValueError(f'template_paths must give each of the {len(labels)} templates an (n, 2) path; '
