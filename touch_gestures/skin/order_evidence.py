@@ -82,6 +82,7 @@ class OrderEvidence:
         self.members = [np.flatnonzero(one_stroke & (labels == c)) for c in range(n_classes)]
         z = np.where(one_stroke[:, None], paths[..., 0] + 1j * paths[..., 1], 0.0)   # (T, n) complex
         self._energy = (np.abs(z) ** 2).sum(axis=1)                                  # (T,)
+        self._z = z
         self._spectra = np.fft.fft(z, axis=1)                                        # (T, n)
         self._closed = one_stroke & (np.abs(z[:, 0] - z[:, -1]) < closed)
         #: (n_classes,) path distance thresholds; inf: no check (fewer than two one-stroke templates).
@@ -100,12 +101,15 @@ class OrderEvidence:
             return float('inf')
         q = path[:, 0] + 1j * path[:, 1]
         both = np.stack([q, q[::-1]])                                                # (2, n): as traced, reversed
-        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 Re sum_k t_k conj(q_(k+s)): the last sum for every
-        # shift s at once is the circular cross-correlation, ifft(fft(t) * conj(fft(q))) up to s's sign.
-        corr = np.fft.ifft(self._spectra[templates][:, None, :] * np.conj(np.fft.fft(both, axis=1)),
-                           axis=2).real                                              # (m, 2, n); [..., 0]: s = 0
-        # A closed template from any start; an open one from either end of the touch only (s = 0).
-        closest = np.where(self._closed[templates], corr.max(axis=(1, 2)), corr[:, :, 0].max(axis=1))
+        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 Re sum_k t_k conj(q_(k+s)). An open template is read
+        # from either end of the touch only (s = 0); a closed one from any start: the sums for every shift s
+        # at once are the circular cross-correlation, ifft(fft(t) * conj(fft(q))) up to s's sign.
+        closest = (self._z[templates][:, None, :] * np.conj(both)[None]).real.sum(axis=2).max(axis=1)   # (m,)
+        loops = self._closed[templates]
+        if loops.any():
+            corr = np.fft.ifft(self._spectra[templates[loops]][:, None, :] * np.conj(np.fft.fft(both, axis=1)),
+                               axis=2).real                                          # (m_closed, 2, n)
+            closest[loops] = corr.max(axis=(1, 2))
         best = self._energy[templates] + float((np.abs(q) ** 2).sum()) - 2 * closest
         return float(np.sqrt(max(float(best.min()), 0.0) / self.n_points))
 
