@@ -1,12 +1,16 @@
 """Parameters set while our nodes run: the ones a node can apply take effect at once, the others are refused
 with the reason (never accepted and ignored). Through the nodes' parameter services, as ros2 param set does."""
 
+import numpy as np
 import pytest
+from test_skin_multistroke import codebook
 
 from touch_driver.bear.node import BearDriverNode
 from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.monitor_node import TouchMonitorNode
 from touch_gestures.patch.node import PatchGesturesNode
+from touch_gestures.skin.clouds import CloudRecogniser
+from touch_gestures.skin.codebook import save_codebook
 from touch_gestures.skin.node import HapticCommandsNode
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_graph.runtime.parameter_messages import parameter_msg
@@ -71,6 +75,22 @@ def test_haptic_commands_recomputes_its_rejection_at_once_and_keeps_the_old_on_r
     assert not ok and 'max_distance' in why and node.recogniser is in_use
     [(ok, _)] = set_parameters(node, codebook='/x.npz')
     assert not ok
+
+
+def test_new_rejection_values_keep_the_codebooks_strokes_durations_and_paths(graph, tmp_path):
+    start, set_parameters = graph
+    gestures, labels = codebook(np.random.default_rng(3), names=('X', 'H', 'Z'), per_class=6)
+    path = save_codebook(tmp_path / 'symbols.npz', CloudRecogniser().fit(gestures, labels), vocabulary='symbols')
+    commands = tmp_path / 'commands.yaml'
+    commands.write_text('format_version: 1\ncommands:\n  X: stop\n')
+    node = start(HapticCommandsNode, parameter_overrides=[Parameter('codebook', value=str(path)),
+                                                          Parameter('commands', value=str(commands))])
+    old = node.recogniser
+    assert set_parameters(node, min_margin=0.3) == [(True, '')] and node.recogniser is not old
+    for attr in ('template_strokes_', 'template_durations_', 'template_paths_'):
+        was, kept = getattr(old, attr), getattr(node.recogniser, attr)
+        assert was is not None and np.array_equal(kept, was, equal_nan=True), attr
+    np.testing.assert_array_equal(node.recogniser.order_evidence_.thresholds, old.order_evidence_.thresholds)
 
 
 def test_a_driver_applies_what_it_can_and_refuses_what_it_reads_at_start(graph):

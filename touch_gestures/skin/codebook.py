@@ -18,6 +18,8 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     max_strokes         ()          int64     v2: most strokes of a template (1: single-stroke vocabulary)
     template_strokes    (T,)        int64     optional: strokes of each template (the end of a gesture, rejection)
     template_durations  (T,)        float64   optional: duration of each template, s (rejection)
+    template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for the others
+                                              (an order-free recogniser's rejection, :mod:`.order_evidence`)
 
 A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
 ``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
@@ -98,7 +100,9 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
         **({} if getattr(recogniser, 'template_strokes_', None) is None
            else {'template_strokes': np.asarray(recogniser.template_strokes_, dtype=np.int64)}),
         **({} if getattr(recogniser, 'template_durations_', None) is None
-           else {'template_durations': np.asarray(recogniser.template_durations_, dtype=np.float64)}))
+           else {'template_durations': np.asarray(recogniser.template_durations_, dtype=np.float64)}),
+        **({} if getattr(recogniser, 'template_paths_', None) is None
+           else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}))
     return path
 
 
@@ -160,7 +164,8 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
     try:
         model.set_codebook(templates, classes[codes], class_thresholds=thresholds,
                            template_strokes=data.get('template_strokes'),
-                           template_durations=data.get('template_durations'))
+                           template_durations=data.get('template_durations'),
+                           template_paths=data.get('template_paths'))
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None

@@ -5,7 +5,15 @@ a symbol is as close to it as the symbol itself. Two things the normalisation di
 still tell them apart, and the codebook says what each class allows:
 
 - **strokes**: a touch of 1 stroke is no X if nobody in the codebook wrote an X with 1
-  stroke (people do write a D with one or two: both are then allowed);
+  stroke (people do write a D with one or two: both are then allowed). A count that only a
+  few templates of a big class show (fewer than ``min_share`` of them: 1 %, so in a class of
+  fewer than 100 templates any count seen is allowed) is taken for an accident of the
+  recording, not a way to write the symbol: two strokes joined by a lift too short to see,
+  one broken by a skip of the pen. On the Mixed Multistroke Gestures, 1 arrowhead in 294
+  has one stroke (the other 293 two), and that one template let the one-stroke scribbles
+  shaped like an arrow through: most of the random touches that fired a command before
+  this rule (docs/skin-multistroke.md); the rare counts of the file's real gestures were
+  mostly recognised wrong anyway;
 - **duration**: a touch far faster or slower than any repetition of the class in the
   codebook (from the ``low`` to the ``high`` quantile of the class's durations, widened by
   ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). Only
@@ -41,18 +49,25 @@ class CodebookEvidence:
         low, high: quantiles of a class's durations that bound it...
         slack: ...widened by this factor (>= 1)...
         min_templates: ...for classes with at least this many templates (the others: no bound).
+        min_share: a stroke count is allowed when at least this fraction of the class's templates
+            show it (and always when one does in a class of fewer than ``1 / min_share``).
     """
 
     def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
                  durations_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
-                 slack: float = 1.5, min_templates: int = 30) -> None:
-        if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1):
-            raise ValueError(f'need 0 <= low <= high <= 1 and slack >= 1; got {low}, {high}, {slack}')
+                 slack: float = 1.5, min_templates: int = 30, min_share: float = 0.01) -> None:
+        if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1 and 0 <= min_share < 1):
+            raise ValueError(f'need 0 <= low <= high <= 1, slack >= 1 and 0 <= min_share < 1; got {low}, {high}, '
+                             f'{slack}, {min_share}')
         labels = np.asarray(template_labels)
         self.stroke_counts: list[frozenset[int]] | None = None
         if strokes is not None:
             strokes = np.asarray(strokes)
-            self.stroke_counts = [frozenset(strokes[labels == c].tolist()) for c in range(n_classes)]
+            self.stroke_counts = []
+            for c in range(n_classes):
+                counts, seen = np.unique(strokes[labels == c], return_counts=True)
+                enough = seen >= max(1.0, min_share * seen.sum())
+                self.stroke_counts.append(frozenset(counts[enough].tolist()))
         self.duration_bounds_s: np.ndarray | None = None
         if durations_s is not None:
             durations_s = np.asarray(durations_s, dtype=np.float64)

@@ -239,7 +239,11 @@ class HapticCommandsNode(Node):
         model = copy.deepcopy(model)  # the one in use stays whole if these values are refused
         try:
             model.set_params(**new)
-            model.set_codebook(model.templates_, model.classes_[model.template_labels_])
+            # The codebook's evidence (strokes, durations, paths) stays: only the thresholds are recomputed.
+            model.set_codebook(model.templates_, model.classes_[model.template_labels_],
+                               template_strokes=getattr(model, 'template_strokes_', None),
+                               template_durations=getattr(model, 'template_durations_', None),
+                               template_paths=getattr(model, 'template_paths_', None))
         except ValueError as err:
             raise ParameterError(f'rejection parameters of {self._fqn}: {err}') from err
         self.get_logger().info(f'rejection {new} (was {({k: stored[k] for k in _REJECTION})}): class thresholds '
