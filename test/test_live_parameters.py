@@ -87,7 +87,7 @@ def test_new_rejection_values_keep_the_codebooks_strokes_durations_and_paths(gra
                                                           Parameter('commands', value=str(commands))])
     old = node.recogniser
     assert set_parameters(node, min_margin=0.3) == [(True, '')] and node.recogniser is not old
-    for attr in ('template_strokes_', 'template_durations_', 'template_paths_'):
+    for attr in ('template_strokes_', 'template_contact_s_', 'template_paths_'):
         was, kept = getattr(old, attr), getattr(node.recogniser, attr)
         assert was is not None and np.array_equal(kept, was, equal_nan=True), attr
     np.testing.assert_array_equal(node.recogniser.order_evidence_.thresholds, old.order_evidence_.thresholds)

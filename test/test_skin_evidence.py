@@ -16,10 +16,12 @@ NAMES = ('X', 'H', 'T', 'Z')
 
 
 def timed(gestures, rng, seconds=(0.6, 1.6)):
-    """The gestures traced over a duration drawn from ``seconds`` (the codebook's pace)."""
+    """The gestures traced in a time in contact drawn from ``seconds`` (the codebook's pace), each
+    stroke starting as the last one ends (no pause: the span is the time in contact)."""
     for g in gestures:
         g.duration_s = float(rng.uniform(*seconds))
-        g.times = np.linspace(0.0, g.duration_s, len(g.trajectory))
+        within = np.r_[0.0, (np.diff(g.stroke) == 0).astype(np.float64)]   # steps inside a stroke
+        g.times = np.cumsum(within) * (g.duration_s / max(within.sum(), 1.0))
     return gestures
 
 
@@ -52,8 +54,8 @@ def test_random_touches_are_rejected_and_new_symbols_accepted(fitted):
     matches = list(map(lax.predict, randoms))
     assert {m.label for m in matches} <= {None, 'Z'}
     assert {m.rejected for m in matches} >= {'strokes', 'duration'}
-    lo, hi = lax.codebook_evidence_.duration_bounds_s[list(lax.classes_).index('Z')]
-    assert all(lo <= g.duration_s <= hi for g, m in zip(randoms, matches, strict=True) if m.label == 'Z')
+    lo, hi = lax.codebook_evidence_.contact_bounds_s[list(lax.classes_).index('Z')]
+    assert all(lo <= g.contact_s <= hi for g, m in zip(randoms, matches, strict=True) if m.label == 'Z')
     rng = np.random.default_rng(9)
     held_out, labels = codebook(rng, names=NAMES, per_class=5)
     hits = [m.label == y for m, y in zip(map(fitted.predict, timed(held_out, rng)), labels, strict=True)]
@@ -63,19 +65,48 @@ def test_random_touches_are_rejected_and_new_symbols_accepted(fitted):
 def test_stroke_counts_and_durations_come_from_the_codebook_and_its_file(fitted, tmp_path):
     ev = fitted.codebook_evidence_
     assert ev.stroke_counts == [frozenset({3}), frozenset({2}), frozenset({2}), frozenset({1})]   # H, T, X, Z
-    lo, hi = ev.duration_bounds_s.T
+    lo, hi = ev.contact_bounds_s.T
     assert (lo >= 0.6 / 1.5 - 1e-9).all() and (hi <= 1.6 * 1.5 + 1e-9).all()
     one_bar = TouchGesture.from_trajectory(np.array([[10.0, 10.0], [37.0, 37.0]]), np.array([0.0, 1.0]))
     assert fitted.predict(one_bar).rejected in ('strokes', 'distance', 'margin')
     loaded = load_codebook(save_codebook(tmp_path / 'c.npz', fitted, vocabulary='symbols'))
     assert loaded.codebook_evidence_.stroke_counts == ev.stroke_counts
-    np.testing.assert_allclose(loaded.codebook_evidence_.duration_bounds_s, ev.duration_bounds_s)
+    np.testing.assert_allclose(loaded.codebook_evidence_.contact_bounds_s, ev.contact_bounds_s)
 
 
 def test_a_codebook_without_strokes_or_durations_checks_nothing_and_bad_settings_fail():
     ev = CodebookEvidence(np.array([0, 0, 1]), 2)
     assert ev.check(TouchGesture.from_trajectory(np.zeros((2, 2))), 1) is None
-    few = CodebookEvidence(np.array([0, 0, 1]), 2, durations_s=np.array([1.0, 1.1, 1.0]))   # too few to bound
+    few = CodebookEvidence(np.array([0, 0, 1]), 2, contact_s=np.array([1.0, 1.1, 1.0]))   # too few to bound
     assert few.check(TouchGesture.from_trajectory(np.zeros((2, 2)), np.array([0.0, 9.0])), 0) is None
     with pytest.raises(ValueError, match='slack'):
         CodebookEvidence(np.array([0]), 1, slack=0.5)
+
+
+def test_contact_time_leaves_out_the_pauses_between_strokes():
+    g = TouchGesture.from_trajectory(np.zeros((6, 2)), np.array([0.0, 0.5, 1.0, 9.0, 9.25, 9.5]))
+    assert g.contact_s == g.duration_s == 9.5                  # one stroke: the span
+    g.stroke = np.array([0, 0, 0, 1, 1, 1], dtype=np.int16)
+    assert g.contact_s == 1.5                                  # 1.0 + 0.5, the 8 s lift left out
+    g.stroke = np.array([0, 1, 2, 3, 4, 5], dtype=np.int16)
+    assert g.contact_s == 0.0                                  # dabs: no time in contact between points
+    empty = TouchGesture.from_trajectory(np.zeros((0, 2)))
+    assert empty.contact_s == 0.0
+
+
+def test_a_symbol_written_with_a_long_pause_is_not_turned_away_for_its_duration(fitted):
+    """People pause between strokes from a fraction of a second to over ten: the pace is in the strokes."""
+    rng = np.random.default_rng(4)
+    held_out, labels = codebook(rng, names=NAMES, per_class=5)
+    checked = 0
+    for g, label in zip(timed(held_out, rng), labels, strict=True):
+        if g.strokes < 2:
+            continue
+        late = g.stroke >= 1
+        g.times = g.times + np.where(late, 8.0, 0.0)           # an 8 s pause before the second stroke
+        g.duration_s = float(g.times[-1] - g.times[0])
+        hi = fitted.codebook_evidence_.contact_bounds_s[list(fitted.classes_).index(label), 1]
+        assert g.duration_s > hi                               # the span with the pause is out of the class's range
+        assert fitted.codebook_evidence_.check(g, list(fitted.classes_).index(label)) is None
+        checked += 1
+    assert checked >= 10

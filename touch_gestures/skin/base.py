@@ -22,7 +22,7 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
 - the margin (runner-up class distance minus best) is below ``min_margin`` times the best
   distance: two classes are about equally close, the touch is ambiguous; or
 - the touch's strokes or duration are none the nearest class shows in the codebook
-  (:mod:`.evidence`; where the codebook knows its templates' strokes and durations); or
+  (:mod:`.evidence`; where the codebook knows its templates' strokes and contact times); or
 - for an order-free recogniser (``direction_aware`` False: a point cloud), a touch of one
   stroke whose path, in the order it was traced, is far from every one-stroke path of its
   nearest class (:mod:`.order_evidence`, calibrated as the distance threshold: ``auto_scale``
@@ -133,7 +133,7 @@ class TemplateRecogniser(BaseEstimator):
         self._check_params()
         if len(gestures) != len(labels):
             raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
-        feats, names, strokes, durations, paths, dropped = [], [], [], [], [], 0
+        feats, names, strokes, contacts, paths, dropped = [], [], [], [], [], 0
         for gesture, label in zip(gestures, labels, strict=True):
             f = self._features(gesture)
             if f is None:
@@ -142,14 +142,14 @@ class TemplateRecogniser(BaseEstimator):
             feats.append(f)
             names.append(str(label))
             strokes.append(int(getattr(gesture, 'strokes', 1)))
-            durations.append(float(getattr(gesture, 'duration_s', np.nan)))
+            contacts.append(float(getattr(gesture, 'contact_s', np.nan)))
             if not self.direction_aware:
                 path = one_stroke_path(gesture)
                 paths.append(np.full((PATH_POINTS, 2), np.nan) if path is None else path)
         if not feats:
             raise ValueError(f'none of the {len(gestures)} gestures gives a usable template (empty maps or '
                              'trajectories?); record the codebook again')
-        self.set_codebook(np.stack(feats), names, template_strokes=strokes, template_durations=durations,
+        self.set_codebook(np.stack(feats), names, template_strokes=strokes, template_contact_s=contacts,
                           template_paths=np.stack(paths) if paths else None)
         self.n_dropped_ = dropped
         # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
@@ -158,12 +158,12 @@ class TemplateRecogniser(BaseEstimator):
 
     def set_codebook(self, templates: np.ndarray, labels: Sequence[str],
                      class_thresholds: np.ndarray | None = None, template_strokes: Sequence[int] | None = None,
-                     template_durations: Sequence[float] | None = None,
+                     template_contact_s: Sequence[float] | None = None,
                      template_paths: np.ndarray | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
         ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
-        ``template_strokes`` (T,) and ``template_durations`` (T,) s give each template's strokes and
-        duration (``template_strokes_``, ``template_durations_``, else None; :mod:`.evidence`);
+        ``template_strokes`` (T,) and ``template_contact_s`` (T,) s give each template's strokes and
+        time in contact (``template_strokes_``, ``template_contact_s_``, else None; :mod:`.evidence`);
         ``template_paths`` (T, n, 2), NaN for templates of several strokes, each template's path
         (:func:`~.order_evidence.one_stroke_path`; ``template_paths_`` and ``order_evidence_`` for an
         order-free recogniser with distance limits, else None: no order check)."""
@@ -189,15 +189,15 @@ class TemplateRecogniser(BaseEstimator):
                 raise ValueError(f'template_strokes must give each of the {len(labels)} templates >= 1 strokes; '
                                  f'got {counts.shape}')
             self.template_strokes_ = counts[order]
-        self.template_durations_ = None
-        if template_durations is not None:
-            durations = np.asarray(template_durations, dtype=np.float64).reshape(-1)
-            if durations.shape != labels.shape:
-                raise ValueError(f'template_durations must give each of the {len(labels)} templates a duration; '
-                                 f'got {durations.shape}')
-            self.template_durations_ = durations[order]
+        self.template_contact_s_ = None
+        if template_contact_s is not None:
+            contacts = np.asarray(template_contact_s, dtype=np.float64).reshape(-1)
+            if contacts.shape != labels.shape:
+                raise ValueError(f'template_contact_s must give each of the {len(labels)} templates a time; '
+                                 f'got {contacts.shape}')
+            self.template_contact_s_ = contacts[order]
         self.codebook_evidence_ = CodebookEvidence(self.template_labels_, len(classes), self.template_strokes_,
-                                          self.template_durations_)
+                                          self.template_contact_s_)
         self.template_paths_ = self.order_evidence_ = None
         if template_paths is not None and not self.direction_aware and self.max_distance is not None:
             paths = np.asarray(template_paths, dtype=np.float64)

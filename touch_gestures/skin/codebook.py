@@ -17,7 +17,9 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     gap_s               ()          float64   v2: the segmenter's gap for it, s (a lift this long ends a gesture)
     max_strokes         ()          int64     v2: most strokes of a template (1: single-stroke vocabulary)
     template_strokes    (T,)        int64     optional: strokes of each template (the end of a gesture, rejection)
-    template_durations  (T,)        float64   optional: duration of each template, s (rejection)
+    template_contact_s  (T,)        float64   optional: time in contact of each template, s (rejection;
+                                              files before it had ``template_durations``, the span with
+                                              the pauses, which is not read: no duration check for them)
     template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for the others
                                               (an order-free recogniser's rejection, :mod:`.order_evidence`)
 
@@ -99,8 +101,8 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
         **({} if description is None else {'description': np.array(str(description))}),
         **({} if getattr(recogniser, 'template_strokes_', None) is None
            else {'template_strokes': np.asarray(recogniser.template_strokes_, dtype=np.int64)}),
-        **({} if getattr(recogniser, 'template_durations_', None) is None
-           else {'template_durations': np.asarray(recogniser.template_durations_, dtype=np.float64)}),
+        **({} if getattr(recogniser, 'template_contact_s_', None) is None
+           else {'template_contact_s': np.asarray(recogniser.template_contact_s_, dtype=np.float64)}),
         **({} if getattr(recogniser, 'template_paths_', None) is None
            else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}))
     return path
@@ -164,7 +166,7 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
     try:
         model.set_codebook(templates, classes[codes], class_thresholds=thresholds,
                            template_strokes=data.get('template_strokes'),
-                           template_durations=data.get('template_durations'),
+                           template_contact_s=data.get('template_contact_s'),
                            template_paths=data.get('template_paths'))
     except ValueError as err:
         raise CodebookError(str(err), where) from err

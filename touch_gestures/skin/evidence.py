@@ -15,15 +15,20 @@ still tell them apart, and the codebook says what each class allows:
   this rule (docs/skin-multistroke.md); the rare counts of the file's real gestures were
   mostly recognised wrong anyway;
 - **duration**: a touch far faster or slower than any repetition of the class in the
-  codebook (from the ``low`` to the ``high`` quantile of the class's durations, widened by
-  ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). Only
+  codebook (from the ``low`` to the ``high`` quantile of the class's contact times, widened
+  by ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). The
+  time in contact (:attr:`~.gesture.TouchGesture.contact_s`: the strokes' own durations, the
+  pauses between them left out) is what the pace of a symbol shows; how long someone pauses
+  between strokes is not (on the Mixed Multistroke Gestures people pause from a fraction of
+  a second to over ten, and the span from first touch to last lift turned away whole
+  symbols written with a long pause, once the end of a gesture waited for them). Only
   for classes with at least ``min_templates`` templates: a few repetitions by a few people
   do not show how fast others go (a codebook of 2 people x 3 repetitions turned away a
   third of a new person's gestures).
 
 :class:`CodebookEvidence` is calibrated on the codebook alone (no constant fitted to any
 test file), so it holds for vocabularies and people it has not seen. A codebook that does
-not know its templates' strokes or durations (an older file) skips that check.
+not know its templates' strokes or contact times (an older file) skips that check.
 """
 
 from __future__ import annotations
@@ -39,14 +44,14 @@ EVIDENCE_REASONS = ('strokes', 'duration')
 
 
 class CodebookEvidence:
-    """Per class, the stroke counts and durations its templates show (module doc).
+    """Per class, the stroke counts and contact times its templates show (module doc).
 
     Args:
         template_labels: (T,) class index of each template.
         n_classes: number of classes.
         strokes: (T,) strokes of each template, or None.
-        durations_s: (T,) duration of each template, s, or None.
-        low, high: quantiles of a class's durations that bound it...
+        contact_s: (T,) time in contact of each template, s, or None.
+        low, high: quantiles of a class's contact times that bound it...
         slack: ...widened by this factor (>= 1)...
         min_templates: ...for classes with at least this many templates (the others: no bound).
         min_share: a stroke count is allowed when at least this fraction of the class's templates
@@ -54,7 +59,7 @@ class CodebookEvidence:
     """
 
     def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
-                 durations_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
+                 contact_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
                  slack: float = 1.5, min_templates: int = 30, min_share: float = 0.01) -> None:
         if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1 and 0 <= min_share < 1):
             raise ValueError(f'need 0 <= low <= high <= 1, slack >= 1 and 0 <= min_share < 1; got {low}, {high}, '
@@ -68,23 +73,23 @@ class CodebookEvidence:
                 counts, seen = np.unique(strokes[labels == c], return_counts=True)
                 enough = seen >= max(1.0, min_share * seen.sum())
                 self.stroke_counts.append(frozenset(counts[enough].tolist()))
-        self.duration_bounds_s: np.ndarray | None = None
-        if durations_s is not None:
-            durations_s = np.asarray(durations_s, dtype=np.float64)
+        self.contact_bounds_s: np.ndarray | None = None
+        if contact_s is not None:
+            contact_s = np.asarray(contact_s, dtype=np.float64)
             bounds = np.full((n_classes, 2), [0.0, np.inf])
             for c in range(n_classes):
-                own = durations_s[(labels == c) & np.isfinite(durations_s)]
+                own = contact_s[(labels == c) & np.isfinite(contact_s)]
                 if own.size >= max(1, min_templates):
                     lo, hi = np.quantile(own, [low, high])
                     bounds[c] = lo / slack, hi * slack
-            self.duration_bounds_s = bounds
+            self.contact_bounds_s = bounds
 
     def check(self, gesture: TouchGesture, label: int) -> str | None:
         """Why ``gesture`` cannot be class ``label`` (one of :data:`EVIDENCE_REASONS`), or None."""
         if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
             return 'strokes'
-        if self.duration_bounds_s is not None:
-            lo, hi = self.duration_bounds_s[label]
-            if not lo <= float(gesture.duration_s) <= hi:
+        if self.contact_bounds_s is not None:
+            lo, hi = self.contact_bounds_s[label]
+            if not lo <= gesture.contact_s <= hi:
                 return 'duration'
         return None

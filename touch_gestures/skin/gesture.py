@@ -132,6 +132,18 @@ class TouchGesture:
                    start_s=float(times[0]) if len(times) else 0.0,
                    duration_s=float(times[-1] - times[0]) if len(times) else 0.0)
 
+    @property
+    def contact_s(self) -> float:
+        """Time in contact, s: each stroke's first to last point, summed (the lifts between strokes
+        left out; :attr:`duration_s` for a gesture of one stroke)."""
+        times, stroke = self.times, self.stroke
+        if len(times) == 0:
+            return 0.0
+        # Strokes are runs of equal ids in time order: a stroke's span is its last time minus its first.
+        starts = np.flatnonzero(np.r_[True, stroke[1:] != stroke[:-1]])
+        ends = np.r_[starts[1:], len(times)] - 1
+        return float((times[ends] - times[starts]).sum())
+
     def __repr__(self) -> str:
         flags = ''.join(f', {name}' for name in ('multi_contact', 'truncated') if getattr(self, name))
         return (f'TouchGesture(points={len(self.trajectory)}, frames={self.frames}, duration_s={self.duration_s:.3f}, '

@@ -242,7 +242,7 @@ class HapticCommandsNode(Node):
             # The codebook's evidence (strokes, durations, paths) stays: only the thresholds are recomputed.
             model.set_codebook(model.templates_, model.classes_[model.template_labels_],
                                template_strokes=getattr(model, 'template_strokes_', None),
-                               template_durations=getattr(model, 'template_durations_', None),
+                               template_contact_s=getattr(model, 'template_contact_s_', None),
                                template_paths=getattr(model, 'template_paths_', None))
         except ValueError as err:
             raise ParameterError(f'rejection parameters of {self._fqn}: {err}') from err

@@ -118,7 +118,7 @@ class AutoRecogniser(TemplateRecogniser):
                           for m, acc in ((ordered, acc_o), (free, acc_f))}
         for attr in ('classes_', 'templates_', 'template_labels_', 'class_starts_', 'n_features_in_',
                      'class_thresholds_', 'n_dropped_', 'max_strokes_', 'template_strokes_',
-                     'template_durations_', 'codebook_evidence_', 'template_paths_', 'order_evidence_'):
+                     'template_contact_s_', 'codebook_evidence_', 'template_paths_', 'order_evidence_'):
             setattr(self, attr, getattr(best, attr))
         self.direction_aware = best.direction_aware
         return self
