@@ -52,8 +52,9 @@ def _vocabulary_section(r: dict) -> list[str]:
            f"(`{r.get('default')}`): {default.get('gestures_per_sample', r['gestures_per_sample'])} (a sample cut into "
            f"other than one gesture counts as wrong). Codebook per fold: every sample of the other people. "
            f"{r['data']}.", '',
-           'Rejection: distance over the class threshold, too small a margin, a stroke count or duration the '
-           'nearest class never (or, for a stroke count, hardly ever: under 1 % of its templates) shows in the '
+           'Rejection: distance over the class threshold, too small a margin, a stroke count or time in contact '
+           '(pauses between strokes left out) the nearest class never (or, for a stroke count, hardly ever: under '
+           '1 % of its templates) shows in the '
            'codebook (touch_gestures.skin.evidence), or, for the order-free cloud, a one-stroke touch whose path is '
            "far from every one-stroke path of the nearest class (touch_gestures.skin.order_evidence); touches the "
            'node screens out (a dab, two fingers) fire nothing. Latency: the lift after the last stroke at which the '
