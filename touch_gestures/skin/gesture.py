@@ -139,10 +139,12 @@ class TouchGesture:
         times, stroke = self.times, self.stroke
         if len(times) == 0:
             return 0.0
-        # Strokes are runs of equal ids in time order: a stroke's span is its last time minus its first.
-        starts = np.flatnonzero(np.r_[True, stroke[1:] != stroke[:-1]])
-        ends = np.r_[starts[1:], len(times)] - 1
-        return float((times[ends] - times[starts]).sum())
+        # The span less each lift between strokes (a stroke's last point to the next one's first).
+        lifts = np.flatnonzero(stroke[1:] != stroke[:-1])
+        span = float(times[-1] - times[0])
+        if not len(lifts):
+            return span
+        return max(0.0, span - float((times[lifts + 1] - times[lifts]).sum()))   # >= 0 whatever the rounding
 
     def __repr__(self) -> str:
         flags = ''.join(f', {name}' for name in ('multi_contact', 'truncated') if getattr(self, name))
