@@ -256,7 +256,7 @@ def test_strokes_that_keep_coming_are_cut_at_the_limit_once():
 
 
 def test_stroke_prefixes_cut_templates_between_strokes_and_fall_back_to_fractions(ending):
-    from touch_gestures.skin.early import PrefixMatcher
+    from touch_gestures.skin.early import template_prefixes
 
     assert ending.prefixes == 'strokes' and sorted(ending._stroke_prefixes) == [1, 2]
     # k = 1: the X's and H's (more than one stroke); k = 2: the H's only.
@@ -268,9 +268,9 @@ def test_stroke_prefixes_cut_templates_between_strokes_and_fall_back_to_fraction
     assert ending(x) is Verdict.WHOLE and ending(first_bar) is not Verdict.WHOLE
     # Per-template fractions cut each template as one fraction would.
     points = rng.normal(size=(3, 16, 2))
-    both = PrefixMatcher._prefixes(points, np.array([0.5, 0.25, 0.5]), 'cloud')
-    np.testing.assert_allclose(both[1], PrefixMatcher._prefixes(points[1:2], 0.25, 'cloud')[0], atol=1e-6)
-    np.testing.assert_allclose(both[[0, 2]], PrefixMatcher._prefixes(points[[0, 2]], 0.5, 'cloud'), atol=1e-6)
+    both = template_prefixes(points, np.array([0.5, 0.25, 0.5]), 'cloud')
+    np.testing.assert_allclose(both[1], template_prefixes(points[1:2], 0.25, 'cloud')[0], atol=1e-6)
+    np.testing.assert_allclose(both[[0, 2]], template_prefixes(points[[0, 2]], 0.5, 'cloud'), atol=1e-6)
     # A codebook that does not know its templates' strokes (an older file): the fractions.
     old = CloudRecogniser().fit([x, first_bar], ['X', 'bar'])
     old.set_codebook(old.templates_, old.classes_[old.template_labels_])

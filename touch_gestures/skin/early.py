@@ -26,7 +26,8 @@ import numpy as np
 from .base import TemplateRecogniser
 from .gesture import TouchGesture
 
-__all__ = ['Candidate', 'PrefixMatcher', 'stable_fraction']
+__all__ = ['Candidate', 'PrefixMatcher', 'ordered_recogniser', 'prefix_recogniser', 'stable_fraction',
+           'template_prefixes']
 
 #: Recognisers whose features are (n, 2) points in order, with how each normalises its points.
 _ORDERED = ('cloud', 'trace')
@@ -74,37 +75,14 @@ class PrefixMatcher:
     """
 
     def __init__(self, recogniser: TemplateRecogniser, fractions: Sequence[float] = (0.25, 0.5, 0.75, 1.0)) -> None:
-        recogniser = getattr(recogniser, 'chosen_', recogniser)
-        if recogniser.name not in _ORDERED:
-            raise ValueError(f'early decisions need the ordered points of {" or ".join(_ORDERED)}; '
-                             f'{recogniser.name!r} has none')
+        recogniser = ordered_recogniser(recogniser)
         fractions = np.asarray(sorted(fractions), dtype=np.float64)
         if not len(fractions) or fractions[0] <= 0 or fractions[-1] > 1:
             raise ValueError(f'fractions must be in (0, 1]; got {fractions.tolist()}')
         self.recogniser = recogniser
         self.fractions = fractions
-        n = recogniser.templates_.shape[1] // 2
-        points = recogniser.templates_.reshape(-1, n, 2).astype(np.float64)
-        labels = recogniser.classes_[recogniser.template_labels_]
-        self._matchers = []
-        for f in fractions:
-            m = copy.deepcopy(recogniser)
-            if f < 1:
-                m.set_codebook(self._prefixes(points, f, recogniser.name).reshape(len(points), -1), labels)
-            self._matchers.append(m)
-
-    @staticmethod
-    def _prefixes(points: np.ndarray, fraction: float | np.ndarray, kind: str) -> np.ndarray:
-        """(T, n, 2) -> (T, n, 2): each template's first ``fraction`` of points (one number, or (T,) one
-        per template), resampled to n, normalised."""
-        n = points.shape[1]
-        f = np.broadcast_to(np.asarray(fraction, dtype=np.float64), (len(points),))
-        source = np.linspace(0.0, 1.0, n)[None, :] * (f[:, None] * (n - 1))   # (T, n) positions along the points
-        lo = np.floor(source).astype(np.intp)
-        hi = np.minimum(lo + 1, n - 1)
-        w = (source - lo)[..., None]
-        rows = np.arange(len(points))[:, None]
-        return _normalise(points[rows, lo] * (1 - w) + points[rows, hi] * w, kind).astype(np.float32)
+        # The whole templates are the recogniser's own codebook: only its distances are read.
+        self._matchers = [prefix_recogniser(recogniser, f) if f < 1 else recogniser for f in fractions]
 
     def fraction_distances(self, gesture: TouchGesture) -> list[np.ndarray] | None:
         """Per fraction (in :attr:`fractions` order), the (n_classes,) float64 distance of ``gesture``
@@ -130,6 +108,56 @@ class PrefixMatcher:
         d2 = float(np.partition(per_class, 1)[1]) if len(per_class) > 1 else float('inf')
         confidence = 1.0 - d1 / d2 if d2 > 0 and np.isfinite(d2) else (1.0 if np.isinf(d2) else 0.0)
         return Candidate(label, float(np.clip(confidence, 0.0, 1.0)), d1, float(self.fractions[k]))
+
+
+def ordered_recogniser(recogniser: TemplateRecogniser) -> TemplateRecogniser:
+    """The fitted recogniser whose templates are points in order (``auto``: the one it chose).
+
+    Raises:
+        ValueError: its features are no ordered points (a map, the centroid's sequence).
+    """
+    recogniser = getattr(recogniser, 'chosen_', recogniser)
+    if recogniser.name not in _ORDERED:
+        raise ValueError(f'early decisions and the end of a gesture need the ordered points of '
+                         f'{" or ".join(_ORDERED)}; {recogniser.name!r} has none')
+    return recogniser
+
+
+def template_prefixes(points: np.ndarray, fraction: float | np.ndarray, kind: str) -> np.ndarray:
+    """(T, n, 2) -> (T, n, 2) float32: each template's first ``fraction`` of points (one number, or (T,)
+    one per template), resampled to n, normalised as recogniser ``kind``'s features are."""
+    n = points.shape[1]
+    f = np.broadcast_to(np.asarray(fraction, dtype=np.float64), (len(points),))
+    source = np.linspace(0.0, 1.0, n)[None, :] * (f[:, None] * (n - 1))   # (T, n) positions along the points
+    lo = np.floor(source).astype(np.intp)
+    hi = np.minimum(lo + 1, n - 1)
+    w = (source - lo)[..., None]
+    rows = np.arange(len(points))[:, None]
+    return _normalise(points[rows, lo] * (1 - w) + points[rows, hi] * w, kind).astype(np.float32)
+
+
+def prefix_recogniser(recogniser: TemplateRecogniser, fraction: float | np.ndarray,
+                      keep: np.ndarray | None = None) -> TemplateRecogniser:
+    """A copy of an :func:`ordered_recogniser` whose codebook is its templates' prefixes.
+
+    Args:
+        fraction: the part of each template kept, one number or (T,) one per template.
+        keep: (T,) bool, the templates to keep (default all).
+
+    Only its distances are meant to be read (``class_distances``, ``query_class_distances``): its
+    rejection thresholds are not calibrated (inf), which saves a leave-one-out pass per copy.
+    """
+    n = recogniser.templates_.shape[1] // 2
+    points = recogniser.templates_.reshape(-1, n, 2).astype(np.float64)
+    labels = recogniser.classes_[recogniser.template_labels_]
+    fraction = np.broadcast_to(np.asarray(fraction, dtype=np.float64), (len(points),))
+    if keep is not None:
+        points, labels, fraction = points[keep], labels[keep], fraction[keep]
+    cut = template_prefixes(points, fraction, recogniser.name)
+    prefixes = copy.deepcopy(recogniser)
+    prefixes.set_codebook(cut.reshape(len(cut), -1), labels,
+                          class_thresholds=np.full(len(np.unique(labels)), np.inf))
+    return prefixes
 
 
 def stable_fraction(labels: Sequence[str | None], truth: str) -> float | None:

@@ -40,12 +40,10 @@ match (a few recognitions) per lift, never per frame.
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
 from .base import TemplateRecogniser
-from .early import PrefixMatcher
+from .early import PrefixMatcher, ordered_recogniser, prefix_recogniser
 from .gesture import TouchGesture
 from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S, Verdict
 
@@ -69,7 +67,7 @@ class GestureEnd:
             templates' strokes) or ``'fractions'`` (module doc); :attr:`prefixes` is the one used.
 
     Raises:
-        ValueError: a recogniser without ordered points (see :class:`~.early.PrefixMatcher`), bad options.
+        ValueError: a recogniser without ordered points (:func:`~.early.ordered_recogniser`), bad options.
     """
 
     def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True,
@@ -78,8 +76,7 @@ class GestureEnd:
             raise ValueError(f'margin must be a finite fraction >= 0, got {margin}')
         if prefixes not in PREFIXES:
             raise ValueError(f'prefixes must be one of {PREFIXES}, got {prefixes!r}')
-        self.matcher = PrefixMatcher(recogniser)
-        self.recogniser = chosen = self.matcher.recogniser
+        self.recogniser = chosen = ordered_recogniser(recogniser)
         self.margin = float(margin)
         self.unfinished = bool(unfinished)
         known = getattr(chosen, 'template_strokes_', None)
@@ -89,20 +86,13 @@ class GestureEnd:
         if counts is not None and strokes:
             self.class_min_strokes = np.minimum.reduceat(counts, chosen.class_starts_)
         self.prefixes = 'fractions' if counts is None else prefixes
-        # k -> a copy of the recogniser whose codebook is the first k strokes of the templates with more.
+        # Only the prefixes of the comparison in use are built: cut at fractions, or between strokes,
+        # where k -> the recogniser's codebook cut to the first k strokes of the templates with more.
+        self.matcher = PrefixMatcher(chosen) if self.prefixes == 'fractions' else None
         self._stroke_prefixes: dict[int, TemplateRecogniser] = {}
-        if self.prefixes == 'strokes':
-            n = chosen.templates_.shape[1] // 2
-            points = chosen.templates_.reshape(-1, n, 2).astype(np.float64)
-            labels = chosen.classes_[chosen.template_labels_]
-            for k in range(1, int(counts.max())):     # type: ignore[union-attr]
-                longer = counts > k                     # type: ignore[operator]
-                cut = PrefixMatcher._prefixes(points[longer], k / counts[longer], chosen.name)  # type: ignore[index]
-                matcher = copy.deepcopy(chosen)
-                # Only distances are read: no rejection thresholds to calibrate.
-                matcher.set_codebook(cut.reshape(len(cut), -1), labels[longer],
-                                     class_thresholds=np.full(len(np.unique(labels[longer])), np.inf))
-                self._stroke_prefixes[k] = matcher
+        if counts is not None and self.prefixes == 'strokes':
+            for k in range(1, int(counts.max())):
+                self._stroke_prefixes[k] = prefix_recogniser(chosen, k / counts, keep=counts > k)
 
     def verdict(self, gesture: TouchGesture) -> Verdict:
         """What ``gesture`` (the strokes so far) is (module doc); an unusable one is whole (nothing to wait for)."""
@@ -114,7 +104,7 @@ class GestureEnd:
             longer = self._stroke_prefixes.get(int(gesture.strokes))
             prefix = np.inf if longer is None else float(longer.query_class_distances(query).min())
         else:
-            per_fraction = self.matcher.fraction_distances(gesture)
+            per_fraction = self.matcher.fraction_distances(gesture)   # type: ignore[union-attr]
             if per_fraction is None:
                 return Verdict.WHOLE
             whole = per_fraction[-1]             # the matcher's fractions end at 1: the whole templates
