@@ -91,9 +91,7 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return None
-    ids = np.zeros(len(pts), dtype=np.int64) if stroke is None else np.asarray(stroke).reshape(-1)
-    cuts = np.flatnonzero(ids[1:] != ids[:-1]) + 1   # a stroke is a run of one id, in traced order
-    strokes = np.split(pts, cuts)
+    strokes = [pts] if stroke is None else split_strokes(pts, np.asarray(stroke).reshape(-1))
     k = len(strokes)
     if k > ink_points:
         return None
@@ -117,6 +115,12 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
         ink /= size
     out[at:] = ink[-1]   # padding repeats the last point: finite, and never read
     return np.concatenate([out.reshape(-1), sid]).astype(np.float32)
+
+
+def split_strokes(points: np.ndarray, ids: np.ndarray) -> list[np.ndarray]:
+    """(m, 2) points with (m,) stroke ids -> each stroke's (m_i, 2) points, in traced order (a stroke
+    is a run of one id)."""
+    return np.split(points, np.flatnonzero(ids[1:] != ids[:-1]) + 1)
 
 
 @lru_cache(maxsize=16)
@@ -271,9 +275,7 @@ class NDollarRecogniser(TemplateRecogniser):
         pts = features[:2 * n].reshape(n, 2).astype(np.float64)
         sid = features[2 * n:]
         used = sid != PADDING
-        pts, sid = pts[used], sid[used]
-        cuts = np.flatnonzero(sid[1:] != sid[:-1]) + 1
-        return np.split(pts, cuts)
+        return split_strokes(pts[used], sid[used])
 
     def _expand(self, features: np.ndarray, as_traced: bool = False) -> tuple[np.ndarray, np.ndarray, int]:
         """A template's unistrokes, or with ``as_traced`` the query's one (its strokes in traced order):
