@@ -235,10 +235,9 @@ class TemplateRecogniser(BaseEstimator):
         per_class = self.class_distances(gesture)
         if per_class is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        match = self.decide(per_class)
+        match, best = self._decide(per_class)
         if match.label is None:
             return match
-        best = int(np.argmin(per_class))
         evidence = getattr(self, 'codebook_evidence_', None)
         reason = evidence.check(gesture, best) if evidence is not None else None
         order = getattr(self, 'order_evidence_', None)
@@ -250,6 +249,10 @@ class TemplateRecogniser(BaseEstimator):
 
     def decide(self, per_class: np.ndarray) -> Match:
         """Apply the rejection rule to per-class distances (n_classes,)."""
+        return self._decide(per_class)[0]
+
+    def _decide(self, per_class: np.ndarray) -> tuple[Match, int]:
+        """:meth:`decide`, with the nearest class's index (for the evidence checks of :meth:`predict`)."""
         best = int(np.argmin(per_class))
         d1 = float(per_class[best])
         if len(per_class) > 1:
@@ -259,10 +262,10 @@ class TemplateRecogniser(BaseEstimator):
             margin = float('inf')
         nearest = str(self.classes_[best])
         if not d1 <= self.class_thresholds_[best]:
-            return Match(None, d1, margin, nearest, 'distance')
+            return Match(None, d1, margin, nearest, 'distance'), best
         if margin < self.min_margin * d1:
-            return Match(None, d1, margin, nearest, 'margin')
-        return Match(nearest, d1, margin, nearest, None)
+            return Match(None, d1, margin, nearest, 'margin'), best
+        return Match(nearest, d1, margin, nearest, None), best
 
     def predict_many(self, gestures: Sequence[TouchGesture]) -> list[Match]:
         return [self.predict(g) for g in gestures]
