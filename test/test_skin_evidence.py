@@ -110,3 +110,41 @@ def test_a_symbol_written_with_a_long_pause_is_not_turned_away_for_its_duration(
         assert fitted.codebook_evidence_.check(g, list(fitted.classes_).index(label)) is None
         checked += 1
     assert checked >= 10
+
+
+def test_the_nearest_class_is_one_the_strokes_and_pace_allow(fitted):
+    """A touch nearest to a class the evidence rules out is named for the nearest class it allows; with
+    the ruled-out class nearer it is still ambiguous, so no command fires."""
+    rng = np.random.default_rng(11)
+    held_out, labels = codebook(rng, names=('X',), per_class=8)
+    x = list(fitted.classes_).index('X')
+    named = 0
+    for g in timed(held_out, rng):
+        if fitted.class_distances(g).argmin() != x or fitted.predict(g).label != 'X':
+            continue
+        # The second bar cut in two: the same ink (the cloud's distances do not change), three strokes,
+        # which only the codebook's H shows.
+        second = np.flatnonzero(g.stroke == 1)
+        g.stroke = g.stroke.copy()
+        g.stroke[second[len(second) // 2:]] = 2
+        g.strokes = 3
+        assert int(g.strokes) == 3 and fitted.class_distances(g).argmin() == x
+        allowed = fitted.codebook_evidence_.allowed(g)
+        assert allowed.tolist() == [c == 'H' for c in fitted.classes_]
+        match = fitted.predict(g)
+        assert match.nearest == 'H' and match.label is None and match.rejected in ('margin', 'distance')
+        assert match.margin < 0            # X, ruled out, is nearer than H
+        named += 1
+    assert named >= 4
+
+
+def test_allowed_classes_combine_strokes_and_pace_and_none_is_every_class():
+    ev = CodebookEvidence(np.repeat([0, 1, 2], 40), 3, strokes=np.repeat([1, 2, 1], 40),
+                          contact_s=np.r_[np.full(40, 1.0), np.full(40, 1.0), np.full(40, 4.0)])
+    one = TouchGesture.from_trajectory(np.zeros((3, 2)), np.array([0.0, 0.5, 1.0]))
+    assert ev.allowed(one).tolist() == [True, False, False]          # 1 stroke, 1 s: not class 2's 4 s
+    one.times = np.array([0.0, 2.0, 4.0])
+    assert ev.allowed(one).tolist() == [False, False, True]
+    one.times = np.array([0.0, 20.0, 40.0])
+    assert not ev.allowed(one).any()                                 # no class: the evidence rejects it
+    assert CodebookEvidence(np.array([0, 1]), 2).allowed(one) is None

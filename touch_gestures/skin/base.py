@@ -29,8 +29,10 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   times the ``auto_quantile`` quantile of leave-one-out path distances; where the codebook
   knows its templates' paths, and not with ``max_distance`` None: no distance limits at all).
 
-**The rule that decides**, in the order it is applied: the nearest class by distance; no
-command if the distance is over the class's threshold (``'distance'``), the margin is too
+**The rule that decides**, in the order it is applied: the nearest class by distance among
+the classes the touch's strokes and time in contact fit (:meth:`.evidence.CodebookEvidence.allowed`;
+all classes when none fits, or when the codebook knows neither), its margin taken over the
+nearest other class of all, ruled out or not; no command if the distance is over the class's threshold (``'distance'``), the margin is too
 small (``'margin'``), the stroke count is rare or unseen for the class (``'strokes'``), the
 duration is out of the class's range (``'duration'``) or the one-stroke path is out of
 order (``'order'``). Measured with the cloud on the Mixed Multistroke Gestures
@@ -41,6 +43,15 @@ command from 7.40 % to 1.20 % (most of it the stroke counts': arrow-like scribbl
 commands from 89.39 % to 89.04 % and wrong ones from 2.00 % to 1.27 %. Of the 18 firings
 left (150 touches x 10 folds), 17 are three one-stroke touches taken for a ``line``, and the
 one that fires most is a line: the generator's smooth curve can be straight.
+
+Naming the nearest class the evidence allows, rather than the nearest of all (which the
+evidence then rejects), changes what the recogniser answers, not which commands fire: a
+class ruled out yet nearer leaves a negative margin, so the touch stays ambiguous. Measured
+the same way, the nearest class is right for 94.13 % of the samples instead of 93.05 %
+(an X of three strokes is no X: the nearest class written with three strokes is named), and
+correct, rejected, wrong and random commands are unchanged (89.89, 6.47, 1.21, 1.20 %): a
+scribble's near classes are mostly ruled out by its stroke count, and a margin over the few
+left would let it through as unambiguous.
 
 Degenerate codebooks: a class with one template has no within-class distance and takes the
 median scale of the other classes; if no class has two templates, every class's scale is
@@ -235,10 +246,16 @@ class TemplateRecogniser(BaseEstimator):
         per_class = self.class_distances(gesture)
         if per_class is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        match, best = self._decide(per_class)
+        evidence = getattr(self, 'codebook_evidence_', None)
+        allowed = evidence.allowed(gesture) if evidence is not None else None
+        if allowed is not None and allowed.any() and not allowed.all():
+            # The nearest class the strokes and contact time allow; the runner-up of the margin stays the
+            # nearest other class of all, so that a class the evidence rules out still makes a touch ambiguous.
+            match, best = self._decide(per_class, allowed)
+        else:
+            match, best = self._decide(per_class)
         if match.label is None:
             return match
-        evidence = getattr(self, 'codebook_evidence_', None)
         reason = evidence.check(gesture, best) if evidence is not None else None
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
@@ -251,13 +268,15 @@ class TemplateRecogniser(BaseEstimator):
         """Apply the rejection rule to per-class distances (n_classes,)."""
         return self._decide(per_class)[0]
 
-    def _decide(self, per_class: np.ndarray) -> tuple[Match, int]:
-        """:meth:`decide`, with the nearest class's index (for the evidence checks of :meth:`predict`)."""
-        best = int(np.argmin(per_class))
+    def _decide(self, per_class: np.ndarray, allowed: np.ndarray | None = None) -> tuple[Match, int]:
+        """:meth:`decide`, with the nearest class's index (for the evidence checks of :meth:`predict`);
+        ``allowed`` (n_classes,) bool limits the nearest class to those (at least one)."""
+        best = int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
         d1 = float(per_class[best])
         if len(per_class) > 1:
-            d2 = float(np.partition(per_class, 1)[1])
-            margin = d2 - d1
+            others = per_class.copy()
+            others[best] = np.inf
+            margin = float(others.min()) - d1
         else:
             margin = float('inf')
         nearest = str(self.classes_[best])

@@ -84,6 +84,20 @@ class CodebookEvidence:
                     bounds[c] = lo / slack, hi * slack
             self.contact_bounds_s = bounds
 
+    def allowed(self, gesture: TouchGesture) -> np.ndarray | None:
+        """(n_classes,) bool: the classes ``gesture``'s strokes and time in contact fit (None: the codebook
+        knows neither, every class fits)."""
+        mask = None
+        if self.stroke_counts is not None:
+            strokes = int(gesture.strokes)
+            mask = np.fromiter((strokes in counts for counts in self.stroke_counts), dtype=bool,
+                               count=len(self.stroke_counts))
+        if self.contact_bounds_s is not None:
+            lo, hi = self.contact_bounds_s[:, 0], self.contact_bounds_s[:, 1]
+            fits = (lo <= gesture.contact_s) & (gesture.contact_s <= hi)   # NaN contact time: no class fits
+            mask = fits if mask is None else mask & fits
+        return mask
+
     def check(self, gesture: TouchGesture, label: int) -> str | None:
         """Why ``gesture`` cannot be class ``label`` (one of :data:`EVIDENCE_REASONS`), or None."""
         if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
