@@ -116,7 +116,7 @@ def test_the_nearest_class_is_one_the_strokes_and_pace_allow(fitted):
     """A touch nearest to a class the evidence rules out is named for the nearest class it allows; with
     the ruled-out class nearer it is still ambiguous, so no command fires."""
     rng = np.random.default_rng(11)
-    held_out, labels = codebook(rng, names=('X',), per_class=8)
+    held_out, _ = codebook(rng, names=('X',), per_class=8)
     x = list(fitted.classes_).index('X')
     named = 0
     for g in timed(held_out, rng):

@@ -30,9 +30,10 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   knows its templates' paths, and not with ``max_distance`` None: no distance limits at all).
 
 **The rule that decides**, in the order it is applied: the nearest class by distance among
-the classes the touch's strokes and time in contact fit (:meth:`.evidence.CodebookEvidence.allowed`;
-all classes when none fits, or when the codebook knows neither), its margin taken over the
-nearest other class of all, ruled out or not; no command if the distance is over the class's threshold (``'distance'``), the margin is too
+the classes the touch's strokes and time in contact fit
+(:meth:`.evidence.CodebookEvidence.allowed`; all classes when none fits, or when the codebook
+knows neither), its margin taken over the nearest other class of all, ruled out or not; no
+command if the distance is over the class's threshold (``'distance'``), the margin is too
 small (``'margin'``), the stroke count is rare or unseen for the class (``'strokes'``), the
 duration is out of the class's range (``'duration'``) or the one-stroke path is out of
 order (``'order'``). Measured with the cloud on the Mixed Multistroke Gestures
