@@ -244,17 +244,16 @@ class TemplateRecogniser(BaseEstimator):
 
     def predict(self, gesture: TouchGesture) -> Match:
         """The nearest class of ``gesture`` with its distance and margin, or a rejection."""
-        per_class = self.class_distances(gesture)
-        if per_class is None:
+        self._check_fitted()
+        query = self._query_features(gesture)
+        if query is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
+        per_class = self.query_class_distances(query)
         evidence = getattr(self, 'codebook_evidence_', None)
         allowed = evidence.allowed(gesture) if evidence is not None else None
-        if allowed is not None and allowed.any() and not allowed.all():
-            # The nearest class the strokes and contact time allow; the runner-up of the margin stays the
-            # nearest other class of all, so that a class the evidence rules out still makes a touch ambiguous.
-            match, best = self._decide(per_class, allowed)
-        else:
-            match, best = self._decide(per_class)
+        if allowed is not None and (allowed.all() or not allowed.any()):
+            allowed = None   # every class fits, or none does (the evidence check below rejects it)
+        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed))
         if match.label is None:
             return match
         reason = evidence.check(gesture, best) if evidence is not None else None
@@ -269,10 +268,21 @@ class TemplateRecogniser(BaseEstimator):
         """Apply the rejection rule to per-class distances (n_classes,)."""
         return self._decide(per_class)[0]
 
-    def _decide(self, per_class: np.ndarray, allowed: np.ndarray | None = None) -> tuple[Match, int]:
-        """:meth:`decide`, with the nearest class's index (for the evidence checks of :meth:`predict`);
-        ``allowed`` (n_classes,) bool limits the nearest class to those (at least one)."""
-        best = int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
+    def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
+        """The features :meth:`predict` hands to ``_distances`` (default: all of ``_features``)."""
+        return self._features(gesture)
+
+    def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
+        """Index of the class :meth:`predict` names: the nearest of those ``allowed`` ((n_classes,) bool,
+        at least one; None: all). A subclass may look again at near ties."""
+        return int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
+
+    def _decide(self, per_class: np.ndarray, best: int | None = None) -> tuple[Match, int]:
+        """:meth:`decide` of the class ``best`` (default: the nearest), with its index (for the evidence
+        checks of :meth:`predict`). The margin is over the nearest other class of all: negative when
+        ``best`` is not the nearest, which the margin rule then rejects."""
+        if best is None:
+            best = int(np.argmin(per_class))
         d1 = float(per_class[best])
         if len(per_class) > 1:
             others = per_class.copy()

@@ -117,6 +117,7 @@ def ordered_recogniser(recogniser: TemplateRecogniser) -> TemplateRecogniser:
         ValueError: its features are no ordered points (a map, the centroid's sequence).
     """
     recogniser = getattr(recogniser, 'chosen_', recogniser)
+    recogniser = getattr(recogniser, 'primary_', recogniser)   # 'refereed': its cloud
     if recogniser.name not in _ORDERED:
         raise ValueError(f'early decisions and the end of a gesture need the ordered points of '
                          f'{" or ".join(_ORDERED)}; {recogniser.name!r} has none')

@@ -58,7 +58,7 @@ class GestureEnd:
     (module doc)? ``complete(gesture)``: the verdict is ``WHOLE``.
 
     Args:
-        recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose).
+        recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose; ``refereed``: its cloud).
         margin: how much nearer (relative) a whole template must be than the best prefix.
         strokes: also require the nearest class to have templates of at most the strokes traced.
         unfinished: strokes fewer than every template of the nearest class has are ``UNFINISHED``

@@ -1,7 +1,7 @@
 """Every skin recogniser by name, for the CLI, codebook files and the evaluation.
 
->>> sorted(RECOGNISERS)
-['auto', 'centroid', 'cloud', 'dollar1', 'dtw', 'map', 'ndollar', 'pdollar', 'protractor', 'static', 'trace']
+>>> ' '.join(sorted(RECOGNISERS))
+'auto centroid cloud dollar1 dtw map ndollar pdollar protractor refereed static trace'
 >>> make_recogniser('trace', n_points=16).n_points
 16
 """
@@ -16,16 +16,17 @@ from .ndollar import NDollarRecogniser
 from .paper import CentroidRecogniser, MapRecogniser, StaticRecogniser
 from .peers import DollarOneRecogniser, DTWRecogniser, PointCloudRecogniser, ProtractorRecogniser
 from .proposed import TraceRecogniser
+from .referee import RefereedRecogniser
 from .vocabulary import AutoRecogniser
 
 __all__ = ['DEFAULT_RECOGNISER', 'PAPER', 'PEERS', 'RECOGNISERS', 'make_recogniser']
 
-#: name -> class, in report order: the paper's three, the peers, ours (single-stroke, multi-stroke, $N, and
-#: ``auto``: whichever of the two the vocabulary's codebook needs, :mod:`.vocabulary`).
+#: name -> class, in report order: the paper's three, the peers, ours (single-stroke, multi-stroke, $N, the
+#: cloud refereed by $N, and ``auto``: whichever of the two the vocabulary's codebook needs, :mod:`.vocabulary`).
 RECOGNISERS: dict[str, type[TemplateRecogniser]] = {
     cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, DollarOneRecogniser,
                               ProtractorRecogniser, PointCloudRecogniser, DTWRecogniser, TraceRecogniser,
-                              CloudRecogniser, NDollarRecogniser, AutoRecogniser)
+                              CloudRecogniser, NDollarRecogniser, RefereedRecogniser, AutoRecogniser)
 }
 PAPER = ('static', 'map', 'centroid')
 PEERS = ('dollar1', 'protractor', 'pdollar', 'dtw')

@@ -1,0 +1,109 @@
+"""A point cloud with a referee for its near ties: :class:`RefereedRecogniser`.
+
+The order-free cloud (:mod:`.clouds`) tells most multi-stroke symbols apart, but a few pairs
+are nearly the same cloud: an N and an H (two bars and what joins them), an asterisk and an
+X. The order of the strokes and their directions tell those apart, which is what $N matches
+(:mod:`.ndollar`: every stroke order and direction of the templates, each as one unistroke).
+$N alone is less accurate than the cloud and costs more, so it is asked only where the cloud
+cannot decide: when its two nearest classes are closer than its own ambiguity rule's margin
+(``min_margin`` times the nearest distance, the rule that rejects a touch as ambiguous,
+:mod:`.base`), the referee's distances choose between those two. Nothing is tuned for it:
+the tie is the cloud's own rule, the choice the referee's nearest of two.
+
+The referee names the class; it does not make a command fire: the tie stays a tie for the
+rejection rule (the margin over the other class is below ``min_margin``, or negative where
+the referee chose the farther one), so what fires is what the cloud alone fires. Each
+template's features are the cloud's and the referee's side by side (one vector, so codebook
+files, ``auto`` and the evaluation handle it as any recogniser); distances, thresholds, the
+end of a gesture and early candidates are the cloud's (:attr:`primary_`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import TemplateRecogniser
+from .clouds import CloudRecogniser
+from .gesture import TouchGesture
+from .ndollar import NDollarRecogniser
+
+__all__ = ['RefereedRecogniser']
+
+#: A short diagonal stroke: its features' length is the primary's share of a template.
+_PROBE = np.array([[10.0, 10.0], [20.0, 15.0], [30.0, 30.0]])
+
+
+class RefereedRecogniser(TemplateRecogniser):
+    """The cloud, with $N choosing between its two nearest classes when they tie (module doc).
+
+    Args:
+        n_points: points of the cloud (:class:`~.clouds.CloudRecogniser`).
+        referee_points: points of the referee's unistrokes (:class:`~.ndollar.NDollarRecogniser`).
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`; ``min_margin``
+            is also the tie the referee decides.
+
+    Attributes:
+        primary_: the fitted cloud (its codebook: the templates' first part).
+        referee_: the fitted $N (the second part).
+        referee_calls_: how many recognitions asked the referee (its cost is ~10x the cloud's).
+    """
+
+    name = 'refereed'
+    direction_aware = False
+
+    def __init__(self, n_points: int = 32, referee_points: int = 96, max_distance: float | str | None = 'auto',
+                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
+        self.n_points = n_points
+        self.referee_points = referee_points
+        self.max_distance = max_distance
+        self.auto_scale = auto_scale
+        self.auto_quantile = auto_quantile
+        self.min_margin = min_margin
+
+    def _parts(self) -> tuple[TemplateRecogniser, TemplateRecogniser]:
+        """New, unfitted cloud and referee (no limits of their own: only their distances are read)."""
+        return (CloudRecogniser(n_points=self.n_points, max_distance=None),
+                NDollarRecogniser(n_points=self.referee_points, max_distance=None))
+
+    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+        primary, referee = getattr(self, 'primary_', None), getattr(self, 'referee_', None)
+        if primary is None:
+            primary, referee = self._parts()
+        cloud, unistrokes = primary._features(gesture), referee._features(gesture)
+        if cloud is None or unistrokes is None:
+            return None
+        return np.concatenate([cloud, unistrokes]).astype(np.float32, copy=False)
+
+    def _prepare_codebook(self) -> None:
+        primary, referee = self._parts()
+        split = len(primary._features(TouchGesture.from_trajectory(_PROBE)))
+        if self.templates_.shape[1] <= split:
+            raise ValueError(f'a refereed codebook holds the cloud ({split} values) and the referee side by side; '
+                             f'got templates of {self.templates_.shape[1]}')
+        labels = self.classes_[self.template_labels_]
+        unlimited = np.full(len(self.classes_), np.inf)   # thresholds are this recogniser's, not the parts'
+        for part, templates in ((primary, self.templates_[:, :split]), (referee, self.templates_[:, split:])):
+            part.set_codebook(templates, labels, class_thresholds=unlimited, template_strokes=self.template_strokes_,
+                              template_contact_s=self.template_contact_s_)
+        self.primary_, self.referee_, self._split = primary, referee, split
+        self.referee_calls_ = 0
+
+    def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
+        return self.primary_._features(gesture)   # the referee's only on a tie (they cost 3 times the cloud's)
+
+    def _distances(self, query: np.ndarray) -> np.ndarray:
+        return self.primary_._distances(query[:self._split])   # a template's or a query's: the cloud comes first
+
+    def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
+        best = super()._nearest(gesture, per_class, allowed)
+        rivals = per_class.copy() if allowed is None else np.where(allowed, per_class, np.inf)
+        rivals[best] = np.inf
+        second = int(np.argmin(rivals))
+        d1 = float(per_class[best])
+        if not rivals[second] - d1 < self.min_margin * d1:   # no tie (or no rival: inf)
+            return best
+        self.referee_calls_ += 1
+        judged = self.referee_.class_distances(gesture)
+        if judged is None:
+            return best
+        return second if judged[second] < judged[best] else best
