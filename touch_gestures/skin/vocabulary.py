@@ -15,7 +15,8 @@ vocabulary needs follows from its codebook, so the rule is measured there, not f
     1. If the order-free one confuses a class (accuracy below ``confused``) that the ordered
        one reads (at least ``separated`` better), direction is part of the vocabulary: the
        ordered recogniser (two lines in opposite directions are one cloud: 50 % each).
-    2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser:
+    2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser (by
+       default the cloud refereed by $N on its near ties, :mod:`.referee`):
        people order and direct their strokes differently, which a codebook cannot show
        (a template's nearest neighbour is mostly its own performer's repetition, traced the
        same way), and which leave-one-person-out shows (docs/skin-evaluation.md).
@@ -79,7 +80,7 @@ class AutoRecogniser(TemplateRecogniser):
 
     name = 'auto'
 
-    def __init__(self, ordered: str = 'trace', order_free: str = 'cloud', per_class: int = 20,
+    def __init__(self, ordered: str = 'trace', order_free: str = 'refereed', per_class: int = 20,
                  confused: float = 0.75, separated: float = 0.25, tie: float = 0.005,
                  max_distance: float | str | None = 'auto',
                  auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:

@@ -18,7 +18,7 @@ way instead). So the latency is two parts:
 shapes, other performers than the codebook's) on the virtual skin, read by the real
 ``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph
 (:class:`~touch_sim.harness.Harness`), with a codebook of ``n_gestures`` x
-``templates_per_gesture`` for the ``recogniser`` (default ``cloud``, the one ``auto`` picks
+``templates_per_gesture`` for the ``recogniser`` (default ``refereed``, the one ``auto`` picks
 for multi-stroke vocabularies); it reports median and p99 over every command.
 """
 
@@ -81,7 +81,7 @@ def _session(scene: Any, params: dict[str, Any], seed: int) -> tuple[dict[int, f
 
 
 def bench_latency(repeats: int = 1, n_gestures: int = 16, templates_per_gesture: int = 30,
-                  gestures_per_class: int = 4, recogniser: str = 'cloud', gap_s: float = MULTISTROKE_GAP_S,
+                  gestures_per_class: int = 4, recogniser: str = 'refereed', gap_s: float = MULTISTROKE_GAP_S,
                   seed: int = 0) -> dict:
     """Median and p99 latency from the gap's end to the command (module doc); a JSON-ready dict.
 
