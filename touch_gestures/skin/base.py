@@ -251,12 +251,13 @@ class TemplateRecogniser(BaseEstimator):
         per_class = self.query_class_distances(query)
         evidence = getattr(self, 'codebook_evidence_', None)
         allowed = evidence.allowed(gesture) if evidence is not None else None
-        if allowed is not None and (allowed.all() or not allowed.any()):
+        fits_none = allowed is not None and not allowed.any()
+        if allowed is not None and (fits_none or allowed.all()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
         match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed))
         if match.label is None:
             return match
-        reason = evidence.check(gesture, best) if evidence is not None else None
+        reason = evidence.check(gesture, best) if fits_none else None   # else ``best`` fits by construction
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
             reason = order.check(gesture, best)

@@ -83,18 +83,22 @@ class CodebookEvidence:
                     lo, hi = np.quantile(own, [low, high])
                     bounds[c] = lo / slack, hi * slack
             self.contact_bounds_s = bounds
+        # What allowed() reads per touch: a mask per stroke count seen (any other count fits no class).
+        self._no_class = np.zeros(n_classes, dtype=bool)
+        self._stroke_masks = None if self.stroke_counts is None else {
+            k: np.array([k in counts for counts in self.stroke_counts]) for k in set().union(*self.stroke_counts)}
+        self._lows_s, self._highs_s = ((None, None) if self.contact_bounds_s is None
+                                       else (self.contact_bounds_s[:, 0].copy(), self.contact_bounds_s[:, 1].copy()))
 
     def allowed(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_classes,) bool: the classes ``gesture``'s strokes and time in contact fit (None: the codebook
         knows neither, every class fits)."""
         mask = None
-        if self.stroke_counts is not None:
-            strokes = int(gesture.strokes)
-            mask = np.fromiter((strokes in counts for counts in self.stroke_counts), dtype=bool,
-                               count=len(self.stroke_counts))
-        if self.contact_bounds_s is not None:
-            lo, hi = self.contact_bounds_s[:, 0], self.contact_bounds_s[:, 1]
-            fits = (lo <= gesture.contact_s) & (gesture.contact_s <= hi)   # NaN contact time: no class fits
+        if self._stroke_masks is not None:
+            mask = self._stroke_masks.get(int(gesture.strokes), self._no_class)
+        if self._lows_s is not None:
+            contact = gesture.contact_s
+            fits = (self._lows_s <= contact) & (contact <= self._highs_s)   # NaN contact time: no class fits
             mask = fits if mask is None else mask & fits
         return mask
 
