@@ -70,5 +70,7 @@ def test_a_refereed_codebook_file_loads_with_both_parts_and_ends_gestures_by_its
     assert isinstance(loaded, RefereedRecogniser) and ordered_recogniser(loaded) is loaded.primary_
     for g in held_out()[0]:
         assert loaded.predict(g) == refereed.predict(g)
+    with pytest.raises(ValueError, match='n_points'):
+        RefereedRecogniser(n_points=1).fit(*codebook(np.random.default_rng(1), names=NAMES, per_class=2))
     with pytest.raises(ValueError, match='side by side'):
         RefereedRecogniser().set_codebook(refereed.templates_[:, :10], refereed.classes_[refereed.template_labels_])

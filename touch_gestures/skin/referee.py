@@ -60,6 +60,11 @@ class RefereedRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
+    def _check_params(self) -> None:
+        super()._check_params()
+        for part in self._parts():
+            part._check_params()
+
     def _parts(self) -> tuple[TemplateRecogniser, TemplateRecogniser]:
         """New, unfitted cloud and referee (no limits of their own: only their distances are read)."""
         return (CloudRecogniser(n_points=self.n_points, max_distance=None),
