@@ -126,3 +126,51 @@ def test_a_stroke_count_few_templates_of_a_big_class_show_is_not_allowed():
     assert CodebookEvidence(labels, 2, strokes, min_share=0.0).stroke_counts == [frozenset({1, 2})] * 2
     with pytest.raises(ValueError, match='min_share'):
         CodebookEvidence(labels, 2, strokes, min_share=1.0)
+
+
+def test_the_cloud_hands_the_order_check_its_own_cloud_as_the_path_of_a_one_stroke_touch(fitted):
+    rng = np.random.default_rng(9)
+    gesture = traced(STAR, rng, start=2)
+    query = fitted._features(gesture)
+    path = fitted._one_stroke_path(gesture, query)
+    np.testing.assert_array_equal(path, one_stroke_path(gesture))   # the same resampling, bit for bit
+    assert path.dtype == np.float64
+    # Stroke ids that change along the touch (a caller's numbering): the ink-only cloud is no path; the check
+    # resamples itself. Several strokes: no path at all.
+    renumbered = copy.copy(gesture)
+    renumbered.stroke = np.repeat(np.array([0, 1], dtype=np.int16), [10, len(gesture.stroke) - 10])
+    assert fitted._one_stroke_path(renumbered, fitted._features(renumbered)) is None
+    two = copy.copy(renumbered)
+    two.strokes = 2
+    assert fitted._one_stroke_path(two, fitted._features(two)) is None
+    assert CloudRecogniser(n_points=16)._one_stroke_path(gesture, query[:32]) is None   # not the check's 32 points
+    # Handed a path, the check reads it; handed one of another length, or none, it resamples the touch.
+    star = list(fitted.classes_).index('star')
+    order = fitted.order_evidence_
+    assert order.check(gesture, star, path) is order.check(gesture, star) is None
+    assert order.check(gesture, star, np.zeros((5, 2))) is None
+    scribble = shuffled_star(rng)
+    assert order.check(scribble, star, fitted._one_stroke_path(scribble, fitted._features(scribble))) == 'order'
+    assert order.check(two, star, path) is None   # several strokes: never checked
+
+
+def test_the_distance_to_gathered_templates_is_the_definition():
+    """path_distance against every one-stroke template of a class: the root-mean-square distance, smallest
+    over the two directions (open templates) and every start (closed ones), computed point by point."""
+    rng = np.random.default_rng(21)
+    n = 16
+    open_paths = rng.normal(0, 0.3, (4, n, 2))
+    open_paths[:, -1] = open_paths[:, 0] + 1.0                          # ends apart: open
+    loops = rng.normal(0, 0.3, (3, n, 2))
+    loops[:, -1] = loops[:, 0] + 0.01                                   # ends together: closed
+    ev = OrderEvidence(np.concatenate([open_paths, loops]), np.zeros(7, int), 1)
+    assert ev._closed.tolist() == [False] * 4 + [True] * 3
+    for _ in range(5):
+        path = rng.normal(0, 0.3, (n, 2))
+        rms = [np.sqrt(((t - p) ** 2).sum(axis=1).mean()) for t in open_paths for p in (path, path[::-1])]
+        rms += [np.sqrt(((t - np.roll(p, s, axis=0)) ** 2).sum(axis=1).mean())
+                for t in loops for p in (path, path[::-1]) for s in range(n)]
+        # float64 sums of 2n products below 1 regrouped: a few ulp of the squared distance.
+        assert ev.path_distance(path, np.arange(7)) == pytest.approx(min(rms), rel=1e-12)
+        assert ev.path_distance(path, np.arange(4)) == pytest.approx(min(rms[:8]), rel=1e-12)
+        assert ev.path_distance(path, np.arange(4, 7)) == pytest.approx(min(rms[8:]), rel=1e-12)

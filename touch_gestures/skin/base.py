@@ -232,20 +232,26 @@ class TemplateRecogniser(BaseEstimator):
 
     def predict(self, gesture: TouchGesture) -> Match:
         """The nearest class of ``gesture`` with its distance and margin, or a rejection."""
-        per_class = self.class_distances(gesture)
-        if per_class is None:
+        self._check_fitted()
+        query = self._features(gesture)
+        if query is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        match, best = self._decide(per_class)
+        match, best = self._decide(self.query_class_distances(query))
         if match.label is None:
             return match
         evidence = getattr(self, 'codebook_evidence_', None)
         reason = evidence.check(gesture, best) if evidence is not None else None
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
-            reason = order.check(gesture, best)
+            reason = order.check(gesture, best, self._one_stroke_path(gesture, query))
         if reason is not None:
             return Match(None, match.distance, match.margin, match.nearest, reason)
         return match
+
+    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        """The order check's path of ``gesture`` (:func:`~.order_evidence.one_stroke_path`) when the
+        features ``query`` already hold it, else None (the check computes it)."""
+        return None
 
     def decide(self, per_class: np.ndarray) -> Match:
         """Apply the rejection rule to per-class distances (n_classes,)."""
@@ -254,12 +260,11 @@ class TemplateRecogniser(BaseEstimator):
     def _decide(self, per_class: np.ndarray) -> tuple[Match, int]:
         """:meth:`decide`, with the nearest class's index (for the evidence checks of :meth:`predict`)."""
         best = int(np.argmin(per_class))
-        d1 = float(per_class[best])
-        if len(per_class) > 1:
-            d2 = float(np.partition(per_class, 1)[1])
-            margin = d2 - d1
-        else:
-            margin = float('inf')
+        distances = per_class.tolist()
+        d1 = distances[best]
+        # The runner-up is the smallest of the others (NaN only where d1 is NaN too: argmin takes a NaN
+        # first, and the margin is NaN whatever the runner-up).
+        margin = min(distances[:best] + distances[best + 1:]) - d1 if len(distances) > 1 else float('inf')
         nearest = str(self.classes_[best])
         if not d1 <= self.class_thresholds_[best]:
             return Match(None, d1, margin, nearest, 'distance'), best

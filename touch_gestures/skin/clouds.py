@@ -52,6 +52,7 @@ from scipy.spatial.distance import cdist
 from .base import TemplateRecogniser
 from .features import arc_length_resample_complex
 from .gesture import TouchGesture
+from .order_evidence import PATH_POINTS
 
 __all__ = ['CloudRecogniser', 'cloud_features']
 
@@ -115,6 +116,13 @@ class CloudRecogniser(TemplateRecogniser):
         if len(gesture.trajectory) == 0:
             return None
         return cloud_features(gesture.trajectory, gesture.stroke, self.n_points)
+
+    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        # A touch whose points are all of one stroke (ids all 0, as the segmenter numbers them) is resampled
+        # the same with and without its stroke ids: the cloud is the order check's path, as float64.
+        if self.n_points != PATH_POINTS or gesture.strokes != 1 or gesture.stroke.any():
+            return None
+        return query.reshape(self.n_points, 2).astype(np.float64)
 
     def _cells(self, clouds: np.ndarray) -> np.ndarray:
         """(..., n, 2) normalised points -> (..., n) flat raster cell index (clipped to the raster)."""

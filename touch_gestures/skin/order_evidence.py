@@ -14,9 +14,13 @@ whether the touch, as the path it was traced, is near such a path of the class:
   units of the gesture's size), the smaller of the two directions; where the template is a
   **closed** stroke (its ends less than ``closed`` gesture sizes apart: a star, a circle),
   from any of its points as the start as well. The touch is compared with every one-stroke
-  template of the class: all starts and both directions at once, as a circular
-  cross-correlation of the paths taken as complex numbers (the templates' FFTs computed
-  once; numpy's FFT, no multi-threaded BLAS, which stalls on a busy machine);
+  template of the class at once: the open ones in one product of the touch's path with the
+  templates' paths, as traced and reversed (stacked per class at fit time: a matrix of
+  2 m x 2n by a vector, far too small for BLAS to start threads, which stall on a busy
+  machine); the closed ones from every start and both directions as a circular
+  cross-correlation of the paths taken as complex numbers (the templates' FFTs computed once).
+  Where the recogniser's own features are that path (the cloud's, for a touch of one stroke),
+  the check reads them instead of resampling the touch again;
 - **the threshold is calibrated on the codebook** as the shape distance's is (:mod:`.base`):
   ``auto_scale`` times the ``auto_quantile`` quantile of the path distances of the class's
   one-stroke templates to their nearest other such template (leave one out). A class with
@@ -29,6 +33,8 @@ skips the check.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -82,9 +88,11 @@ class OrderEvidence:
         self.members = [np.flatnonzero(one_stroke & (labels == c)) for c in range(n_classes)]
         z = np.where(one_stroke[:, None], paths[..., 0] + 1j * paths[..., 1], 0.0)   # (T, n) complex
         self._energy = (np.abs(z) ** 2).sum(axis=1)                                  # (T,)
-        self._z = z
+        self._paths = np.where(one_stroke[:, None, None], paths, 0.0)                 # (T, n, 2)
         self._spectra = np.fft.fft(z, axis=1)                                        # (T, n)
         self._closed = one_stroke & (np.abs(z[:, 0] - z[:, -1]) < closed)
+        #: per class, what :meth:`check` reads of its one-stroke templates, gathered once (no copy per check)
+        self._by_class = [self._gathered(own) for own in self.members]
         #: (n_classes,) path distance thresholds; inf: no check (fewer than two one-stroke templates).
         self.thresholds = np.full(n_classes, np.inf)
         for c, own in enumerate(self.members):
@@ -94,33 +102,57 @@ class OrderEvidence:
             loo = [self.path_distance(paths[i], own[own != i]) for i in left_out]
             self.thresholds[c] = scale * float(np.quantile(loo, quantile))
 
+    def _gathered(self, templates: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What :meth:`_distance` reads of the given templates (indices): the open ones' paths as traced and
+        reversed, (2 m_open, 2n) times 2, with their (2 m_open,) energies; the closed ones' (m_closed, n)
+        spectra with their (m_closed,) energies."""
+        loops = self._closed[templates]
+        opened, closed = templates[~loops], templates[loops]
+        n = self.n_points
+        paths = self._paths[opened]
+        both = np.concatenate([paths, paths[:, ::-1]]).reshape(-1, 2 * n)
+        return 2.0 * both, np.tile(self._energy[opened], 2), self._spectra[closed], self._energy[closed]
+
     def path_distance(self, path: np.ndarray, templates: np.ndarray) -> float:
         """Smallest root-mean-square point distance of an (n, 2) path to the given templates' paths
         (indices), in either direction, from any start on a closed template (inf without templates)."""
         if len(templates) == 0:
             return float('inf')
-        q = path[:, 0] + 1j * path[:, 1]
-        both = np.stack([q, q[::-1]])                                                # (2, n): as traced, reversed
-        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 Re sum_k t_k conj(q_(k+s)). An open template is read
-        # from either end of the touch only (s = 0); a closed one from any start: the sums for every shift s
-        # at once are the circular cross-correlation, ifft(fft(t) * conj(fft(q))) up to s's sign.
-        closest = (self._z[templates][:, None, :] * np.conj(both)[None]).real.sum(axis=2).max(axis=1)   # (m,)
-        loops = self._closed[templates]
-        if loops.any():
-            corr = np.fft.ifft(self._spectra[templates[loops]][:, None, :] * np.conj(np.fft.fft(both, axis=1)),
-                               axis=2).real                                          # (m_closed, 2, n)
-            closest[loops] = corr.max(axis=(1, 2))
-        best = self._energy[templates] + float((np.abs(q) ** 2).sum()) - 2 * closest
-        return float(np.sqrt(max(float(best.min()), 0.0) / self.n_points))
+        return self._distance(path, *self._gathered(templates))
 
-    def check(self, gesture: TouchGesture, label: int) -> str | None:
+    def _distance(self, path: np.ndarray, open_paths2: np.ndarray, open_energy: np.ndarray,
+                  closed_spectra: np.ndarray, closed_energy: np.ndarray) -> float:
+        """:meth:`path_distance` to templates gathered by :meth:`_gathered`."""
+        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 sum_k (t_k . q_(k+s)), the points as 2-vectors. An open
+        # template is read from either end of the touch only (s = 0; the touch reversed is the template
+        # reversed): one product of the touch's (2n,) path with the templates' both ways, doubled at fit
+        # time. A closed one from any start: the sums for every shift s at once are the circular
+        # cross-correlation of the paths as complex numbers, Re ifft(fft(t) * conj(fft(q))).
+        xy = np.ascontiguousarray(path, dtype=np.float64)                            # (n, 2)
+        flat = xy.reshape(-1)                                                        # x, y interleaved
+        best = np.inf
+        if len(open_energy):
+            best = float((open_energy - open_paths2 @ flat).min())
+        if len(closed_energy):
+            q = xy.view(np.complex128).reshape(-1)                                   # (n,) x + iy, no copy
+            spectra = np.conj(np.fft.fft(np.stack([q, q[::-1]]), axis=1))              # (2, n)
+            corr = np.fft.ifft(closed_spectra[:, None, :] * spectra, axis=2).real  # (m_closed, 2, n)
+            best = min(best, float((closed_energy - 2 * corr.max(axis=(1, 2))).min()))
+        return math.sqrt(max(best + float(flat @ flat), 0.0) / self.n_points)
+
+    def check(self, gesture: TouchGesture, label: int, path: np.ndarray | None = None) -> str | None:
         """``'order'`` when the one-stroke ``gesture``'s path is farther than class ``label``'s threshold
-        from every one-stroke template of the class, else None."""
-        if not np.isfinite(self.thresholds[label]):
+        from every one-stroke template of the class, else None. ``path``: the gesture's
+        :func:`one_stroke_path` if the caller has it already (a cloud's own features), else computed here."""
+        threshold = float(self.thresholds[label])
+        if not math.isfinite(threshold):
             return None
-        path = one_stroke_path(gesture, self.n_points)
+        if path is None or len(path) != self.n_points:
+            path = one_stroke_path(gesture, self.n_points)
+        elif int(getattr(gesture, 'strokes', 1)) != 1:
+            path = None
         if path is None:
             return None
-        if self.path_distance(path, self.members[label]) > self.thresholds[label]:
+        if self._distance(path, *self._by_class[label]) > threshold:
             return ORDER_REASON
         return None
