@@ -74,11 +74,13 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     """
     cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
     cloud -= cloud.sum() / n_points
-    xy = cloud.view(np.float64).reshape(n_points, 2)                # the same memory as (n, 2) x, y
-    size = float((xy.max(axis=0) - xy.min(axis=0)).max())
+    x, y = cloud.real, cloud.imag                                   # views: cheaper than reducing (n, 2) along 0
+    width, height = float(x.max()) - float(x.min()), float(y.max()) - float(y.min())
+    size = width if width > height or width != width else height    # the larger side; NaN if either is, as numpy's
+    xy = cloud.view(np.float64)                                     # the same memory, x and y interleaved
     if size > 1e-9:
         xy /= size
-    return xy.reshape(-1).astype(np.float32)
+    return xy.astype(np.float32)
 
 
 class CloudRecogniser(TemplateRecogniser):
