@@ -131,10 +131,11 @@ class CloudRecogniser(TemplateRecogniser):
         # Truncation is the floor for the points inside the raster; those left of it clip to 0 either way.
         ij = ((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
         np.minimum(np.maximum(ij, 0, out=ij), self.grid - 1, out=ij)   # np.clip's checks cost more here
-        return ij[..., 1] * self.grid + ij[..., 0]
+        return ij @ self._cell_steps                                   # row * grid + column, one call
 
     def _prepare_codebook(self) -> None:
         n, g = self.n_points, self.grid
+        self._cell_steps = np.array([1, g], dtype=np.intp)
         self._clouds = self.templates_.reshape(len(self.templates_), n, 2).astype(np.float64)
         self._cell_mm = 2 * _EXTENT / g   # the raster's cell side, gesture sizes
         centres = (np.arange(g) + 0.5) * self._cell_mm - _EXTENT
@@ -159,7 +160,8 @@ class CloudRecogniser(TemplateRecogniser):
             shape=(T, g * g))
         self._cell_counts.sum_duplicates()
         self._visit_labels = self.template_labels_.tolist()
-        self._row_starts = np.arange(0, n * n * min(self.exact, T), n)   # flat start of each (point, template) row
+        # flat start of each (point, template) row of the (n, k, n) point distances to the k closest
+        self._row_starts = np.arange(0, n * n * min(self.exact, T), n).reshape(n, min(self.exact, T))
 
     def _query_field(self, cells: np.ndarray) -> np.ndarray:
         """(g*g,) float32 distance from each raster cell's centre to the nearest cell centre occupied
@@ -177,7 +179,7 @@ class CloudRecogniser(TemplateRecogniser):
         # below 3 (the raster's diagonal): float32 adds ~1e-7 relative, far under the half-cell.
         to_templates = self._fields[cells].sum(axis=0)
         to_templates += self._cell_counts @ self._query_field(cells)
-        return to_templates.astype(np.float64) * (0.5 / self.n_points)
+        return np.multiply(to_templates, 0.5 / self.n_points, dtype=np.float64)   # as float64, then scaled
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         n = self.n_points
@@ -191,7 +193,7 @@ class CloudRecogniser(TemplateRecogniser):
         pair = cdist(q, self._clouds[closest].reshape(-1, 2)).reshape(n, k, n)
         nearest = pair.argmin(axis=2)                        # (n, k) each query point's nearest template point
         # Their distances gathered by flat index: numpy's min along a short last axis is slower.
-        rows = pair.reshape(-1)[self._row_starts[:n * k].reshape(n, k) + nearest]
+        rows = pair.reshape(-1)[self._row_starts + nearest]
         to_template = rows.sum(axis=0) / n                   # (k,) directed Chamfer means, both ways
         chamfer = np.maximum(to_template, pair.min(axis=0).sum(axis=1) / n)   # true lower bounds
         # The visit is over k (6) values: Python lists, not numpy calls.
