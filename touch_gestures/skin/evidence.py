@@ -89,7 +89,7 @@ class CodebookEvidence:
         if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
             return 'strokes'
         if self.contact_bounds_s is not None:
-            lo, hi = self.contact_bounds_s[label]
+            lo, hi = self.contact_bounds_s[label].tolist()   # Python floats: cheaper to compare
             if not lo <= gesture.contact_s <= hi:
                 return 'duration'
         return None
