@@ -13,7 +13,7 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.evidence import CodebookEvidence
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.order_evidence import OrderEvidence, one_stroke_path
+from touch_gestures.skin.order_evidence import _ONE_THREAD, OrderEvidence, one_stroke_path
 from touch_gestures.skin.proposed import TraceRecogniser
 
 #: A five-point star's tips in the order one stroke visits them (unit circle, y down).
@@ -174,3 +174,21 @@ def test_the_distance_to_gathered_templates_is_the_definition():
         assert ev.path_distance(path, np.arange(7)) == pytest.approx(min(rms), rel=1e-12)
         assert ev.path_distance(path, np.arange(4)) == pytest.approx(min(rms[:8]), rel=1e-12)
         assert ev.path_distance(path, np.arange(4, 7)) == pytest.approx(min(rms[8:]), rel=1e-12)
+
+
+def test_a_big_class_is_read_in_blocks_with_the_same_distance():
+    """Over _ONE_THREAD / 2n rows the open templates are read block by block: the nearest is found in any."""
+    rng = np.random.default_rng(22)
+    n = 32
+    paths = rng.normal(0, 0.3, (300, n, 2))
+    paths[:, -1] = paths[:, 0] + 1.0                                    # open
+    ev = OrderEvidence(paths, np.zeros(300, int), 1, per_class=2)
+    blocks, spectra, _ = ev._by_class[0]
+    assert len(blocks) > 2 and len(spectra) == 0
+    assert all(block.size < _ONE_THREAD for block, _ in blocks)
+    for target in (3, 150, 299):                                        # in the first, a middle, the last block
+        path = paths[target][::-1] + rng.normal(0, 1e-3, (n, 2))
+        rms = min(np.sqrt(((t - p) ** 2).sum(axis=1).mean()) for t in paths for p in (path, path[::-1]))
+        assert ev.path_distance(path, np.arange(300)) == pytest.approx(rms, rel=1e-12)
+    nan = np.full((n, 2), np.nan)
+    assert np.isnan(ev.path_distance(nan, np.arange(300)))               # NaN stays NaN, as numpy's minimum

@@ -16,8 +16,8 @@ whether the touch, as the path it was traced, is near such a path of the class:
   from any of its points as the start as well. The touch is compared with every one-stroke
   template of the class at once: the open ones in one product of the touch's path with the
   templates' paths, as traced and reversed (stacked per class at fit time: a matrix of
-  2 m x 2n by a vector, far too small for BLAS to start threads, which stall on a busy
-  machine); the closed ones from every start and both directions as a circular
+  2 m x 2n by a vector, in blocks small enough that BLAS keeps to one thread, as threads
+  stall on a busy machine); the closed ones from every start and both directions as a circular
   cross-correlation of the paths taken as complex numbers (the templates' FFTs computed once).
   Where the recogniser's own features are that path (the cloud's, for a touch of one stroke),
   the check reads them instead of resampling the touch again;
@@ -46,6 +46,9 @@ __all__ = ['ORDER_REASON', 'OrderEvidence', 'one_stroke_path']
 ORDER_REASON = 'order'
 #: Points of a path along the ink ($P's 32).
 PATH_POINTS = 32
+#: OpenBLAS's matrix-vector product runs on one thread below m x n = 2304 x GEMM_MULTITHREAD_THRESHOLD (4 by
+#: default; interface/gemv.c): threads wait for a core on a busy machine, so the products stay below it.
+_ONE_THREAD = 2304 * 4
 
 
 def one_stroke_path(gesture: TouchGesture, n_points: int = PATH_POINTS) -> np.ndarray | None:
@@ -102,16 +105,19 @@ class OrderEvidence:
             loo = [self.path_distance(paths[i], own[own != i]) for i in left_out]
             self.thresholds[c] = scale * float(np.quantile(loo, quantile))
 
-    def _gathered(self, templates: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _gathered(self, templates: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]], np.ndarray, np.ndarray]:
         """What :meth:`_distance` reads of the given templates (indices): the open ones' paths as traced and
-        reversed, (2 m_open, 2n) times 2, with their (2 m_open,) energies; the closed ones' (m_closed, n)
-        spectra with their (m_closed,) energies."""
+        reversed, (2 m_open, 2n) times 2, with their (2 m_open,) energies, in blocks of rows small enough for
+        one thread (:data:`_ONE_THREAD`); the closed ones' (m_closed, n) spectra with their (m_closed,) energies."""
         loops = self._closed[templates]
         opened, closed = templates[~loops], templates[loops]
         n = self.n_points
         paths = self._paths[opened]
-        both = np.concatenate([paths, paths[:, ::-1]]).reshape(-1, 2 * n)
-        return 2.0 * both, np.tile(self._energy[opened], 2), self._spectra[closed], self._energy[closed]
+        both = 2.0 * np.concatenate([paths, paths[:, ::-1]]).reshape(-1, 2 * n)
+        energy = np.tile(self._energy[opened], 2)
+        rows = max(1, (_ONE_THREAD - 1) // (2 * n))
+        blocks = [(both[i:i + rows], energy[i:i + rows]) for i in range(0, len(both), rows)]
+        return blocks, self._spectra[closed], self._energy[closed]
 
     def path_distance(self, path: np.ndarray, templates: np.ndarray) -> float:
         """Smallest root-mean-square point distance of an (n, 2) path to the given templates' paths
@@ -120,7 +126,7 @@ class OrderEvidence:
             return float('inf')
         return self._distance(path, *self._gathered(templates))
 
-    def _distance(self, path: np.ndarray, open_paths2: np.ndarray, open_energy: np.ndarray,
+    def _distance(self, path: np.ndarray, open_blocks: list[tuple[np.ndarray, np.ndarray]],
                   closed_spectra: np.ndarray, closed_energy: np.ndarray) -> float:
         """:meth:`path_distance` to templates gathered by :meth:`_gathered`."""
         # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 sum_k (t_k . q_(k+s)), the points as 2-vectors. An open
@@ -131,13 +137,13 @@ class OrderEvidence:
         xy = np.ascontiguousarray(path, dtype=np.float64)                            # (n, 2)
         flat = xy.reshape(-1)                                                        # x, y interleaved
         best = np.inf
-        if len(open_energy):
-            best = float((open_energy - open_paths2 @ flat).min())
+        for paths2, energy in open_blocks:
+            best = _smaller(best, float((energy - paths2 @ flat).min()))
         if len(closed_energy):
             q = xy.view(np.complex128).reshape(-1)                                   # (n,) x + iy, no copy
             spectra = np.conj(np.fft.fft(np.stack([q, q[::-1]]), axis=1))              # (2, n)
             corr = np.fft.ifft(closed_spectra[:, None, :] * spectra, axis=2).real  # (m_closed, 2, n)
-            best = min(best, float((closed_energy - 2 * corr.max(axis=(1, 2))).min()))
+            best = _smaller(best, float((closed_energy - 2 * corr.max(axis=(1, 2))).min()))
         return math.sqrt(max(best + float(flat @ flat), 0.0) / self.n_points)
 
     def check(self, gesture: TouchGesture, label: int, path: np.ndarray | None = None) -> str | None:
@@ -156,3 +162,8 @@ class OrderEvidence:
         if self._distance(path, *self._by_class[label]) > threshold:
             return ORDER_REASON
         return None
+
+
+def _smaller(a: float, b: float) -> float:
+    """The smaller of two floats, NaN if either is (as numpy's minimum)."""
+    return b if b < a or b != b else a
