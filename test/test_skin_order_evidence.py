@@ -13,7 +13,7 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.evidence import CodebookEvidence
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.order_evidence import _ONE_THREAD, OrderEvidence, one_stroke_path
+from touch_gestures.skin.order_evidence import _ONE_THREAD_PRODUCT, _ONE_THREAD_VECTOR, OrderEvidence, one_stroke_path
 from touch_gestures.skin.proposed import TraceRecogniser
 
 #: A five-point star's tips in the order one stroke visits them (unit circle, y down).
@@ -176,19 +176,33 @@ def test_the_distance_to_gathered_templates_is_the_definition():
         assert ev.path_distance(path, np.arange(4, 7)) == pytest.approx(min(rms[8:]), rel=1e-12)
 
 
-def test_a_big_class_is_read_in_blocks_with_the_same_distance():
-    """Over _ONE_THREAD / 2n rows the open templates are read block by block: the nearest is found in any."""
+def test_a_big_class_gives_the_definition_and_its_closed_templates_are_read_in_blocks():
+    """Open and closed templates in blocks small enough for one BLAS thread (_ONE_THREAD_VECTOR for the open
+    ones' matrix-vector product, _ONE_THREAD_PRODUCT for the closed ones'): the nearest is found in whichever
+    block it is."""
     rng = np.random.default_rng(22)
     n = 32
     paths = rng.normal(0, 0.3, (300, n, 2))
     paths[:, -1] = paths[:, 0] + 1.0                                    # open
     ev = OrderEvidence(paths, np.zeros(300, int), 1, per_class=2)
-    blocks, spectra, _ = ev._by_class[0]
-    assert len(blocks) > 2 and len(spectra) == 0
-    assert all(block.size < _ONE_THREAD for block, _ in blocks)
-    for target in (3, 150, 299):                                        # in the first, a middle, the last block
+    blocks, closed = ev._by_class[0]
+    assert len(blocks) > 2 and all(block.size < _ONE_THREAD_VECTOR for block, _ in blocks) and not closed
+    for target in (3, 150, 299):
         path = paths[target][::-1] + rng.normal(0, 1e-3, (n, 2))
         rms = min(np.sqrt(((t - p) ** 2).sum(axis=1).mean()) for t in paths for p in (path, path[::-1]))
         assert ev.path_distance(path, np.arange(300)) == pytest.approx(rms, rel=1e-12)
-    nan = np.full((n, 2), np.nan)
-    assert np.isnan(ev.path_distance(nan, np.arange(300)))               # NaN stays NaN, as numpy's minimum
+    assert ev.path_distance(paths[7], np.arange(300)) == 0.0            # itself: no rounding left over
+    assert np.isnan(ev.path_distance(np.full((n, 2), np.nan), np.arange(300)))   # NaN stays NaN
+    loops = paths[:150].copy()
+    loops[:, -1] = loops[:, 0]                                          # closed: every start, in blocks
+    ev = OrderEvidence(loops, np.zeros(150, int), 1, per_class=2)
+    _, blocks = ev._by_class[0]
+    assert len(blocks) > 2 and all(len(block) * (2 * n) ** 2 <= _ONE_THREAD_PRODUCT for block, _ in blocks)
+    for target in (1, 70, 149):
+        path = np.roll(loops[target][::-1], 5, axis=0)
+        rms = min(np.sqrt(((t - np.roll(p, s, axis=0)) ** 2).sum(axis=1).mean())
+                  for t in loops for p in (path, path[::-1]) for s in range(n))
+        # |t|^2 + |q|^2 - 2 t.q of sums below 10: float64 leaves ~1e-14 of the squared distance (~1e-7 of 0)
+        assert ev.path_distance(path, np.arange(150)) == pytest.approx(rms, abs=1e-6)
+    nan_loop = np.full((n, 2), np.nan)
+    assert np.isnan(ev.path_distance(nan_loop, np.arange(150)))
