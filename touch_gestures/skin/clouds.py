@@ -131,7 +131,7 @@ class CloudRecogniser(TemplateRecogniser):
         # Truncation is the floor for the points inside the raster; those left of it clip to 0 either way.
         ij = ((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
         np.minimum(np.maximum(ij, 0, out=ij), self.grid - 1, out=ij)   # np.clip's checks cost more here
-        return ij @ self._cell_steps                                   # row * grid + column, one call
+        return np.dot(ij, self._cell_steps)                            # row * grid + column, one call
 
     def _prepare_codebook(self) -> None:
         n, g = self.n_points, self.grid
