@@ -11,9 +11,10 @@ import json
 import numpy as np
 import pytest
 
+from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import make_recogniser
 from touch_graph.cli.main import main as social_touch
-from touch_lab.skin.bench import bench_recognition
+from touch_lab.skin.bench import STEPS, bench_recognition, predict_steps, synthetic_codebook
 from touch_lab.skin.datasets import TraceSample, write_traces
 from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
 from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
@@ -145,7 +146,22 @@ def test_bench_smoke():
                                repeats=1)
     assert set(result['recognisers']) == {'centroid', 'trace', 'cloud'} and result['data'] == 'synthetic gestures'
     assert result['recognisers']['trace']['templates'] == 6
-    # The parts of a recognition, each timed alone; the cloud's raster bounds besides.
-    assert set(result['recognisers']['trace']['steps_cpu_us']) == {'features', 'search', 'decision'}
-    assert set(result['recognisers']['cloud']['steps_cpu_us']) == {'features', 'search', 'decision', 'raster'}
+    # The steps of a recognition and the rest of predict; the cloud's raster bounds (part of its search) besides.
+    assert set(result['recognisers']['trace']['steps_cpu_us']) == {*STEPS, 'other'}
+    assert set(result['recognisers']['cloud']['steps_cpu_us']) == {*STEPS, 'other', 'raster'}
     assert all(np.isfinite(v) for v in result['recognisers']['cloud']['steps_cpu_us'].values())
+
+
+@pytest.mark.parametrize('name', ['cloud', 'trace', 'centroid', 'refereed', 'auto'])
+def test_the_bench_steps_answer_as_predict(name):
+    """predict_steps runs predict's steps in its order: the same answer for the touches it accepts, those it
+    turns away and an unusable one."""
+    gestures, labels = synthetic_codebook(4, 6)
+    model = make_recogniser(name).fit(gestures, labels)
+    probe, _ = synthetic_codebook(4, 3, seed=1)
+    rng = np.random.default_rng(0)
+    scribbles = [TouchGesture.from_trajectory(rng.uniform(5, 40, (60, 2))) for _ in range(8)]
+    empty = TouchGesture(np.zeros((12, 12), bool), np.zeros((12, 12)), np.zeros((0, 2)), np.zeros(0))
+    for gesture in [*probe, *scribbles, empty]:
+        match, ns = predict_steps(model, gesture)
+        assert match == model.predict(gesture) and set(ns) == set(STEPS) and min(ns.values()) >= 0

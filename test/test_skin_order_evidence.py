@@ -13,7 +13,7 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.evidence import CodebookEvidence
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.order_evidence import OrderEvidence, one_stroke_path
+from touch_gestures.skin.order_evidence import _ONE_THREAD_PRODUCT, _ONE_THREAD_VECTOR, OrderEvidence, one_stroke_path
 from touch_gestures.skin.proposed import TraceRecogniser
 
 #: A five-point star's tips in the order one stroke visits them (unit circle, y down).
@@ -126,3 +126,83 @@ def test_a_stroke_count_few_templates_of_a_big_class_show_is_not_allowed():
     assert CodebookEvidence(labels, 2, strokes, min_share=0.0).stroke_counts == [frozenset({1, 2})] * 2
     with pytest.raises(ValueError, match='min_share'):
         CodebookEvidence(labels, 2, strokes, min_share=1.0)
+
+
+def test_the_cloud_hands_the_order_check_its_own_cloud_as_the_path_of_a_one_stroke_touch(fitted):
+    rng = np.random.default_rng(9)
+    gesture = traced(STAR, rng, start=2)
+    query = fitted._features(gesture)
+    path = fitted._one_stroke_path(gesture, query)
+    np.testing.assert_array_equal(path, one_stroke_path(gesture))   # the same resampling, bit for bit
+    assert path.dtype == np.float64
+    # Stroke ids that change along the touch (a caller's numbering): the ink-only cloud is no path; the check
+    # resamples itself. Several strokes: no path at all.
+    renumbered = copy.copy(gesture)
+    renumbered.stroke = np.repeat(np.array([0, 1], dtype=np.int16), [10, len(gesture.stroke) - 10])
+    assert fitted._one_stroke_path(renumbered, fitted._features(renumbered)) is None
+    two = copy.copy(renumbered)
+    two.strokes = 2
+    assert fitted._one_stroke_path(two, fitted._features(two)) is None
+    assert CloudRecogniser(n_points=16)._one_stroke_path(gesture, query[:32]) is None   # not the check's 32 points
+    # Handed a path, the check reads it; handed one of another length, or none, it resamples the touch.
+    star = list(fitted.classes_).index('star')
+    order = fitted.order_evidence_
+    assert order.check(gesture, star, path) is order.check(gesture, star) is None
+    assert order.check(gesture, star, np.zeros((5, 2))) is None
+    scribble = shuffled_star(rng)
+    assert order.check(scribble, star, fitted._one_stroke_path(scribble, fitted._features(scribble))) == 'order'
+    assert order.check(two, star, path) is None   # several strokes: never checked
+
+
+def test_the_distance_to_gathered_templates_is_the_definition():
+    """path_distance against every one-stroke template of a class: the root-mean-square distance, smallest
+    over the two directions (open templates) and every start (closed ones), computed point by point."""
+    rng = np.random.default_rng(21)
+    n = 16
+    open_paths = rng.normal(0, 0.3, (4, n, 2))
+    open_paths[:, -1] = open_paths[:, 0] + 1.0                          # ends apart: open
+    loops = rng.normal(0, 0.3, (3, n, 2))
+    loops[:, -1] = loops[:, 0] + 0.01                                   # ends together: closed
+    ev = OrderEvidence(np.concatenate([open_paths, loops]), np.zeros(7, int), 1)
+    assert ev._closed.tolist() == [False] * 4 + [True] * 3
+    for _ in range(5):
+        path = rng.normal(0, 0.3, (n, 2))
+        rms = [np.sqrt(((t - p) ** 2).sum(axis=1).mean()) for t in open_paths for p in (path, path[::-1])]
+        rms += [np.sqrt(((t - np.roll(p, s, axis=0)) ** 2).sum(axis=1).mean())
+                for t in loops for p in (path, path[::-1]) for s in range(n)]
+        # float64 sums of 2n products below 1 regrouped: a few ulp of the squared distance.
+        assert ev.path_distance(path, np.arange(7)) == pytest.approx(min(rms), rel=1e-12)
+        assert ev.path_distance(path, np.arange(4)) == pytest.approx(min(rms[:8]), rel=1e-12)
+        assert ev.path_distance(path, np.arange(4, 7)) == pytest.approx(min(rms[8:]), rel=1e-12)
+
+
+def test_a_big_class_gives_the_definition_and_its_closed_templates_are_read_in_blocks():
+    """Open and closed templates in blocks small enough for one BLAS thread (_ONE_THREAD_VECTOR for the open
+    ones' matrix-vector product, _ONE_THREAD_PRODUCT for the closed ones'): the nearest is found in whichever
+    block it is."""
+    rng = np.random.default_rng(22)
+    n = 32
+    paths = rng.normal(0, 0.3, (300, n, 2))
+    paths[:, -1] = paths[:, 0] + 1.0                                    # open
+    ev = OrderEvidence(paths, np.zeros(300, int), 1, per_class=2)
+    blocks, closed = ev._by_class[0]
+    assert len(blocks) > 2 and all(block.size < _ONE_THREAD_VECTOR for block, _ in blocks) and not closed
+    for target in (3, 150, 299):
+        path = paths[target][::-1] + rng.normal(0, 1e-3, (n, 2))
+        rms = min(np.sqrt(((t - p) ** 2).sum(axis=1).mean()) for t in paths for p in (path, path[::-1]))
+        assert ev.path_distance(path, np.arange(300)) == pytest.approx(rms, rel=1e-12)
+    assert ev.path_distance(paths[7], np.arange(300)) == 0.0            # itself: no rounding left over
+    assert np.isnan(ev.path_distance(np.full((n, 2), np.nan), np.arange(300)))   # NaN stays NaN
+    loops = paths[:150].copy()
+    loops[:, -1] = loops[:, 0]                                          # closed: every start, in blocks
+    ev = OrderEvidence(loops, np.zeros(150, int), 1, per_class=2)
+    _, blocks = ev._by_class[0]
+    assert len(blocks) > 2 and all(len(block) * (2 * n) ** 2 <= _ONE_THREAD_PRODUCT for block, _ in blocks)
+    for target in (1, 70, 149):
+        path = np.roll(loops[target][::-1], 5, axis=0)
+        rms = min(np.sqrt(((t - np.roll(p, s, axis=0)) ** 2).sum(axis=1).mean())
+                  for t in loops for p in (path, path[::-1]) for s in range(n))
+        # |t|^2 + |q|^2 - 2 t.q of sums below 10: float64 leaves ~1e-14 of the squared distance (~1e-7 of 0)
+        assert ev.path_distance(path, np.arange(150)) == pytest.approx(rms, abs=1e-6)
+    nan_loop = np.full((n, 2), np.nan)
+    assert np.isnan(ev.path_distance(nan_loop, np.arange(150)))

@@ -260,10 +260,15 @@ class TemplateRecogniser(BaseEstimator):
         reason = evidence.check(gesture, best) if fits_none else None   # else ``best`` fits by construction
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
-            reason = order.check(gesture, best)
+            reason = order.check(gesture, best, self._one_stroke_path(gesture, query))
         if reason is not None:
             return Match(None, match.distance, match.margin, match.nearest, reason)
         return match
+
+    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        """The order check's path of ``gesture`` (:func:`~.order_evidence.one_stroke_path`) when the
+        features ``query`` already hold it, else None (the check computes it)."""
+        return None
 
     def decide(self, per_class: np.ndarray) -> Match:
         """Apply the rejection rule to per-class distances (n_classes,)."""
@@ -284,13 +289,11 @@ class TemplateRecogniser(BaseEstimator):
         ``best`` is not the nearest, which the margin rule then rejects."""
         if best is None:
             best = int(np.argmin(per_class))
-        d1 = float(per_class[best])
-        if len(per_class) > 1:
-            others = per_class.copy()
-            others[best] = np.inf
-            margin = float(others.min()) - d1
-        else:
-            margin = float('inf')
+        distances = per_class.tolist()
+        d1 = distances[best]
+        # The runner-up is the smallest of the others (NaN only where d1 is NaN too: argmin takes a NaN
+        # first, and the margin is NaN whatever the runner-up).
+        margin = min(distances[:best] + distances[best + 1:]) - d1 if len(distances) > 1 else float('inf')
         nearest = str(self.classes_[best])
         if not d1 <= self.class_thresholds_[best]:
             return Match(None, d1, margin, nearest, 'distance'), best

@@ -52,6 +52,7 @@ from scipy.spatial.distance import cdist
 from .base import TemplateRecogniser
 from .features import arc_length_resample_complex
 from .gesture import TouchGesture
+from .order_evidence import PATH_POINTS
 
 __all__ = ['CloudRecogniser', 'cloud_features']
 
@@ -73,11 +74,13 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     """
     cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
     cloud -= cloud.sum() / n_points
-    xy = cloud.view(np.float64).reshape(n_points, 2)                # the same memory as (n, 2) x, y
-    size = float((xy.max(axis=0) - xy.min(axis=0)).max())
+    x, y = cloud.real, cloud.imag                                   # views: cheaper than reducing (n, 2) along 0
+    width, height = float(x.max()) - float(x.min()), float(y.max()) - float(y.min())
+    size = width if width > height or width != width else height    # the larger side; NaN if either is, as numpy's
+    xy = cloud.view(np.float64)                                     # the same memory, x and y interleaved
     if size > 1e-9:
         xy /= size
-    return xy.reshape(-1).astype(np.float32)
+    return xy.astype(np.float32)
 
 
 class CloudRecogniser(TemplateRecogniser):
@@ -116,15 +119,23 @@ class CloudRecogniser(TemplateRecogniser):
             return None
         return cloud_features(gesture.trajectory, gesture.stroke, self.n_points)
 
+    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        # A touch whose points are all of one stroke (ids all 0, as the segmenter numbers them) is resampled
+        # the same with and without its stroke ids: the cloud is the order check's path, as float64.
+        if self.n_points != PATH_POINTS or gesture.strokes != 1 or gesture.stroke.any():
+            return None
+        return query.reshape(self.n_points, 2).astype(np.float64)
+
     def _cells(self, clouds: np.ndarray) -> np.ndarray:
         """(..., n, 2) normalised points -> (..., n) flat raster cell index (clipped to the raster)."""
         # Truncation is the floor for the points inside the raster; those left of it clip to 0 either way.
         ij = ((clouds + _EXTENT) * (self.grid / (2 * _EXTENT))).astype(np.intp)
         np.minimum(np.maximum(ij, 0, out=ij), self.grid - 1, out=ij)   # np.clip's checks cost more here
-        return ij[..., 1] * self.grid + ij[..., 0]
+        return np.dot(ij, self._cell_steps)                            # row * grid + column, one call
 
     def _prepare_codebook(self) -> None:
         n, g = self.n_points, self.grid
+        self._cell_steps = np.array([1, g], dtype=np.intp)
         self._clouds = self.templates_.reshape(len(self.templates_), n, 2).astype(np.float64)
         self._cell_mm = 2 * _EXTENT / g   # the raster's cell side, gesture sizes
         centres = (np.arange(g) + 0.5) * self._cell_mm - _EXTENT
@@ -149,7 +160,8 @@ class CloudRecogniser(TemplateRecogniser):
             shape=(T, g * g))
         self._cell_counts.sum_duplicates()
         self._visit_labels = self.template_labels_.tolist()
-        self._row_starts = np.arange(0, n * n * min(self.exact, T), n)   # flat start of each (point, template) row
+        # flat start of each (point, template) row of the (n, k, n) point distances to the k closest
+        self._row_starts = np.arange(0, n * n * min(self.exact, T), n).reshape(n, min(self.exact, T))
 
     def _query_field(self, cells: np.ndarray) -> np.ndarray:
         """(g*g,) float32 distance from each raster cell's centre to the nearest cell centre occupied
@@ -167,7 +179,7 @@ class CloudRecogniser(TemplateRecogniser):
         # below 3 (the raster's diagonal): float32 adds ~1e-7 relative, far under the half-cell.
         to_templates = self._fields[cells].sum(axis=0)
         to_templates += self._cell_counts @ self._query_field(cells)
-        return to_templates.astype(np.float64) * (0.5 / self.n_points)
+        return np.multiply(to_templates, 0.5 / self.n_points, dtype=np.float64)   # as float64, then scaled
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         n = self.n_points
@@ -181,7 +193,7 @@ class CloudRecogniser(TemplateRecogniser):
         pair = cdist(q, self._clouds[closest].reshape(-1, 2)).reshape(n, k, n)
         nearest = pair.argmin(axis=2)                        # (n, k) each query point's nearest template point
         # Their distances gathered by flat index: numpy's min along a short last axis is slower.
-        rows = pair.reshape(-1)[self._row_starts[:n * k].reshape(n, k) + nearest]
+        rows = pair.reshape(-1)[self._row_starts + nearest]
         to_template = rows.sum(axis=0) / n                   # (k,) directed Chamfer means, both ways
         chamfer = np.maximum(to_template, pair.min(axis=0).sum(axis=1) / n)   # true lower bounds
         # The visit is over k (6) values: Python lists, not numpy calls.

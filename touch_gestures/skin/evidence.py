@@ -84,9 +84,12 @@ class CodebookEvidence:
                     bounds[c] = lo / slack, hi * slack
             self.contact_bounds_s = bounds
         # What allowed() reads per touch: a mask per stroke count seen (any other count fits no class).
+        # The masks are handed out as they are: read-only, so that no caller changes them for the next.
         self._no_class = np.zeros(n_classes, dtype=bool)
         self._stroke_masks = None if self.stroke_counts is None else {
             k: np.array([k in counts for counts in self.stroke_counts]) for k in set().union(*self.stroke_counts)}
+        for mask in [self._no_class, *(self._stroke_masks or {}).values()]:
+            mask.flags.writeable = False
         self._lows_s, self._highs_s = ((None, None) if self.contact_bounds_s is None
                                        else (self.contact_bounds_s[:, 0].copy(), self.contact_bounds_s[:, 1].copy()))
 
@@ -107,7 +110,7 @@ class CodebookEvidence:
         if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
             return 'strokes'
         if self.contact_bounds_s is not None:
-            lo, hi = self.contact_bounds_s[label]
+            lo, hi = self.contact_bounds_s[label].tolist()   # Python floats: cheaper to compare
             if not lo <= gesture.contact_s <= hi:
                 return 'duration'
         return None

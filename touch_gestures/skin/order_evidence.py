@@ -14,9 +14,14 @@ whether the touch, as the path it was traced, is near such a path of the class:
   units of the gesture's size), the smaller of the two directions; where the template is a
   **closed** stroke (its ends less than ``closed`` gesture sizes apart: a star, a circle),
   from any of its points as the start as well. The touch is compared with every one-stroke
-  template of the class: all starts and both directions at once, as a circular
-  cross-correlation of the paths taken as complex numbers (the templates' FFTs computed
-  once; numpy's FFT, no multi-threaded BLAS, which stalls on a busy machine);
+  template of the class at once: the open ones, as traced and reversed (stacked per class at
+  fit time), ranked by one product with the touch's path, the nearest then measured point by
+  point; the closed ones from every start and both directions in one product of their paths
+  with the touch's path read from each of its points both ways (2n x 2n, gathered from the
+  touch); the products in blocks small enough that BLAS keeps to one thread (threads stall on
+  a busy machine).
+  Where the recogniser's own features are that path (the cloud's, for a touch of one stroke),
+  the check reads them instead of resampling the touch again;
 - **the threshold is calibrated on the codebook** as the shape distance's is (:mod:`.base`):
   ``auto_scale`` times the ``auto_quantile`` quantile of the path distances of the class's
   one-stroke templates to their nearest other such template (leave one out). A class with
@@ -30,6 +35,8 @@ skips the check.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .gesture import TouchGesture
@@ -40,6 +47,11 @@ __all__ = ['ORDER_REASON', 'OrderEvidence', 'one_stroke_path']
 ORDER_REASON = 'order'
 #: Points of a path along the ink ($P's 32).
 PATH_POINTS = 32
+#: OpenBLAS's matrix-vector product runs on one thread below m x n = 2304 x GEMM_MULTITHREAD_THRESHOLD (4 by
+#: default; interface/gemv.c), its matrix product up to m x n x k = 65536 x 4 (interface/gemm.c): threads wait
+#: for a core on a busy machine, so the products stay within them.
+_ONE_THREAD_VECTOR = 2304 * 4
+_ONE_THREAD_PRODUCT = 65536 * 4
 
 
 def one_stroke_path(gesture: TouchGesture, n_points: int = PATH_POINTS) -> np.ndarray | None:
@@ -80,11 +92,17 @@ class OrderEvidence:
         one_stroke = np.isfinite(paths).all(axis=(1, 2))
         #: per class, the indices (into ``T``) of its one-stroke templates
         self.members = [np.flatnonzero(one_stroke & (labels == c)) for c in range(n_classes)]
-        z = np.where(one_stroke[:, None], paths[..., 0] + 1j * paths[..., 1], 0.0)   # (T, n) complex
-        self._energy = (np.abs(z) ** 2).sum(axis=1)                                  # (T,)
-        self._z = z
-        self._spectra = np.fft.fft(z, axis=1)                                        # (T, n)
-        self._closed = one_stroke & (np.abs(z[:, 0] - z[:, -1]) < closed)
+        self._paths = np.where(one_stroke[:, None, None], paths, 0.0)                 # (T, n, 2)
+        self._energy = (self._paths ** 2).sum(axis=(1, 2))                          # (T,) squared norms
+        self._closed = one_stroke & (np.hypot(*(self._paths[:, 0] - self._paths[:, -1]).T) < closed)
+        # (2n, 2n): column d * n + s gathers the touch's path read from point s (d = 0: as traced; 1: reversed),
+        # x and y interleaved, from its (2n,) flat path
+        k = np.arange(self.n_points)
+        starts = (k[None, :] + k[:, None]) % self.n_points                          # [s, k]: point k + s
+        points = np.concatenate([starts, self.n_points - 1 - starts])                # (2n shifts, n)
+        self._shifts = np.stack([2 * points, 2 * points + 1], axis=2).reshape(2 * self.n_points, -1).T.copy()
+        #: per class, what :meth:`check` reads of its one-stroke templates, gathered once (no copy per check)
+        self._by_class = [self._gathered(own) for own in self.members]
         #: (n_classes,) path distance thresholds; inf: no check (fewer than two one-stroke templates).
         self.thresholds = np.full(n_classes, np.inf)
         for c, own in enumerate(self.members):
@@ -94,33 +112,73 @@ class OrderEvidence:
             loo = [self.path_distance(paths[i], own[own != i]) for i in left_out]
             self.thresholds[c] = scale * float(np.quantile(loo, quantile))
 
+    def _gathered(self, templates: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray]],
+                                                         list[tuple[np.ndarray, np.ndarray]]]:
+        """What :meth:`_distance` reads of the given templates (indices), in blocks of rows small enough for
+        BLAS to keep to one thread: the open ones' paths as traced and reversed, (2 m_open, 2n) with half
+        their squared norms (:data:`_ONE_THREAD_VECTOR`); the closed ones' paths (m_closed, 2n) times 2
+        with their squared norms (:data:`_ONE_THREAD_PRODUCT`)."""
+        loops = self._closed[templates]
+        opened, closed = templates[~loops], templates[loops]
+        n = self.n_points
+        paths = self._paths[opened]
+        both = np.concatenate([paths, paths[:, ::-1]]).reshape(-1, 2 * n)
+        return (_blocks(both, 0.5 * np.tile(self._energy[opened], 2), (_ONE_THREAD_VECTOR - 1) // (2 * n)),
+                _blocks(2.0 * self._paths[closed].reshape(-1, 2 * n), self._energy[closed],
+                        _ONE_THREAD_PRODUCT // (2 * n) ** 2))
+
     def path_distance(self, path: np.ndarray, templates: np.ndarray) -> float:
         """Smallest root-mean-square point distance of an (n, 2) path to the given templates' paths
         (indices), in either direction, from any start on a closed template (inf without templates)."""
         if len(templates) == 0:
             return float('inf')
-        q = path[:, 0] + 1j * path[:, 1]
-        both = np.stack([q, q[::-1]])                                                # (2, n): as traced, reversed
-        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 Re sum_k t_k conj(q_(k+s)). An open template is read
-        # from either end of the touch only (s = 0); a closed one from any start: the sums for every shift s
-        # at once are the circular cross-correlation, ifft(fft(t) * conj(fft(q))) up to s's sign.
-        closest = (self._z[templates][:, None, :] * np.conj(both)[None]).real.sum(axis=2).max(axis=1)   # (m,)
-        loops = self._closed[templates]
-        if loops.any():
-            corr = np.fft.ifft(self._spectra[templates[loops]][:, None, :] * np.conj(np.fft.fft(both, axis=1)),
-                               axis=2).real                                          # (m_closed, 2, n)
-            closest[loops] = corr.max(axis=(1, 2))
-        best = self._energy[templates] + float((np.abs(q) ** 2).sum()) - 2 * closest
-        return float(np.sqrt(max(float(best.min()), 0.0) / self.n_points))
+        return self._distance(path, *self._gathered(templates))
 
-    def check(self, gesture: TouchGesture, label: int) -> str | None:
+    def _distance(self, path: np.ndarray, open_blocks: list[tuple[np.ndarray, np.ndarray]],
+                  closed_blocks: list[tuple[np.ndarray, np.ndarray]]) -> float:
+        """:meth:`path_distance` to templates gathered by :meth:`_gathered`."""
+        # sum_k |t_k - q_(k+s)|^2 = |t|^2 + |q|^2 - 2 sum_k t_k . q_(k+s), the points as 2-vectors.
+        flat = np.ascontiguousarray(path, dtype=np.float64).reshape(-1)             # (2n,) x, y interleaved
+        best = np.inf
+        for paths, half_norms in open_blocks:
+            # An open template is read from either end of the touch only (the touch reversed is the template
+            # reversed): |t|^2 / 2 - t . q ranks them in one matrix-vector product; the nearest one's distance
+            # is then taken as the difference (a path's distance to itself is 0 exactly, not a rounding).
+            diff = paths[int((half_norms - paths @ flat).argmin())] - flat
+            best = _smaller(best, float(diff @ diff))
+        if closed_blocks:
+            # A closed one from any start s, either way: the sums t . q_(k+s) for every start in one product
+            # with the (2n, 2n) matrix of the touch's path read from each of its points both ways.
+            energy = float(flat @ flat)
+            every_start = flat[self._shifts]                                         # (2n, 2n starts)
+            for paths2, norms in closed_blocks:
+                best = _smaller(best, float(((norms + energy)[:, None] - paths2 @ every_start).min()))
+        return math.sqrt(max(best, 0.0) / self.n_points)
+
+    def check(self, gesture: TouchGesture, label: int, path: np.ndarray | None = None) -> str | None:
         """``'order'`` when the one-stroke ``gesture``'s path is farther than class ``label``'s threshold
-        from every one-stroke template of the class, else None."""
-        if not np.isfinite(self.thresholds[label]):
+        from every one-stroke template of the class, else None. ``path``: the gesture's
+        :func:`one_stroke_path` if the caller has it already (a cloud's own features), else computed here."""
+        threshold = float(self.thresholds[label])
+        if not math.isfinite(threshold):
             return None
-        path = one_stroke_path(gesture, self.n_points)
+        if path is None or len(path) != self.n_points:
+            path = one_stroke_path(gesture, self.n_points)
+        elif int(getattr(gesture, 'strokes', 1)) != 1:
+            path = None
         if path is None:
             return None
-        if self.path_distance(path, self.members[label]) > self.thresholds[label]:
+        if self._distance(path, *self._by_class[label]) > threshold:
             return ORDER_REASON
         return None
+
+
+def _smaller(a: float, b: float) -> float:
+    """The smaller of two floats, NaN if either is (as numpy's minimum)."""
+    return b if b < a or b != b else a
+
+
+def _blocks(rows: np.ndarray, values: np.ndarray, size: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(m, d) ``rows`` with their (m,) ``values`` in blocks of at most ``size`` (>= 1) rows; none for m = 0."""
+    size = max(1, size)
+    return [(rows[i:i + size], values[i:i + size]) for i in range(0, len(rows), size)]

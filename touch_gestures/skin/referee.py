@@ -96,6 +96,9 @@ class RefereedRecogniser(TemplateRecogniser):
     def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
         return self.primary_._features(gesture)   # the referee's only on a tie (they cost 3 times the cloud's)
 
+    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        return self.primary_._one_stroke_path(gesture, query[:self._split])   # the cloud's features come first
+
     def _distances(self, query: np.ndarray) -> np.ndarray:
         return self.primary_._distances(query[:self._split])   # a template's or a query's: the cloud comes first
 

@@ -17,12 +17,18 @@ does not depend on a data file. Each recogniser is timed over ``queries`` gestur
 time, which on a shared machine leaves out the waits for a core), with its ratio to the goal and to
 the centroid method, measured in the same run: ``social-touch bench skin [--json]``.
 
-``steps_cpu_us`` splits a recognition into its parts, each timed alone on the same queries (CPU
-time, medians): ``features`` (``_features``), ``search`` (``_distances``: the codebook against the
-query's features), ``decision`` (the rejection rule on the per-class distances); for ``cloud``
-also ``raster`` (the distance-field bounds, step 2 of :mod:`~touch_gestures.skin.clouds`, part of
-the search). Timed alone, a part keeps its tables in the cache: the parts add up to less than a
-whole ``predict``.
+``steps_cpu_us`` says where every microsecond of a ``predict`` goes: the steps of
+:meth:`~touch_gestures.skin.base.TemplateRecogniser.predict`, run in its order on the same queries
+with the thread's CPU clock read between them (:func:`predict_steps`; medians of the repeats, each
+step's clock reads taken off): ``features`` (``_features``), ``search`` (``_distances``: the codebook
+against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
+classes the strokes and duration allow, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the
+nearest allowed class, ``refereed``'s referee on a tie, the distance and margin rules), ``order`` (the
+path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
+accepts) and ``other``: the whole
+``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
+``raster``, the distance-field bounds (step 2 of :mod:`~touch_gestures.skin.clouds`), timed alone:
+it is part of ``search``, not added to the total.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import time
 
 import numpy as np
 
+from touch_gestures.skin.base import Match, TemplateRecogniser
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
@@ -39,10 +46,12 @@ from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
 from touch_lab.bench.timing import gc_paused
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
-__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'bench_recognition', 'synthetic_codebook']
+__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'STEPS', 'bench_recognition', 'predict_steps', 'synthetic_codebook']
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
+#: The steps of a recognition that ``steps_cpu_us`` times (module doc), in predict's order.
+STEPS = ('features', 'search', 'minima', 'evidence', 'decision', 'order')
 
 
 def synthetic_codebook(n_gestures: int = 16, templates_per_gesture: int = 30, seed: int = 0
@@ -79,7 +88,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         us, cpu_us = _median_us(model.predict, probe, repeats)
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                     'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_),
-                                    'steps_cpu_us': _steps_cpu_us(model, probe, repeats)}
+                                    'steps_cpu_us': _steps_cpu_us(model, probe, repeats, cpu_us)}
         if name in ('cloud', 'ndollar', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
@@ -95,14 +104,62 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
     return out
 
 
-def _steps_cpu_us(model, probe: list[TouchGesture], repeats: int) -> dict[str, float]:
-    """Median CPU us of each part of ``model.predict`` over the ``probe`` gestures (module doc)."""
-    queries = [q for q in map(model._features, probe) if q is not None]
-    steps = {'features': _median_us(model._features, probe, repeats)[1],
-             'search': _median_us(model._distances, queries, repeats)[1],
-             'decision': _median_us(model.decide, [model.query_class_distances(q) for q in queries], repeats)[1]}
+def predict_steps(model: TemplateRecogniser, gesture: TouchGesture, clock=time.thread_time_ns
+                  ) -> tuple[Match, dict[str, int]]:
+    """``model.predict(gesture)`` step by step (module doc), with the ``clock`` (ns) read after each:
+    the same answer, and the ns of each step (a step not reached takes 0)."""
+    model = getattr(model, 'chosen_', model)   # auto predicts with the recogniser it chose
+    ns = dict.fromkeys(STEPS, 0)
+    start = clock()
+    query = model._query_features(gesture)
+    ns['features'] = (done := clock()) - start
+    if query is None:
+        return model.predict(gesture), ns
+    distances = model._distances(query)
+    ns['search'] = (start := clock()) - done
+    per_class = np.minimum.reduceat(distances, model.class_starts_).astype(np.float64, copy=False)
+    ns['minima'] = (done := clock()) - start
+    evidence = getattr(model, 'codebook_evidence_', None)
+    allowed = evidence.allowed(gesture) if evidence is not None else None
+    fits_none = allowed is not None and not allowed.any()
+    if allowed is not None and (fits_none or allowed.all()):
+        allowed = None
+    ns['evidence'] = (start := clock()) - done
+    match, best = model._decide(per_class, model._nearest(gesture, per_class, allowed))
+    ns['decision'] = (done := clock()) - start
+    if match.label is None:
+        return match, ns
+    reason = evidence.check(gesture, best) if fits_none else None
+    order = getattr(model, 'order_evidence_', None)
+    if reason is None and order is not None:
+        reason = order.check(gesture, best, model._one_stroke_path(gesture, query))
+        ns['order'] = clock() - done
+    if reason is not None:
+        match = Match(None, match.distance, match.margin, match.nearest, reason)
+    return match, ns
+
+
+def _steps_cpu_us(model: TemplateRecogniser, probe: list[TouchGesture], repeats: int, whole_cpu_us: float
+                  ) -> dict[str, float]:
+    """Median CPU us of each step of ``model.predict`` over the ``probe`` gestures, and ``other``: the
+    whole ``predict``'s ``whole_cpu_us`` less the steps (module doc)."""
+    clock = time.thread_time_ns
+    reads = [-(clock() - clock()) for _ in range(1001)]
+    read_ns = statistics.median(reads)   # one clock read, ns: taken off each step
+    for gesture in probe[:3]:
+        predict_steps(model, gesture)    # warm up, as _median_us
+    runs = []
+    with gc_paused():
+        for _ in range(repeats):
+            total = dict.fromkeys(STEPS, 0.0)
+            for gesture in probe:
+                for step, ns in predict_steps(model, gesture, clock)[1].items():
+                    total[step] += max(ns - read_ns, 0) if ns else 0.0
+            runs.append(total)
+    steps = {step: statistics.median(r[step] for r in runs) / len(probe) / 1e3 for step in STEPS}
+    steps['other'] = whole_cpu_us - sum(steps.values())
     if isinstance(model, CloudRecogniser):
-        clouds = [q.reshape(-1, 2).astype(np.float64) for q in queries]
+        clouds = [q.reshape(-1, 2).astype(np.float64) for q in map(model._features, probe) if q is not None]
         steps['raster'] = _median_us(model._bounds, clouds, repeats)[1]
     return steps
 
