@@ -122,7 +122,7 @@ class CloudRecogniser(TemplateRecogniser):
     def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
         # A touch whose points are all of one stroke (ids all 0, as the segmenter numbers them) is resampled
         # the same with and without its stroke ids: the cloud is the order check's path, as float64.
-        if self.n_points != PATH_POINTS or gesture.strokes != 1 or gesture.stroke.any():
+        if self.n_points != PATH_POINTS or getattr(gesture, 'strokes', 1) != 1 or gesture.stroke.any():
             return None
         return query.reshape(self.n_points, 2).astype(np.float64)
 

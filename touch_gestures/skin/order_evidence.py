@@ -143,7 +143,7 @@ class OrderEvidence:
         for paths, half_norms in open_blocks:
             # An open template is read from either end of the touch only (the touch reversed is the template
             # reversed): |t|^2 / 2 - t . q ranks them in one matrix-vector product; the nearest one's distance
-            # is then taken as the difference (a path's distance to itself is 0 exactly, not a rounding).
+            # is then taken as the difference (no rounding of the expansion left in it: a path is 0 from itself).
             diff = paths[int((half_norms - paths @ flat).argmin())] - flat
             best = _smaller(best, float(diff @ diff))
         if closed_blocks:
