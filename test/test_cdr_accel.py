@@ -323,3 +323,20 @@ def test_float32_values_round_as_struct_rounds_them():
     msg.f = 3.5e38  # finite beyond float32: refused by both
     with pytest.raises(MessageError):
         compiled.encode(msg)
+
+
+@needs_accel
+def test_a_list_emptied_while_it_is_encoded_gives_message_error_not_a_crash():
+    statuses = [get_message('diagnostic_msgs/msg/DiagnosticStatus')(name=str(i)) for i in range(3)]
+
+    class Emptying:
+        def __index__(self) -> int:
+            statuses.clear()
+            return 1
+
+    statuses[0].level = Emptying()
+    msg = get_message('diagnostic_msgs/msg/DiagnosticArray')(status=list(statuses))
+    msg.status = statuses
+    _, _, alone = _codecs('diagnostic_msgs/msg/DiagnosticArray')
+    with pytest.raises(MessageError, match='changed size'):
+        alone.encode(msg)

@@ -456,8 +456,17 @@ static int encode_items(Codec *self, Writer *w, const Field *f, PyObject *value)
                      PySequence_Fast_GET_SIZE(items));
         ok = -1;
     }
-    for (Py_ssize_t i = 0; ok == 0 && i < n; i++)
-        ok = encode_element(self, w, f, PySequence_Fast_GET_ITEM(items, i));
+    for (Py_ssize_t i = 0; ok == 0 && i < n; i++) {
+        /* A list is not copied: code an element runs (__index__, __float__) could shrink it. */
+        if (i >= PySequence_Fast_GET_SIZE(items)) {
+            PyErr_Format(PyExc_RuntimeError, "field %U changed size while it was encoded", f->name);
+            ok = -1;
+            break;
+        }
+        PyObject *item = Py_NewRef(PySequence_Fast_GET_ITEM(items, i));
+        ok = encode_element(self, w, f, item);
+        Py_DECREF(item);
+    }
     Py_DECREF(items);
     return ok;
 }
