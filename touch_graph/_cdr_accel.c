@@ -816,11 +816,11 @@ static int Codec_init(Codec *self, PyObject *args, PyObject *kwargs)
         PyErr_SetString(PyExc_TypeError, "Codec: other must be callable and error an exception class");
         return -1;
     }
-    self->typename = Py_NewRef(typename);
-    self->other = Py_NewRef(other);
-    self->error = Py_NewRef(error);
-    self->explain_encode = Py_NewRef(explain_encode);
-    self->explain_decode = Py_NewRef(explain_decode);
+    Py_XSETREF(self->typename, Py_NewRef(typename));  /* XSETREF: an __init__ that failed may be called again */
+    Py_XSETREF(self->other, Py_NewRef(other));
+    Py_XSETREF(self->error, Py_NewRef(error));
+    Py_XSETREF(self->explain_encode, Py_NewRef(explain_encode));
+    Py_XSETREF(self->explain_decode, Py_NewRef(explain_decode));
     return read_program(self, program);
 }
 
