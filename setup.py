@@ -6,7 +6,12 @@
 
 from glob import glob
 
-from setuptools import find_packages, setup
+from setuptools import Extension, find_packages, setup
+
+try:  # numpy's headers for the compiled CDR codec (pip gets numpy through pyproject's build requirements)
+    import numpy
+except ImportError:  # a build without numpy (a bare colcon build): the pure-Python package
+    numpy = None
 
 PACKAGE = 'social_touch'
 
@@ -66,7 +71,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
         'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',
         'skin-latency = touch_lab.skin.latency:bench_latency',
         'stack = touch_lab.bench.stack:bench_stack', 'training = touch_lab.bench.training:bench_training',
-        'framing = touch_lab.bench.framing:bench_framing',
+        'framing = touch_lab.bench.framing:bench_framing', 'codec = touch_lab.bench.codec:bench_codec',
     ],
     # `generator: NAME` in a scene file (touch_sim.scenes): a function returning a stimulus.
     'social_touch.scene_generators': ['bear_people = touch_sim.bear.people:make_scene',
@@ -77,6 +82,12 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
     'social_touch.serial_url_handlers': ['bearsim = touch_sim.urlhandlers', 'patchsim = touch_sim.urlhandlers',
                                          'skinsim = touch_sim.urlhandlers'],
 }
+
+# The compiled CDR codec (touch_graph/cdr_accel.py): optional, as PyYAML's libyaml binding is. Where it
+# does not build (no C compiler, no Python headers) the package installs without it and runs the
+# Python codec; SOCIAL_TOUCH_REQUIRE_CDR_ACCEL=1 makes the tests fail then (CI sets it).
+EXTENSIONS = [Extension('touch_graph._cdr_accel', ['touch_graph/_cdr_accel.c'], include_dirs=[numpy.get_include()],
+                        optional=True)] if numpy is not None else []
 
 setup(
     name=PACKAGE,
@@ -132,7 +143,8 @@ setup(
                  # the view's browser test (system chromium + chromedriver) and Foxglove client test
                  'selenium>=4.11,<5', 'websockets>=13.0,<18'],
     },
-    zip_safe=True,
+    ext_modules=EXTENSIONS,
+    zip_safe=False,  # a compiled extension is loaded from a file
     entry_points={
         'console_scripts': [
             'social-touch = touch_graph.cli.main:main',
