@@ -112,7 +112,7 @@ def test_a_symbol_written_with_a_long_pause_is_not_turned_away_for_its_duration(
     assert checked >= 10
 
 
-def test_the_nearest_class_is_one_the_strokes_and_pace_allow(fitted):
+def test_the_nearest_class_is_one_written_with_the_touchs_strokes(fitted):
     """A touch nearest to a class the evidence rules out is named for the nearest class it allows; with
     the ruled-out class nearer it is still ambiguous, so no command fires."""
     rng = np.random.default_rng(11)
@@ -132,19 +132,20 @@ def test_the_nearest_class_is_one_the_strokes_and_pace_allow(fitted):
         allowed = fitted.codebook_evidence_.allowed(g)
         assert allowed.tolist() == [c == 'H' for c in fitted.classes_]
         match = fitted.predict(g)
-        assert match.nearest == 'H' and match.label is None and match.rejected in ('margin', 'distance')
+        assert match.nearest == 'H' and match.label is None and match.rejected in ('strokes', 'distance')
         assert match.margin < 0            # X, ruled out, is nearer than H
         named += 1
     assert named >= 4
 
 
-def test_allowed_classes_combine_strokes_and_pace_and_none_is_every_class():
+def test_allowed_classes_follow_the_stroke_count_not_the_pace():
     ev = CodebookEvidence(np.repeat([0, 1, 2], 40), 3, strokes=np.repeat([1, 2, 1], 40),
                           contact_s=np.r_[np.full(40, 1.0), np.full(40, 1.0), np.full(40, 4.0)])
     one = TouchGesture.from_trajectory(np.zeros((3, 2)), np.array([0.0, 0.5, 1.0]))
-    assert ev.allowed(one).tolist() == [True, False, False]          # 1 stroke, 1 s: not class 2's 4 s
-    one.times = np.array([0.0, 2.0, 4.0])
-    assert ev.allowed(one).tolist() == [False, False, True]
-    one.times = np.array([0.0, 20.0, 40.0])
-    assert not ev.allowed(one).any()                                 # no class: the evidence rejects it
-    assert CodebookEvidence(np.array([0, 1]), 2).allowed(one) is None
+    assert ev.allowed(one).tolist() == [True, False, True]
+    one.times = np.array([0.0, 20.0, 40.0])                          # slower than every class: still named,
+    assert ev.allowed(one).tolist() == [True, False, True]           # then its command rejected by check
+    assert ev.check(one, 0) == ev.check(one, 2) == 'duration'
+    one.strokes = 3
+    assert not ev.allowed(one).any() and not ev.allowed(one).flags.writeable
+    assert CodebookEvidence(np.array([0, 1]), 2, contact_s=np.array([1.0, 2.0])).allowed(one) is None

@@ -30,10 +30,10 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   knows its templates' paths, and not with ``max_distance`` None: no distance limits at all).
 
 **The rule that decides**, in the order it is applied: the nearest class by distance among
-the classes the touch's strokes and time in contact fit
-(:meth:`.evidence.CodebookEvidence.allowed`; all classes when none fits, or when the codebook
-knows neither), its margin taken over the nearest other class of all, ruled out or not; no
-command if the distance is over the class's threshold (``'distance'``), the margin is too
+the classes written with the touch's number of strokes
+(:meth:`.evidence.CodebookEvidence.allowed`; all classes when none is, or when the codebook
+does not know its templates' strokes), its margin taken over the nearest other class of all,
+ruled out or not; no command if the distance is over the class's threshold (``'distance'``), the margin is too
 small (``'margin'``), the stroke count is rare or unseen for the class (``'strokes'``), the
 duration is out of the class's range (``'duration'``) or the one-stroke path is out of
 order (``'order'``). Measured with the cloud on the Mixed Multistroke Gestures
@@ -251,13 +251,12 @@ class TemplateRecogniser(BaseEstimator):
         per_class = self.query_class_distances(query)
         evidence = getattr(self, 'codebook_evidence_', None)
         allowed = evidence.allowed(gesture) if evidence is not None else None
-        fits_none = allowed is not None and not allowed.any()
-        if allowed is not None and (fits_none or allowed.all()):
+        if allowed is not None and (allowed.all() or not allowed.any()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
-        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed))
+        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed)
         if match.label is None:
             return match
-        reason = evidence.check(gesture, best) if fits_none else None   # else ``best`` fits by construction
+        reason = evidence.check(gesture, best) if evidence is not None else None
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
             reason = order.check(gesture, best, self._one_stroke_path(gesture, query))
@@ -283,10 +282,13 @@ class TemplateRecogniser(BaseEstimator):
         at least one; None: all). A subclass may look again at near ties."""
         return int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
 
-    def _decide(self, per_class: np.ndarray, best: int | None = None) -> tuple[Match, int]:
+    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None
+                ) -> tuple[Match, int]:
         """:meth:`decide` of the class ``best`` (default: the nearest), with its index (for the evidence
         checks of :meth:`predict`). The margin is over the nearest other class of all: negative when
-        ``best`` is not the nearest, which the margin rule then rejects."""
+        ``best`` is not the nearest, which the margin rule then rejects; as ``'strokes'`` where the nearest
+        is a class ``allowed`` ((n_classes,) bool) rules out (the touch is nearer a symbol written with
+        another number of strokes)."""
         if best is None:
             best = int(np.argmin(per_class))
         distances = per_class.tolist()
@@ -298,7 +300,8 @@ class TemplateRecogniser(BaseEstimator):
         if not d1 <= self.class_thresholds_[best]:
             return Match(None, d1, margin, nearest, 'distance'), best
         if margin < self.min_margin * d1:
-            return Match(None, d1, margin, nearest, 'margin'), best
+            ruled_out = margin < 0 and allowed is not None and not allowed[int(np.argmin(per_class))]
+            return Match(None, d1, margin, nearest, 'strokes' if ruled_out else 'margin'), best
         return Match(nearest, d1, margin, nearest, None), best
 
     def predict_many(self, gestures: Sequence[TouchGesture]) -> list[Match]:

@@ -83,27 +83,24 @@ class CodebookEvidence:
                     lo, hi = np.quantile(own, [low, high])
                     bounds[c] = lo / slack, hi * slack
             self.contact_bounds_s = bounds
-        # What allowed() reads per touch: a mask per stroke count seen (any other count fits no class).
+        # What allowed() hands out per touch: a mask per stroke count seen (any other count fits no class).
         # The masks are handed out as they are: read-only, so that no caller changes them for the next.
         self._no_class = np.zeros(n_classes, dtype=bool)
         self._stroke_masks = None if self.stroke_counts is None else {
             k: np.array([k in counts for counts in self.stroke_counts]) for k in set().union(*self.stroke_counts)}
         for mask in [self._no_class, *(self._stroke_masks or {}).values()]:
             mask.flags.writeable = False
-        self._lows_s, self._highs_s = ((None, None) if self.contact_bounds_s is None
-                                       else (self.contact_bounds_s[:, 0].copy(), self.contact_bounds_s[:, 1].copy()))
 
     def allowed(self, gesture: TouchGesture) -> np.ndarray | None:
-        """(n_classes,) bool: the classes ``gesture``'s strokes and time in contact fit (None: the codebook
-        knows neither, every class fits)."""
-        mask = None
-        if self._stroke_masks is not None:
-            mask = self._stroke_masks.get(int(gesture.strokes), self._no_class)
-        if self._lows_s is not None:
-            contact = gesture.contact_s
-            fits = (self._lows_s <= contact) & (contact <= self._highs_s)   # NaN contact time: no class fits
-            mask = fits if mask is None else mask & fits
-        return mask
+        """(n_classes,) bool, read-only: the classes written with ``gesture``'s number of strokes (None: the
+        codebook does not know its templates' strokes, every class fits).
+
+        The time in contact is left out: people trace at their own pace (a slow performer is out of every
+        class's range), so it rejects a command (:meth:`check`) but does not pick the class; the stroke
+        count of a symbol is how it is written."""
+        if self._stroke_masks is None:
+            return None
+        return self._stroke_masks.get(int(gesture.strokes), self._no_class)
 
     def check(self, gesture: TouchGesture, label: int) -> str | None:
         """Why ``gesture`` cannot be class ``label`` (one of :data:`EVIDENCE_REASONS`), or None."""

@@ -22,7 +22,8 @@ the centroid method, measured in the same run: ``social-touch bench skin [--json
 with the thread's CPU clock read between them (:func:`predict_steps`; medians of the repeats, each
 step's clock reads taken off): ``features`` (``_features``), ``search`` (``_distances``: the codebook
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
-classes the strokes and duration allow, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the
+classes the stroke count allows before the decision, strokes and duration of the class it names
+after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the
 nearest allowed class, ``refereed``'s referee on a tie, the distance and margin rules), ``order`` (the
 path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
 accepts) and ``other``: the whole
@@ -121,15 +122,16 @@ def predict_steps(model: TemplateRecogniser, gesture: TouchGesture, clock=time.t
     ns['minima'] = (done := clock()) - start
     evidence = getattr(model, 'codebook_evidence_', None)
     allowed = evidence.allowed(gesture) if evidence is not None else None
-    fits_none = allowed is not None and not allowed.any()
-    if allowed is not None and (fits_none or allowed.all()):
+    if allowed is not None and (allowed.all() or not allowed.any()):
         allowed = None
     ns['evidence'] = (start := clock()) - done
-    match, best = model._decide(per_class, model._nearest(gesture, per_class, allowed))
+    match, best = model._decide(per_class, model._nearest(gesture, per_class, allowed), allowed)
     ns['decision'] = (done := clock()) - start
     if match.label is None:
         return match, ns
-    reason = evidence.check(gesture, best) if fits_none else None
+    reason = evidence.check(gesture, best) if evidence is not None else None
+    ns['evidence'] += (start := clock()) - done
+    done = start
     order = getattr(model, 'order_evidence_', None)
     if reason is None and order is not None:
         reason = order.check(gesture, best, model._one_stroke_path(gesture, query))
