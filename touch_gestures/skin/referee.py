@@ -16,6 +16,12 @@ the referee chose the farther one), so what fires is what the cloud alone fires.
 template's features are the cloud's and the referee's side by side (one vector, so codebook
 files, ``auto`` and the evaluation handle it as any recogniser); distances, thresholds, the
 end of a gesture and early candidates are the cloud's (:attr:`primary_`).
+
+Measured leave-one-person-out on the Mixed Multistroke Gestures through the virtual skin
+(``social-touch report skin-multistroke``, docs/skin-multistroke.md): the nearest class is right
+for 94.70 % of the samples against the cloud's 93.86 % (97.06 % of the samples cut into one
+gesture), with the same commands; it costs about a third more per recognition on the synthetic
+bench (243 against 185 us, 16 gestures x 30 templates), where near ties are more common.
 """
 
 from __future__ import annotations
