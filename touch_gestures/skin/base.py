@@ -53,8 +53,7 @@ docs/skin-multistroke.md), the cloud's nearest class is right for 93.86 % of the
 instead of 93.05 % (an X of three strokes is no X: the nearest class written with three
 strokes is named), and correct, rejected, wrong and random commands are unchanged (89.89,
 6.47, 1.21, 1.20 %). The time in contact rejects but does not name: people trace at their own
-pace, and a synthetic performer at 0.4 times the speed lost Fig. 8 lines to it
-(docs/skin-evaluation.md, section 3) when it did.
+pace, and one slower or faster than the codebook's would be named for another class.
 
 Degenerate codebooks: a class with one template has no within-class distance and takes the
 median scale of the other classes; if no class has two templates, every class's scale is
