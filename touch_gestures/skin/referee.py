@@ -51,7 +51,7 @@ class RefereedRecogniser(TemplateRecogniser):
     Attributes:
         primary_: the fitted cloud (its codebook: the templates' first part).
         referee_: the fitted $N (the second part).
-        referee_calls_: how many recognitions asked the referee (its cost is ~10x the cloud's).
+        referee_calls_: how many recognitions asked the referee (each such call runs $N's whole search).
     """
 
     name = 'refereed'
@@ -100,7 +100,7 @@ class RefereedRecogniser(TemplateRecogniser):
         self.referee_calls_ = 0
 
     def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
-        return self.primary_._features(gesture)   # the referee's only on a tie (they cost 3 times the cloud's)
+        return self.primary_._features(gesture)   # the referee's only on a tie (they cost more than the cloud's)
 
     def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
         return self.primary_._one_stroke_path(gesture, query[:self._split])   # the cloud's features come first
