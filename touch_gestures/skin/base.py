@@ -65,7 +65,7 @@ all gets no distance limit. A codebook with one class has no runner-up: the marg
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -77,7 +77,11 @@ from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
 
-__all__ = ['Match', 'TemplateRecogniser']
+__all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser']
+
+#: The steps of :meth:`TemplateRecogniser.predict`, in its order (the evidence comes before the decision,
+#: the classes the strokes allow, and after it, the named class's strokes and duration).
+PREDICT_STEPS = ('features', 'search', 'minima', 'evidence', 'decision', 'order')
 
 
 @dataclass(frozen=True, slots=True)
@@ -245,22 +249,35 @@ class TemplateRecogniser(BaseEstimator):
 
     def predict(self, gesture: TouchGesture) -> Match:
         """The nearest class of ``gesture`` with its distance and margin, or a rejection."""
+        return self._predict(gesture, _no_step)
+
+    def _predict(self, gesture: TouchGesture, step: Callable[[str], None]) -> Match:
+        """:meth:`predict`, calling ``step(name)`` after each of its steps (:data:`PREDICT_STEPS`; a step
+        may end twice, a step not reached never): what ``social-touch bench skin`` times."""
         self._check_fitted()
         query = self._query_features(gesture)
+        step('features')
         if query is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        per_class = self.query_class_distances(query)
+        distances = self._distances(query)
+        step('search')
+        per_class = np.minimum.reduceat(distances, self.class_starts_).astype(np.float64, copy=False)
+        step('minima')
         evidence = getattr(self, 'codebook_evidence_', None)
         allowed = evidence.allowed(gesture) if evidence is not None else None
         if allowed is not None and (allowed.all() or not allowed.any()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
+        step('evidence')
         match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed)
+        step('decision')
         if match.label is None:
             return match
         reason = evidence.check(gesture, best) if evidence is not None else None
+        step('evidence')
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
             reason = order.check(gesture, best, self._one_stroke_path(gesture, query))
+            step('order')
         if reason is not None:
             return Match(None, match.distance, match.margin, match.nearest, reason)
         return match
@@ -372,3 +389,7 @@ class TemplateRecogniser(BaseEstimator):
                 within[i] = d[same].min() if same.any() else np.inf
                 between[i] = d[other].min() if other.any() else np.inf
         return within, between
+
+
+def _no_step(name: str) -> None:
+    """:meth:`TemplateRecogniser.predict`'s steps, untimed."""

@@ -19,7 +19,7 @@ the centroid method, measured in the same run: ``social-touch bench skin [--json
 
 ``steps_cpu_us`` says where every microsecond of a ``predict`` goes: the steps of
 :meth:`~touch_gestures.skin.base.TemplateRecogniser.predict`, run in its order on the same queries
-with the thread's CPU clock read between them (:func:`predict_steps`; medians of the repeats, each
+with the thread's CPU clock read as each ends (:func:`predict_steps`; medians of the repeats, each
 step's clock reads taken off): ``features`` (``_features``), ``search`` (``_distances``: the codebook
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
 classes the stroke count allows before the decision, strokes and duration of the class it names
@@ -39,7 +39,7 @@ import time
 
 import numpy as np
 
-from touch_gestures.skin.base import Match, TemplateRecogniser
+from touch_gestures.skin.base import PREDICT_STEPS, Match, TemplateRecogniser
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
@@ -52,7 +52,7 @@ __all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'STEPS', 'bench_recognition', 'pred
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
 #: The steps of a recognition that ``steps_cpu_us`` times (module doc), in predict's order.
-STEPS = ('features', 'search', 'minima', 'evidence', 'decision', 'order')
+STEPS = PREDICT_STEPS
 
 
 def synthetic_codebook(n_gestures: int = 16, templates_per_gesture: int = 30, seed: int = 0
@@ -107,38 +107,18 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
 
 def predict_steps(model: TemplateRecogniser, gesture: TouchGesture, clock=time.thread_time_ns
                   ) -> tuple[Match, dict[str, int]]:
-    """``model.predict(gesture)`` step by step (module doc), with the ``clock`` (ns) read after each:
-    the same answer, and the ns of each step (a step not reached takes 0)."""
+    """``model.predict(gesture)`` with the ``clock`` (ns) read after each of its steps (module doc): the
+    answer, and the ns of each step (a step not reached takes 0)."""
     model = getattr(model, 'chosen_', model)   # auto predicts with the recogniser it chose
     ns = dict.fromkeys(STEPS, 0)
-    start = clock()
-    query = model._query_features(gesture)
-    ns['features'] = (done := clock()) - start
-    if query is None:
-        return model.predict(gesture), ns
-    distances = model._distances(query)
-    ns['search'] = (start := clock()) - done
-    per_class = np.minimum.reduceat(distances, model.class_starts_).astype(np.float64, copy=False)
-    ns['minima'] = (done := clock()) - start
-    evidence = getattr(model, 'codebook_evidence_', None)
-    allowed = evidence.allowed(gesture) if evidence is not None else None
-    if allowed is not None and (allowed.all() or not allowed.any()):
-        allowed = None
-    ns['evidence'] = (start := clock()) - done
-    match, best = model._decide(per_class, model._nearest(gesture, per_class, allowed), allowed)
-    ns['decision'] = (done := clock()) - start
-    if match.label is None:
-        return match, ns
-    reason = evidence.check(gesture, best) if evidence is not None else None
-    ns['evidence'] += (start := clock()) - done
-    done = start
-    order = getattr(model, 'order_evidence_', None)
-    if reason is None and order is not None:
-        reason = order.check(gesture, best, model._one_stroke_path(gesture, query))
-        ns['order'] = clock() - done
-    if reason is not None:
-        match = Match(None, match.distance, match.margin, match.nearest, reason)
-    return match, ns
+    last = [clock()]
+
+    def step(name: str) -> None:
+        now = clock()
+        ns[name] += now - last[0]
+        last[0] = now
+
+    return model._predict(gesture, step), ns
 
 
 def _steps_cpu_us(model: TemplateRecogniser, probe: list[TouchGesture], repeats: int, whole_cpu_us: float
