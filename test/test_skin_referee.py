@@ -74,3 +74,11 @@ def test_a_refereed_codebook_file_loads_with_both_parts_and_ends_gestures_by_its
         RefereedRecogniser(n_points=1).fit(*codebook(np.random.default_rng(1), names=NAMES, per_class=2))
     with pytest.raises(ValueError, match='side by side'):
         RefereedRecogniser().set_codebook(refereed.templates_[:, :10], refereed.classes_[refereed.template_labels_])
+
+
+def test_a_refit_after_set_params_makes_templates_of_the_new_sizes():
+    gestures, labels = codebook(np.random.default_rng(2), names=NAMES, per_class=6)
+    refit = RefereedRecogniser().fit(gestures, labels).set_params(n_points=16).fit(gestures, labels)
+    fresh = RefereedRecogniser(n_points=16).fit(gestures, labels)
+    np.testing.assert_array_equal(refit.templates_, fresh.templates_)
+    assert all(refit.predict(g) == fresh.predict(g) for g in held_out()[0])

@@ -77,9 +77,9 @@ class RefereedRecogniser(TemplateRecogniser):
                 NDollarRecogniser(n_points=self.referee_points, max_distance=None))
 
     def _features(self, gesture: TouchGesture) -> np.ndarray | None:
-        primary, referee = getattr(self, 'primary_', None), getattr(self, 'referee_', None)
-        if primary is None:
-            primary, referee = self._parts()
+        # Parts of the current parameters, not the fitted ones: a fit after set_params makes templates of the
+        # new sizes (the features need no codebook; predict reads the cloud's through _query_features).
+        primary, referee = self._parts()
         cloud, unistrokes = primary._features(gesture), referee._features(gesture)
         if cloud is None or unistrokes is None:
             return None
