@@ -463,9 +463,24 @@ def _rosbags_encode(full: str, message: Message, pad: bool = False) -> bytes:
 
 def _rosbags_decode(full: str, data: bytes) -> Message:
     try:  # big endian, or a type without a generated codec
-        return typestore.deserialize_cdr(data, full)
+        message = typestore.deserialize_cdr(data, full)
     except (SerdeError, IndexError, ValueError, TypeError) as err:
         raise MessageError(f'cannot deserialise {len(data)} bytes as {full}: {err}') from err
+    return _read_only(message)
+
+
+def _read_only(value: Any) -> Any:
+    """``value`` with its numeric arrays, and those of the messages in it, made read-only, as the codecs
+    decode them (rosbags gives writeable copies where it swaps bytes, and for empty arrays)."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, Message):
+        for name in value._fields:
+            _read_only(getattr(value, name))
+    elif isinstance(value, list):
+        for item in value:
+            _read_only(item)
+    return value
 
 
 def to_dict(message: Message) -> dict[str, Any]:
