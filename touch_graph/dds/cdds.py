@@ -109,6 +109,25 @@ class WaitSet:
             _set_guard(self.guard, False)
         return keys
 
+    def wait_into(self, timeout_ns: int, keys: set[int]) -> int:
+        """:meth:`wait` adding the triggered keys but the guard's to ``keys``; the number triggered (0: timeout).
+
+        (No list is built: this is the executor's wait, on every received sample's path.)
+        """
+        n = _waitset_wait(self.ref, self._buffer, self._capacity, timeout_ns)
+        if n <= 0:
+            if n < 0:
+                raise DDSException(n, 'Occurred in dds_waitset_wait')
+            return 0
+        buffer = self._buffer
+        for i in range(min(n, self._capacity)):
+            key = buffer[i]
+            if key == self.GUARD:
+                _set_guard(self.guard, False)
+            else:
+                keys.add(key)
+        return n
+
     def close(self) -> None:
         _delete(self.ref)
         _delete(self.guard)

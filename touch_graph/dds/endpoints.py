@@ -44,6 +44,7 @@ TAKE_BATCH = 256
 MATCH_RECHECK_S = 0.25
 _ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 _RETCODE_TIMEOUT = -10
+_monotonic = time.monotonic
 
 
 def pad4(data: bytes) -> bytes:
@@ -99,12 +100,15 @@ class DdsWriter:
 
         Once a remote reader is matched, DDS is asked again only every :data:`MATCH_RECHECK_S`.
         """
-        if not self.latched and time.monotonic() >= self._matched_until:
+        if not self.latched and _monotonic() >= self._matched_until:
             if matched_readers(self.ref) == 0:
                 self.skipped += 1
                 return
-            self._matched_until = time.monotonic() + MATCH_RECHECK_S
-        data = pad4(raw) if raw is not None else self._encode(msg, True)
+            self._matched_until = _monotonic() + MATCH_RECHECK_S
+        if raw is None:
+            data = self._encode(msg, True)
+        else:  # pad4 inlined: every forwarded sample's path
+            data = raw + b'\0' * (-len(raw) % 4) if len(raw) % 4 else raw
         ret = self._write(self.ref, data)
         if ret < 0:
             self.failed += 1
@@ -146,33 +150,48 @@ class DdsReader:
         self._reported: set[int] = set()
 
     def drain(self) -> bool:
-        """Take everything DDS holds for this reader onto the subscription's queue; True if anything came."""
+        """Take everything DDS holds for this reader onto the subscription's queue; True if anything came.
+
+        The queue is the subscription's (``Subscription._enqueue_local``, inlined here: this is every
+        received sample's path): when it is full the oldest item is dropped and counted.
+        """
         sub = self.subscription
-        decode = None if sub.raw else self._decode
+        decode = self._decode if not sub.raw else None
         with_info = sub.with_info
-        enqueue = sub._enqueue_local
-        took = False
+        queue = sub._queue
+        depth = queue.maxlen
+        append = queue.append
+        queued = 0
         while True:
             samples = ddspy_take(self.ref, _ANY_STATE, TAKE_BATCH)
-            if not isinstance(samples, list) or not samples:
-                return took
-            now = time.time_ns() if with_info else 0
+            if type(samples) is not list:  # a DDS error code: the reader is gone
+                break
             for data, info in samples:
                 if not info.valid_data:
                     continue  # a writer went away (no data, only an instance state change)
                 self.received += 1
-                item: Any = data
                 if decode is not None:
                     try:
-                        item = decode(data)
+                        data = decode(data)
                     except MessageError as err:
                         self._undecodable(info.publication_handle, err)
                         continue
-                enqueue((item, {'source_timestamp': info.source_timestamp, 'received_timestamp': now})
-                        if with_info else item)
-                took = True
+                if with_info:
+                    data = (data, {'source_timestamp': info.source_timestamp, 'received_timestamp': time.time_ns()})
+                if len(queue) == depth:
+                    sub.dropped += 1
+                append(data)
+                queued += 1
             if len(samples) < TAKE_BATCH:
-                return took
+                break
+        if not queued:
+            return False
+        sub.received += queued
+        executor = sub._executor
+        if not sub._ready and executor is not None:
+            sub._ready = True
+            executor._ready.append(sub)
+        return True
 
     def _undecodable(self, writer_handle: int, err: MessageError) -> None:
         self.undecodable += 1

@@ -28,6 +28,7 @@ __all__ = ['DdsWaker']
 
 #: While the executor is busy (it does not block), how often it still looks for samples, s.
 POLL_S = 0.001
+_monotonic = time.monotonic
 
 
 class DdsWaker:
@@ -45,7 +46,8 @@ class DdsWaker:
         self._keys: dict[int, int] = {}  # id(reader) -> attach key
         self._next_key = 1
         self._pending: set[int] = set()
-        self._last_poll = 0.0
+        self._last_poll = 0.0  # time.monotonic() of the last wait or poll
+        self.poll_s = POLL_S
         self._lock = threading.Lock()
 
     # ------------------------------------------------------------------ threading.Event's interface
@@ -65,12 +67,11 @@ class DdsWaker:
             return True
         timeout_ns = 2**62 if timeout is None else max(0, int(timeout * 1e9))
         try:
-            keys = self._waitset.wait(timeout_ns)
+            triggered = self._waitset.wait_into(timeout_ns, self._pending)
         except DDSException:  # the participant was deleted (the context shut down): nothing to wait for
             return True
-        self._last_poll = time.monotonic()  # a wait is a poll: take() need not ask again at once
-        self._note(keys)
-        return bool(keys) or self._flag
+        self._last_poll = _monotonic()  # a wait is a poll: take() need not ask again at once
+        return triggered > 0 or self._flag
 
     # ------------------------------------------------------------------ readers
     def attach(self, reader: DdsReader) -> None:
@@ -95,30 +96,25 @@ class DdsWaker:
     def take(self) -> bool:
         """Move the samples of readers with data onto their subscriptions' queues (executor thread).
 
-        Looks (without blocking) for newly arrived samples at most every :data:`POLL_S`, so a
-        busy executor still takes them; returns True when it took anything.
+        Takes from the readers a wait noted; with none noted, looks (without blocking) for newly
+        arrived samples, so a busy executor that does not wait still takes them. The executor
+        calls it only when ``_pending`` holds keys or ``poll_s`` (:data:`POLL_S`) passed since
+        ``_last_poll`` (a test it makes inline: it is on every turn of every executor). Returns
+        True when it took anything.
         """
-        now = time.monotonic()
-        if now - self._last_poll >= POLL_S:
-            self._last_poll = now
+        pending = self._pending
+        if not pending:  # no wait noted samples: look for some without blocking (a busy executor)
+            self._last_poll = _monotonic()
             try:
-                self._note(self._waitset.wait(0))
+                self._waitset.wait_into(0, pending)
             except DDSException:  # deleted with the participant
                 return False
-        if not self._pending:
-            return False
-        pending, self._pending = self._pending, set()
         took = False
-        for key in pending:
-            reader = self._readers.get(key)
+        while pending:  # drain() only queues (no callback runs), so nothing adds keys meanwhile
+            reader = self._readers.get(pending.pop())
             if reader is not None:
                 took = reader.drain() or took
         return took
-
-    def _note(self, keys: list[int]) -> None:
-        for key in keys:
-            if key != WaitSet.GUARD:
-                self._pending.add(key)
 
     def close(self) -> None:
         with self._lock:

@@ -73,7 +73,7 @@ class Publisher:
             if not isinstance(msg, (bytes, bytearray, memoryview)):
                 raise TypeError(f'{self.node.get_fully_qualified_name()} publishes {topic.type_name} on '
                                 f"'{topic.name}', not {type(msg).__name__}")
-            raw = bytes(msg)
+            raw = msg if type(msg) is bytes else bytes(msg)  # a copy of a mutable buffer
             # Decoded only for whom needs a message: a remote reader takes the bytes as they are.
             needs_message = self._latched is not None or len(topic.subscriptions) > topic.raw_subscriptions
             msg = messages.deserialize(raw, topic.type_name) if needs_message else None
@@ -82,18 +82,19 @@ class Publisher:
         self.published += 1
         if self._latched is not None:
             self._latched.append(msg)
-        if topic.raw_subscriptions and raw is None:
-            raw = messages.serialize(msg, topic.type_name)
-        node = self.node
-        info = None
-        if topic.info_subscriptions:
-            now = node.context.now_ns()
-            info = {'source_timestamp': now, 'received_timestamp': now}
-        for sub in topic.subscriptions:
-            if sub.ignore_local_publications and sub.node is node:
-                continue
-            item = raw if sub.raw else msg
-            sub._enqueue((item, info) if sub.with_info else item)
+        if topic.subscriptions:  # in-process delivery (a node talking only to the network skips all this)
+            if topic.raw_subscriptions and raw is None:
+                raw = messages.serialize(msg, topic.type_name)
+            node = self.node
+            info = None
+            if topic.info_subscriptions:
+                now = node.context.now_ns()
+                info = {'source_timestamp': now, 'received_timestamp': now}
+            for sub in topic.subscriptions:
+                if sub.ignore_local_publications and sub.node is node:
+                    continue
+                item = raw if sub.raw else msg
+                sub._enqueue((item, info) if sub.with_info else item)
         dds = self._dds
         if dds is not None:
             dds.write(msg, raw)

@@ -28,6 +28,7 @@ from .node import Node
 __all__ = ['Executor', 'MultiThreadedExecutor', 'SingleThreadedExecutor']
 
 _get_ident = threading.get_ident
+_monotonic = time.monotonic
 
 
 class Executor:
@@ -150,11 +151,15 @@ class Executor:
 
     def spin_once(self, timeout_sec: float | None = None) -> None:
         """Run at most one callback, waiting up to ``timeout_sec`` for one (None: forever)."""
-        outer = self._begin()
+        # _begin and _end inlined: a node spinning once per message pays them per message
+        lock = self._spin_lock
+        lock.acquire()
+        outer, self._spinning_in = self._spinning_in, _get_ident()
         try:
             self._run_one(None if timeout_sec is None else max(0.0, timeout_sec), until_ns=None)
         finally:
-            self._end(outer)
+            self._spinning_in = outer
+            lock.release()
 
     def spin(self) -> None:
         """Run callbacks until the context shuts down (or :meth:`shutdown`)."""
@@ -228,8 +233,8 @@ class Executor:
             fn, args = inbox.popleft()
             self._guarded(fn, args, None, 'cross-thread call')
         waker = self._dds_waker
-        if waker is not None:
-            waker.take()
+        if waker is not None and (waker._pending or _monotonic() - waker._last_poll >= waker.poll_s):
+            waker.take()  # (tested here, not in take(): this runs on every turn)
         timers = self._timers
         if timers:
             now = self.context.now_ns()
@@ -264,7 +269,7 @@ class Executor:
         return False
 
     def _run_one(self, timeout_sec: float | None, until_ns: int | None) -> None:
-        if not self.context.ok():
+        if not self.context._ok:
             raise ExternalShutdownException('the context was shut down')
         if (self._dds_waker.owner if self._dds_waker is not None else None) is not self.context.transport:
             self._network_waker()
@@ -280,17 +285,20 @@ class Executor:
             heapq.heappop(self._timers)  # stale entry
         if until_ns is not None:
             deadline = until_ns if deadline is None else min(deadline, until_ns)
-        source = self.context.time_source
         if timeout_sec == 0:
             return
-        if isinstance(source, SimTimeSource) and math.isinf(source.rate) and deadline is None:
-            # Nothing scheduled in a fast simulation: only another thread can bring work.
-            self._wake.wait(timeout_sec if timeout_sec is not None else 0.5)
+        if deadline is None:
+            source = self.context.time_source
+            if isinstance(source, SimTimeSource) and math.isinf(source.rate):
+                # Nothing scheduled in a fast simulation: only another thread can bring work.
+                self._wake.wait(timeout_sec if timeout_sec is not None else 0.5)
+            else:  # no deadline to convert to wall time: what every time source's wait_until would do
+                self._wake.wait(timeout_sec)
         else:
-            source.wait_until(deadline, self._wake, timeout_sec)
+            self.context.time_source.wait_until(deadline, self._wake, timeout_sec)
         # Run what woke us (a sample, a due timer) in this call, as rclpy's spin_once does,
         # rather than returning to the caller's loop for another round first.
-        if self.context.ok():
+        if self.context._ok:  # (ok() inlined: every message's path)
             self._run_ready_work()
 
     def _guarded(self, fn: Callable[..., Any], args: tuple, node: Node | None, what: str) -> None:
