@@ -29,7 +29,8 @@ from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samp
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
 HELP = 'regenerate docs/skin-multistroke.md: multi-stroke vocabularies, early decisions, collisions, cost'
-#: Evaluated per vocabulary: the default, the two it chooses from, $N, the paper's centroid method.
+#: Evaluated per vocabulary: the default, the two it chooses from (fused, trace), the cloud refereed by $N
+#: (the default before fused) and the cloud alone, $N, the paper's centroid method.
 RECOGNISERS = ('auto', 'fused', 'refereed', 'cloud', 'ndollar', 'trace', 'centroid')
 
 
