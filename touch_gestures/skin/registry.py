@@ -1,7 +1,7 @@
 """Every skin recogniser by name, for the CLI, codebook files and the evaluation.
 
 >>> ' '.join(sorted(RECOGNISERS))
-'auto centroid cloud dollar1 dtw map ndollar pdollar protractor refereed static trace'
+'auto centroid cloud dollar1 dtw fused map ndollar pdollar protractor refereed static trace'
 >>> make_recogniser('trace', n_points=16).n_points
 16
 """
@@ -12,6 +12,7 @@ from typing import Any
 
 from .base import TemplateRecogniser
 from .clouds import CloudRecogniser
+from .fused import FusedRecogniser
 from .ndollar import NDollarRecogniser
 from .paper import CentroidRecogniser, MapRecogniser, StaticRecogniser
 from .peers import DollarOneRecogniser, DTWRecogniser, PointCloudRecogniser, ProtractorRecogniser
@@ -22,11 +23,13 @@ from .vocabulary import AutoRecogniser
 __all__ = ['DEFAULT_RECOGNISER', 'PAPER', 'PEERS', 'RECOGNISERS', 'make_recogniser']
 
 #: name -> class, in report order: the paper's three, the peers, ours (single-stroke, multi-stroke, $N, the
-#: cloud refereed by $N, and ``auto``: whichever of the two the vocabulary's codebook needs, :mod:`.vocabulary`).
+#: cloud refereed by $N, the cloud and the trace summed, and ``auto``: whichever of the two the vocabulary's
+#: codebook needs, :mod:`.vocabulary`).
 RECOGNISERS: dict[str, type[TemplateRecogniser]] = {
     cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, DollarOneRecogniser,
                               ProtractorRecogniser, PointCloudRecogniser, DTWRecogniser, TraceRecogniser,
-                              CloudRecogniser, NDollarRecogniser, RefereedRecogniser, AutoRecogniser)
+                              CloudRecogniser, NDollarRecogniser, RefereedRecogniser, FusedRecogniser,
+                              AutoRecogniser)
 }
 PAPER = ('static', 'map', 'centroid')
 PEERS = ('dollar1', 'protractor', 'pdollar', 'dtw')

@@ -18,8 +18,10 @@ way instead). So the latency is two parts:
 shapes, other performers than the codebook's) on the virtual skin, read by the real
 ``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph
 (:class:`~touch_sim.harness.Harness`), with a codebook of ``n_gestures`` x
-``templates_per_gesture`` for the ``recogniser`` (default ``refereed``, the one ``auto`` picks
-for multi-stroke vocabularies); it reports median and p99 over every command.
+``templates_per_gesture`` for the ``recogniser`` (default ``refereed``: with rejection off it fires on
+every gesture; ``fused``, the one ``auto`` picks for multi-stroke vocabularies, still rejects one where
+the sum names another class than the cloud's nearest, leaving that gesture untimed); it reports median
+and p99 over every command.
 """
 
 from __future__ import annotations
