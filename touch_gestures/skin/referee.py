@@ -51,7 +51,8 @@ class RefereedRecogniser(TemplateRecogniser):
     Attributes:
         primary_: the fitted cloud (its codebook: the templates' first part).
         referee_: the fitted $N (the second part).
-        referee_calls_: how many recognitions asked the referee (each such call runs $N's whole search).
+        referee_calls_: how many recognitions asked the referee (each such call matches the query against the
+            two tied classes' unistrokes only).
     """
 
     name = 'refereed'
@@ -117,7 +118,7 @@ class RefereedRecogniser(TemplateRecogniser):
         if not rivals[second] - d1 < self.min_margin * d1:   # no tie (or no rival: inf)
             return best
         self.referee_calls_ += 1
-        judged = self.referee_.class_distances(gesture)
+        judged = self.referee_.class_distances_among(gesture, (best, second))   # only the two tied classes
         if judged is None:
             return best
-        return second if judged[second] < judged[best] else best
+        return second if judged[1] < judged[0] else best
