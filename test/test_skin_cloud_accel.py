@@ -240,3 +240,102 @@ def test_copies_and_pickles_search_as_the_original():
         assert other.implementation_ == rec.implementation_
         np.testing.assert_array_equal(other._distances(templates[1]), rec._distances(templates[1]))
     assert '_accel' in rec.__dict__   # pickling did not take it from the original
+
+
+# ----------------------------------------------------------------------------- the compiled features
+def numpy_twins():
+    """The numpy resampling, cloud and unistroke (the module's code with the compiled functions off)."""
+    from touch_gestures.skin import clouds, features, ndollar
+    saved = cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke
+    cloud_accel.resample = cloud_accel.cloud = cloud_accel.unistroke = None
+    try:
+        yield features.arc_length_resample_complex, clouds.cloud_features, ndollar.unistroke_vectors
+    finally:
+        cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke = saved
+
+
+paths = st.integers(0, 2**32 - 1).map(np.random.default_rng).flatmap(lambda rng: st.just((
+    rng.normal(0, 10, (int(rng.integers(1, 150)), 2)) * rng.choice([1e-6, 1.0, 1e4]),
+    rng.random())))
+
+
+@needs_accel
+@settings(max_examples=150, deadline=None)
+@given(drawn=paths, n=st.sampled_from([1, 2, 32, 96, 128]), strokes=st.integers(0, 4), still=st.booleans())
+def test_the_compiled_features_are_numpys(drawn, n, strokes, still):
+    # The resampling and the cloud: numpy's arithmetic step by step, so the same numbers where numpy's
+    # complex absolute value takes its AVX-512 loop (this machine's, checked bit for bit when so); its
+    # scalar loop may round a step's length an ulp apart: then 4 ulp of float64 per point (relative to
+    # the path's extent), and one float32 ulp for the cloud. The unistroke: float64 of 96 points through
+    # sums, rotations and a norm, ~1e-14 (ATOL).
+    points, share = drawn
+    if still:
+        points[share < 0.5:] = points[0]       # a path that stops moving, or never moves (a dab)
+    ids = None if not strokes else np.sort(np.random.default_rng(len(points)).integers(0, strokes + 1,
+                                                                                        len(points)))
+    twins = numpy_twins()
+    resample, cloud_features_numpy, unistroke_numpy = next(twins)
+    try:
+        want = resample(points, n, ids)
+        want_cloud = cloud_features_numpy(points, ids, n)
+        want_vec, want_angle = unistroke_numpy(points[None], max(n, 16), 0.25) if n >= 16 else (None, None)
+    finally:
+        next(twins, None)
+    extent = float(np.abs(points - points[0]).max()) or 1.0
+    got = cloud_accel._cloud_accel.resample(points, ids, n)
+    np.testing.assert_allclose(got.view(np.float64), want.view(np.float64), rtol=0,
+                               atol=4 * np.spacing(extent + float(np.abs(points).max())))
+    got_cloud = cloud_accel._cloud_accel.cloud(points, ids, n)
+    assert got_cloud.dtype == np.float32 and got_cloud.shape == want_cloud.shape
+    np.testing.assert_allclose(got_cloud, want_cloud, rtol=0, atol=np.spacing(np.float32(1.0)))
+    if want_vec is not None:
+        vec, angle = cloud_accel._cloud_accel.unistroke(points, max(n, 16), 0.25)
+        np.testing.assert_allclose(vec, want_vec[0], rtol=0, atol=ATOL)
+        assert np.isnan(angle) == np.isnan(want_angle[0])
+        if not np.isnan(angle):   # a start angle near +-pi may come out on the other side
+            assert abs(np.angle(np.exp(1j * (angle - want_angle[0])))) <= ATOL
+
+
+@needs_accel
+def test_the_compiled_features_refuse_what_numpy_refuses_with_the_same_words():
+    A = cloud_accel._cloud_accel
+    for bad, words in ((np.empty((0, 2)), 'empty path'), (np.zeros(3), r'got shape \(3,\)'),
+                       (np.zeros((3, 3)), r'got shape \(3, 3\)')):
+        for call in (lambda p: A.resample(p, None, 4), lambda p: A.cloud(p, None, 4),
+                     lambda p: A.unistroke(p, 16, 0.25)):
+            with pytest.raises(ValueError, match=words):
+                call(bad)
+    with pytest.raises(ValueError, match='one stroke id per point'):
+        A.resample(np.zeros((3, 2)), np.zeros(2), 4)
+    with pytest.raises(ValueError):
+        A.resample(np.zeros((3, 2)), None, 0)
+    with pytest.raises(ValueError):
+        A.unistroke(np.zeros((3, 2)), 16, 1.5)
+    # lists and float32 are converted, as np.ascontiguousarray converts them
+    assert A.resample([[0.0, 0.0], [2.0, 0.0]], None, 3).tolist() == [0j, 1 + 0j, 2 + 0j]
+    assert A.cloud(np.array([[0, 0], [4, 0]], np.float32), [0, 0], 2).tolist() == [-0.5, 0.0, 0.5, 0.0]
+
+
+@needs_accel
+def test_the_compiled_features_leak_nothing():
+    A = cloud_accel._cloud_accel
+    rng = np.random.default_rng(9)
+    points, ids = rng.normal(size=(40, 2)), np.sort(rng.integers(0, 3, 40))
+
+    def run(times: int) -> None:
+        for _ in range(times):
+            A.resample(points, ids, 32)
+            A.cloud(points, None, 32)
+            A.unistroke(points, 96, 0.25)
+            for bad in (np.empty((0, 2)), np.zeros(3)):
+                with contextlib.suppress(ValueError):
+                    A.cloud(bad, None, 32)
+
+    run(100)
+    gc.collect()
+    before = [sys.getrefcount(obj) for obj in (points, ids)]
+    blocks = sys.getallocatedblocks()
+    run(2000)
+    gc.collect()
+    assert [sys.getrefcount(obj) for obj in (points, ids)] == before
+    assert sys.getallocatedblocks() - blocks < 100

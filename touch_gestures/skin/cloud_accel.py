@@ -5,7 +5,10 @@ each, not arithmetic. Where the C extension ``touch_gestures.skin._cloud_accel``
 compiles it when a C compiler and Python's headers are there, as it does the CDR codec,
 :mod:`touch_graph.cdr_accel`), the raster bounds and the exact search run in one C call on the same
 arrays; the numpy path stays the reference and the fall-back (``test/test_skin_cloud_accel.py`` checks
-that both name the same classes with the same distances, to a few ulp of float64).
+that both name the same classes with the same distances, to a few ulp of float64). The features the
+search needs are compiled too: the resampling along the ink and the cloud's normalisation (the same
+numbers as numpy's where numpy takes its AVX-512 loop for complex absolute values, else to an ulp), and
+$N's unistroke of one path (the referee's query, to ~1e-14).
 
 ``SOCIAL_TOUCH_SKIN_ACCEL=python`` forces the numpy path, ``=c`` insists on the compiled one (an error if it
 is not built); unset, the compiled one where built. The choice is read once, at import.
@@ -26,7 +29,8 @@ except ImportError as err:  # not built: no compiler at install time, or an unsu
     _cloud_accel = None
     IMPORT_ERROR = str(err)
 
-__all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'implementation', 'make_codebook']
+__all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'cloud', 'implementation', 'make_codebook', 'resample',
+           'unistroke']
 
 #: Environment variable choosing the cloud search: ``python``, ``c``, or unset (the compiled one where built).
 ACCEL_VARIABLE = 'SOCIAL_TOUCH_SKIN_ACCEL'
@@ -50,6 +54,13 @@ def _choose() -> str:
 
 
 _IMPLEMENTATION = _choose()
+
+#: The compiled twins of :func:`.features.arc_length_resample_complex`, :func:`.clouds.cloud_features` and
+#: :func:`.ndollar.unistroke_vectors` of one path, or None where numpy is chosen: ``resample(points, stroke,
+#: n)``, ``cloud(points, stroke, n)``, ``unistroke(path, n, one_d_ratio) -> (vector, start angle)``.
+resample = _cloud_accel.resample if _IMPLEMENTATION == 'c' else None
+cloud = _cloud_accel.cloud if _IMPLEMENTATION == 'c' else None
+unistroke = _cloud_accel.unistroke if _IMPLEMENTATION == 'c' else None
 
 
 def implementation() -> str:

@@ -69,6 +69,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from . import cloud_accel
 from .base import TemplateRecogniser
 from .features import arc_length_resample
 from .gesture import TouchGesture
@@ -184,6 +185,9 @@ def _rotate(points: np.ndarray, angle: np.ndarray) -> np.ndarray:
 def unistroke_vectors(paths: np.ndarray, n_points: int, one_d_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """(U, m, 2) joined strokes -> (U, 2 n) float64 unit vectors and (U,) start angles, radians
     (NaN where the start does not move): module doc, 3."""
+    if len(paths) == 1 and cloud_accel.unistroke is not None:   # a query: one C call (cloud_accel)
+        vec, angle = cloud_accel.unistroke(paths[0], n_points, one_d_ratio)
+        return vec[None], np.array([angle])
     pts = _resample_paths(paths, n_points)
     centre = pts.mean(axis=1, keepdims=True)
     pts = pts - centre
