@@ -36,7 +36,7 @@ typedef struct {
     PyObject_HEAD
     Py_ssize_t n_templates, n_points, grid, cells, n_classes, exact;
     float *fields;          /* (cells, T) distance of each cell centre to each template's nearest point */
-    double *clouds;         /* (T, n, 2) template points */
+    double *clouds;         /* (T, 2, n) template points: each template's xs, then its ys (loops vectorise) */
     npy_intp *labels;       /* (T,) class of each template */
     npy_intp *cell_starts;  /* (T + 1,) each template's run in cell_ids / cell_counts */
     npy_intp *cell_ids;     /* a template's occupied cells, ascending */
@@ -169,7 +169,12 @@ static int Codebook_init(Codebook *self, PyObject *args, PyObject *kwds)
         memcpy(self->table, PyArray_DATA(table), cells * cells * sizeof(float));
     }
     memcpy(self->fields, PyArray_DATA(fields), cells * (size_t)T * sizeof(float));
-    memcpy(self->clouds, pts, (size_t)(2 * T * n) * sizeof(double));
+    for (npy_intp t = 0; t < T; t++) {
+        for (npy_intp j = 0; j < n; j++) {
+            self->clouds[2 * n * t + j] = pts[2 * (t * n + j)];
+            self->clouds[2 * n * t + n + j] = pts[2 * (t * n + j) + 1];
+        }
+    }
     memcpy(self->labels, lab, (size_t)T * sizeof(npy_intp));
     double side = 2.0 / (double)grid;   /* clouds.py: (arange(g) + 0.5) * (2 / g) - 1 */
     for (Py_ssize_t i = 0; i < grid; i++)
@@ -340,9 +345,9 @@ static int exact_search(const Codebook *self, const double *q, double *out, PyOb
     const Py_ssize_t T = self->n_templates, n = self->n_points, k = self->exact < T ? self->exact : T;
     if (k == 0)
         return 0;
-    /* One block: (k, n, n) point distances, then k of: template, means, bounds, costs, order; n nearest;
-     * n_classes settled; n seen. */
-    size_t doubles = (size_t)(k * n * n) + 4 * (size_t)k + (size_t)self->n_classes;
+    /* One block: (k, n, n) squared point distances; k each of means both ways, bounds, costs; n_classes
+     * settled; n column minima; k closest, k visit order, (k, n) nearest; n seen. */
+    size_t doubles = (size_t)(k * n * n) + 4 * (size_t)k + (size_t)self->n_classes + (size_t)n;
     size_t indices = 2 * (size_t)k + (size_t)(k * n);
     char *block = PyMem_Malloc(doubles * sizeof(double) + indices * sizeof(npy_intp) + (size_t)n);
     if (block == NULL) {
@@ -351,7 +356,8 @@ static int exact_search(const Codebook *self, const double *q, double *out, PyOb
     }
     double *pair = (double *)block, *to_template = pair + k * n * n, *bound = to_template + k;
     double *cost = bound + k, *from_template = cost + k, *settled = from_template + k;
-    npy_intp *closest = (npy_intp *)(settled + self->n_classes), *order = closest + k, *nearest = order + k;
+    double *column = settled + self->n_classes;   /* n: a template point's nearest query point, squared */
+    npy_intp *closest = (npy_intp *)(column + n), *order = closest + k, *nearest = order + k;
     char *seen = (char *)(nearest + k * n);
     int status = -1;
 
@@ -368,25 +374,24 @@ static int exact_search(const Codebook *self, const double *q, double *out, PyOb
     for (Py_ssize_t i = 0; i < k; i++) {
         /* Squared point distances: the nearest by them is the nearest by distance, and the root of the
          * smallest square is the smallest root (what cdist then min gives); the Hungarian gets the roots. */
-        const double *tp = self->clouds + 2 * n * closest[i];
+        const double *tx = self->clouds + 2 * n * closest[i], *ty = tx + n;
         double *d = pair + i * n * n, forward = 0.0, backward = 0.0;
         for (Py_ssize_t a = 0; a < n; a++) {
+            double qx = q[2 * a], qy = q[2 * a + 1], *row = d + a * n;
             for (Py_ssize_t b = 0; b < n; b++) {
-                double dx = q[2 * a] - tp[2 * b], dy = q[2 * a + 1] - tp[2 * b + 1];
-                d[a * n + b] = dx * dx + dy * dy;
+                double dx = qx - tx[b], dy = qy - ty[b];
+                row[b] = dx * dx + dy * dy;
             }
+            for (Py_ssize_t b = 0; b < n; b++)
+                column[b] = a == 0 || row[b] < column[b] ? row[b] : column[b];
             npy_intp best = 0;
             for (Py_ssize_t b = 1; b < n; b++)
-                best = d[a * n + b] < d[a * n + best] ? b : best;
+                best = row[b] < row[best] ? b : best;
             nearest[i * n + a] = best;
-            forward += sqrt(d[a * n + best]);
+            forward += sqrt(row[best]);
         }
-        for (Py_ssize_t b = 0; b < n; b++) {
-            double m = d[b];
-            for (Py_ssize_t a = 1; a < n; a++)
-                m = d[a * n + b] < m ? d[a * n + b] : m;
-            backward += sqrt(m);
-        }
+        for (Py_ssize_t b = 0; b < n; b++)
+            backward += sqrt(column[b]);
         to_template[i] = forward / (double)n;
         from_template[i] = backward / (double)n;
         bound[i] = cost[i] = to_template[i] > from_template[i] ? to_template[i] : from_template[i];
