@@ -246,12 +246,13 @@ def test_copies_and_pickles_search_as_the_original():
 def numpy_twins():
     """The numpy resampling, cloud and unistroke (the module's code with the compiled functions off)."""
     from touch_gestures.skin import clouds, features, ndollar
-    saved = cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke
-    cloud_accel.resample = cloud_accel.cloud = cloud_accel.unistroke = None
+    saved = cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke, cloud_accel.ink
+    cloud_accel.resample = cloud_accel.cloud = cloud_accel.unistroke = cloud_accel.ink = None
     try:
-        yield features.arc_length_resample_complex, clouds.cloud_features, ndollar.unistroke_vectors
+        yield (features.arc_length_resample_complex, clouds.cloud_features, ndollar.unistroke_vectors,
+               ndollar.ink_features)
     finally:
-        cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke = saved
+        cloud_accel.resample, cloud_accel.cloud, cloud_accel.unistroke, cloud_accel.ink = saved
 
 
 paths = st.integers(0, 2**32 - 1).map(np.random.default_rng).flatmap(lambda rng: st.just((
@@ -261,7 +262,8 @@ paths = st.integers(0, 2**32 - 1).map(np.random.default_rng).flatmap(lambda rng:
 
 @needs_accel
 @settings(max_examples=150, deadline=None)
-@given(drawn=paths, n=st.sampled_from([1, 2, 32, 96, 128]), strokes=st.integers(0, 4), still=st.booleans())
+@given(drawn=paths, n=st.sampled_from([1, 2, 32, 96, 128]), strokes=st.sampled_from([0, 1, 4, 40, 300]),
+       still=st.booleans())
 def test_the_compiled_features_are_numpys(drawn, n, strokes, still):
     # The resampling and the cloud: numpy's arithmetic step by step, so the same numbers where numpy's
     # complex absolute value takes its AVX-512 loop (this machine's, checked bit for bit when so); its
@@ -274,10 +276,11 @@ def test_the_compiled_features_are_numpys(drawn, n, strokes, still):
     ids = None if not strokes else np.sort(np.random.default_rng(len(points)).integers(0, strokes + 1,
                                                                                         len(points)))
     twins = numpy_twins()
-    resample, cloud_features_numpy, unistroke_numpy = next(twins)
+    resample, cloud_features_numpy, unistroke_numpy, ink_numpy = next(twins)
     try:
         want = resample(points, n, ids)
         want_cloud = cloud_features_numpy(points, ids, n)
+        want_ink = ink_numpy(points, ids, n)
         want_vec, want_angle = unistroke_numpy(points[None], max(n, 16), 0.25) if n >= 16 else (None, None)
     finally:
         next(twins, None)
@@ -288,7 +291,14 @@ def test_the_compiled_features_are_numpys(drawn, n, strokes, still):
     got_cloud = cloud_accel._cloud_accel.cloud(points, ids, n)
     assert got_cloud.dtype == np.float32 and got_cloud.shape == want_cloud.shape
     np.testing.assert_allclose(got_cloud, want_cloud, rtol=0, atol=np.spacing(np.float32(1.0)))
-    if want_vec is not None:
+    got_ink = cloud_accel._cloud_accel.ink(points, ids, n)   # $N's features: the cloud's reasoning, per stroke
+    assert (got_ink is None) == (want_ink is None)
+    if got_ink is not None:
+        np.testing.assert_allclose(got_ink, want_ink, rtol=0, atol=np.spacing(np.float32(1.0)))
+    # A dab (a path that never moves) has no direction: numpy's unit vector is then the direction of the
+    # rounding residue its centring leaves (sums of equal numbers), an arbitrary one, the kernel's 0 or
+    # another residue; both are finite, and neither is compared.
+    if want_vec is not None and np.ptp(points, axis=0).max() > 0:
         vec, angle = cloud_accel._cloud_accel.unistroke(points, max(n, 16), 0.25)
         np.testing.assert_allclose(vec, want_vec[0], rtol=0, atol=ATOL)
         assert np.isnan(angle) == np.isnan(want_angle[0])
@@ -302,7 +312,7 @@ def test_the_compiled_features_refuse_what_numpy_refuses_with_the_same_words():
     for bad, words in ((np.empty((0, 2)), 'empty path'), (np.zeros(3), r'got shape \(3,\)'),
                        (np.zeros((3, 3)), r'got shape \(3, 3\)')):
         for call in (lambda p: A.resample(p, None, 4), lambda p: A.cloud(p, None, 4),
-                     lambda p: A.unistroke(p, 16, 0.25)):
+                     lambda p: A.unistroke(p, 16, 0.25), lambda p: A.ink(p, None, 8)):
             with pytest.raises(ValueError, match=words):
                 call(bad)
     with pytest.raises(ValueError, match='one stroke id per point'):
@@ -327,6 +337,8 @@ def test_the_compiled_features_leak_nothing():
             A.resample(points, ids, 32)
             A.cloud(points, None, 32)
             A.unistroke(points, 96, 0.25)
+            A.ink(points, ids, 128)
+            A.ink(points, np.arange(40), 8)   # more strokes than points: None
             for bad in (np.empty((0, 2)), np.zeros(3)):
                 with contextlib.suppress(ValueError):
                     A.cloud(bad, None, 32)

@@ -745,6 +745,139 @@ static PyObject *py_cloud(PyObject *module, PyObject *args)
     return out;
 }
 
+/* numpy's pairwise sum of n doubles (what a contiguous .sum() gives bit for bit). */
+static double pairwise_real(const double *a, Py_ssize_t n)
+{
+    if (n < 8) {
+        double r = 0.0;
+        for (Py_ssize_t i = 0; i < n; i++)
+            r += a[i];
+        return r;
+    }
+    if (n <= 128) {
+        double r[8], res;
+        Py_ssize_t i;
+        for (int j = 0; j < 8; j++)
+            r[j] = a[j];
+        for (i = 8; i < n - (n % 8); i += 8)
+            for (int j = 0; j < 8; j++)
+                r[j] += a[i + j];
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for (; i < n; i++)
+            res += a[i];
+        return res;
+    }
+    Py_ssize_t half = n / 2;
+    half -= half % 8;
+    return pairwise_real(a, half) + pairwise_real(a + half, n - half);
+}
+
+/* ink(points, stroke, ink_points) -> (3 ink_points,) float32 or None: ndollar.py's ink_features, numpy's
+ * arithmetic step by step (stroke lengths as hypot summed pairwise, shares floored, each stroke
+ * resampled, the mean of the columns summed in order then divided, the larger side of the box). */
+static PyObject *py_ink(PyObject *Py_UNUSED(module), PyObject *args)
+{
+    PyObject *points_obj, *ids_obj;
+    Py_ssize_t ink;
+    if (!PyArg_ParseTuple(args, "OOn:ink", &points_obj, &ids_obj, &ink))
+        return NULL;
+    if (ink < 1) {
+        PyErr_Format(PyExc_ValueError, "need ink_points >= 1, got %zd", ink);
+        return NULL;
+    }
+    PyArrayObject *pts = path_points(points_obj), *ids = NULL;
+    if (pts == NULL)
+        return NULL;
+    Py_ssize_t m = PyArray_DIM(pts, 0);
+    if (ids_obj != Py_None) {
+        ids = (PyArrayObject *)PyArray_FROMANY(ids_obj, NPY_FLOAT64, 1, 1, NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
+        if (ids == NULL || PyArray_DIM(ids, 0) != m) {
+            if (ids != NULL)
+                PyErr_Format(PyExc_ValueError, "need one stroke id per point: %zd points, %zd ids", m,
+                             (Py_ssize_t)PyArray_DIM(ids, 0));
+            Py_XDECREF(ids);
+            Py_DECREF(pts);
+            return NULL;
+        }
+    }
+    const double *p = PyArray_DATA(pts), *id = ids ? PyArray_DATA(ids) : NULL;
+    Py_ssize_t k = 1;
+    for (Py_ssize_t i = 1; id != NULL && i < m; i++)
+        k += id[i] != id[i - 1];
+    PyObject *result = NULL;
+    if (k > ink) {   /* more strokes than points to give them */
+        result = Py_NewRef(Py_None);
+        goto done;
+    }
+    /* one block: k stroke starts + 1, k lengths, m steps (and m cumulative lengths), ink x 2 points, ink ids */
+    size_t need = (size_t)(k + 1) * sizeof(Py_ssize_t) + ((size_t)k + 2 * (size_t)m + 3 * (size_t)ink) * sizeof(double);
+    char *block = PyMem_Malloc(need);
+    if (block == NULL) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    Py_ssize_t *start = (Py_ssize_t *)block;
+    double *lengths = (double *)(start + k + 1), *steps = lengths + k, *cum = steps + m, *out = cum + m;
+    double *sid = out + 2 * ink;
+    start[0] = 0;
+    for (Py_ssize_t i = 1, s = 1; id != NULL && i < m; i++)
+        if (id[i] != id[i - 1])
+            start[s++] = i;
+    start[k] = m;
+    for (Py_ssize_t s = 0; s < k; s++) {
+        Py_ssize_t a = start[s], len = start[s + 1] - a;
+        for (Py_ssize_t i = 1; i < len; i++)
+            steps[i - 1] = hypot(p[2 * (a + i)] - p[2 * (a + i - 1)], p[2 * (a + i) + 1] - p[2 * (a + i - 1) + 1]);
+        lengths[s] = pairwise_real(steps, len - 1);
+    }
+    double total = pairwise_real(lengths, k);
+    Py_ssize_t floor_points = 2 * k <= ink ? 2 : 1, spare = ink - floor_points * k, at = 0;
+    for (Py_ssize_t s = 0; s < k; s++) {
+        Py_ssize_t c = floor_points + (total > 0 ? (Py_ssize_t)floor((double)spare * lengths[s] / total) : 0);
+        resample_into(p + 2 * start[s], NULL, start[s + 1] - start[s], c, cum, out + 2 * at);
+        for (Py_ssize_t j = 0; j < c; j++)
+            sid[at + j] = (double)s;
+        at += c;
+    }
+    for (Py_ssize_t j = at; j < ink; j++)
+        sid[j] = -1.0;   /* padding */
+    double mean[2] = {0.0, 0.0}, lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    int nan_seen = 0;
+    for (Py_ssize_t j = 0; j < at; j++) {
+        mean[0] += out[2 * j];
+        mean[1] += out[2 * j + 1];
+    }
+    mean[0] /= (double)at;
+    mean[1] /= (double)at;
+    for (Py_ssize_t j = 0; j < at; j++) {
+        for (int a = 0; a < 2; a++) {
+            double v = out[2 * j + a] -= mean[a];
+            nan_seen |= isnan(v);
+            lo[a] = v < lo[a] ? v : lo[a];
+            hi[a] = v > hi[a] ? v : hi[a];
+        }
+    }
+    double w = hi[0] - lo[0], h = hi[1] - lo[1], size = nan_seen ? NAN : (w > h ? w : h);
+    npy_intp dims[1] = {3 * ink};
+    result = PyArray_SimpleNew(1, dims, NPY_FLOAT32);
+    if (result != NULL) {
+        float *f = PyArray_DATA((PyArrayObject *)result);
+        for (Py_ssize_t j = 0; j < ink; j++) {
+            Py_ssize_t from = j < at ? j : at - 1;   /* padding repeats the last point */
+            for (int a = 0; a < 2; a++) {
+                double v = out[2 * from + a];
+                f[2 * j + a] = (float)(size > 1e-9 ? v / size : v);
+            }
+            f[2 * ink + j] = (float)sid[j];
+        }
+    }
+    PyMem_Free(block);
+done:
+    Py_XDECREF(ids);
+    Py_DECREF(pts);
+    return result;
+}
+
 /* Mean of (n, 2) points into c[2]. */
 static void centre_of(const double *p, Py_ssize_t n, double *c)
 {
@@ -838,6 +971,8 @@ static PyMethodDef module_methods[] = {
      "resample(points, stroke, n) -> (n,) complex128 points equally spaced along the ink (features.py)."},
     {"cloud", py_cloud, METH_VARARGS,
      "cloud(points, stroke, n) -> (2 n,) float32 normalised cloud, x and y interleaved (clouds.py's cloud_features)."},
+    {"ink", py_ink, METH_VARARGS,
+     "ink(points, stroke, ink_points) -> (3 ink_points,) float32 or None: ndollar.py's ink_features."},
     {"unistroke", py_unistroke, METH_VARARGS,
      "unistroke(path, n, one_d_ratio) -> ((2 n,) float64 unit vector, start angle): ndollar.py's, of one path."},
     {NULL, NULL, 0, NULL},

@@ -8,7 +8,8 @@ arrays; the numpy path stays the reference and the fall-back (``test/test_skin_c
 that both name the same classes with the same distances, to a few ulp of float64). The features the
 search needs are compiled too: the resampling along the ink and the cloud's normalisation (the same
 numbers as numpy's where numpy takes its AVX-512 loop for complex absolute values, else to an ulp), and
-$N's unistroke of one path (the referee's query, to ~1e-14).
+$N's features and unistroke of one path (the referee's query: the features the same numbers, the
+unistroke to ~1e-14).
 
 ``SOCIAL_TOUCH_SKIN_ACCEL=python`` forces the numpy path, ``=c`` insists on the compiled one (an error if it
 is not built); unset, the compiled one where built. The choice is read once, at import.
@@ -29,8 +30,8 @@ except ImportError as err:  # not built: no compiler at install time, or an unsu
     _cloud_accel = None
     IMPORT_ERROR = str(err)
 
-__all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'cloud', 'implementation', 'make_codebook', 'resample',
-           'unistroke']
+__all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'cloud', 'implementation', 'ink', 'make_codebook',
+           'resample', 'unistroke']
 
 #: Environment variable choosing the cloud search: ``python``, ``c``, or unset (the compiled one where built).
 ACCEL_VARIABLE = 'SOCIAL_TOUCH_SKIN_ACCEL'
@@ -61,6 +62,8 @@ _IMPLEMENTATION = _choose()
 resample = _cloud_accel.resample if _IMPLEMENTATION == 'c' else None
 cloud = _cloud_accel.cloud if _IMPLEMENTATION == 'c' else None
 unistroke = _cloud_accel.unistroke if _IMPLEMENTATION == 'c' else None
+#: ... and of :func:`.ndollar.ink_features`: ``ink(points, stroke, ink_points)`` (None where numpy is chosen).
+ink = _cloud_accel.ink if _IMPLEMENTATION == 'c' else None
 
 
 def implementation() -> str:

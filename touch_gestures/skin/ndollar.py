@@ -93,6 +93,8 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return None
+    if cloud_accel.ink is not None:   # the same numbers in one C call (cloud_accel)
+        return cloud_accel.ink(pts, None if stroke is None else np.asarray(stroke).reshape(-1), ink_points)
     strokes = [pts] if stroke is None else split_strokes(pts, np.asarray(stroke).reshape(-1))
     k = len(strokes)
     if k > ink_points:
@@ -313,22 +315,16 @@ class NDollarRecogniser(TemplateRecogniser):
         self._n_angled = int(np.isfinite(self._angles).sum())
         self._template_counts = np.asarray(counts, dtype=np.int64)
         self._unistroke_counts = self._template_counts[self.unistroke_owner_]
-        # Each class's unistrokes on their own, in the same order (a referee asks about two classes only).
+        # Each class's rows of the sorted unistrokes (a referee asks about two classes only): every class has
+        # templates, and every template at least one unistroke.
         unistroke_class = self.template_labels_[self.unistroke_owner_]
-        self._class_unistrokes = []
-        for c in range(len(self.classes_)):
-            rows = np.flatnonzero(unistroke_class == c)
-            angles_c = self._angles[rows]
-            self._class_unistrokes.append((self._vectors[rows], angles_c, int(np.isfinite(angles_c).sum()),
-                                           self._unistroke_counts[rows]))
+        self._class_rows = [np.flatnonzero(unistroke_class == c) for c in range(len(self.classes_))]
+        self._class_rows_cache: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
 
-    def _windows(self, angle: float, angles: np.ndarray | None = None, n_angled: int | None = None
-                 ) -> list[slice]:
+    def _windows(self, angle: float) -> list[slice]:
         """Slices of the sorted unistrokes whose start is within ``start_angle_deg`` of ``angle``,
-        plus those without a start direction (compared always). ``angles`` (sorted, NaN last, the first
-        ``n_angled`` finite): one class's unistrokes; default all of the codebook's."""
-        if angles is None:
-            angles, n_angled = self._angles, self._n_angled
+        plus those without a start direction (compared always)."""
+        angles, n_angled = self._angles, self._n_angled
         tail = slice(n_angled, len(angles))
         if self.start_angle_deg is None or not np.isfinite(angle) or self.start_angle_deg >= 180:
             return [slice(0, len(angles))]
@@ -368,7 +364,15 @@ class NDollarRecogniser(TemplateRecogniser):
     def _query(self, query: np.ndarray) -> tuple[np.ndarray, float, int]:
         """The query's (2, 2 n) float32 unit vector and its turn by 90 degrees (:meth:`_similarities`), its
         start angle (radians, NaN: none) and its number of strokes."""
-        vec, angles, k = self._expand(query, as_traced=True)
+        # The strokes in traced order, joined: the feature's used points as they are (what _expand(as_traced)
+        # joins after splitting them, in fewer numpy calls); a stroke begins where the stroke number changes.
+        n = self.ink_points
+        sid = query[2 * n:]
+        used = sid != PADDING
+        ids = sid[used]
+        k = 1 + int(np.count_nonzero(ids[1:] != ids[:-1]))
+        vec, angles = unistroke_vectors(query[:2 * n].reshape(n, 2)[used].astype(np.float64)[None], self.n_points,
+                                        self.one_d_ratio)
         queries = np.empty((2, vec.shape[1]), dtype=np.float32)
         queries[0] = vec[0]
         queries[1, 0::2], queries[1, 1::2] = vec[0, 1::2], -vec[0, 0::2]   # turned by 90 degrees
@@ -392,22 +396,28 @@ class NDollarRecogniser(TemplateRecogniser):
         if features is None:
             return None
         queries, angle, k = self._query(features)
-        strokes: int | None = k
-        if not self._compares_any(self._windows(angle), k):
-            strokes = None   # the whole search would compare all: so does each class's
-        out = np.full(len(classes), np.inf)
-        for i, c in enumerate(classes):
-            vectors, angles, n_angled, counts = self._class_unistrokes[c]
-            windows = self._windows(angle, angles, n_angled) if strokes is not None else [slice(0, len(angles))]
-            for rows in windows:
-                if rows.stop <= rows.start:
-                    continue
-                d = np.arccos(np.clip(self._similarities(rows, queries, vectors), -1.0, 1.0))
-                if self.same_strokes and strokes is not None:
-                    d[counts[rows] != strokes] = np.inf
-                if d.size:
-                    out[i] = np.minimum(out[i], d.min())   # NaN propagates, as np.minimum.at in _search
-        return out
+        windows = self._windows(angle)
+        rows, starts = self._rows_of(tuple(int(c) for c in classes))
+        d = np.arccos(np.clip(self._similarities(slice(None), queries, self._vectors[rows]), -1.0, 1.0))
+        if self._compares_any(windows, k):   # else the whole search would compare all: so does each class's
+            keep = np.zeros(len(rows), dtype=bool)
+            for w in windows:   # the rows of the two classes within the whole search's windows
+                if w.stop > w.start:
+                    keep |= (rows >= w.start) & (rows < w.stop)
+            if self.same_strokes:
+                keep &= self._unistroke_counts[rows] == k
+            d = np.where(keep, d, np.inf)
+        return np.minimum.reduceat(d, starts)   # NaN propagates, as np.minimum.at in _search
+
+    def _rows_of(self, classes: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """The sorted unistrokes of ``classes`` (their rows, class after class) and where each class starts;
+        kept per tuple of classes (at most n_classes squared pairs for a referee)."""
+        cached = self._class_rows_cache.get(classes)
+        if cached is None:
+            parts = [self._class_rows[c] for c in classes]
+            cached = np.concatenate(parts), np.cumsum([0] + [len(p) for p in parts[:-1]])
+            self._class_rows_cache[classes] = cached
+        return cached
 
     def _compares_any(self, windows: list[slice], strokes: int) -> bool:
         """Whether :meth:`_search` over ``windows`` compares any unistroke (gives a finite distance)."""
