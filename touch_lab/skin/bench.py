@@ -2,8 +2,8 @@
 
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, and ``auto``, which picks
-``cloud`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
+issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, and ``auto``, which picks
+``refereed`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it
 while a gesture is traced.
