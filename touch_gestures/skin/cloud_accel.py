@@ -5,7 +5,9 @@ each, not arithmetic. Where the C extension ``touch_gestures.skin._cloud_accel``
 compiles it when a C compiler and Python's headers are there, as it does the CDR codec,
 :mod:`touch_graph.cdr_accel`), the raster bounds and the exact search run in one C call on the same
 arrays; the numpy path stays the reference and the fall-back (``test/test_skin_cloud_accel.py`` checks
-that both name the same classes with the same distances, to a few ulp of float64). The features the
+that both name the same classes with the same distances, to a few ulp of float64). One rule differs where
+it is free: among templates tied for the ``exact``-th smallest raster bound (duplicates, coarse rasters) the
+kernel matches the first in template order, numpy's ``argpartition`` one of its own choosing. The features the
 search needs are compiled too: the resampling along the ink and the cloud's normalisation (the same
 numbers as numpy's where numpy takes its AVX-512 loop for complex absolute values, else to an ulp), and
 $N's features and unistroke of one path (the referee's query: the features the same numbers, the
