@@ -121,6 +121,28 @@ static void resample_into(const double *p, const double *ids, Py_ssize_t m, Py_s
     }
 }
 
+/* A path's points (path_points) and its (m,) stroke ids as float64, or NULL for None: compared as numpy
+ * compares the ids it is given (integers exactly, NaN unlike itself). 0, or -1 with an exception (and
+ * nothing held). */
+static int path_and_ids(PyObject *points_obj, PyObject *ids_obj, PyArrayObject **pts, PyArrayObject **ids)
+{
+    *ids = NULL;
+    *pts = path_points(points_obj);
+    if (*pts == NULL)
+        return -1;
+    if (ids_obj == Py_None)
+        return 0;
+    *ids = (PyArrayObject *)PyArray_FROMANY(ids_obj, NPY_FLOAT64, 1, 1, NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
+    if (*ids != NULL && PyArray_DIM(*ids, 0) == PyArray_DIM(*pts, 0))
+        return 0;
+    if (*ids != NULL)
+        PyErr_Format(PyExc_ValueError, "need one stroke id per point: %zd points, %zd ids",
+                     (Py_ssize_t)PyArray_DIM(*pts, 0), (Py_ssize_t)PyArray_DIM(*ids, 0));
+    Py_CLEAR(*ids);
+    Py_CLEAR(*pts);
+    return -1;
+}
+
 /* resample(points, stroke, n) -> (n,) complex128: features.py's arc_length_resample_complex. */
 static PyObject *py_resample(PyObject *Py_UNUSED(module), PyObject *args)
 {
@@ -132,22 +154,10 @@ static PyObject *py_resample(PyObject *Py_UNUSED(module), PyObject *args)
         PyErr_Format(PyExc_ValueError, "need n >= 1 points, got %zd", n);
         return NULL;
     }
-    PyArrayObject *pts = path_points(points_obj), *ids = NULL;
-    if (pts == NULL)
+    PyArrayObject *pts, *ids;
+    if (path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
         return NULL;
     Py_ssize_t m = PyArray_DIM(pts, 0);
-    if (ids_obj != Py_None) {
-        /* as doubles: compared as numpy compares the ids it is given (integers exactly, NaN unlike itself) */
-        ids = (PyArrayObject *)PyArray_FROMANY(ids_obj, NPY_FLOAT64, 1, 1, NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
-        if (ids == NULL || PyArray_DIM(ids, 0) != m) {
-            if (ids != NULL)
-                PyErr_Format(PyExc_ValueError, "need one stroke id per point: %zd points, %zd ids", m,
-                             (Py_ssize_t)PyArray_DIM(ids, 0));
-            Py_XDECREF(ids);
-            Py_DECREF(pts);
-            return NULL;
-        }
-    }
     npy_intp dims[1] = {n};
     PyObject *out = PyArray_SimpleNew(1, dims, NPY_COMPLEX128);
     double *cum = PyMem_Malloc((size_t)m * sizeof(double));
@@ -278,21 +288,10 @@ static PyObject *py_ink(PyObject *Py_UNUSED(module), PyObject *args)
         PyErr_Format(PyExc_ValueError, "need ink_points >= 1, got %zd", ink);
         return NULL;
     }
-    PyArrayObject *pts = path_points(points_obj), *ids = NULL;
-    if (pts == NULL)
+    PyArrayObject *pts, *ids;
+    if (path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
         return NULL;
     Py_ssize_t m = PyArray_DIM(pts, 0);
-    if (ids_obj != Py_None) {
-        ids = (PyArrayObject *)PyArray_FROMANY(ids_obj, NPY_FLOAT64, 1, 1, NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
-        if (ids == NULL || PyArray_DIM(ids, 0) != m) {
-            if (ids != NULL)
-                PyErr_Format(PyExc_ValueError, "need one stroke id per point: %zd points, %zd ids", m,
-                             (Py_ssize_t)PyArray_DIM(ids, 0));
-            Py_XDECREF(ids);
-            Py_DECREF(pts);
-            return NULL;
-        }
-    }
     const double *p = PyArray_DATA(pts), *id = ids ? PyArray_DATA(ids) : NULL;
     Py_ssize_t k = 1;
     for (Py_ssize_t i = 1; id != NULL && i < m; i++)
