@@ -4,6 +4,7 @@
 `pip install .` puts the same console scripts on PATH.
 """
 
+import sys
 from glob import glob
 
 from setuptools import Extension, find_packages, setup
@@ -86,8 +87,15 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
 # The compiled CDR codec (touch_graph/cdr_accel.py): optional, as PyYAML's libyaml binding is. Where it
 # does not build (no C compiler, no Python headers) the package installs without it and runs the
 # Python codec; SOCIAL_TOUCH_REQUIRE_CDR_ACCEL=1 makes the tests fail then (CI sets it).
+# The skin's cloud search (touch_gestures/skin/cloud_accel.py) the same way: SOCIAL_TOUCH_REQUIRE_SKIN_ACCEL=1.
+# No fused multiply-adds in it: they would round otherwise than the numpy reference (MSVC does not contract).
+_NO_FMA = [] if sys.platform == 'win32' else ['-ffp-contract=off']
 EXTENSIONS = [Extension('touch_graph._cdr_accel', ['touch_graph/_cdr_accel.c'], include_dirs=[numpy.get_include()],
-                        optional=True)] if numpy is not None else []
+                        optional=True),
+              Extension('touch_gestures.skin._cloud_accel', ['touch_gestures/skin/_cloud_accel.c',
+                                                             'touch_gestures/skin/_cloud_features.c'],
+                        include_dirs=[numpy.get_include()], extra_compile_args=_NO_FMA, optional=True),
+              ] if numpy is not None else []
 
 setup(
     name=PACKAGE,

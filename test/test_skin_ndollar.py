@@ -164,6 +164,30 @@ def test_start_angle_pruning_and_same_strokes_only_leave_templates_out():
         assert counted.predict(q).nearest == name
 
 
+@pytest.mark.parametrize('params', [{}, {'start_angle_deg': None}, {'same_strokes': True}, {'start_angle_deg': 0.5},
+                                    {'start_angle_deg': 0.5, 'same_strokes': True}, {'max_rotation_deg': 45}])
+def test_the_distances_among_some_classes_are_those_of_the_whole_search(params):
+    # What the referee asks (two classes) is the whole search's answer for them, bit for bit where the
+    # same rows are compared: the start-angle window, the stroke counts and the fall-back to comparing all
+    # when pruning leaves nothing in the whole codebook (a 0.5 degree window usually does) are the same.
+    rng = np.random.default_rng(11)
+    train, labels = codebook(rng, per_class=3, shuffle=True)
+    rec = NDollarRecogniser(max_distance=None, **params).fit(train, labels)
+    n = len(rec.classes_)
+    queries = [symbol(name, rng) for name in SYMBOLS]
+    queries.append(gesture([polyline([(5, 5), (30, 30)], 20, rng)] * 7))   # a stroke count no class has
+    fell_back = 0
+    for q in queries:
+        whole = rec.class_distances(q)
+        _, angle, k = rec._query(rec._features(q))
+        fell_back += not rec._compares_any(rec._windows(angle), k)
+        for pair in [(0, 1), (n - 1, 0), (2, 2), tuple(np.argsort(whole)[:2])]:
+            np.testing.assert_allclose(rec.class_distances_among(q, pair), whole[list(pair)], rtol=0, atol=1e-12)
+    assert rec.class_distances_among(TouchGesture.from_trajectory(np.empty((0, 2))), (0, 1)) is None
+    if params.get('same_strokes'):
+        assert fell_back   # the seven strokes: nothing of that count anywhere
+
+
 def _perp(q):
     out = np.empty_like(q)
     out[0::2], out[1::2] = q[1::2], -q[0::2]

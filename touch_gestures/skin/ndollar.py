@@ -64,10 +64,12 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
 
+from . import cloud_accel
 from .base import TemplateRecogniser
 from .features import arc_length_resample
 from .gesture import TouchGesture
@@ -91,6 +93,8 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return None
+    if cloud_accel.ink is not None:   # the same numbers in one C call (cloud_accel)
+        return cloud_accel.ink(pts, None if stroke is None else np.asarray(stroke).reshape(-1), ink_points)
     strokes = [pts] if stroke is None else split_strokes(pts, np.asarray(stroke).reshape(-1))
     k = len(strokes)
     if k > ink_points:
@@ -183,6 +187,9 @@ def _rotate(points: np.ndarray, angle: np.ndarray) -> np.ndarray:
 def unistroke_vectors(paths: np.ndarray, n_points: int, one_d_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """(U, m, 2) joined strokes -> (U, 2 n) float64 unit vectors and (U,) start angles, radians
     (NaN where the start does not move): module doc, 3."""
+    if len(paths) == 1 and cloud_accel.unistroke is not None:   # a query: one C call (cloud_accel)
+        vec, angle = cloud_accel.unistroke(paths[0], n_points, one_d_ratio)
+        return vec[None], np.array([angle])
     pts = _resample_paths(paths, n_points)
     centre = pts.mean(axis=1, keepdims=True)
     pts = pts - centre
@@ -308,15 +315,21 @@ class NDollarRecogniser(TemplateRecogniser):
         self._n_angled = int(np.isfinite(self._angles).sum())
         self._template_counts = np.asarray(counts, dtype=np.int64)
         self._unistroke_counts = self._template_counts[self.unistroke_owner_]
+        # Each class's rows of the sorted unistrokes (a referee asks about two classes only): every class has
+        # templates, and every template at least one unistroke.
+        unistroke_class = self.template_labels_[self.unistroke_owner_]
+        self._class_rows = [np.flatnonzero(unistroke_class == c) for c in range(len(self.classes_))]
+        self._class_rows_cache: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
 
     def _windows(self, angle: float) -> list[slice]:
         """Slices of the sorted unistrokes whose start is within ``start_angle_deg`` of ``angle``,
         plus those without a start direction (compared always)."""
-        tail = slice(self._n_angled, len(self._angles))
+        angles, n_angled = self._angles, self._n_angled
+        tail = slice(n_angled, len(angles))
         if self.start_angle_deg is None or not np.isfinite(angle) or self.start_angle_deg >= 180:
-            return [slice(0, len(self._angles))]
+            return [slice(0, len(angles))]
         half = math.radians(self.start_angle_deg)
-        angled = self._angles[:self._n_angled]
+        angled = angles[:n_angled]
         out = [tail]
         lo, hi = angle - half, angle + half
         # The window on the circle as at most three ranges of [-pi, pi].
@@ -328,14 +341,15 @@ class NDollarRecogniser(TemplateRecogniser):
                     out.append(slice(i, j))
         return out
 
-    def _similarities(self, rows: slice, queries: np.ndarray) -> np.ndarray:
-        """Cosine of the best rotation within ``max_rotation_deg`` for the unistrokes ``rows`` (module doc,
-        4); ``queries`` is (2, 2 n) float32: the query and the query turned by 90 degrees (whose dot product
-        with a unistroke is Protractor's b). Two matrix-vector products on contiguous rows: a (2 n, 2)
-        product or a strided vector takes numpy's slow paths (3 to 5 times slower here). ``einsum``, not ``@``:
+    def _similarities(self, rows: slice, queries: np.ndarray, vectors: np.ndarray | None = None) -> np.ndarray:
+        """Cosine of the best rotation within ``max_rotation_deg`` for the unistrokes ``rows`` of ``vectors``
+        (default: the codebook's sorted unistrokes; module doc, 4); ``queries`` is (2, 2 n) float32: the
+        query and the query turned by 90 degrees (whose dot product with a unistroke is Protractor's b). Two
+        matrix-vector products on contiguous rows: a (2 n, 2) product or a strided vector takes numpy's slow
+        paths (3 to 5 times slower here). ``einsum``, not ``@``:
         BLAS splits a long product over threads, which on a busy machine wait for each other and make a
         recognition many times slower; einsum's loop stays in this thread at about one BLAS thread's speed."""
-        block = self._vectors[rows]
+        block = (self._vectors if vectors is None else vectors)[rows]
         a = np.einsum('ij,j->i', block, queries[0]).astype(np.float64)
         if self.max_rotation_deg <= 0:
             return a
@@ -347,15 +361,70 @@ class NDollarRecogniser(TemplateRecogniser):
         h = np.hypot(a, b)
         return np.where(a >= h * c, h, a * c + np.abs(b) * s)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
-        vec, angles, k = self._expand(query, as_traced=True)
+    def _query(self, query: np.ndarray) -> tuple[np.ndarray, float, int]:
+        """The query's (2, 2 n) float32 unit vector and its turn by 90 degrees (:meth:`_similarities`), its
+        start angle (radians, NaN: none) and its number of strokes."""
+        # The strokes in traced order, joined: the feature's used points as they are (what _expand(as_traced)
+        # joins after splitting them, in fewer numpy calls); a stroke begins where the stroke number changes.
+        n = self.ink_points
+        sid = query[2 * n:]
+        used = sid != PADDING
+        ids = sid[used]
+        k = 1 + int(np.count_nonzero(ids[1:] != ids[:-1]))
+        vec, angles = unistroke_vectors(query[:2 * n].reshape(n, 2)[used].astype(np.float64)[None], self.n_points,
+                                        self.one_d_ratio)
         queries = np.empty((2, vec.shape[1]), dtype=np.float32)
         queries[0] = vec[0]
         queries[1, 0::2], queries[1, 1::2] = vec[0, 1::2], -vec[0, 0::2]   # turned by 90 degrees
-        out = self._search(self._windows(float(angles[0])), queries, k)
+        return queries, float(angles[0]), k
+
+    def _distances(self, query: np.ndarray) -> np.ndarray:
+        queries, angle, k = self._query(query)
+        out = self._search(self._windows(angle), queries, k)
         if not np.isfinite(out).any():   # pruning left nothing: compare all (module doc, 5)
             out = self._search([slice(0, len(self._angles))], queries, None)
         return out
+
+    def class_distances_among(self, gesture: TouchGesture, classes: Sequence[int]) -> np.ndarray | None:
+        """``class_distances(gesture)[classes]`` ((len(classes),) float64; None if unusable), comparing only
+        those classes' unistrokes: what a referee between two classes needs, at a fraction of the cost.
+
+        The start-angle window and the stroke-count rule are the whole search's: whether pruning left
+        nothing at all to compare (then every unistroke is, module doc 5) is decided over the whole codebook."""
+        self._check_fitted()
+        features = self._features(gesture)
+        if features is None:
+            return None
+        queries, angle, k = self._query(features)
+        windows = self._windows(angle)
+        rows, starts = self._rows_of(tuple(int(c) for c in classes))
+        d = np.arccos(np.clip(self._similarities(slice(None), queries, self._vectors[rows]), -1.0, 1.0))
+        if self._compares_any(windows, k):   # else the whole search would compare all: so does each class's
+            keep = np.zeros(len(rows), dtype=bool)
+            for w in windows:   # the rows of the two classes within the whole search's windows
+                if w.stop > w.start:
+                    keep |= (rows >= w.start) & (rows < w.stop)
+            if self.same_strokes:
+                keep &= self._unistroke_counts[rows] == k
+            d = np.where(keep, d, np.inf)
+        return np.minimum.reduceat(d, starts)   # NaN propagates, as np.minimum.at in _search
+
+    def _rows_of(self, classes: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """The sorted unistrokes of ``classes`` (their rows, class after class) and where each class starts;
+        kept per tuple of classes (at most n_classes squared pairs for a referee)."""
+        cached = self._class_rows_cache.get(classes)
+        if cached is None:
+            parts = [self._class_rows[c] for c in classes]
+            cached = np.concatenate(parts), np.cumsum([0] + [len(p) for p in parts[:-1]])
+            self._class_rows_cache[classes] = cached
+        return cached
+
+    def _compares_any(self, windows: list[slice], strokes: int) -> bool:
+        """Whether :meth:`_search` over ``windows`` compares any unistroke (gives a finite distance)."""
+        for rows in windows:
+            if rows.stop > rows.start and (not self.same_strokes or (self._unistroke_counts[rows] == strokes).any()):
+                return True
+        return False
 
     def _search(self, windows: list[slice], queries: np.ndarray, strokes: int | None) -> np.ndarray:
         """(T,) smallest angle over each template's unistrokes within ``windows`` (inf: none compared)."""

@@ -20,8 +20,11 @@ end of a gesture and early candidates are the cloud's (:attr:`primary_`).
 Measured leave-one-person-out on the Mixed Multistroke Gestures through the virtual skin
 (``social-touch report skin-multistroke``, docs/skin-multistroke.md): the nearest class is right
 for 94.70 % of the samples against the cloud's 93.86 % (97.06 % of the samples cut into one
-gesture), with the same commands; it costs about a third more per recognition on the synthetic
-bench (243 against 185 us, 16 gestures x 30 templates), where near ties are more common.
+gesture), with the same commands. A tie matches the query against the two tied classes' unistrokes
+only (:meth:`~.ndollar.NDollarRecogniser.class_distances_among`: the whole search's distances for
+them). With the compiled search and features (:mod:`.cloud_accel`) it costs 93 against the cloud's
+73 CPU us per recognition on the synthetic bench (16 gestures x 30 templates, where 8 of the 64
+queries tie; medians of three runs of ``social-touch bench skin``; numpy: 267 against 194).
 """
 
 from __future__ import annotations
@@ -51,7 +54,8 @@ class RefereedRecogniser(TemplateRecogniser):
     Attributes:
         primary_: the fitted cloud (its codebook: the templates' first part).
         referee_: the fitted $N (the second part).
-        referee_calls_: how many recognitions asked the referee (each such call runs $N's whole search).
+        referee_calls_: how many recognitions asked the referee (each such call matches the query against the
+            two tied classes' unistrokes only).
     """
 
     name = 'refereed'
@@ -117,7 +121,7 @@ class RefereedRecogniser(TemplateRecogniser):
         if not rivals[second] - d1 < self.min_margin * d1:   # no tie (or no rival: inf)
             return best
         self.referee_calls_ += 1
-        judged = self.referee_.class_distances(gesture)
+        judged = self.referee_.class_distances_among(gesture, (best, second))   # only the two tied classes
         if judged is None:
             return best
-        return second if judged[second] < judged[best] else best
+        return second if judged[1] < judged[0] else best

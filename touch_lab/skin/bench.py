@@ -2,8 +2,8 @@
 
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, and ``auto``, which picks
-``cloud`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
+issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, and ``auto``, which picks
+``refereed`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it
 while a gesture is traced.
@@ -30,6 +30,9 @@ accepts) and ``other``: the whole
 ``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
 ``raster``, the distance-field bounds (step 2 of :mod:`~touch_gestures.skin.clouds`), timed alone:
 it is part of ``search``, not added to the total.
+
+``cloud_search`` says which implementation of the cloud's search ran (:mod:`~touch_gestures.skin.cloud_accel`):
+``'c'``, the compiled kernel, or ``'python'``, numpy (``SOCIAL_TOUCH_SKIN_ACCEL=python``, or not built).
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ import time
 
 import numpy as np
 
+from touch_gestures.skin import cloud_accel
 from touch_gestures.skin.base import PREDICT_STEPS, Match, TemplateRecogniser
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
@@ -81,7 +85,8 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
     gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
     probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
     probe = probe[:queries]
-    out: dict = {'goal_us': GOAL_US, 'goal_us_multistroke': GOAL_US_MULTISTROKE, 'gestures': n_gestures,
+    out: dict = {'cloud_search': cloud_accel.implementation(), 'goal_us': GOAL_US,
+                 'goal_us_multistroke': GOAL_US_MULTISTROKE, 'gestures': n_gestures,
                  'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
                  'data': 'synthetic gestures', 'recognisers': {}}
     for name in names:
@@ -90,7 +95,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                     'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_),
                                     'steps_cpu_us': _steps_cpu_us(model, probe, repeats, cpu_us)}
-        if name in ('cloud', 'ndollar', 'auto'):
+        if name in ('cloud', 'ndollar', 'refereed', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
             halves = [TouchGesture.from_trajectory(g.trajectory[:max(1, len(g.trajectory) // 2)],
