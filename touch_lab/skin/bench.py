@@ -2,8 +2,8 @@
 
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, and ``auto``, which picks
-``refereed`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
+issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, ``fused``, and ``auto``, which
+picks ``fused`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it
 while a gesture is traced.
@@ -24,7 +24,7 @@ step's clock reads taken off): ``features`` (``_features``), ``search`` (``_dist
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
 classes the stroke count allows before the decision, strokes and duration of the class it names
 after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the
-nearest allowed class, ``refereed``'s referee on a tie, the distance and margin rules), ``order`` (the
+nearest allowed class, ``refereed``'s referee on a tie, ``fused``'s trace and sum, the distance and margin rules), ``order`` (the
 path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
 accepts) and ``other``: the whole
 ``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
@@ -95,7 +95,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                     'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_),
                                     'steps_cpu_us': _steps_cpu_us(model, probe, repeats, cpu_us)}
-        if name in ('cloud', 'ndollar', 'refereed', 'auto'):
+        if name in ('cloud', 'ndollar', 'refereed', 'fused', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
             halves = [TouchGesture.from_trajectory(g.trajectory[:max(1, len(g.trajectory) // 2)],
