@@ -1,4 +1,5 @@
-"""The compiled trace features (cloud_accel.trace) and fused sum (cloud_accel.relative_sum) against numpy's.
+"""The compiled trace features, class minima and fused sum (cloud_accel.trace, trace_minima, relative_sum)
+against the numpy they replace.
 
 Both run the same float64 steps in the same order: each point's bin is the same product truncated, the bins'
 sums add the points in index order (as ``np.bincount`` does), each is divided by its count, empty bins take
@@ -7,6 +8,9 @@ the features are compared bit for bit, not within a tolerance. The compiled twin
 points and times (numpy's answers to them are accidents of its steps); ``trace_features`` then answers
 with the reference, so a recogniser sees the same numbers whichever path runs. The fused sum is two
 divisions and an addition per class, the same float64 operations: bit for bit too, NaN, inf and 0 included.
+The class minima follow numpy's BLAS product (left to numpy): the same float32 steps per template and the
+same minimum per class, equal values (the sign of a zero is the one freedom: numpy's SIMD maximum and
+minimum may keep either of 0.0 and -0.0).
 """
 
 from __future__ import annotations
@@ -118,7 +122,7 @@ def test_bad_arguments_are_refused_clearly(points, times, n, words):
 
 
 @needs_accel
-def test_the_recogniser_names_the_same_with_either_path():
+def test_the_recogniser_measures_the_same_with_either_path():
     rng = np.random.default_rng(3)
     shapes = [np.column_stack([np.linspace(0, 20, 40), a * np.linspace(0, 20, 40)]) for a in (0.0, 1.0, -1.0)]
     gestures, labels = [], []
@@ -127,7 +131,7 @@ def test_the_recogniser_names_the_same_with_either_path():
             gestures.append(TouchGesture.from_trajectory(shape + rng.normal(0, 0.5, shape.shape)))
             labels.append(str(label))
     compiled = TraceRecogniser().fit(gestures, labels)
-    with mock.patch.object(cloud_accel, 'trace', None):
+    with mock.patch.object(cloud_accel, 'trace', None), mock.patch.object(cloud_accel, 'trace_minima', None):
         reference = TraceRecogniser().fit(gestures, labels)
         want = [reference.class_distances(g) for g in gestures]
     assert np.array_equal(compiled.templates_, reference.templates_)
@@ -183,4 +187,54 @@ def test_the_compiled_relative_sum_refuses_mismatched_classes_and_leaks_nothing(
         with contextlib.suppress(ValueError):
             _cloud_accel.relative_sum(first, second[:2])
     assert [sys.getrefcount(first), sys.getrefcount(second)] == before
+    assert sys.getallocatedblocks() - blocks < 100
+
+
+def numpy_minima(sq_norms, products, query_sq, n_points, starts) -> np.ndarray:
+    """proposed.py's _distances (after the product) and base.py's class minima, as numpy runs them."""
+    with np.errstate(invalid='ignore', over='ignore'):   # inf - inf: NaN on both paths
+        d2 = sq_norms - 2.0 * products + query_sq
+        return np.minimum.reduceat(np.sqrt(np.maximum(d2, 0.0) / n_points), starts).astype(np.float64, copy=False)
+
+
+FLOAT32 = st.one_of(st.floats(-1e3, 1e3, width=32), st.sampled_from([0.0, -0.0, np.nan, np.inf, 1e-45]))
+
+
+@needs_accel
+@settings(max_examples=300, deadline=None)
+@given(rows=st.lists(st.tuples(FLOAT32, FLOAT32), min_size=1, max_size=40), query_sq=FLOAT32,
+       n_points=st.integers(1, 64), cuts=st.lists(st.integers(0, 39), min_size=0, max_size=8))
+def test_the_compiled_trace_minima_are_numpys(rows, query_sq, n_points, cuts):
+    # Equal values compared: the sign of a zero is the one freedom (numpy's SIMD maximum and minimum may
+    # keep either of two equal operands, 0.0 and -0.0), and no distance or decision tells them apart.
+    from touch_gestures.skin import _cloud_accel
+    sq_norms, products = (np.array(column, dtype=np.float32) for column in zip(*rows, strict=True))
+    starts = np.array(sorted({0, *(c % len(rows) for c in cuts)}), dtype=np.intp)
+    if len(starts) > 2:   # a run that does not rise (reduceat: its first element)
+        starts = np.sort(np.append(starts, starts[1]))
+    query_sq = float(np.float32(query_sq))
+    mine = _cloud_accel.trace_minima(sq_norms, products, query_sq, n_points, starts)
+    want = numpy_minima(sq_norms, products, query_sq, n_points, starts)
+    assert mine.dtype == want.dtype == np.float64
+    assert np.array_equal(mine, want, equal_nan=True), (mine, want)
+
+
+@needs_accel
+def test_the_compiled_trace_minima_refuse_bad_runs_and_leak_nothing():
+    from touch_gestures.skin import _cloud_accel
+    norms, products, starts = np.ones(4, np.float32), np.zeros(4, np.float32), np.array([0, 2], dtype=np.intp)
+    for bad_starts in (np.array([0, 4]), np.array([-1, 2])):
+        with pytest.raises(ValueError, match='outside 4 templates'):
+            _cloud_accel.trace_minima(norms, products, 1.0, 8, bad_starts)
+    with pytest.raises(ValueError, match='as many products as norms'):
+        _cloud_accel.trace_minima(norms, products[:3], 1.0, 8, starts)
+    watched = (norms, products, starts)
+    for _ in range(100):
+        _cloud_accel.trace_minima(norms, products, 1.0, 8, starts)
+    before, blocks = [sys.getrefcount(obj) for obj in watched], sys.getallocatedblocks()
+    for _ in range(2000):
+        _cloud_accel.trace_minima(norms, products, 1.0, 8, starts)
+        with contextlib.suppress(ValueError):
+            _cloud_accel.trace_minima(norms, products, 1.0, 8, starts + 3)
+    assert [sys.getrefcount(obj) for obj in watched] == before
     assert sys.getallocatedblocks() - blocks < 100

@@ -636,6 +636,67 @@ done:
     return out;
 }
 
+/* trace_minima(sq_norms, products, query_sq, n_points, class_starts) -> (n_classes,) float64: proposed.py's
+ * distances (sqrt(max(|t|^2 - 2 t.q + |q|^2, 0) / n_points), float32 step by step as numpy computes them: the
+ * python float |q|^2 and n_points as float32) and base.py's class minima of them (np.minimum.reduceat: NaN if
+ * any is; a class whose run is empty takes its first template's, as reduceat). sq_norms and products (T,)
+ * float32 (the templates' squared norms and the matrix-vector product numpy's BLAS computed), class_starts
+ * (n_classes,) intp ascending within [0, T). */
+static PyObject *py_trace_minima(PyObject *Py_UNUSED(module), PyObject *args)
+{
+    PyObject *norms_obj, *products_obj, *starts_obj;
+    double query_sq;
+    Py_ssize_t n_points;
+    if (!PyArg_ParseTuple(args, "OOdnO:trace_minima", &norms_obj, &products_obj, &query_sq, &n_points, &starts_obj))
+        return NULL;
+    PyArrayObject *norms = NULL, *products = NULL, *starts = NULL;
+    PyObject *out = NULL;
+    norms = (PyArrayObject *)PyArray_FROMANY(norms_obj, NPY_FLOAT32, 1, 1, NPY_ARRAY_CARRAY_RO);
+    products = norms ? (PyArrayObject *)PyArray_FROMANY(products_obj, NPY_FLOAT32, 1, 1, NPY_ARRAY_CARRAY_RO) : NULL;
+    starts = products ? (PyArrayObject *)PyArray_FROMANY(starts_obj, NPY_INTP, 1, 1, NPY_ARRAY_CARRAY_RO) : NULL;
+    if (starts == NULL)
+        goto done;
+    Py_ssize_t t_count = PyArray_DIM(norms, 0), n_classes = PyArray_DIM(starts, 0);
+    if (PyArray_DIM(products, 0) != t_count || n_points < 1 || n_classes < 1) {
+        PyErr_Format(PyExc_ValueError, "trace_minima: need as many products as norms (%zd, %zd), n_points >= 1 "
+                     "(%zd) and a class", t_count, (Py_ssize_t)PyArray_DIM(products, 0), n_points);
+        goto done;
+    }
+    const npy_intp *start = PyArray_DATA(starts);
+    for (Py_ssize_t c = 0; c < n_classes; c++)
+        if (start[c] < 0 || start[c] >= t_count) {
+            PyErr_Format(PyExc_ValueError, "trace_minima: class %zd starts at %zd, outside %zd templates", c,
+                         (Py_ssize_t)start[c], t_count);
+            goto done;
+        }
+    npy_intp dims[1] = {n_classes};
+    out = PyArray_SimpleNew(1, dims, NPY_FLOAT64);
+    if (out == NULL)
+        goto done;
+    const float *sq = PyArray_DATA(norms), *tq = PyArray_DATA(products);
+    const float qq = (float)query_sq, n = (float)n_points;
+    double *o = PyArray_DATA((PyArrayObject *)out);
+    for (Py_ssize_t c = 0; c < n_classes; c++) {
+        Py_ssize_t end = c + 1 == n_classes ? t_count : start[c + 1];
+        if (end <= start[c])
+            end = start[c] + 1;   /* reduceat: a run that does not rise is its first element */
+        float best = NAN;
+        for (Py_ssize_t i = start[c]; i < end; i++) {
+            float d2 = (sq[i] - 2.0f * tq[i]) + qq;
+            d2 = isnan(d2) || d2 >= 0.0f ? d2 : 0.0f;   /* np.maximum(d2, 0.0): NaN stays */
+            float d = sqrtf(d2 / n);
+            if (i == start[c] || (!isnan(best) && (isnan(d) || d < best)))   /* np.minimum: a NaN wins, and stays */
+                best = d;
+        }
+        o[c] = (double)best;
+    }
+done:
+    Py_XDECREF(starts);
+    Py_XDECREF(products);
+    Py_XDECREF(norms);
+    return out;
+}
+
 /* ------------------------------------------------------------------------- fused.py's sum */
 
 /* relative_sum(first, second) -> (n,) float64: fused.py's relative_distances(first) + relative_distances(second)
@@ -698,6 +759,8 @@ PyMethodDef cloud_feature_methods[] = {
      "unistroke(path, n, one_d_ratio) -> ((2 n,) float64 unit vector, start angle): ndollar.py's, of one path."},
     {"trace", py_trace, METH_VARARGS,
      "trace(points, times, n, aspect_floor) -> (2 n,) float32: proposed.py's trace_features (finite input only)."},
+    {"trace_minima", py_trace_minima, METH_VARARGS,
+     "trace_minima(sq_norms, products, query_sq, n_points, class_starts) -> (n_classes,) float64: the trace's class minima."},
     {"relative_sum", py_relative_sum, METH_VARARGS,
      "relative_sum(first, second) -> (n,) float64: fused.py's relative_distances(first) + relative_distances(second)."},
     {NULL, NULL, 0, NULL},

@@ -25,10 +25,11 @@ samples: Mixed Multistroke Gestures 95.32 % against ``refereed``'s 94.70 % (97.7
 8), unistroke file 99.33 % against ``trace``'s 99.17 %. Commands: wrong ones from 1.21 % to
 0.40 % of the multi-stroke samples, correct ones from 89.89 % to 89.22 % (a class the sum
 names against the cloud's nearest is rejected), random touches firing unchanged (1.20 %).
-Cost: the cloud's and the trace's search. With the compiled features and sum (:mod:`.cloud_accel`: the trace's
-features and :func:`relative_distances` of both in one C call each, the same numbers as numpy's) 88 CPU us per
-recognition against the cloud's 72 on the synthetic bench (16 gestures x 30 templates; medians of three runs of
-``social-touch bench skin``; 134 before those two were compiled).
+Cost: the cloud's and the trace's search. With the compiled features, class minima and sum
+(:mod:`.cloud_accel`: the trace's features, its distances' class minima after numpy's matrix-vector product,
+and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 82 CPU us per recognition
+against the cloud's 74 on the synthetic bench (16 gestures x 30 templates; medians of three runs of ``social-touch
+bench skin``; 136 before those three were compiled).
 """
 
 from __future__ import annotations
