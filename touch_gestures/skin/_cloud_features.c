@@ -12,6 +12,7 @@
 #define NO_IMPORT_ARRAY
 #include <numpy/arrayobject.h>
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -458,6 +459,295 @@ static PyObject *py_unistroke(PyObject *Py_UNUSED(module), PyObject *args)
     return result;
 }
 
+/* ------------------------------------------------------------------------- the trace (proposed.py) */
+
+/* numpy's minimum / maximum of two: NaN if either is. */
+static inline double nan_min(double a, double b) { return isnan(a) ? a : isnan(b) ? b : (a <= b ? a : b); }
+static inline double nan_max(double a, double b) { return isnan(a) ? a : isnan(b) ? b : (a >= b ? a : b); }
+
+/* np.interp of index x between the full bins `full` (ascending, n_full >= 1) of res (n, 2): numpy's
+ * arithmetic (the slope over the bracketing pair, times the offset from the lower, plus its value; from the
+ * upper where that is NaN; the ends' values outside). */
+static void interpolate_bin(double *res, const npy_intp *full, Py_ssize_t n_full, npy_intp x)
+{
+    if (n_full == 1 || x < full[0] || x > full[n_full - 1]) {
+        npy_intp end = x < full[0] ? full[0] : full[n_full - 1];
+        res[2 * x] = res[2 * end];
+        res[2 * x + 1] = res[2 * end + 1];
+        return;
+    }
+    Py_ssize_t lo = 0, hi = n_full - 1;   /* full[lo] <= x < full[hi] */
+    while (hi - lo > 1) {
+        Py_ssize_t mid = (lo + hi) / 2;
+        if (full[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    double x0 = (double)full[lo], x1 = (double)full[hi], xv = (double)x;
+    for (int a = 0; a < 2; a++) {
+        double y0 = res[2 * full[lo] + a], y1 = res[2 * full[hi] + a];
+        double v;
+        if (xv == x0)
+            v = y0;
+        else {
+            double slope = (y1 - y0) / (x1 - x0);
+            v = slope * (xv - x0) + y0;
+            if (isnan(v)) {
+                v = slope * (xv - x1) + y1;
+                if (isnan(v) && y0 == y1)
+                    v = y0;
+            }
+        }
+        res[2 * x + a] = v;
+    }
+}
+
+/* proposed.py's time_bin_resample of m >= 1 finite points p (m, 2) at times t (m,) into res (n, 2): each
+ * point's bin ((t - t0) * n / duration, truncated, the last point into the last bin; by sample index where
+ * the times are constant, go backwards or the duration is so small that n / duration overflows), the bins'
+ * sums in point order (as np.bincount's), divided by their counts; empty bins interpolated. counts and full
+ * hold n each. */
+static void time_bins(const double *p, const double *t, Py_ssize_t m, Py_ssize_t n, double *res,
+                      npy_intp *counts, npy_intp *full)
+{
+    if (m == 1) {
+        for (Py_ssize_t k = 0; k < n; k++) {
+            res[2 * k] = p[0];
+            res[2 * k + 1] = p[1];
+        }
+        return;
+    }
+    double duration = t[m - 1] - t[0];
+    double scale = duration > 0 ? (double)n / duration : INFINITY;
+    int by_index = !isfinite(scale);
+    for (Py_ssize_t i = 1; i < m && !by_index; i++)
+        by_index = t[i] < t[i - 1];
+    if (by_index)
+        scale = (double)n / (double)(m - 1);
+    memset(res, 0, 2 * (size_t)n * sizeof(double));
+    memset(counts, 0, (size_t)n * sizeof(npy_intp));
+    for (Py_ssize_t i = 0; i < m; i++) {
+        double offset = by_index ? (double)i : t[i] - t[0];
+        npy_intp k = (npy_intp)(offset * scale);
+        if (k > n - 1)
+            k = n - 1;   /* the last point falls on the upper edge: last bin */
+        res[2 * k] += p[2 * i];
+        res[2 * k + 1] += p[2 * i + 1];
+        counts[k]++;
+    }
+    Py_ssize_t n_full = 0;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        if (counts[k] == 0)
+            continue;
+        res[2 * k] /= (double)counts[k];
+        res[2 * k + 1] /= (double)counts[k];
+        full[n_full++] = k;
+    }
+    if (n_full < n)
+        for (Py_ssize_t k = 0; k < n; k++)
+            if (counts[k] == 0)
+                interpolate_bin(res, full, n_full, k);
+}
+
+/* proposed.py's trace_features after the resampling: res (n, 2) centred on its bounding box and divided per
+ * axis by the larger of its extent and aspect_floor times the larger extent, into out (2 n) float32; all
+ * zeros where the larger extent is not above 1e-9 (or NaN). numpy's NaN rules (min, max, maximum). */
+static void trace_scale(const double *res, Py_ssize_t n, double aspect_floor, float *out)
+{
+    double lo[2] = {res[0], res[1]}, hi[2] = {res[0], res[1]};
+    for (Py_ssize_t k = 1; k < n; k++)
+        for (int a = 0; a < 2; a++) {
+            lo[a] = nan_min(lo[a], res[2 * k + a]);
+            hi[a] = nan_max(hi[a], res[2 * k + a]);
+        }
+    double span[2] = {hi[0] - lo[0], hi[1] - lo[1]};
+    double size = nan_max(span[0], span[1]);
+    if (!(size > 1e-9)) {
+        memset(out, 0, 2 * (size_t)n * sizeof(float));
+        return;
+    }
+    double centre[2], scale[2];
+    for (int a = 0; a < 2; a++) {
+        centre[a] = 0.5 * (lo[a] + hi[a]);
+        scale[a] = nan_max(span[a], aspect_floor * size);
+    }
+    for (Py_ssize_t k = 0; k < n; k++)
+        for (int a = 0; a < 2; a++)
+            out[2 * k + a] = (float)((res[2 * k + a] - centre[a]) / scale[a]);
+}
+
+/* trace(points, times, n, aspect_floor) -> (2 n,) float32: proposed.py's trace_features. Points and times
+ * must be finite (the numpy reference's answers to NaN are accidents of its steps: refused here). */
+static PyObject *py_trace(PyObject *Py_UNUSED(module), PyObject *args)
+{
+    PyObject *points_obj, *times_obj;
+    Py_ssize_t n;
+    double aspect_floor;
+    if (!PyArg_ParseTuple(args, "OOnd:trace", &points_obj, &times_obj, &n, &aspect_floor))
+        return NULL;
+    if (n < 1) {
+        PyErr_Format(PyExc_ValueError, "need n >= 1 time bins, got %zd", n);
+        return NULL;
+    }
+    PyArrayObject *pts = path_points(points_obj);
+    if (pts == NULL)
+        return NULL;
+    PyArrayObject *times = (PyArrayObject *)PyArray_FROMANY(times_obj, NPY_FLOAT64, 1, 1,
+                                                            NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
+    if (times == NULL) {
+        Py_DECREF(pts);
+        return NULL;
+    }
+    Py_ssize_t m = PyArray_DIM(pts, 0);
+    const double *p = PyArray_DATA(pts), *t = PyArray_DATA(times);
+    PyObject *out = NULL;
+    double *res = NULL;
+    npy_intp *counts = NULL;
+    if (PyArray_DIM(times, 0) != m) {
+        PyErr_Format(PyExc_ValueError, "need one time per point: %zd points, %zd times", m,
+                     (Py_ssize_t)PyArray_DIM(times, 0));
+        goto done;
+    }
+    int finite = 1;
+    for (Py_ssize_t i = 0; i < m; i++)
+        finite = finite && isfinite(p[2 * i]) && isfinite(p[2 * i + 1]) && isfinite(t[i]);
+    if (!finite) {
+        PyErr_SetString(PyExc_ValueError, "a trace needs finite points and times: got a NaN or infinite one");
+        goto done;
+    }
+    npy_intp dims[1] = {2 * n};
+    res = PyMem_Malloc(2 * (size_t)n * sizeof(double));
+    counts = PyMem_Malloc(2 * (size_t)n * sizeof(npy_intp));   /* the counts, then the full bins */
+    if (res == NULL || counts == NULL) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    out = PyArray_SimpleNew(1, dims, NPY_FLOAT32);
+    if (out == NULL)
+        goto done;
+    time_bins(p, t, m, n, res, counts, counts + n);
+    trace_scale(res, n, aspect_floor, PyArray_DATA((PyArrayObject *)out));
+done:
+    PyMem_Free(counts);
+    PyMem_Free(res);
+    Py_DECREF(times);
+    Py_DECREF(pts);
+    return out;
+}
+
+/* trace_minima(sq_norms, products, query_sq, n_points, class_starts) -> (n_classes,) float64: proposed.py's
+ * distances (sqrt(max(|t|^2 - 2 t.q + |q|^2, 0) / n_points), float32 step by step as numpy computes them: the
+ * python float |q|^2 and n_points as float32) and base.py's class minima of them (np.minimum.reduceat: NaN if
+ * any is; a class whose run is empty takes its first template's, as reduceat). sq_norms and products (T,)
+ * float32 (the templates' squared norms and the matrix-vector product numpy's BLAS computed), class_starts
+ * (n_classes,) intp ascending within [0, T). */
+static PyObject *py_trace_minima(PyObject *Py_UNUSED(module), PyObject *args)
+{
+    PyObject *norms_obj, *products_obj, *starts_obj;
+    double query_sq;
+    Py_ssize_t n_points;
+    if (!PyArg_ParseTuple(args, "OOdnO:trace_minima", &norms_obj, &products_obj, &query_sq, &n_points, &starts_obj))
+        return NULL;
+    PyArrayObject *norms = NULL, *products = NULL, *starts = NULL;
+    PyObject *out = NULL;
+    norms = (PyArrayObject *)PyArray_FROMANY(norms_obj, NPY_FLOAT32, 1, 1, NPY_ARRAY_CARRAY_RO);
+    products = norms ? (PyArrayObject *)PyArray_FROMANY(products_obj, NPY_FLOAT32, 1, 1, NPY_ARRAY_CARRAY_RO) : NULL;
+    starts = products ? (PyArrayObject *)PyArray_FROMANY(starts_obj, NPY_INTP, 1, 1, NPY_ARRAY_CARRAY_RO) : NULL;
+    if (starts == NULL)
+        goto done;
+    Py_ssize_t t_count = PyArray_DIM(norms, 0), n_classes = PyArray_DIM(starts, 0);
+    if (PyArray_DIM(products, 0) != t_count || n_points < 1 || n_classes < 1) {
+        PyErr_Format(PyExc_ValueError, "trace_minima: need as many products as norms (%zd, %zd), n_points >= 1 "
+                     "(%zd) and a class", t_count, (Py_ssize_t)PyArray_DIM(products, 0), n_points);
+        goto done;
+    }
+    const npy_intp *start = PyArray_DATA(starts);
+    for (Py_ssize_t c = 0; c < n_classes; c++)
+        if (start[c] < 0 || start[c] >= t_count) {
+            PyErr_Format(PyExc_ValueError, "trace_minima: class %zd starts at %zd, outside %zd templates", c,
+                         (Py_ssize_t)start[c], t_count);
+            goto done;
+        }
+    npy_intp dims[1] = {n_classes};
+    out = PyArray_SimpleNew(1, dims, NPY_FLOAT64);
+    if (out == NULL)
+        goto done;
+    const float *sq = PyArray_DATA(norms), *tq = PyArray_DATA(products);
+    const float qq = (float)query_sq, n = (float)n_points;
+    double *o = PyArray_DATA((PyArrayObject *)out);
+    for (Py_ssize_t c = 0; c < n_classes; c++) {
+        Py_ssize_t end = c + 1 == n_classes ? t_count : start[c + 1];
+        if (end <= start[c])
+            end = start[c] + 1;   /* reduceat: a run that does not rise is its first element */
+        float best = NAN;
+        for (Py_ssize_t i = start[c]; i < end; i++) {
+            float d2 = (sq[i] - 2.0f * tq[i]) + qq;
+            d2 = isnan(d2) || d2 >= 0.0f ? d2 : 0.0f;   /* np.maximum(d2, 0.0): NaN stays */
+            float d = sqrtf(d2 / n);
+            if (i == start[c] || (!isnan(best) && (isnan(d) || d < best)))   /* np.minimum: a NaN wins, and stays */
+                best = d;
+        }
+        o[c] = (double)best;
+    }
+done:
+    Py_XDECREF(starts);
+    Py_XDECREF(products);
+    Py_XDECREF(norms);
+    return out;
+}
+
+/* ------------------------------------------------------------------------- fused.py's sum */
+
+/* relative_sum(first, second) -> (n,) float64: fused.py's relative_distances(first) + relative_distances(second)
+ * of two (n,) float64 arrays: each over its smallest finite value (over DBL_MIN, numpy's finfo tiny, where that
+ * is not above 0; as it is where none is finite), the same divisions and sum as numpy's, no warnings. */
+static PyObject *py_relative_sum(PyObject *Py_UNUSED(module), PyObject *args)
+{
+    PyObject *objs[2];
+    if (!PyArg_ParseTuple(args, "OO:relative_sum", &objs[0], &objs[1]))
+        return NULL;
+    PyArrayObject *arrs[2] = {NULL, NULL};
+    PyObject *out = NULL;
+    for (int a = 0; a < 2; a++) {
+        arrs[a] = (PyArrayObject *)PyArray_FROMANY(objs[a], NPY_FLOAT64, 1, 1, NPY_ARRAY_CARRAY_RO | NPY_ARRAY_FORCECAST);
+        if (arrs[a] == NULL)
+            goto done;
+    }
+    Py_ssize_t n = PyArray_DIM(arrs[0], 0);
+    if (PyArray_DIM(arrs[1], 0) != n) {
+        PyErr_Format(PyExc_ValueError, "need two distances per class: %zd and %zd", n,
+                     (Py_ssize_t)PyArray_DIM(arrs[1], 0));
+        goto done;
+    }
+    const double *d[2] = {PyArray_DATA(arrs[0]), PyArray_DATA(arrs[1])};
+    double divisor[2];
+    int divide[2];
+    for (int a = 0; a < 2; a++) {
+        double nearest = INFINITY;
+        divide[a] = 0;
+        for (Py_ssize_t k = 0; k < n; k++)
+            if (isfinite(d[a][k])) {
+                divide[a] = 1;
+                nearest = d[a][k] < nearest ? d[a][k] : nearest;
+            }
+        divisor[a] = nearest > 0 ? nearest : DBL_MIN;   /* an exact match: over the smallest normal float */
+    }
+    npy_intp dims[1] = {n};
+    out = PyArray_SimpleNew(1, dims, NPY_FLOAT64);
+    if (out == NULL)
+        goto done;
+    double *o = PyArray_DATA((PyArrayObject *)out);
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double x = divide[0] ? d[0][k] / divisor[0] : d[0][k], y = divide[1] ? d[1][k] / divisor[1] : d[1][k];
+        o[k] = x + y;
+    }
+done:
+    Py_XDECREF(arrs[0]);
+    Py_XDECREF(arrs[1]);
+    return out;
+}
+
 PyMethodDef cloud_feature_methods[] = {
     {"resample", py_resample, METH_VARARGS,
      "resample(points, stroke, n) -> (n,) complex128 points equally spaced along the ink (features.py)."},
@@ -467,6 +757,12 @@ PyMethodDef cloud_feature_methods[] = {
      "ink(points, stroke, ink_points) -> (3 ink_points,) float32 or None: ndollar.py's ink_features."},
     {"unistroke", py_unistroke, METH_VARARGS,
      "unistroke(path, n, one_d_ratio) -> ((2 n,) float64 unit vector, start angle): ndollar.py's, of one path."},
+    {"trace", py_trace, METH_VARARGS,
+     "trace(points, times, n, aspect_floor) -> (2 n,) float32: proposed.py's trace_features (finite input only)."},
+    {"trace_minima", py_trace_minima, METH_VARARGS,
+     "trace_minima(sq_norms, products, query_sq, n_points, class_starts) -> (n_classes,) float64: the trace's class minima."},
+    {"relative_sum", py_relative_sum, METH_VARARGS,
+     "relative_sum(first, second) -> (n,) float64: fused.py's relative_distances(first) + relative_distances(second)."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -11,7 +11,8 @@ kernel matches the first in template order, numpy's ``argpartition`` one of its 
 search needs are compiled too: the resampling along the ink and the cloud's normalisation (the same
 numbers as numpy's where numpy takes its AVX-512 loop for complex absolute values, else to an ulp), and
 $N's features and unistroke of one path (the referee's query: the features the same numbers, the
-unistroke to ~1e-14).
+unistroke to ~1e-14), and the trace's time bins and scaling (:mod:`.proposed`, the same numbers) and class minima (equal
+but for the sign of a zero).
 
 ``SOCIAL_TOUCH_SKIN_ACCEL=python`` forces the numpy path, ``=c`` insists on the compiled one (an error if it
 is not built); unset, the compiled one where built. The choice is read once, at import.
@@ -33,7 +34,7 @@ except ImportError as err:  # not built: no compiler at install time, or an unsu
     IMPORT_ERROR = str(err)
 
 __all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'cloud', 'implementation', 'ink', 'make_codebook',
-           'resample', 'unistroke']
+           'relative_sum', 'resample', 'trace', 'trace_minima', 'unistroke']
 
 #: Environment variable choosing the cloud search: ``python``, ``c``, or unset (the compiled one where built).
 ACCEL_VARIABLE = 'SOCIAL_TOUCH_SKIN_ACCEL'
@@ -66,6 +67,14 @@ cloud = _cloud_accel.cloud if _IMPLEMENTATION == 'c' else None
 unistroke = _cloud_accel.unistroke if _IMPLEMENTATION == 'c' else None
 #: ... and of :func:`.ndollar.ink_features`: ``ink(points, stroke, ink_points)`` (None where numpy is chosen).
 ink = _cloud_accel.ink if _IMPLEMENTATION == 'c' else None
+#: ... and of :func:`.proposed.trace_features`: ``trace(points, times, n_points, aspect_floor)``, finite points and
+#: times only (a ValueError otherwise); None where numpy is chosen.
+trace = _cloud_accel.trace if _IMPLEMENTATION == 'c' else None
+#: ... and of :class:`.proposed.TraceRecogniser`'s distances and their class minima after numpy's matrix-vector
+#: product: ``trace_minima(sq_norms, products, query_sq, n_points, class_starts)``.
+trace_minima = _cloud_accel.trace_minima if _IMPLEMENTATION == 'c' else None
+#: ... and :func:`.fused.relative_distances` of two (n,) arrays summed: ``relative_sum(first, second)``.
+relative_sum = _cloud_accel.relative_sum if _IMPLEMENTATION == 'c' else None
 
 
 def implementation() -> str:

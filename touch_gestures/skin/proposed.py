@@ -28,6 +28,12 @@ the $1 traces and on synthetic performers during development:
    (Protractor, which removes rotation, confuses every line with every other).
 
 The distance is the root-mean-square point distance in units of the gesture's size.
+
+Steps 1-2 run in one C call where the extension was built (:mod:`.cloud_accel`): the same numbers bit for
+bit (the bins' sums in point order, as ``np.bincount``'s; np.interp's arithmetic), ~1.5 against ~25 us. So
+do the class minima of step 3's distances after numpy's product (equal but for the sign of a zero;
+:meth:`TraceRecogniser.query_class_distances`, which the fused recogniser asks). numpy is the reference and
+the fall-back (test/test_skin_trace_accel.py compares them).
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import math
 
 import numpy as np
 
+from . import cloud_accel
 from .base import TemplateRecogniser
 from .gesture import TouchGesture
 
@@ -93,6 +100,11 @@ def trace_features(points: np.ndarray, times: np.ndarray, n_points: int = 32, as
     >>> f.reshape(3, 2).tolist()   # a horizontal line keeps its proportions: y stays 0
     [[-0.5, 0.0], [0.0, 0.0], [0.5, 0.0]]
     """
+    if cloud_accel.trace is not None:   # the same numbers in one C call, for finite points and times
+        try:
+            return cloud_accel.trace(points, times, n_points, aspect_floor)
+        except ValueError:   # refused there (a NaN or infinite point or time, an empty trajectory): numpy's answer
+            pass
     res = time_bin_resample(points, times, n_points)
     lo, hi = res.min(axis=0), res.max(axis=0)
     span = hi - lo
@@ -133,6 +145,14 @@ class TraceRecogniser(TemplateRecogniser):
 
     def _prepare_codebook(self) -> None:
         self._sq_norms = np.einsum('ij,ij->i', self.templates_, self.templates_)
+
+    def query_class_distances(self, query: np.ndarray) -> np.ndarray:
+        if cloud_accel.trace_minima is None:
+            return super().query_class_distances(query)
+        # The same float32 steps as _distances' and the class minima in one C call, after numpy's product
+        # (BLAS: its sums in its own order, which the C code would not reproduce).
+        return cloud_accel.trace_minima(self._sq_norms, self.templates_ @ query, float(query @ query), self.n_points,
+                                        self.class_starts_)
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         d2 = self._sq_norms - 2.0 * (self.templates_ @ query) + float(query @ query)

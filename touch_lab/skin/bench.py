@@ -23,8 +23,8 @@ with the thread's CPU clock read as each ends (:func:`predict_steps`; medians of
 step's clock reads taken off): ``features`` (``_features``), ``search`` (``_distances``: the codebook
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
 classes the stroke count allows before the decision, strokes and duration of the class it names
-after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the
-nearest allowed class, ``refereed``'s referee on a tie, ``fused``'s trace and sum, the distance and margin rules), ``order`` (the
+after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the nearest allowed class, ``refereed``'s
+referee on a tie, ``fused``'s trace and sum, the distance and margin rules), ``order`` (the
 path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
 accepts) and ``other``: the whole
 ``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
