@@ -22,9 +22,10 @@ Measured leave-one-person-out through the virtual skin (``social-touch eval skin
 <file> --json --recognisers fused``; docs/skin-multistroke.md), nearest class right over all
 samples: Mixed Multistroke Gestures 95.32 % against ``refereed``'s 94.70 % (97.70 % against
 97.06 % of the samples cut into one gesture; the worst confusion, an N named H, from 13 to
-6, while an X named pitchfork went from 0 to 18), unistroke file 99.33 % against ``trace``'s 99.17 %. Commands: wrong ones from 1.21 % to
-0.40 % of the multi-stroke samples, correct ones from 89.89 % to 89.22 % (a class the sum
-names against the cloud's nearest is rejected), random touches firing unchanged (1.20 %).
+6, while an X named pitchfork went from 0 to 18), unistroke file 99.33 % against ``trace``'s
+99.17 %. Commands: wrong ones from 1.21 % to 0.40 % of the multi-stroke samples, correct ones
+from 89.89 % to 89.22 % (a class the sum names against the cloud's nearest is rejected),
+random touches firing unchanged (1.20 %).
 Cost: the cloud's and the trace's search. With the compiled features, class minima and sum
 (:mod:`.cloud_accel`: the trace's features, its distances' class minima after numpy's matrix-vector product,
 and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 82 CPU us per recognition
