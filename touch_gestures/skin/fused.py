@@ -35,16 +35,22 @@ bench skin``; 136 before those three were compiled).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import cloud_accel
 from .base import TemplateRecogniser
 from .clouds import CloudRecogniser
 from .gesture import TouchGesture
-from .proposed import TraceRecogniser
+from .proposed import TraceRecogniser, trace_features
 from .referee import RefereedRecogniser
+from .stroke_orders import every_order
 
-__all__ = ['FusedRecogniser', 'relative_distances']
+__all__ = ['MAX_STROKE_ORDERS', 'FusedRecogniser', 'relative_distances']
+
+#: The most strokes of a template the trace may hold in every order (4! = 24 readings of the template).
+MAX_STROKE_ORDERS = 4
 
 
 def relative_distances(per_class: np.ndarray) -> np.ndarray:
@@ -69,20 +75,26 @@ class FusedRecogniser(RefereedRecogniser):
     Args:
         n_points: points of the cloud (:class:`~.clouds.CloudRecogniser`).
         trace_points: points of the trace (:class:`~.proposed.TraceRecogniser`).
+        stroke_orders: the trace holds each template of up to this many strokes in every order of its strokes
+            (:mod:`.stroke_orders`; k! readings of k strokes, each class at its nearest); 1: only as traced.
         max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base` (the cloud's distances).
 
     Attributes:
         primary_: the fitted cloud (its codebook: the templates' first part).
-        referee_: the fitted trace (the second part), asked on every recognition.
+        referee_: the fitted trace, asked on every recognition. Its codebook is the templates' second part:
+            ``stroke_orders``! trace features side by side, the order traced first, then the others (copies of
+            the first where a template has fewer orders), less the copies.
     """
 
     name = 'fused'
     direction_aware = False
 
-    def __init__(self, n_points: int = 32, trace_points: int = 32, max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
+    def __init__(self, n_points: int = 32, trace_points: int = 32, stroke_orders: int = 3,
+                 max_distance: float | str | None = 'auto', auto_scale: float = 2.0, auto_quantile: float = 0.9,
+                 min_margin: float = 0.1) -> None:
         self.n_points = n_points
         self.trace_points = trace_points
+        self.stroke_orders = stroke_orders
         self.max_distance = max_distance
         self.auto_scale = auto_scale
         self.auto_quantile = auto_quantile
@@ -93,11 +105,52 @@ class FusedRecogniser(RefereedRecogniser):
         if isinstance(self.trace_points, bool) or not isinstance(self.trace_points, int | np.integer) \
                 or self.trace_points < 2:
             raise ValueError(f'trace_points must be an integer >= 2 (a path), got {self.trace_points!r}')
+        if isinstance(self.stroke_orders, bool) or not isinstance(self.stroke_orders, int | np.integer) \
+                or not 1 <= self.stroke_orders <= MAX_STROKE_ORDERS:
+            raise ValueError(f'stroke_orders must be an integer from 1 to {MAX_STROKE_ORDERS} (the most strokes '
+                             f'of a template held in every order), got {self.stroke_orders!r}')
 
     def _parts(self) -> tuple[TemplateRecogniser, TemplateRecogniser]:
         """New, unfitted cloud and trace (no limits of their own: only their distances are read)."""
         return (CloudRecogniser(n_points=self.n_points, max_distance=None),
                 TraceRecogniser(n_points=self.trace_points, max_distance=None))
+
+    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+        # A template's: the cloud's features, then the trace's of each order of its strokes in stroke_orders!
+        # slots (copies of the order traced fill the rest, so every template has one width). A query's are the
+        # cloud's alone (_query_features); the trace reads the query itself (_nearest).
+        cloud, trace = self._parts()
+        first = cloud._features(gesture)
+        if first is None or not len(gesture.trajectory):
+            return None
+        orders = [trace_features(p, t, trace.n_points, trace.aspect_floor)
+                  for p, t in every_order(gesture, self.stroke_orders)]
+        orders += orders[:1] * (math.factorial(self.stroke_orders) - len(orders))
+        return np.concatenate([first, *orders]).astype(np.float32, copy=False)
+
+    def _prepare_codebook(self) -> None:
+        cloud, trace = self._parts()
+        split = self._primary_width(cloud)
+        width = 2 * self.trace_points
+        if self.templates_.shape[1] <= split or (self.templates_.shape[1] - split) % width:
+            raise ValueError(f'a fused codebook holds the cloud ({split} values), then the trace ({width} values) '
+                             f'of one or more stroke orders; got templates of {self.templates_.shape[1]} (made '
+                             'with other n_points or trace_points?)')
+        slots = self.templates_[:, split:].reshape(len(self.templates_), -1, width)
+        # Orders that read the same as the one traced (padding) would only cost rows of the search.
+        distinct = np.ones(slots.shape[:2], dtype=bool)
+        distinct[:, 1:] = (slots[:, 1:] != slots[:, :1]).any(axis=2)
+        template, slot = np.nonzero(distinct)
+        labels = self.classes_[self.template_labels_]
+        unlimited = np.full(len(self.classes_), np.inf)   # thresholds are this recogniser's, not the parts'
+        strokes, contacts = self.template_strokes_, self.template_contact_s_
+        cloud.set_codebook(self.templates_[:, :split], labels, class_thresholds=unlimited,
+                           template_strokes=strokes, template_contact_s=contacts)
+        trace.set_codebook(slots[template, slot], labels[template], class_thresholds=unlimited,
+                           template_strokes=None if strokes is None else strokes[template],
+                           template_contact_s=None if contacts is None else contacts[template])
+        self.primary_, self.referee_, self._split = cloud, trace, split
+        self.referee_calls_ = 0
 
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         second = self.referee_.class_distances(gesture)

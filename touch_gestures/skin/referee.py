@@ -91,7 +91,7 @@ class RefereedRecogniser(TemplateRecogniser):
 
     def _prepare_codebook(self) -> None:
         primary, referee = self._parts()
-        split = len(primary._features(TouchGesture.from_trajectory(_PROBE)))
+        split = self._primary_width(primary)
         if self.templates_.shape[1] <= split:
             raise ValueError(f'a refereed codebook holds the cloud ({split} values) and the referee side by side; '
                              f'got templates of {self.templates_.shape[1]}')
@@ -102,6 +102,11 @@ class RefereedRecogniser(TemplateRecogniser):
                               template_contact_s=self.template_contact_s_)
         self.primary_, self.referee_, self._split = primary, referee, split
         self.referee_calls_ = 0
+
+    @staticmethod
+    def _primary_width(primary: TemplateRecogniser) -> int:
+        """How many of a template's values are the primary's (they come first)."""
+        return len(primary._features(TouchGesture.from_trajectory(_PROBE)))
 
     def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
         return self.primary_._features(gesture)   # the referee's only on a tie (they cost more than the cloud's)

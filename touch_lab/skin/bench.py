@@ -31,6 +31,12 @@ accepts) and ``other``: the whole
 ``raster``, the distance-field bounds (step 2 of :mod:`~touch_gestures.skin.clouds`), timed alone:
 it is part of ``search``, not added to the total.
 
+``fused_3_strokes`` times the multi-stroke default where its trace searches most: the same
+gestures, each cut into three strokes (thirds of its path, lifts of ``LIFT_S``), so that every
+template is matched in all 3! = 6 orders of its strokes (:mod:`~touch_gestures.skin.stroke_orders`);
+``templates`` there counts the trace's rows. A real vocabulary mixes one, two and three strokes and
+costs between the two.
+
 ``cloud_search`` says which implementation of the cloud's search ran (:mod:`~touch_gestures.skin.cloud_accel`):
 ``'c'``, the compiled kernel, or ``'python'``, numpy (``SOCIAL_TOUCH_SKIN_ACCEL=python``, or not built).
 """
@@ -51,10 +57,13 @@ from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
 from touch_lab.bench.timing import gc_paused
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
-__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'STEPS', 'bench_recognition', 'predict_steps', 'synthetic_codebook']
+__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recognition', 'in_strokes', 'predict_steps',
+           'synthetic_codebook']
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
+#: The lift (s) between the strokes of ``fused_3_strokes``'s gestures.
+LIFT_S = 0.3
 #: The steps of a recognition that ``steps_cpu_us`` times (module doc), in predict's order.
 STEPS = PREDICT_STEPS
 
@@ -76,6 +85,15 @@ def synthetic_codebook(n_gestures: int = 16, templates_per_gesture: int = 30, se
         gestures.append(TouchGesture.from_trajectory(np.column_stack([s.x, s.y]), s.t_ms / 1000.0))
         labels.append(s.gesture)
     return gestures, labels
+
+
+def in_strokes(gesture: TouchGesture, k: int, lift_s: float = LIFT_S) -> TouchGesture:
+    """``gesture`` (one stroke) cut into ``k`` strokes of equal points, the later ones ``lift_s`` s later per lift."""
+    n = len(gesture.trajectory)
+    stroke = (np.arange(n) * k // max(n, 1)).astype(np.int16)
+    return TouchGesture(gesture.binary_map, gesture.peak_map, gesture.trajectory, gesture.times + stroke * lift_s,
+                        stroke, frames=gesture.frames, start_s=gesture.start_s,
+                        duration_s=gesture.duration_s + (k - 1) * lift_s, strokes=k)
 
 
 def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, templates_per_gesture: int = 30,
@@ -103,6 +121,13 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
             early, early_cpu = _median_us(PrefixMatcher(model).candidate, halves, repeats)
             out['early'] = {'recogniser': name, 'us_per_candidate': early, 'cpu_us_per_candidate': early_cpu,
                             'ratio_to_goal': early / GOAL_US_MULTISTROKE}
+    if 'fused' in names:
+        cut = [in_strokes(g, 3) for g in gestures]
+        model = make_recogniser('fused').fit(cut, labels)
+        us, cpu_us = _median_us(model.predict, [in_strokes(g, 3) for g in probe], repeats)
+        out['fused_3_strokes'] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
+                                  'templates': len(model.referee_.templates_),
+                                  'ratio_to_multistroke_goal': us / GOAL_US_MULTISTROKE}
     base = out['recognisers'].get('centroid', {}).get('us_per_recognition')
     if base:
         for r in out['recognisers'].values():

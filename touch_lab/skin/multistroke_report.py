@@ -168,6 +168,12 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
               '| recogniser | us per recognition | CPU us (no waits for a core) |', '|---|---|---|']
     for name, v in b['recognisers'].items():
         lines.append(f"| {name} | {v['us_per_recognition']:.0f} | {v['cpu_us_per_recognition']:.0f} |")
+    if 'fused_3_strokes' in b:
+        f3 = b['fused_3_strokes']
+        lines += ['', f"fused with every template of three strokes (each gesture cut into thirds; the trace matches "
+                  f"each template in its 6 stroke orders, {f3['templates']} rows): {f3['us_per_recognition']:.0f} us "
+                  f"({f3['cpu_us_per_recognition']:.0f} CPU us). A vocabulary of one to three strokes costs between "
+                  'this and the row above.']
     if 'early' in b:
         lines += ['', f"An early candidate (cloud, template prefixes at four fractions) for the first half of a "
                   f"gesture: {b['early']['us_per_candidate']:.0f} us ({b['early']['cpu_us_per_candidate']:.0f} CPU us; "
