@@ -18,19 +18,25 @@ the cloud's (:attr:`~.referee.RefereedRecogniser.primary_`), so a class the clou
 first is named but rejected (its margin over the cloud's nearest is negative), and what fires
 is what the cloud alone fires (the random touches that fire a command do not change).
 
+People write a symbol's strokes in their own order, so the trace holds each template of up to
+``stroke_orders`` strokes in every order of its strokes (:mod:`.stroke_orders`, as $N does for its
+unistrokes; each stroke keeps its direction): a person who draws the other bar of an X first is
+near the X's templates read that way, not nearer a pitchfork.
+
 Measured leave-one-person-out through the virtual skin (``social-touch eval skin --traces
 <file> --json --recognisers fused``; docs/skin-multistroke.md), nearest class right over all
-samples: Mixed Multistroke Gestures 95.32 % against ``refereed``'s 94.70 % (97.70 % against
-97.06 % of the samples cut into one gesture; the worst confusion, an N named H, from 13 to
-6, while an X named pitchfork went from 0 to 18), unistroke file 99.33 % against ``trace``'s
-99.17 %. Commands: wrong ones from 1.21 % to 0.40 % of the multi-stroke samples, correct ones
-from 89.89 % to 89.22 % (a class the sum names against the cloud's nearest is rejected),
-random touches firing unchanged (1.20 %).
+samples: Mixed Multistroke Gestures 95.63 % against ``refereed``'s 94.70 % (98.02 % against
+97.06 % of the samples cut into one gesture; an N named H from 13 to 7; with the templates
+only as traced, 95.32 %, 97.70 % and an X named pitchfork 18 times, all by one person, who
+draws the other bar first: 1 with every order), unistroke file 99.33 % against ``trace``'s
+99.17 % (one-stroke templates have one order). Commands: wrong ones from 1.21 % to 0.48 % of
+the multi-stroke samples, correct ones from 89.89 % to 89.49 % (a class the sum names against
+the cloud's nearest is rejected), random touches firing unchanged (1.20 %).
 Cost: the cloud's and the trace's search. With the compiled features, class minima and sum
 (:mod:`.cloud_accel`: the trace's features, its distances' class minima after numpy's matrix-vector product,
-and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 82 CPU us per recognition
-against the cloud's 74 on the synthetic bench (16 gestures x 30 templates; medians of three runs of ``social-touch
-bench skin``; 136 before those three were compiled).
+and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 84 CPU us per recognition
+against the cloud's 76 on the synthetic bench (16 gestures x 30 one-stroke templates), 100 where every template
+has three strokes (6 orders each, ``fused_3_strokes``; ``social-touch bench skin``).
 """
 
 from __future__ import annotations
