@@ -89,6 +89,8 @@ def test_a_bad_order_and_an_empty_path():
             reordered(g.trajectory, g.times, stroke_spans(g.stroke), bad)
     empty = TouchGesture.from_trajectory(np.zeros((0, 2)))
     assert stroke_spans(empty.stroke) == [] and len(every_order(empty, 3)) == 1
+    points, times = reordered(empty.trajectory, empty.times, [], ())
+    assert points.shape == (0, 2) and times.shape == (0,)
 
 
 def bars(first, second, rng, lift=0.4):

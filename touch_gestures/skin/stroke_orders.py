@@ -55,6 +55,8 @@ def reordered(points: np.ndarray, times: np.ndarray, spans: list[slice], order: 
     if sorted(order) != list(range(len(spans))):
         raise ValueError(f'order must list each of the {len(spans)} strokes once, got {order}')
     times = np.asarray(times, dtype=np.float64)
+    if not spans:   # no stroke: nothing to reorder
+        return np.asarray(points).copy(), times.copy()
     lifts = [times[b.start] - times[a.stop - 1] for a, b in itertools.pairwise(spans)]
     stamps = []
     t = float(times[0]) if len(times) else 0.0
