@@ -7,7 +7,6 @@ type the type store knows are drawn at random (cdr_testing), and damaged bytes a
 values are drawn around them.
 """
 
-import gc
 import math
 import os
 import struct
@@ -20,6 +19,7 @@ import pytest
 from cdr_testing import EVERY, OURS, damaged, message_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from leak_testing import assert_no_leak
 from rosbags.interfaces import Nodetype
 
 from touch_graph import cdr_accel, messages
@@ -303,14 +303,7 @@ def test_no_references_or_blocks_leak_on_success_and_on_failure():
                     with pytest.raises(MessageError):
                         fn(arg)
 
-    run(200)  # warm: caches, interned names, the first exceptions' types
-    gc.collect()
-    before = [sys.getrefcount(obj) for obj in watched]
-    blocks = sys.getallocatedblocks()
-    run(3000)
-    gc.collect()
-    assert [sys.getrefcount(obj) for obj in watched] == before
-    assert sys.getallocatedblocks() - blocks < 100  # 3000 leaked messages would be many thousands
+    assert_no_leak(run, watched, warm=200, times=3000)
 
 
 @needs_accel

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import copy
-import gc
 import os
 import pickle
 import subprocess
@@ -29,6 +28,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from leak_testing import assert_no_leak
 from scipy.optimize import linear_sum_assignment
 from test_skin_cloud_search import N, random_codebook
 
@@ -222,14 +222,7 @@ def test_no_references_or_blocks_leak_on_success_and_on_failure():
             Codebook(compiled._fields, compiled._clouds, compiled.template_labels_.astype(np.intp),
                      len(compiled.classes_), compiled.grid, compiled.exact, compiled._cell_table)
 
-    run(100)  # warm: caches, the first exceptions' types
-    gc.collect()
-    before = [sys.getrefcount(obj) for obj in watched]
-    blocks = sys.getallocatedblocks()
-    run(2000)
-    gc.collect()
-    assert [sys.getrefcount(obj) for obj in watched] == before
-    assert sys.getallocatedblocks() - blocks < 100   # 2000 leaked arrays or codebooks would be thousands
+    assert_no_leak(run, watched)
 
 
 def test_copies_and_pickles_search_as_the_original():
@@ -343,11 +336,4 @@ def test_the_compiled_features_leak_nothing():
                 with contextlib.suppress(ValueError):
                     A.cloud(bad, None, 32)
 
-    run(100)
-    gc.collect()
-    before = [sys.getrefcount(obj) for obj in (points, ids)]
-    blocks = sys.getallocatedblocks()
-    run(2000)
-    gc.collect()
-    assert [sys.getrefcount(obj) for obj in (points, ids)] == before
-    assert sys.getallocatedblocks() - blocks < 100
+    assert_no_leak(run, (points, ids))

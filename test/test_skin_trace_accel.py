@@ -16,13 +16,13 @@ minimum may keep either of 0.0 and -0.0).
 from __future__ import annotations
 
 import contextlib
-import sys
 from unittest import mock
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from leak_testing import assert_no_leak
 from test_skin_cloud_accel import needs_accel
 
 from touch_gestures.skin import cloud_accel
@@ -151,12 +151,7 @@ def test_the_compiled_trace_leaks_nothing():
                 with contextlib.suppress(ValueError):
                     compiled_trace(*args)
 
-    run(100)  # warm: caches, the first exceptions' types
-    before = [sys.getrefcount(obj) for obj in (points, times, bad)]
-    blocks = sys.getallocatedblocks()
-    run(2000)
-    assert [sys.getrefcount(obj) for obj in (points, times, bad)] == before
-    assert sys.getallocatedblocks() - blocks < 100   # 2000 leaked arrays would be thousands
+    assert_no_leak(run, (points, times, bad))
 
 
 DISTANCE = st.one_of(st.floats(0.0, 1e300), st.sampled_from([0.0, 5e-324, 1e-310, np.inf, np.nan]))
@@ -179,15 +174,14 @@ def test_the_compiled_relative_sum_refuses_mismatched_classes_and_leaks_nothing(
     first, second = np.array([1.0, 2.0, np.inf]), np.array([0.0, 3.0, 4.0])
     with pytest.raises(ValueError, match='two distances per class'):
         _cloud_accel.relative_sum(first, second[:2])
-    for _ in range(100):
-        _cloud_accel.relative_sum(first, second)
-    before, blocks = [sys.getrefcount(first), sys.getrefcount(second)], sys.getallocatedblocks()
-    for _ in range(2000):
-        _cloud_accel.relative_sum(first, second)
-        with contextlib.suppress(ValueError):
-            _cloud_accel.relative_sum(first, second[:2])
-    assert [sys.getrefcount(first), sys.getrefcount(second)] == before
-    assert sys.getallocatedblocks() - blocks < 100
+
+    def run(times: int) -> None:
+        for _ in range(times):
+            _cloud_accel.relative_sum(first, second)
+            with contextlib.suppress(ValueError):
+                _cloud_accel.relative_sum(first, second[:2])
+
+    assert_no_leak(run, (first, second))
 
 
 def numpy_minima(sq_norms, products, query_sq, n_points, starts) -> np.ndarray:
@@ -228,13 +222,11 @@ def test_the_compiled_trace_minima_refuse_bad_runs_and_leak_nothing():
             _cloud_accel.trace_minima(norms, products, 1.0, 8, bad_starts)
     with pytest.raises(ValueError, match='as many products as norms'):
         _cloud_accel.trace_minima(norms, products[:3], 1.0, 8, starts)
-    watched = (norms, products, starts)
-    for _ in range(100):
-        _cloud_accel.trace_minima(norms, products, 1.0, 8, starts)
-    before, blocks = [sys.getrefcount(obj) for obj in watched], sys.getallocatedblocks()
-    for _ in range(2000):
-        _cloud_accel.trace_minima(norms, products, 1.0, 8, starts)
-        with contextlib.suppress(ValueError):
-            _cloud_accel.trace_minima(norms, products, 1.0, 8, starts + 3)
-    assert [sys.getrefcount(obj) for obj in watched] == before
-    assert sys.getallocatedblocks() - blocks < 100
+
+    def run(times: int) -> None:
+        for _ in range(times):
+            _cloud_accel.trace_minima(norms, products, 1.0, 8, starts)
+            with contextlib.suppress(ValueError):
+                _cloud_accel.trace_minima(norms, products, 1.0, 8, starts + 3)
+
+    assert_no_leak(run, (norms, products, starts))
