@@ -14,7 +14,20 @@ from test_skin_multistroke import SYMBOLS, polyline
 from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.stroke_orders import every_order, reordered, stroke_spans
+from touch_gestures.skin.ndollar import split_strokes
+from touch_gestures.skin.stroke_orders import every_order, reordered
+
+
+def stroke_spans(stroke):
+    """The strokes as slices of the path (runs of one stroke id, as split_strokes cuts them)."""
+    sizes = [len(part) for part in split_strokes(np.zeros(len(stroke)), stroke)] if len(stroke) else []
+    ends = np.cumsum(sizes, dtype=int)
+    return [slice(int(e - n), int(e)) for n, e in zip(sizes, ends, strict=True)]
+
+
+def in_strokes(g):
+    """The gesture's strokes and their clocks, as reordered takes them."""
+    return split_strokes(g.trajectory, g.stroke), split_strokes(g.times, g.stroke)
 
 
 def strokes_gesture(strokes, lifts, rate=150.0):
@@ -47,7 +60,7 @@ def multi_stroke(draw):
 def test_a_reordered_path_keeps_each_stroke_and_the_lifts_in_turn(g, data):
     spans = stroke_spans(g.stroke)
     order = tuple(data.draw(st.permutations(range(len(spans)))))
-    points, times = reordered(g.trajectory, g.times, spans, order)
+    points, times = reordered(*in_strokes(g), order)
     assert points.shape == g.trajectory.shape and times.dtype == np.float64
     new, start = [], 0
     for index in order:   # the new path's strokes: the old ones' lengths, in the new order
@@ -86,10 +99,15 @@ def test_a_bad_order_and_an_empty_path():
     g = strokes_gesture([np.zeros((2, 2)), np.ones((2, 2))], [0.5])
     for bad in ((0,), (0, 0), (1, 2), (0, 1, 2)):
         with pytest.raises(ValueError, match='each of the 2 strokes once'):
-            reordered(g.trajectory, g.times, stroke_spans(g.stroke), bad)
+            reordered(*in_strokes(g), bad)
     empty = TouchGesture.from_trajectory(np.zeros((0, 2)))
     assert stroke_spans(empty.stroke) == [] and len(every_order(empty, 3)) == 1
-    points, times = reordered(empty.trajectory, empty.times, [], ())
+    points, times = reordered([], [], ())
+    strokes, clocks = in_strokes(g)
+    with pytest.raises(ValueError, match='one clock per stroke'):
+        reordered(strokes, clocks[:1], (1, 0))
+    with pytest.raises(ValueError, match='at least one point'):
+        reordered([np.zeros((0, 2)), np.ones((1, 2))], [np.zeros(0), np.zeros(1)], (1, 0))
     assert points.shape == (0, 2) and times.shape == (0,)
 
 

@@ -20,54 +20,46 @@ import itertools
 import numpy as np
 
 from .gesture import TouchGesture
+from .ndollar import split_strokes
 
-__all__ = ['every_order', 'reordered', 'stroke_spans']
-
-
-def stroke_spans(stroke: np.ndarray) -> list[slice]:
-    """(n,) stroke index of each point -> the strokes in time order: slices of consecutive points
-    with one index.
-
-    >>> stroke_spans(np.array([0, 0, 1, 1, 1]))
-    [slice(0, 2, None), slice(2, 5, None)]
-    """
-    n = len(stroke)
-    if n == 0:
-        return []
-    starts = np.concatenate(([0], np.flatnonzero(stroke[1:] != stroke[:-1]) + 1, [n]))
-    return [slice(int(a), int(b)) for a, b in itertools.pairwise(starts)]
+__all__ = ['every_order', 'reordered']
 
 
-def reordered(points: np.ndarray, times: np.ndarray, spans: list[slice], order: tuple[int, ...]
+def reordered(strokes: list[np.ndarray], clocks: list[np.ndarray], order: tuple[int, ...]
               ) -> tuple[np.ndarray, np.ndarray]:
-    """The path with its strokes (``spans``, :func:`stroke_spans`) traced in ``order`` (each index once).
+    """The path of ``strokes`` traced in ``order`` (each index once).
 
     Args:
-        points: (n, 2) contact points, mm; times: (n,) s, non-decreasing.
+        strokes: each stroke's (m_i, 2) contact points, mm, in the order traced (:func:`~.ndollar.split_strokes`).
+        clocks: each stroke's (m_i,) times, s, non-decreasing, in the same order.
 
     Returns:
-        (n, 2) points and (n,) float64 times: each stroke's own points and clock, the lifts between
-        strokes of the same lengths in turn, from the same first time.
+        (sum m_i, 2) points and (sum m_i,) float64 times: each stroke's own points and clock, the lifts
+        between strokes of the same lengths in turn, from the same first time.
 
     Raises:
-        ValueError: ``order`` is not a permutation of the strokes.
+        ValueError: ``order`` is not a permutation of the strokes, or a stroke has no point or no time
+        for each point.
     """
-    if sorted(order) != list(range(len(spans))):
-        raise ValueError(f'order must list each of the {len(spans)} strokes once, got {order}')
-    times = np.asarray(times, dtype=np.float64)
-    if not spans:   # no stroke: nothing to reorder
-        return np.asarray(points).copy(), times.copy()
-    lifts = [times[b.start] - times[a.stop - 1] for a, b in itertools.pairwise(spans)]
+    if sorted(order) != list(range(len(strokes))):
+        raise ValueError(f'order must list each of the {len(strokes)} strokes once, got {order}')
+    if len(clocks) != len(strokes):
+        raise ValueError(f'need one clock per stroke: {len(strokes)} strokes, {len(clocks)} clocks')
+    clocks = [np.asarray(c, dtype=np.float64) for c in clocks]
+    if any(len(c) == 0 or len(c) != len(p) for p, c in zip(strokes, clocks, strict=True)):
+        raise ValueError('every stroke needs at least one point and one time per point')
+    if not strokes:   # no stroke: nothing to reorder
+        return np.empty((0, 2)), np.empty(0)
+    lifts = [b[0] - a[-1] for a, b in itertools.pairwise(clocks)]
     stamps = []
-    t = float(times[0]) if len(times) else 0.0
+    t = float(clocks[0][0])
     for k, index in enumerate(order):
-        span = spans[index]
-        own = times[span] - times[span.start]   # the stroke's own clock, from its first point
+        own = clocks[index] - clocks[index][0]   # the stroke's own clock, from its first point
         if k:
             t += lifts[k - 1]
         stamps.append(t + own)
         t += float(own[-1])
-    return np.concatenate([points[spans[i]] for i in order]), np.concatenate(stamps)
+    return np.concatenate([strokes[i] for i in order]), np.concatenate(stamps)
 
 
 def every_order(gesture: TouchGesture, max_strokes: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -79,8 +71,8 @@ def every_order(gesture: TouchGesture, max_strokes: int) -> list[tuple[np.ndarra
     >>> [(p[0].tolist(), t.tolist()) for p, t in every_order(g, 2)]
     [([0.0, 0.0], [0.0, 1.0, 3.0, 4.0]), ([5.0, 5.0], [0.0, 1.0, 3.0, 4.0])]
     """
-    spans = stroke_spans(gesture.stroke)
-    if not 2 <= len(spans) <= max_strokes:
+    strokes = split_strokes(gesture.trajectory, gesture.stroke)
+    if not 2 <= len(strokes) <= max_strokes:
         return [(gesture.trajectory, gesture.times)]
-    return [reordered(gesture.trajectory, gesture.times, spans, order)
-            for order in itertools.permutations(range(len(spans)))]
+    clocks = split_strokes(gesture.times, gesture.stroke)
+    return [reordered(strokes, clocks, order) for order in itertools.permutations(range(len(strokes)))]
