@@ -9,7 +9,7 @@ import pytest
 
 MODULES = [f'touch_gestures.skin.{name}' for name in ('gesture', 'features', 'segmentation', 'proposed', 'registry',
                                                       'codebook', 'base', 'paper', 'peers', 'commands', 'ndollar',
-                                                      'fused', 'stroke_orders')] + \
+                                                      'fused', 'stroke_orders', 'oriented')] + \
     [f'touch_sim.skin.{name}' for name in ('synthetic', 'render')] + \
     [f'touch_lab.skin.{name}' for name in ('datasets', 'cli', 'evaluate', 'bench', 'report')]
 

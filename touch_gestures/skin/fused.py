@@ -137,12 +137,14 @@ class FusedRecogniser(RefereedRecogniser):
     def _prepare_codebook(self) -> None:
         cloud, trace = self._parts()
         split = self._primary_width(cloud)
+        start = self._trace_start(split)
         width = 2 * self.trace_points
-        if self.templates_.shape[1] <= split or (self.templates_.shape[1] - split) % width:
-            raise ValueError(f'a fused codebook holds the cloud ({split} values), then the trace ({width} values) '
-                             f'of one or more stroke orders; got templates of {self.templates_.shape[1]} (made '
+        if self.templates_.shape[1] <= start or (self.templates_.shape[1] - start) % width:
+            own = f', {start - split} values of its own' if start > split else ''
+            raise ValueError(f'a {self.name} codebook holds the cloud ({split} values){own}, then the trace ({width} '
+                             f'values) of one or more stroke orders; got templates of {self.templates_.shape[1]} (made '
                              'with other n_points or trace_points?)')
-        slots = self.templates_[:, split:].reshape(len(self.templates_), -1, width)
+        slots = self.templates_[:, start:].reshape(len(self.templates_), -1, width)
         # Orders that read the same as the one traced (padding) would only cost rows of the search.
         distinct = np.ones(slots.shape[:2], dtype=bool)
         distinct[:, 1:] = (slots[:, 1:] != slots[:, :1]).any(axis=2)
@@ -157,6 +159,11 @@ class FusedRecogniser(RefereedRecogniser):
                            template_contact_s=None if contacts is None else contacts[template])
         self.primary_, self.referee_, self._split = cloud, trace, split
         self.referee_calls_ = 0
+
+    def _trace_start(self, split: int) -> int:
+        """Where a template's trace features start, given where the cloud's end (``split``): right after them
+        (a subclass may hold a part of its own between, :class:`~.oriented.OrientedFusedRecogniser`)."""
+        return split
 
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         second = self.referee_.class_distances(gesture)

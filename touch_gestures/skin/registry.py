@@ -1,7 +1,7 @@
 """Every skin recogniser by name, for the CLI, codebook files and the evaluation.
 
 >>> ' '.join(sorted(RECOGNISERS))
-'auto centroid cloud dollar1 dtw fused map ndollar pdollar protractor refereed static trace'
+'auto centroid cloud dollar1 dtw fused fused_oriented map ndollar oriented pdollar protractor refereed static trace'
 >>> make_recogniser('trace', n_points=16).n_points
 16
 """
@@ -14,6 +14,7 @@ from .base import TemplateRecogniser
 from .clouds import CloudRecogniser
 from .fused import FusedRecogniser
 from .ndollar import NDollarRecogniser
+from .oriented import OrientedCloudRecogniser, OrientedFusedRecogniser
 from .paper import CentroidRecogniser, MapRecogniser, StaticRecogniser
 from .peers import DollarOneRecogniser, DTWRecogniser, PointCloudRecogniser, ProtractorRecogniser
 from .proposed import TraceRecogniser
@@ -29,7 +30,7 @@ RECOGNISERS: dict[str, type[TemplateRecogniser]] = {
     cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, DollarOneRecogniser,
                               ProtractorRecogniser, PointCloudRecogniser, DTWRecogniser, TraceRecogniser,
                               CloudRecogniser, NDollarRecogniser, RefereedRecogniser, FusedRecogniser,
-                              AutoRecogniser)
+                              OrientedCloudRecogniser, OrientedFusedRecogniser, AutoRecogniser)
 }
 PAPER = ('static', 'map', 'centroid')
 PEERS = ('dollar1', 'protractor', 'pdollar', 'dtw')
