@@ -113,7 +113,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         out['recognisers'][name] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                     'ratio_to_goal': us / GOAL_US, 'templates': len(model.templates_),
                                     'steps_cpu_us': _steps_cpu_us(model, probe, repeats, cpu_us)}
-        if name in ('cloud', 'ndollar', 'refereed', 'fused', 'auto'):
+        if name in ('cloud', 'ndollar', 'refereed', 'fused', 'oriented', 'fused_oriented', 'auto'):
             out['recognisers'][name]['ratio_to_multistroke_goal'] = us / GOAL_US_MULTISTROKE
         if name == 'cloud':
             halves = [TouchGesture.from_trajectory(g.trajectory[:max(1, len(g.trajectory) // 2)],

@@ -29,9 +29,10 @@ from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samp
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
 
 HELP = 'regenerate docs/skin-multistroke.md: multi-stroke vocabularies, early decisions, collisions, cost'
-#: Evaluated per vocabulary: the default, the two it chooses from (fused, trace), the cloud refereed by $N
-#: (the default before fused) and the cloud alone, $N, the paper's centroid method.
-RECOGNISERS = ('auto', 'fused', 'refereed', 'cloud', 'ndollar', 'trace', 'centroid')
+#: Evaluated per vocabulary: the default, the two it chooses from (fused, trace), fused with the oriented
+#: cloud naming the class, the cloud refereed by $N (the default before fused) and the cloud alone, the
+#: oriented cloud alone, $N, the paper's centroid method.
+RECOGNISERS = ('auto', 'fused', 'fused_oriented', 'refereed', 'cloud', 'oriented', 'ndollar', 'trace', 'centroid')
 
 
 def _say(line: str) -> None:
@@ -161,7 +162,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
                   f"({c['frame_period_ms']:.2f} ms each): median {lat['median']:.0f}, 90th percentile "
                   f"{lat['p90']:.0f}, max {lat['max']:.0f}."]
     _say('cost')
-    b = bench_recognition(['trace', 'cloud', 'refereed', 'fused', 'ndollar', 'auto', 'centroid'])
+    b = bench_recognition(['trace', 'cloud', 'refereed', 'fused', 'oriented', 'fused_oriented', 'ndollar', 'auto',
+                           'centroid'])
     lines += ['', '## Cost per recognition (synthetic gestures)', '',
               f"{b['gestures']} gestures x {b['templates_per_gesture']} templates, median of {b['repeats']} runs over "
               f"{b['queries']} queries, one `predict` each (`social-touch bench skin`):", '',
