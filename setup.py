@@ -93,7 +93,9 @@ _NO_FMA = [] if sys.platform == 'win32' else ['-ffp-contract=off']
 EXTENSIONS = [Extension('touch_graph._cdr_accel', ['touch_graph/_cdr_accel.c'], include_dirs=[numpy.get_include()],
                         optional=True),
               Extension('touch_gestures.skin._cloud_accel', ['touch_gestures/skin/_cloud_accel.c',
-                                                             'touch_gestures/skin/_cloud_features.c'],
+                                                             'touch_gestures/skin/_cloud_features.c',
+                                                             'touch_gestures/skin/_oriented_features.c'],
+                        depends=['touch_gestures/skin/_cloud_features.h'],
                         include_dirs=[numpy.get_include()], extra_compile_args=_NO_FMA, optional=True),
               ] if numpy is not None else []
 

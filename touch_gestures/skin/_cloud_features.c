@@ -16,6 +16,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "_cloud_features.h"
+
 /* ------------------------------------------------------------------------- resampling, $N's unistroke */
 
 /* points as (m, 2) float64 C-contiguous (converted if need be, a new reference), m >= 1; the errors of
@@ -62,7 +64,7 @@ static inline double step_length(double dx, double dy)
  * (cumsum), n targets equally spaced (the last exactly the total), and np.interp's arithmetic: the last
  * knot at or below each target, its value where they are equal, else the slope times the offset plus
  * the value (numpy's formula, and its fall-back where that gives NaN). cum holds m doubles. */
-static void resample_into(const double *p, const double *ids, Py_ssize_t m, Py_ssize_t n, double *cum,
+void skin_resample_into(const double *p, const double *ids, Py_ssize_t m, Py_ssize_t n, double *cum,
                           double *out)
 {
     cum[0] = 0.0;
@@ -125,7 +127,7 @@ static void resample_into(const double *p, const double *ids, Py_ssize_t m, Py_s
 /* A path's points (path_points) and its (m,) stroke ids as float64, or NULL for None: compared as numpy
  * compares the ids it is given (integers exactly, NaN unlike itself). 0, or -1 with an exception (and
  * nothing held). */
-static int path_and_ids(PyObject *points_obj, PyObject *ids_obj, PyArrayObject **pts, PyArrayObject **ids)
+int skin_path_and_ids(PyObject *points_obj, PyObject *ids_obj, PyArrayObject **pts, PyArrayObject **ids)
 {
     *ids = NULL;
     *pts = path_points(points_obj);
@@ -156,14 +158,14 @@ static PyObject *py_resample(PyObject *Py_UNUSED(module), PyObject *args)
         return NULL;
     }
     PyArrayObject *pts, *ids;
-    if (path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
+    if (skin_path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
         return NULL;
     Py_ssize_t m = PyArray_DIM(pts, 0);
     npy_intp dims[1] = {n};
     PyObject *out = PyArray_SimpleNew(1, dims, NPY_COMPLEX128);
     double *cum = PyMem_Malloc((size_t)m * sizeof(double));
     if (out != NULL && cum != NULL)
-        resample_into(PyArray_DATA(pts), ids ? PyArray_DATA(ids) : NULL, m, n, cum,
+        skin_resample_into(PyArray_DATA(pts), ids ? PyArray_DATA(ids) : NULL, m, n, cum,
                       PyArray_DATA((PyArrayObject *)out));
     else if (out != NULL) {
         Py_CLEAR(out);
@@ -290,7 +292,7 @@ static PyObject *py_ink(PyObject *Py_UNUSED(module), PyObject *args)
         return NULL;
     }
     PyArrayObject *pts, *ids;
-    if (path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
+    if (skin_path_and_ids(points_obj, ids_obj, &pts, &ids) < 0)
         return NULL;
     Py_ssize_t m = PyArray_DIM(pts, 0);
     const double *p = PyArray_DATA(pts), *id = ids ? PyArray_DATA(ids) : NULL;
@@ -327,7 +329,7 @@ static PyObject *py_ink(PyObject *Py_UNUSED(module), PyObject *args)
     Py_ssize_t floor_points = 2 * k <= ink ? 2 : 1, spare = ink - floor_points * k, at = 0;
     for (Py_ssize_t s = 0; s < k; s++) {
         Py_ssize_t c = floor_points + (total > 0 ? (Py_ssize_t)floor((double)spare * lengths[s] / total) : 0);
-        resample_into(p + 2 * start[s], NULL, start[s + 1] - start[s], c, cum, out + 2 * at);
+        skin_resample_into(p + 2 * start[s], NULL, start[s + 1] - start[s], c, cum, out + 2 * at);
         for (Py_ssize_t j = 0; j < c; j++)
             sid[at + j] = (double)s;
         at += c;
@@ -410,7 +412,7 @@ static PyObject *py_unistroke(PyObject *Py_UNUSED(module), PyObject *args)
         return vec == NULL ? NULL : PyErr_NoMemory();
     }
     double *p = PyArray_DATA((PyArrayObject *)vec), c[2];
-    resample_into(PyArray_DATA(path), NULL, m, n, cum, p);
+    skin_resample_into(PyArray_DATA(path), NULL, m, n, cum, p);
     PyMem_Free(cum);
     Py_DECREF(path);
     centre_of(p, n, c);
@@ -763,6 +765,10 @@ PyMethodDef cloud_feature_methods[] = {
      "trace_minima(sq_norms, products, query_sq, n_points, class_starts) -> (n_classes,) float64: the trace's class minima."},
     {"relative_sum", py_relative_sum, METH_VARARGS,
      "relative_sum(first, second) -> (n,) float64: fused.py's relative_distances(first) + relative_distances(second)."},
+    {"oriented_cells", skin_oriented_cells, METH_VARARGS,
+     "oriented_cells(points, stroke, n, grid, bins) -> (n,) intp: oriented.py's raster cells of a touch's cloud."},
+    {"oriented_mean", skin_oriented_mean, METH_VARARGS,
+     "oriented_mean(fields, cells) -> (T,) float32: fields[cells].mean(axis=0) (oriented.py's distances)."},
     {NULL, NULL, 0, NULL},
 };
 

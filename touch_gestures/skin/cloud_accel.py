@@ -34,7 +34,7 @@ except ImportError as err:  # not built: no compiler at install time, or an unsu
     IMPORT_ERROR = str(err)
 
 __all__ = ['ACCEL_VARIABLE', 'IMPORT_ERROR', 'available', 'cloud', 'implementation', 'ink', 'make_codebook',
-           'relative_sum', 'resample', 'trace', 'trace_minima', 'unistroke']
+           'oriented_cells', 'oriented_mean', 'relative_sum', 'resample', 'trace', 'trace_minima', 'unistroke']
 
 #: Environment variable choosing the cloud search: ``python``, ``c``, or unset (the compiled one where built).
 ACCEL_VARIABLE = 'SOCIAL_TOUCH_SKIN_ACCEL'
@@ -75,6 +75,11 @@ trace = _cloud_accel.trace if _IMPLEMENTATION == 'c' else None
 trace_minima = _cloud_accel.trace_minima if _IMPLEMENTATION == 'c' else None
 #: ... and :func:`.fused.relative_distances` of two (n,) arrays summed: ``relative_sum(first, second)``.
 relative_sum = _cloud_accel.relative_sum if _IMPLEMENTATION == 'c' else None
+#: ... and the oriented cloud's query (:mod:`.oriented`): ``oriented_cells(points, stroke, n, grid, bins)``, the
+#: raster cells of :func:`.oriented.oriented_cloud` (finite points only: a ValueError otherwise), and
+#: ``oriented_mean(fields, cells)``, ``fields[cells].mean(axis=0)`` of float32 fields; None where numpy is chosen.
+oriented_cells = _cloud_accel.oriented_cells if _IMPLEMENTATION == 'c' else None
+oriented_mean = _cloud_accel.oriented_mean if _IMPLEMENTATION == 'c' else None
 
 
 def implementation() -> str:

@@ -53,7 +53,7 @@ from .proposed import TraceRecogniser, trace_features
 from .referee import RefereedRecogniser
 from .stroke_orders import every_order
 
-__all__ = ['MAX_STROKE_ORDERS', 'FusedRecogniser', 'relative_distances']
+__all__ = ['MAX_STROKE_ORDERS', 'FusedRecogniser', 'relative_distances', 'relative_sum']
 
 #: The most strokes of a template the trace may hold in every order (4! = 24 readings of the template).
 MAX_STROKE_ORDERS = 4
@@ -73,6 +73,17 @@ def relative_distances(per_class: np.ndarray) -> np.ndarray:
     nearest = float(finite.min())
     with np.errstate(over='ignore'):   # others of a (near) exact match: inf, still ordered after it
         return d / (nearest if nearest > 0 else np.finfo(np.float64).tiny)
+
+
+def relative_sum(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """``relative_distances(first) + relative_distances(second)`` of two (n_classes,) opinions: the sum rule.
+
+    >>> relative_sum(np.array([1.0, 2.0]), np.array([4.0, 2.0])).tolist()
+    [3.0, 3.0]
+    """
+    if cloud_accel.relative_sum is not None:   # the same numbers in one C call (cloud_accel)
+        return cloud_accel.relative_sum(first, second)
+    return relative_distances(first) + relative_distances(second)
 
 
 class FusedRecogniser(RefereedRecogniser):
@@ -169,8 +180,4 @@ class FusedRecogniser(RefereedRecogniser):
         second = self.referee_.class_distances(gesture)
         if second is None:   # the trace cannot read it: the cloud alone
             return TemplateRecogniser._nearest(self, gesture, per_class, allowed)
-        if cloud_accel.relative_sum is not None:   # the same numbers in one C call (cloud_accel)
-            summed = cloud_accel.relative_sum(per_class, second)
-        else:
-            summed = relative_distances(per_class) + relative_distances(second)
-        return TemplateRecogniser._nearest(self, gesture, summed, allowed)
+        return TemplateRecogniser._nearest(self, gesture, relative_sum(per_class, second), allowed)

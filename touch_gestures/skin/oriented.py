@@ -14,15 +14,16 @@ of a stroke too short to have a direction (a dot) carries ``o = 0``, 1 from ever
 is $P's cloud with a per-point direction, as $P+ adds turning angles (Vatavu, ICMI 2017); it stays
 free of stroke order and direction.
 
-The distance of a query to a template is the symmetric Chamfer distance (the mean of the two
-directed means of nearest-point distances), read from rasters as $Q reads its lookup tables
-(Vatavu, Anthony and Wobbrock, MobileHCI 2018): at fit time each template's distance field is
-sampled on ``grid`` x ``grid`` positions x ``bins`` orientations (+ one code for no orientation);
-a query's points read their distance to every template in one gather, the query's own field is
-made on the same raster and read at the templates' points. Raster error: a point is read at the
-centre of its cell, at most half a cell diagonal (``sqrt(2) / grid`` gesture sizes) away, and its
-orientation at the centre of its bin, at most ``pi / (2 bins)`` off (``w * 2 sin(pi / (2 bins))``):
-each directed mean is within the sum of the two of the exact one (test/test_skin_oriented.py).
+The distance of a query to a template is the mean, over the query's points, of the distance to the
+template's nearest point (the directed Chamfer distance), read from a raster as $Q reads its lookup
+tables (Vatavu, Anthony and Wobbrock, MobileHCI 2018): at fit time each template's distance field is
+sampled on ``grid`` x ``grid`` positions x ``bins`` orientations (+ one code for no orientation), so a
+query's points read their distance to every template in one gather of ``n_points`` rows. Raster error
+(triangle inequality): a point is read at the centre of its cell, at most half a cell diagonal
+(``sqrt(2) / grid`` gesture sizes) away, and at the centre of its orientation bin, at most
+``pi / (2 bins)`` off (``w * 2 sin(pi / (2 bins))``); the distance is within the sum of the two of the
+exact one (test/test_skin_oriented.py). Bins are centred on horizontal, vertical and the diagonals,
+where most ink of symbols lies.
 
 Measured leave-one-person-out through the virtual skin (``social-touch eval skin --traces <file>
 --json --recognisers fused,fused_oriented``; docs/skin-multistroke.md): as the naming opinion of
@@ -35,12 +36,14 @@ import math
 
 import numpy as np
 
+from . import cloud_accel
 from .base import TemplateRecogniser
 from .features import arc_length_resample_complex
-from .fused import FusedRecogniser, relative_distances
+from .fused import FusedRecogniser, relative_sum
 from .gesture import TouchGesture
 
-__all__ = ['OrientedCloudRecogniser', 'OrientedFusedRecogniser', 'exact_oriented_chamfer', 'oriented_cloud']
+__all__ = ['OrientedCloudRecogniser', 'OrientedFusedRecogniser', 'distance_field', 'exact_oriented_chamfer',
+           'oriented_cloud', 'raster_cells']
 
 #: Values per point of an oriented cloud: x, y, cos 2 theta, sin 2 theta.
 POINT_WIDTH = 4
@@ -51,8 +54,10 @@ def _resampled_strokes(points: np.ndarray, stroke: np.ndarray | None, n: int) ->
     pts = np.asarray(points, dtype=np.float64)
     path = arc_length_resample_complex(pts, n, stroke)
     ids = np.zeros(len(pts), dtype=np.int64) if stroke is None else np.asarray(stroke, dtype=np.int64)
-    # The stroke of each resampled point: the one its ink position falls in (the air adds no length).
-    step = np.hypot(*np.diff(pts, axis=0).T)
+    # The stroke of each resampled point: the one its ink position falls in (the air adds no length). The steps
+    # as the resampling measures them (numpy's complex abs), so a point at a stroke's end falls in that stroke.
+    flat = np.ascontiguousarray(pts).view(np.complex128).reshape(-1)
+    step = np.abs(flat[1:] - flat[:-1])
     step[ids[1:] != ids[:-1]] = 0.0
     cum = np.concatenate([[0.0], np.cumsum(step)])
     target = np.linspace(0.0, cum[-1], n)
@@ -73,7 +78,7 @@ def oriented_cloud(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     [[1.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [-1.0, 0.0]]
     """
     xy, ids = _resampled_strokes(points, stroke, n_points)
-    xy -= xy.mean(axis=0)
+    xy -= np.cumsum(xy, axis=0)[-1] / n_points   # the mean, summed in point order (as the compiled twin)
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
     if size > 1e-9:
         xy /= size
@@ -81,23 +86,63 @@ def oriented_cloud(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     same_after = np.r_[ids[:-1] == ids[1:], False]
     before = np.where(same_before, np.arange(n_points) - 1, np.arange(n_points))
     after = np.where(same_after, np.arange(n_points) + 1, np.arange(n_points))
-    tangent = xy[after] - xy[before]
-    length = np.hypot(tangent[:, 0], tangent[:, 1])
-    theta = np.arctan2(tangent[:, 1], tangent[:, 0])
-    directed = length > 1e-9   # a point with no neighbour of its stroke, or none apart from it: no direction
+    dx, dy = (xy[after] - xy[before]).T
+    square = dx * dx + dy * dy
+    directed = square > 1e-18   # a point with no neighbour of its stroke, or none apart from it: no direction
+    safe = np.where(directed, square, 1.0)
     cloud = np.empty((n_points, POINT_WIDTH))
     cloud[:, :2] = xy
-    cloud[:, 2] = np.where(directed, np.cos(2 * theta), 0.0)
-    cloud[:, 3] = np.where(directed, np.sin(2 * theta), 0.0)
+    # (cos 2 theta, sin 2 theta) of the tangent (dx, dy): its square as a complex number over its squared length.
+    cloud[:, 2] = np.where(directed, (dx * dx - dy * dy) / safe, 0.0)
+    cloud[:, 3] = np.where(directed, 2.0 * dx * dy / safe, 0.0)
     return cloud
 
 
-def exact_oriented_chamfer(a: np.ndarray, b: np.ndarray, weight: float) -> float:
-    """Symmetric Chamfer distance of two (n, 4) oriented clouds, every pair computed (the reference the
-    raster reads approximate; module doc)."""
-    d = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
-    d += weight * np.hypot(a[:, None, 2] - b[None, :, 2], a[:, None, 3] - b[None, :, 3])
-    return 0.5 * float(d.min(axis=1).mean() + d.min(axis=0).mean())
+def exact_oriented_chamfer(query: np.ndarray, template: np.ndarray, weight: float) -> float:
+    """Mean over the (n, 4) ``query``'s points of the distance to the nearest point of ``template``, every pair
+    computed: the distance the raster reads approximate (module doc)."""
+    d = np.hypot(query[:, None, 0] - template[None, :, 0], query[:, None, 1] - template[None, :, 1])
+    d += weight * np.hypot(query[:, None, 2] - template[None, :, 2], query[:, None, 3] - template[None, :, 3])
+    return float(d.min(axis=1).mean())
+
+
+def _bin_codes(bins: int) -> np.ndarray:
+    """(bins + 1, 2) the orientation code of each bin's centre (bin 0 centred on 0 degrees), then (0, 0)."""
+    theta = np.arange(bins) * (math.pi / bins)
+    return np.vstack([np.column_stack([np.cos(2 * theta), np.sin(2 * theta)]), np.zeros((1, 2))])
+
+
+def _cell_centres(grid: int) -> np.ndarray:
+    """(grid * grid, 2) x, y of each cell's centre, row by row (row = y), over [-1, 1] x [-1, 1]."""
+    centres = (np.arange(grid) + 0.5) * (2.0 / grid) - 1.0
+    cx, cy = np.meshgrid(centres, centres)
+    return np.column_stack([cx.ravel(), cy.ravel()])
+
+
+def raster_cells(clouds: np.ndarray, grid: int, bins: int) -> np.ndarray:
+    """(..., n, 4) oriented clouds -> (..., n) flat raster index, ``(row * grid + column) * (bins + 1) + bin``.
+
+    Positions clip to the raster's border cells; bin k holds the orientations within ``pi / (2 bins)`` of
+    ``k pi / bins`` (horizontal ink: bin 0), the code ``bins`` the points without orientation.
+
+    >>> raster_cells(np.array([[-1.0, -1.0, 1.0, 0.0], [0.99, 0.99, -1.0, 0.0], [0.0, 0.0, 0.0, 0.0]]), 2, 4).tolist()
+    [0, 17, 19]
+    """
+    ij = np.clip(((clouds[..., :2] + 1.0) * (grid / 2.0)).astype(np.intp), 0, grid - 1)
+    # 2 theta in (-pi, pi]: bin round(theta / (pi / bins)) modulo bins.
+    half_turns = np.arctan2(clouds[..., 3], clouds[..., 2]) * (bins / (2 * math.pi))
+    k = np.floor(half_turns + 0.5).astype(np.intp) % bins
+    k[clouds[..., 2] * clouds[..., 2] + clouds[..., 3] * clouds[..., 3] < 0.25] = bins   # (0, 0)
+    return (ij[..., 1] * grid + ij[..., 0]) * (bins + 1) + k
+
+
+def distance_field(cloud: np.ndarray, grid: int, bins: int, weight: float) -> np.ndarray:
+    """(n, 4) oriented cloud -> (grid * grid * (bins + 1),) float32: each raster cell's distance to the nearest
+    point of the cloud (its centre's position and its bin's orientation; :func:`raster_cells` order)."""
+    centres, codes = _cell_centres(grid), _bin_codes(bins)
+    positional = np.hypot(centres[:, None, 0] - cloud[None, :, 0], centres[:, None, 1] - cloud[None, :, 1])
+    angular = weight * np.hypot(codes[:, None, 0] - cloud[None, :, 2], codes[:, None, 1] - cloud[None, :, 3])
+    return (positional[:, None, :] + angular[None, :, :]).min(axis=2).ravel().astype(np.float32)
 
 
 class OrientedCloudRecogniser(TemplateRecogniser):
@@ -144,48 +189,39 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         cloud = oriented_cloud(gesture.trajectory, gesture.stroke, self.n_points).ravel()
         return cloud.astype(np.float32) if np.isfinite(cloud).all() else None
 
-    # --- the raster -----------------------------------------------------------------------------------
-
-    def _codes(self) -> np.ndarray:
-        """(bins + 1, 2) orientation code of each bin's centre, then (0, 0): no orientation."""
-        theta = (np.arange(self.bins) + 0.5) * (math.pi / self.bins)
-        return np.vstack([np.column_stack([np.cos(2 * theta), np.sin(2 * theta)]), np.zeros((1, 2))])
-
-    def _cells(self, clouds: np.ndarray) -> np.ndarray:
-        """(..., n, 4) oriented clouds -> (..., n) flat raster index ((row * grid + column) * (bins + 1) + bin)."""
-        g, b = self.grid, self.bins
-        ij = np.clip(((clouds[..., :2] + 1.0) * (g / 2.0)).astype(np.intp), 0, g - 1)
-        theta = np.mod(0.5 * np.arctan2(clouds[..., 3], clouds[..., 2]), math.pi)
-        k = np.minimum((theta * (b / math.pi)).astype(np.intp), b - 1)
-        k[np.hypot(clouds[..., 2], clouds[..., 3]) < 0.5] = b   # (0, 0): no orientation
-        return (ij[..., 1] * g + ij[..., 0]) * (b + 1) + k
-
-    def _field(self, cloud: np.ndarray) -> np.ndarray:
-        """(n, 4) oriented cloud -> (grid**2 * (bins + 1),) float32: each cell's distance to its nearest point."""
-        positional = np.hypot(self._centres[:, None, 0] - cloud[None, :, 0],
-                              self._centres[:, None, 1] - cloud[None, :, 1])               # (g*g, n)
-        angular = self.orientation_weight * np.hypot(self._code_table[:, None, 0] - cloud[None, :, 2],
-                                                     self._code_table[:, None, 1] - cloud[None, :, 3])  # (b+1, n)
-        return (positional[:, None, :] + angular[None, :, :]).min(axis=2).ravel().astype(np.float32)
-
     def _prepare_codebook(self) -> None:
-        g = self.grid
-        centres = (np.arange(g) + 0.5) * (2.0 / g) - 1.0
-        cx, cy = np.meshgrid(centres, centres)            # (g, g), row = y
-        self._centres = np.column_stack([cx.ravel(), cy.ravel()])
-        self._code_table = self._codes()
         clouds = self.templates_.reshape(len(self.templates_), self.n_points, POINT_WIDTH).astype(np.float64)
-        fields = np.empty((len(self._centres) * len(self._code_table), len(clouds)), dtype=np.float32)
+        fields = np.empty((self.grid * self.grid * (self.bins + 1), len(clouds)), dtype=np.float32)
         for k, cloud in enumerate(clouds):
-            fields[:, k] = self._field(cloud)
-        self._fields = fields                            # cells first: a query's n cells gather n rows
-        self._template_cells = self._cells(clouds)       # (T, n)
+            fields[:, k] = distance_field(cloud, self.grid, self.bins, self.orientation_weight)
+        self._fields = fields   # cells first: a query's n cells gather n contiguous rows
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         cloud = np.asarray(query, dtype=np.float64).reshape(self.n_points, POINT_WIDTH)
-        to_templates = self._fields[self._cells(cloud)].mean(axis=0)          # (T,) query -> template
-        from_templates = self._field(cloud)[self._template_cells].mean(axis=1)  # (T,) template -> query
-        return 0.5 * (to_templates + from_templates)
+        return self._fields[raster_cells(cloud, self.grid, self.bins)].mean(axis=0)   # (T,) float32
+
+    def query_cells(self, gesture: TouchGesture) -> np.ndarray | None:
+        """(n_points,) raster cells of ``gesture``'s oriented cloud (made from its float64 points, not from the
+        float32 features), or None if it is unusable (no point, or a NaN or infinite one)."""
+        points = gesture.trajectory
+        if len(points) == 0 or not np.isfinite(points).all():
+            return None
+        if cloud_accel.oriented_cells is not None:   # the same cells in one C call (cloud_accel)
+            return cloud_accel.oriented_cells(points, gesture.stroke, self.n_points, self.grid, self.bins)
+        return raster_cells(oriented_cloud(points, gesture.stroke, self.n_points), self.grid, self.bins)
+
+    def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
+        # The query side without its features: the cells they would fall in, and one gather (what the fused
+        # recogniser asks on every touch).
+        self._check_fitted()
+        cells = self.query_cells(gesture)
+        if cells is None:
+            return None
+        if cloud_accel.oriented_mean is not None:
+            distances = cloud_accel.oriented_mean(self._fields, cells)
+        else:
+            distances = self._fields[cells].mean(axis=0)
+        return np.minimum.reduceat(distances, self.class_starts_).astype(np.float64, copy=False)
 
 
 class OrientedFusedRecogniser(FusedRecogniser):
@@ -253,5 +289,4 @@ class OrientedFusedRecogniser(FusedRecogniser):
         first = self.oriented_.class_distances(gesture)
         if second is None or first is None:   # the trace or the oriented cloud cannot read it: the cloud alone
             return TemplateRecogniser._nearest(self, gesture, per_class, allowed)
-        return TemplateRecogniser._nearest(self, gesture, relative_distances(first) + relative_distances(second),
-                                           allowed)
+        return TemplateRecogniser._nearest(self, gesture, relative_sum(first, second), allowed)
