@@ -14,7 +14,15 @@ import pytest
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import make_recogniser
 from touch_graph.cli.main import main as social_touch
-from touch_lab.skin.bench import LIFT_S, STEPS, bench_recognition, in_strokes, predict_steps, synthetic_codebook
+from touch_lab.skin.bench import (
+    LIFT_S,
+    MULTISTROKE_DEFAULT,
+    STEPS,
+    bench_recognition,
+    in_strokes,
+    predict_steps,
+    synthetic_codebook,
+)
 from touch_lab.skin.datasets import TraceSample, write_traces
 from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
 from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
@@ -152,9 +160,9 @@ def test_bench_smoke():
     assert all(np.isfinite(v) for v in result['recognisers']['cloud']['steps_cpu_us'].values())
 
 
-def test_the_bench_times_fused_with_every_template_in_its_six_stroke_orders():
-    result = bench_recognition(['fused'], n_gestures=3, templates_per_gesture=2, queries=3, repeats=1)
-    assert result['recognisers']['fused']['templates'] == 6
+def test_the_bench_times_the_multistroke_default_with_every_template_in_its_six_stroke_orders():
+    result = bench_recognition([MULTISTROKE_DEFAULT], n_gestures=3, templates_per_gesture=2, queries=3, repeats=1)
+    assert result['recognisers'][MULTISTROKE_DEFAULT]['templates'] == 6
     assert result['fused_3_strokes']['templates'] == 6 * 6 and result['fused_3_strokes']['us_per_recognition'] > 0
     g = synthetic_codebook(1, 1)[0][0]
     cut = in_strokes(g, 3)

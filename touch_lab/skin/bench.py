@@ -2,8 +2,9 @@
 
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, ``fused``, and ``auto``, which
-picks ``fused`` for multi-stroke vocabularies) 100 us (``goal_us_multistroke``). ``early`` is one candidate of
+issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, ``fused``, ``oriented``,
+``fused_oriented``, and ``auto``, which picks ``fused_oriented`` for multi-stroke vocabularies) 100 us
+(``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it
 while a gesture is traced.
@@ -24,14 +25,15 @@ step's clock reads taken off): ``features`` (``_features``), ``search`` (``_dist
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
 classes the stroke count allows before the decision, strokes and duration of the class it names
 after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the nearest allowed class, ``refereed``'s
-referee on a tie, ``fused``'s trace and sum, the distance and margin rules), ``order`` (the
+referee on a tie, ``fused``'s trace and sum (``fused_oriented``: also the oriented cloud's gather), the
+distance and margin rules), ``order`` (the
 path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
 accepts) and ``other``: the whole
 ``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
 ``raster``, the distance-field bounds (step 2 of :mod:`~touch_gestures.skin.clouds`), timed alone:
 it is part of ``search``, not added to the total.
 
-``fused_3_strokes`` times the multi-stroke default where its trace searches most: the same
+``fused_3_strokes`` times the multi-stroke default (:data:`MULTISTROKE_DEFAULT`) where its trace searches most: the same
 gestures, each cut into three strokes (thirds of its path, lifts of ``LIFT_S``), so that every
 template is matched in all 3! = 6 orders of its strokes (:mod:`~touch_gestures.skin.stroke_orders`);
 ``templates`` there counts the trace's rows. A real vocabulary mixes one, two and three strokes and
@@ -54,6 +56,7 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
+from touch_gestures.skin.vocabulary import AutoRecogniser
 from touch_lab.bench.timing import gc_paused
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
@@ -62,6 +65,9 @@ __all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recogniti
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
+#: What ``auto`` picks for a multi-stroke vocabulary (:mod:`touch_gestures.skin.vocabulary`): ``fused_3_strokes``
+#: times it.
+MULTISTROKE_DEFAULT = AutoRecogniser().order_free
 #: The lift (s) between the strokes of ``fused_3_strokes``'s gestures.
 LIFT_S = 0.3
 #: The steps of a recognition that ``steps_cpu_us`` times (module doc), in predict's order.
@@ -121,9 +127,9 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
             early, early_cpu = _median_us(PrefixMatcher(model).candidate, halves, repeats)
             out['early'] = {'recogniser': name, 'us_per_candidate': early, 'cpu_us_per_candidate': early_cpu,
                             'ratio_to_goal': early / GOAL_US_MULTISTROKE}
-    if 'fused' in names:
+    if MULTISTROKE_DEFAULT in names:
         cut = [in_strokes(g, 3) for g in gestures]
-        model = make_recogniser('fused').fit(cut, labels)
+        model = make_recogniser(MULTISTROKE_DEFAULT).fit(cut, labels)
         us, cpu_us = _median_us(model.predict, [in_strokes(g, 3) for g in probe], repeats)
         out['fused_3_strokes'] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
                                   'templates': len(model.referee_.templates_),
