@@ -131,7 +131,8 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         cut = [in_strokes(g, 3) for g in gestures]
         model = make_recogniser(MULTISTROKE_DEFAULT).fit(cut, labels)
         us, cpu_us = _median_us(model.predict, [in_strokes(g, 3) for g in probe], repeats)
-        out['fused_3_strokes'] = {'us_per_recognition': us, 'cpu_us_per_recognition': cpu_us,
+        out['fused_3_strokes'] = {'recogniser': MULTISTROKE_DEFAULT, 'us_per_recognition': us,
+                                  'cpu_us_per_recognition': cpu_us,
                                   'templates': len(model.referee_.templates_),
                                   'ratio_to_multistroke_goal': us / GOAL_US_MULTISTROKE}
     base = out['recognisers'].get('centroid', {}).get('us_per_recognition')

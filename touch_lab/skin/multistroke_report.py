@@ -172,7 +172,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
         lines.append(f"| {name} | {v['us_per_recognition']:.0f} | {v['cpu_us_per_recognition']:.0f} |")
     if 'fused_3_strokes' in b:
         f3 = b['fused_3_strokes']
-        lines += ['', f"fused with every template of three strokes (each gesture cut into thirds; the trace matches "
+        lines += ['', f"{f3.get('recogniser', 'fused')}, the multi-stroke default, with every template of three "
+                  "strokes (each gesture cut into thirds; the trace matches "
                   f"each template in its 6 stroke orders, {f3['templates']} rows): {f3['us_per_recognition']:.0f} us "
                   f"({f3['cpu_us_per_recognition']:.0f} CPU us). A vocabulary of one to three strokes costs between "
                   'this and the row above.']
