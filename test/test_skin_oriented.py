@@ -149,3 +149,14 @@ def test_a_fused_oriented_codebook_file_loads_with_its_three_parts(fitted, tmp_p
     with pytest.raises(ValueError, match='a fused_oriented codebook holds the cloud'):
         labels = oriented.classes_[oriented.template_labels_]
         OrientedFusedRecogniser().set_codebook(oriented.templates_[:, :-1], labels)
+
+
+def test_a_touch_of_one_point_and_a_trace_ten_times_longer_than_any_template_get_an_answer(fitted):
+    oriented, _ = fitted
+    dab = TouchGesture.from_trajectory(np.array([[12.0, 20.0]]))
+    assert np.isfinite(oriented.oriented_.class_distances(dab)).all()
+    oriented.predict(dab)   # named or rejected, never raised
+    rng = np.random.default_rng(11)
+    long = TouchGesture.from_trajectory(np.cumsum(rng.normal(0, 1.5, (4000, 2)), axis=0))
+    assert np.isfinite(oriented.oriented_.class_distances(long)).all()
+    oriented.predict(long)
