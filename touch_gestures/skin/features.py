@@ -21,6 +21,7 @@ __all__ = [
     'nna_indices',
     'nna_resample',
     'nna_rescale',
+    'running_ink',
     'shift_to_corner',
 ]
 
@@ -135,6 +136,24 @@ def arc_length_resample(points: np.ndarray, n: int, stroke: np.ndarray | None = 
     return arc_length_resample_complex(points, n, stroke).view(np.float64).reshape(n, 2)
 
 
+def running_ink(path: np.ndarray, stroke: np.ndarray | None = None) -> np.ndarray:
+    """(m,) complex128 path ``x + 1j * y`` with (m,) stroke ids -> (m,) float64 ink length up to each point.
+
+    The steps are numpy's complex ``abs``; the jump from one stroke to the next adds nothing.
+
+    >>> running_ink(np.array([0, 3 + 4j, 9 + 4j, 9 + 5j]), np.array([0, 0, 1, 1])).tolist()
+    [0.0, 5.0, 5.0, 6.0]
+    """
+    step = np.abs(path[1:] - path[:-1])
+    if stroke is not None:
+        stroke = np.asarray(stroke)
+        step[stroke[1:] != stroke[:-1]] = 0.0  # the finger is lifted: no ink between strokes
+    cum = np.empty(len(path))
+    cum[0] = 0.0
+    np.cumsum(step, out=cum[1:])
+    return cum
+
+
 def arc_length_resample_complex(points: np.ndarray, n: int, stroke: np.ndarray | None = None) -> np.ndarray:
     """:func:`arc_length_resample` as (n,) complex128 ``x + 1j * y`` (x and y interleaved in memory).
 
@@ -151,13 +170,7 @@ def arc_length_resample_complex(points: np.ndarray, n: int, stroke: np.ndarray |
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise ValueError(f'a path is (m, 2) points; got shape {pts.shape}')
     path = pts.view(np.complex128).reshape(-1)
-    step = np.abs(path[1:] - path[:-1])
-    if stroke is not None:
-        stroke = np.asarray(stroke)
-        step[stroke[1:] != stroke[:-1]] = 0.0  # the finger is lifted: no ink between strokes
-    cum = np.empty(len(pts))
-    cum[0] = 0.0
-    np.cumsum(step, out=cum[1:])
+    cum = running_ink(path, stroke)
     total = cum[-1]
     if not total > 0:
         return np.repeat(path[:1], n)

@@ -138,12 +138,18 @@ class FusedRecogniser(RefereedRecogniser):
         # cloud's alone (_query_features); the trace reads the query itself (_nearest).
         cloud, trace = self._parts()
         first = cloud._features(gesture)
-        if first is None or not len(gesture.trajectory):
+        own = self._own_features(gesture)
+        if first is None or own is None or not len(gesture.trajectory):
             return None
         orders = [trace_features(p, t, trace.n_points, trace.aspect_floor)
                   for p, t in every_order(gesture, self.stroke_orders)]
         orders += orders[:1] * (math.factorial(self.stroke_orders) - len(orders))
-        return np.concatenate([first, *orders]).astype(np.float32, copy=False)
+        return np.concatenate([first, *own, *orders]).astype(np.float32, copy=False)
+
+    def _own_features(self, gesture: TouchGesture) -> list[np.ndarray] | None:
+        """A subclass's part of a template, between the cloud's and the trace's (:meth:`_trace_start` says where
+        the trace starts after it): none here; None: the gesture is unusable."""
+        return []
 
     def _prepare_codebook(self) -> None:
         cloud, trace = self._parts()

@@ -32,13 +32,14 @@ Measured leave-one-person-out through the virtual skin (``social-touch eval skin
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from . import cloud_accel
 from .base import TemplateRecogniser
-from .features import arc_length_resample_complex
+from .features import arc_length_resample_complex, running_ink
 from .fused import FusedRecogniser, relative_sum
 from .gesture import TouchGesture
 
@@ -51,18 +52,13 @@ POINT_WIDTH = 4
 
 def _resampled_strokes(points: np.ndarray, stroke: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(m, 2) points, (m,) stroke ids -> (n, 2) float64 points along the ink and (n,) the stroke of each."""
-    pts = np.asarray(points, dtype=np.float64)
+    pts = np.ascontiguousarray(points, dtype=np.float64)
     path = arc_length_resample_complex(pts, n, stroke)
-    ids = np.zeros(len(pts), dtype=np.int64) if stroke is None else np.asarray(stroke, dtype=np.int64)
-    # The stroke of each resampled point: the one its ink position falls in (the air adds no length). The steps
-    # as the resampling measures them (numpy's complex abs), so a point at a stroke's end falls in that stroke.
-    flat = np.ascontiguousarray(pts).view(np.complex128).reshape(-1)
-    step = np.abs(flat[1:] - flat[:-1])
-    step[ids[1:] != ids[:-1]] = 0.0
-    cum = np.concatenate([[0.0], np.cumsum(step)])
-    target = np.linspace(0.0, cum[-1], n)
-    # A target at a stroke's end (where the air step of length 0 starts) belongs to that stroke.
-    at = np.clip(np.searchsorted(cum, target, side='left'), 0, len(pts) - 1)
+    ids = np.zeros(len(pts), dtype=np.int64) if stroke is None else np.asarray(stroke)
+    # The stroke of each resampled point: the one its ink position falls in (the air adds no length), a target
+    # at a stroke's end (where the air step of length 0 starts) in that stroke.
+    cum = running_ink(pts.view(np.complex128).reshape(-1), stroke)
+    at = np.clip(np.searchsorted(cum, np.linspace(0.0, cum[-1], n), side='left'), 0, len(pts) - 1)
     return np.column_stack([path.real, path.imag]), ids[at]
 
 
@@ -106,17 +102,25 @@ def exact_oriented_chamfer(query: np.ndarray, template: np.ndarray, weight: floa
     return float(d.min(axis=1).mean())
 
 
+@functools.lru_cache(maxsize=8)
 def _bin_codes(bins: int) -> np.ndarray:
-    """(bins + 1, 2) the orientation code of each bin's centre (bin 0 centred on 0 degrees), then (0, 0)."""
+    """(bins + 1, 2) the orientation code of each bin's centre (bin 0 centred on 0 degrees), then (0, 0);
+    read-only: made once per ``bins``, shared by every template's field."""
     theta = np.arange(bins) * (math.pi / bins)
-    return np.vstack([np.column_stack([np.cos(2 * theta), np.sin(2 * theta)]), np.zeros((1, 2))])
+    codes = np.vstack([np.column_stack([np.cos(2 * theta), np.sin(2 * theta)]), np.zeros((1, 2))])
+    codes.flags.writeable = False
+    return codes
 
 
+@functools.lru_cache(maxsize=8)
 def _cell_centres(grid: int) -> np.ndarray:
-    """(grid * grid, 2) x, y of each cell's centre, row by row (row = y), over [-1, 1] x [-1, 1]."""
+    """(grid * grid, 2) x, y of each cell's centre, row by row (row = y), over [-1, 1] x [-1, 1]; read-only:
+    made once per ``grid``, shared by every template's field."""
     centres = (np.arange(grid) + 0.5) * (2.0 / grid) - 1.0
     cx, cy = np.meshgrid(centres, centres)
-    return np.column_stack([cx.ravel(), cy.ravel()])
+    xy = np.column_stack([cx.ravel(), cy.ravel()])
+    xy.flags.writeable = False
+    return xy
 
 
 def raster_cells(clouds: np.ndarray, grid: int, bins: int) -> np.ndarray:
@@ -202,7 +206,8 @@ class OrientedCloudRecogniser(TemplateRecogniser):
 
     def query_cells(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_points,) raster cells of ``gesture``'s oriented cloud (made from its float64 points, not from the
-        float32 features), or None if it is unusable (no point, or a NaN or infinite one)."""
+        float32 features), or None if it is unusable (no point, or a NaN or infinite one; float32 points, as a
+        gesture holds them, never overflow the float64 ink)."""
         points = gesture.trajectory
         if len(points) == 0 or not np.isfinite(points).all():
             return None
@@ -260,14 +265,10 @@ class OrientedFusedRecogniser(FusedRecogniser):
         super()._check_params()
         self._oriented()._check_params()
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
-        # A template's: the fused ones with the oriented cloud after the cloud.
-        fused = super()._features(gesture)
+    def _own_features(self, gesture: TouchGesture) -> list[np.ndarray] | None:
+        # A template holds the oriented cloud between the cloud and the trace.
         oriented = self._oriented()._features(gesture)
-        if fused is None or oriented is None:
-            return None
-        split = self._primary_width(self._parts()[0])
-        return np.concatenate([fused[:split], oriented, fused[split:]])
+        return None if oriented is None else [oriented]
 
     def _oriented_width(self) -> int:
         return POINT_WIDTH * self.n_points
