@@ -156,6 +156,12 @@ def test_a_touch_of_one_point_and_a_trace_ten_times_longer_than_any_template_get
     dab = TouchGesture.from_trajectory(np.array([[12.0, 20.0]]))
     assert np.isfinite(oriented.oriented_.class_distances(dab)).all()
     oriented.predict(dab)   # named or rejected, never raised
+    # The farthest apart float32 points a gesture can hold: their ink is a finite float64, so is every distance.
+    big = float(np.finfo(np.float32).max)
+    apart = TouchGesture(np.zeros((12, 12), bool), np.zeros((12, 12), np.float32),
+                         np.array([[0.0, 0.0], [big, big], [-big, 3.0]]), np.arange(3) / 150.0)
+    assert np.isfinite(oriented.oriented_.class_distances(apart)).all()
+    assert np.isfinite(oriented.oriented_._features(apart)).all()
     rng = np.random.default_rng(11)
     long = TouchGesture.from_trajectory(np.cumsum(rng.normal(0, 1.5, (4000, 2)), axis=0))
     assert np.isfinite(oriented.oriented_.class_distances(long)).all()

@@ -86,6 +86,8 @@ def test_bad_input_is_refused_with_what_was_expected():
         c.oriented_cells(np.zeros((0, 2)), None, 8, 4, 4)
     with pytest.raises(ValueError, match='one stroke id per point'):
         c.oriented_cells(good, np.zeros(3), 8, 4, 4)
+    with pytest.raises(OverflowError, match='overflows'):   # finite points whose ink is no finite number
+        c.oriented_cells(np.array([[0.0, 0.0], [1e308, 1e308], [-1e308, 3.0]]), None, 8, 4, 4)
     with pytest.raises(ValueError, match='n >= 2'):
         c.oriented_cells(good, None, 1, 4, 4)
     fields = np.zeros((5, 3), dtype=np.float32)

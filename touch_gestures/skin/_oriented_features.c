@@ -36,8 +36,9 @@ static void resampled_ids(const double *cum, const double *ids, Py_ssize_t m, Py
 }
 
 /* oriented.py's oriented_cloud of resampled points xy (2 n doubles, changed in place: centred, scaled) with
- * their stroke ids, then raster_cells into cells. */
-static void cells_of(double *xy, const double *sid, Py_ssize_t n, Py_ssize_t grid, Py_ssize_t bins, npy_intp *cells)
+ * their stroke ids, then raster_cells into cells. 0, or -1 where the cloud is not finite (finite points whose
+ * ink or spread overflows a double): no cell is made of a NaN. */
+static int cells_of(double *xy, const double *sid, Py_ssize_t n, Py_ssize_t grid, Py_ssize_t bins, npy_intp *cells)
 {
     double sx = 0.0, sy = 0.0;
     for (Py_ssize_t k = 0; k < n; k++) {
@@ -59,6 +60,9 @@ static void cells_of(double *xy, const double *sid, Py_ssize_t n, Py_ssize_t gri
     if (size > 1e-9)
         for (Py_ssize_t k = 0; k < 2 * n; k++)
             xy[k] /= size;
+    for (Py_ssize_t k = 0; k < 2 * n; k++)
+        if (!isfinite(xy[k]))
+            return -1;
     double half_grid = (double)grid / 2.0, per_half_turn = (double)bins / (2.0 * M_PI);
     for (Py_ssize_t k = 0; k < n; k++) {
         Py_ssize_t before = (k > 0 && sid[k - 1] == sid[k]) ? k - 1 : k;
@@ -80,10 +84,12 @@ static void cells_of(double *xy, const double *sid, Py_ssize_t n, Py_ssize_t gri
         row = row < 0 ? 0 : (row > grid - 1 ? grid - 1 : row);
         cells[k] = (npy_intp)((row * grid + col) * (bins + 1) + bin);
     }
+    return 0;
 }
 
 /* oriented_cells(points, stroke, n, grid, bins) -> (n,) intp: oriented.py's
- * raster_cells(oriented_cloud(points, stroke, n), grid, bins) of finite points. */
+ * raster_cells(oriented_cloud(points, stroke, n), grid, bins) of finite points (ValueError otherwise;
+ * OverflowError where the cloud of finite points is not finite). */
 PyObject *skin_oriented_cells(PyObject *Py_UNUSED(module), PyObject *args)
 {
     PyObject *points_obj, *ids_obj;
@@ -115,7 +121,11 @@ PyObject *skin_oriented_cells(PyObject *Py_UNUSED(module), PyObject *args)
         const double *idp = ids ? PyArray_DATA(ids) : NULL;
         skin_resample_into(p, idp, m, n, cum, xy);
         resampled_ids(cum, idp, m, n, sid);
-        cells_of(xy, sid, n, grid, bins, PyArray_DATA((PyArrayObject *)out));
+        if (cells_of(xy, sid, n, grid, bins, PyArray_DATA((PyArrayObject *)out)) < 0) {
+            Py_CLEAR(out);
+            PyErr_SetString(PyExc_OverflowError, "the touch's oriented cloud overflows a double (points too far "
+                                                 "apart to measure its ink)");
+        }
     }
     else if (out != NULL) {
         Py_CLEAR(out);
