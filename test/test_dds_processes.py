@@ -17,7 +17,7 @@ from dds_testing import SpinningGraph, wait_until
 from rosbags.typesys import Stores, get_typestore
 
 from touch_graph import messages
-from touch_graph.dds.cdds import delete_entity
+from touch_graph.dds.cdds import delete_entity, take_builtin
 from touch_graph.dds.idl import idl_struct
 from touch_graph.messages import get_message
 
@@ -107,7 +107,7 @@ def test_ros_discovery_info_is_what_ros2_reads(dds_domain):
         endpoints = {}
 
         def seen():
-            for sample in publications.take(N=100) + subscriptions.take(N=100):
+            for sample in take_builtin(publications, 100) + take_builtin(subscriptions, 100):
                 endpoints[sample.key.bytes] = (sample.topic_name, sample.type_name)
             gids = [bytes(g.data) for g in (*entry.writer_gid_seq, *entry.reader_gid_seq)]
             return all(gid in endpoints for gid in gids)

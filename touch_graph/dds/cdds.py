@@ -4,7 +4,9 @@
   only says how many), woken by a guard condition;
 - deleting an entity now and making sure cyclonedds' Python object will not delete it
   again when it is garbage collected (entity handles could be reused);
-- the number of matched remote readers of a writer, without building a list.
+- the number of matched remote readers of a writer, without building a list;
+- one lock around cyclonedds-python's calls that turn a C QoS into a ``Qos``
+  (:func:`take_builtin`, :func:`matched_endpoint`): they are not safe in two threads at once.
 
 Every call goes to the library cyclonedds-python loaded (its wheel bundles it). ctypes
 releases the GIL during each call, so a thread blocked in :meth:`WaitSet.wait` does not
@@ -14,12 +16,14 @@ hold up Python.
 from __future__ import annotations
 
 import ctypes as ct
+import threading
 from typing import Any
 
 from cyclonedds.core import DDSException, Entity
 from cyclonedds.internal import DDS
 
-__all__ = ['WaitSet', 'delete_entity', 'forget', 'matched_readers', 'wait_for_acks']
+__all__ = ['QOS_CONVERSION_LOCK', 'WaitSet', 'delete_entity', 'forget', 'matched_endpoint', 'matched_readers',
+           'take_builtin', 'wait_for_acks']
 
 _lib = DDS._dll_handle
 _entity = ct.c_int32
@@ -42,6 +46,31 @@ _set_guard = _fn('dds_set_guardcondition', ct.c_int32, _entity, ct.c_bool)
 _delete = _fn('dds_delete', ct.c_int32, _entity)
 _matched_subscriptions = _fn('dds_get_matched_subscriptions', ct.c_int32, _entity, ct.c_void_p, ct.c_size_t)
 _wait_for_acks = _fn('dds_wait_for_acks', ct.c_int32, _entity, ct.c_int64)
+
+
+# cyclonedds-python (11.0.1) turns a C QoS into a Qos through output buffers shared by the whole
+# process (class attributes of cyclonedds.qos._CQos), and decodes a built-in sample's type id
+# through a buffer shared by the type. Two threads converting at once read each other's
+# pointers: a partition list read through another thread's array, and in dds_qget_userdata a
+# copy written into another thread's smaller block (heap corruption; a CI run died of it).
+# Every participant's receive thread takes built-in samples, so every such call holds this.
+QOS_CONVERSION_LOCK = threading.Lock()
+
+
+def take_builtin(reader: Any, n: int) -> list:
+    """Up to ``n`` samples of a cyclonedds ``BuiltinDataReader``, taken under :data:`QOS_CONVERSION_LOCK`."""
+    with QOS_CONVERSION_LOCK:
+        return reader.take(N=n)
+
+
+def matched_endpoint(get_data: Any, handle: int) -> Any:
+    """``get_data(handle)`` (a writer's ``get_matched_subscription_data`` or a reader's
+    ``get_matched_publication_data``) under :data:`QOS_CONVERSION_LOCK`; None when the endpoint is gone."""
+    with QOS_CONVERSION_LOCK:
+        try:
+            return get_data(handle)
+        except Exception:  # the endpoint went away between the two calls
+            return None
 
 
 def delete_entity(entity: Entity | int) -> None:

@@ -43,7 +43,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from .. import messages
 from ..runtime.qos import DurabilityPolicy, QoSProfile
-from .cdds import forget
+from .cdds import forget, take_builtin
 from .endpoints import pad4
 from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo, ServiceEndpoint
 from .idl import idl_service_struct, idl_struct
@@ -210,7 +210,7 @@ class GraphDiscovery:
 
     # ------------------------------------------------------------------ what we read
     def _take_builtin(self, kind: str, reader: Any) -> None:
-        samples = reader.take(N=256)
+        samples = take_builtin(reader, 256)
         if not samples:
             return
         with self._lock:

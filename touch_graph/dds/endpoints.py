@@ -28,7 +28,7 @@ from cyclonedds.sub import DataReader
 from .. import messages
 from ..errors import MessageError
 from ..runtime.qos import DurabilityPolicy
-from .cdds import forget, matched_readers
+from .cdds import forget, matched_endpoint, matched_readers
 from .qos import dds_qos
 
 if TYPE_CHECKING:
@@ -206,8 +206,5 @@ class DdsReader:
 
 def writer_type(reader: Any, writer_handle: int) -> str:
     """``'type' (writer GUID)`` of a writer matched with ``reader``, for reports ('an unknown type' if gone)."""
-    try:
-        endpoint = reader.get_matched_publication_data(writer_handle)
-    except Exception:  # the writer may be gone already; the report still goes out
-        endpoint = None
+    endpoint = matched_endpoint(reader.get_matched_publication_data, writer_handle)  # None: gone already
     return f"'{endpoint.type_name}' (writer {endpoint.key})" if endpoint is not None else 'an unknown type'

@@ -36,7 +36,7 @@ from cyclonedds.sub import DataReader
 
 from .. import messages
 from ..errors import MessageError
-from .cdds import forget, matched_readers
+from .cdds import forget, matched_endpoint, matched_readers
 from .discovery import user_data_value
 from .endpoints import TAKE_BATCH, pad4, writer_type
 from .idl import idl_service_struct
@@ -213,20 +213,14 @@ class DdsService(_Pair):
         """'yes' (its reply reader is matched), 'gone' (its request writer left) or 'maybe' (after waiting)."""
         deadline = time.monotonic() + REPLY_MATCH_WAIT_S
         while True:
-            try:
-                writer = self.reader.get_matched_publication_data(handle)
-            except Exception:
-                writer = None
+            writer = matched_endpoint(self.reader.get_matched_publication_data, handle)
             if writer is None:
                 return 'gone'
             clientid = user_data_value(writer.qos, 'clientid')
             if not clientid or clientid in self._clients_seen:
                 return 'yes'  # a client without an id (older rmw): assume all is well, as rmw_cyclonedds does
             for reader_handle in self.writer.get_matched_subscriptions():
-                try:
-                    reader = self.writer.get_matched_subscription_data(reader_handle)
-                except Exception:
-                    continue
+                reader = matched_endpoint(self.writer.get_matched_subscription_data, reader_handle)
                 if reader is not None and user_data_value(reader.qos, 'clientid') == clientid:
                     if len(self._clients_seen) > 1000:
                         self._clients_seen.clear()
@@ -304,13 +298,13 @@ class DdsClient(_Pair):
             return False
         ids = set()
         for handle in readers:
-            data = _safe(self.writer.get_matched_subscription_data, handle)
+            data = matched_endpoint(self.writer.get_matched_subscription_data, handle)
             if data is not None and user_data_value(data.qos, 'serviceid'):
                 ids.add(user_data_value(data.qos, 'serviceid'))
         if not ids:
             return True  # servers without ids (older rmw): matches on both topics are enough
         for handle in writers:
-            data = _safe(self.reader.get_matched_publication_data, handle)
+            data = matched_endpoint(self.reader.get_matched_publication_data, handle)
             if data is not None and user_data_value(data.qos, 'serviceid') in ids:
                 return True
         return False
@@ -324,8 +318,3 @@ class DdsClient(_Pair):
             self.client._fail_pending('the server left the graph before replying', seqs)
 
 
-def _safe(fn: Any, handle: int) -> Any:
-    try:
-        return fn(handle)
-    except Exception:  # the endpoint went away between the two calls
-        return None
