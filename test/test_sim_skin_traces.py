@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from touch_driver.skin.calibration import calibrate_frames
-from touch_sim.skin.traces import TraceStimulus, render_frames
+from touch_sim.skin.traces import TraceStimulus, clock_tick, render_frames, spread_stamps
 
 PITCH = 47 / 12
 
@@ -28,12 +32,47 @@ def test_degenerate_shapes():
     line = TraceStimulus.from_points([0, 50, 100], [7, 7, 7], [0, 100, 200], margin_mm=0)
     assert line.strokes[0][:, 1].tolist() == pytest.approx([0, 23.5, 47])
     assert line.strokes[0][:, 2].tolist() == pytest.approx([23.5] * 3)
-    dup = TraceStimulus.from_points([0, 1, 2], [0, 1, 2], [0, 0, 10])     # equal times keep the last point
-    assert len(dup.strokes[0]) == 2
-    # A dot whose pen-down was logged twice in the tick the first one ended is one touch, not an overlap.
+    dup = TraceStimulus.from_points([0, 1, 2], [0, 1, 2], [0, 0, 10])     # one time: spread over its tick
+    assert dup.strokes[0][:, 0].tolist() == pytest.approx([0.55, 0.555, 0.56])
+    # A dot whose pen-down was logged twice in the tick the first one ended is one touch, not an overlap;
+    # its three points keep their order in time within that millisecond.
     bang = TraceStimulus.from_points([0, 0, 0, 0, 0], [0, 90, 100, 100, 100], [0, 100, 300, 301, 300],
                                      stroke=[0, 0, 1, 1, 2])
-    assert [len(s) for s in bang.strokes] == [2, 2]
+    assert [len(s) for s in bang.strokes] == [2, 3]
+    assert bang.strokes[1][:, 0].tolist() == pytest.approx([0.85, 0.8505, 0.851])
+
+
+def test_a_stroke_logged_in_one_tick_passes_every_point():
+    """A bar of an X whose points the logger stamped at one time (Mixed Multistroke sample 2946): the finger
+    moves along it within the tick instead of dabbing its last point."""
+    stim = TraceStimulus.from_points([78, 75, 76, 166, 166, 84, 90, 99], [127, 130, 130, 16, 16, 21, 33, 46],
+                                     [0, 0, 0, 0, 31, 609, 624, 640], stroke=[0, 0, 0, 0, 0, 1, 1, 1])
+    bar = stim.strokes[0]
+    assert len(bar) == 5 and np.all(np.diff(bar[:, 0]) > 0)
+    assert bar[-2, 0] - bar[0, 0] == pytest.approx(3 * 0.016 / 4)      # the run of 4 spread over a 16 ms tick
+    xy, down = stim.truth(np.array([bar[0, 0], bar[-2, 0]]))
+    assert down.all() and np.hypot(*(xy[1] - xy[0])) > 30             # the finger crossed the skin
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.integers(0, 6), min_size=1, max_size=30), st.floats(0.5, 40), st.sampled_from([math.inf, 5.0]))
+def test_spread_stamps_keeps_every_point_it_can_in_order_within_its_tick(steps, tick, end_after):
+    t = np.cumsum(np.asarray(steps, dtype=np.float64) * 8.0)          # runs of equal times, steps of 8 units
+    end = t[-1] + end_after
+    times, keep = spread_stamps(t, tick, end)
+    kept = times[keep]
+    assert keep[-1] and np.all(np.diff(kept) > 0) and kept[-1] < end
+    assert np.all(times >= t) and np.all(times[keep] - t[keep] < tick)  # within the tick that stamped it
+    assert np.array_equal(np.unique(t), np.unique(t[keep]))            # every time still has a point
+    assert keep.all()                                                  # a finite tick and room: nothing dropped
+
+
+def test_spread_stamps_without_a_tick_keeps_the_last_point_of_a_run():
+    times, keep = spread_stamps(np.array([0.0, 0.0, 5.0, 5.0]), math.nan)
+    assert times[keep].tolist() == [0.0, 5.0] and keep.tolist() == [False, True, False, True]
+    assert math.isnan(clock_tick(np.array([3.0, 3.0]), np.array([0, 0])))   # no two distinct times: no tick
+    times, keep = spread_stamps(np.array([]), 16.0)
+    assert times.size == 0 and keep.size == 0
 
 
 @pytest.mark.parametrize(('args', 'kwargs', 'message'), [

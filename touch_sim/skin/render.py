@@ -51,7 +51,7 @@ __all__ = ['RenderSettings', 'RenderedSample', 'TimedGesture', 'default_cache_di
            'render_samples']
 
 _NS = 1_000_000_000
-_CACHE_VERSION = 5  # bump when the segmenter or the sensor path changes what a sample renders to
+_CACHE_VERSION = 6  # bump when the segmenter or the sensor path changes what a sample renders to
 
 
 @dataclass(frozen=True)
@@ -98,18 +98,16 @@ class RenderedSample:
 
 
 def _stimulus(sample: TraceSample, settings: RenderSettings):
-    from touch_sim.skin.traces import TraceStimulus
+    from touch_sim.skin.traces import TraceStimulus, clock_tick, spread_strokes
 
     if settings.placement == 'fit':
         return TraceStimulus.from_points(sample.x, sample.y, sample.t_ms, sample.stroke, force_n=settings.force_n,
                                          radius_mm=settings.radius_mm)
     lead = 0.55  # untouched skin first (the calibrator tares on it), then the touch-down ramp
-    strokes = []
-    for sid in np.unique(sample.stroke):
-        sel = sample.stroke == sid
-        t = lead + (sample.t_ms[sel] - sample.t_ms.min()) / 1000.0
-        keep = np.r_[np.diff(t) > 0, True]
-        strokes.append(np.column_stack([t[keep], sample.x[sel][keep], sample.y[sel][keep]]))
+    t = lead + (sample.t_ms - sample.t_ms.min()) / 1000.0
+    stamped = sorted((np.column_stack([t[sel], sample.x[sel], sample.y[sel]])
+                      for sel in (sample.stroke == sid for sid in np.unique(sample.stroke))), key=lambda r: r[0, 0])
+    strokes = spread_strokes(stamped, clock_tick(sample.t_ms, sample.stroke) / 1000.0)
     return TraceStimulus(strokes, force_n=settings.force_n, radius_mm=settings.radius_mm)
 
 
