@@ -168,7 +168,7 @@ def test_the_rule_keeps_direction_where_the_vocabulary_needs_it():
     gestures, labels = lines(rng, 10)
     auto = AutoRecogniser().fit(gestures, labels)
     assert auto.choice_ == 'trace' and auto.direction_aware and auto.reason_.startswith('direction')
-    cloud, trace = auto.evidence_['fused_oriented'], auto.evidence_['trace']
+    cloud, trace = auto.evidence_['fused'], auto.evidence_['trace']
     assert max(cloud.values()) < 0.75 < min(trace.values())   # one cloud for two directions
     g, _ = lines(rng, 1)
     assert auto.predict(g[0]).label == 'line_right' and auto.predict(g[1]).label == 'line_left'
@@ -177,10 +177,10 @@ def test_the_rule_keeps_direction_where_the_vocabulary_needs_it():
 def test_the_rule_takes_the_cloud_where_people_vary_the_stroke_order():
     rng = np.random.default_rng(6)
     auto = AutoRecogniser().fit(*codebook(rng, per_class=10))
-    assert auto.choice_ == 'fused_oriented' and auto.reason_ == 'multi-stroke vocabulary', auto.evidence_
+    assert auto.choice_ == 'fused' and auto.reason_ == 'multi-stroke vocabulary', auto.evidence_
     assert auto.predict(symbol('H', rng)).label == 'H'
     # One template per class: nothing to measure on, the vocabulary still has multi-stroke gestures.
-    assert make_recogniser('auto').fit(*codebook(rng, per_class=1)).choice_ == 'fused_oriented'
+    assert make_recogniser('auto').fit(*codebook(rng, per_class=1)).choice_ == 'fused'
 
 
 def test_codebook_accuracy_of_a_class_with_one_template_is_nan():

@@ -16,16 +16,19 @@ vocabulary needs follows from its codebook, so the rule is measured there, not f
        one reads (at least ``separated`` better), direction is part of the vocabulary: the
        ordered recogniser (two lines in opposite directions are one cloud: 50 % each).
     2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser (by
-       default ``fused_oriented``, :mod:`.oriented`: the oriented cloud's class distances summed
-       with the trace's, each over its own nearest, to name the class; its distances and
-       rejection are the cloud's): people order and direct their strokes differently, which a
-       codebook cannot show (a template's nearest neighbour is mostly its own performer's
-       repetition, traced the same way), and which leave-one-person-out shows
-       (docs/skin-evaluation.md). The default among the order-free ones is the one
-       leave-one-person-out on people the codebook has not seen reads best without losing
-       elsewhere, within the cost goal: ``fused_oriented`` against ``fused`` (the cloud in the
-       sum) and the cloud refereed by $N on its near ties (:mod:`.referee`), random touches
-       firing the same (``social-touch eval skin``; figures in docs/skin-multistroke.md).
+       default ``fused``, :mod:`.fused`: the cloud's class distances summed with the trace's,
+       each over its own nearest, to name the class; its distances and rejection are the
+       cloud's): people order and direct their strokes differently, which a codebook cannot
+       show (a template's nearest neighbour is mostly its own performer's repetition, traced
+       the same way), and which leave-one-person-out shows (docs/skin-evaluation.md). The
+       default among the order-free ones is the one leave-one-person-out on people the
+       codebook has not seen reads best without losing elsewhere, within the cost goal (and
+       of two that read the same, the cheaper): ``fused`` against ``fused_oriented`` (the
+       oriented cloud in the sum, :mod:`.oriented`: the same accuracy and wrong commands on the
+       Mixed Multistroke Gestures, at 13 us more per recognition, at the goal's edge with
+       three-stroke templates) and the cloud refereed by $N on its near ties (:mod:`.referee`),
+       random touches firing the same (``social-touch eval skin``; figures in
+       docs/skin-multistroke.md).
     3. A single-stroke vocabulary gets the one with the higher mean per-class accuracy, the
        ordered one within ``tie`` (it is cheaper).
 
@@ -86,7 +89,7 @@ class AutoRecogniser(TemplateRecogniser):
 
     name = 'auto'
 
-    def __init__(self, ordered: str = 'trace', order_free: str = 'fused_oriented', per_class: int = 20,
+    def __init__(self, ordered: str = 'trace', order_free: str = 'fused', per_class: int = 20,
                  confused: float = 0.75, separated: float = 0.25, tie: float = 0.005,
                  max_distance: float | str | None = 'auto',
                  auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:

@@ -3,7 +3,7 @@
 Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
 ``predict`` call (features + matching against the whole codebook + decision), on one core;
 issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, ``fused``, ``oriented``,
-``fused_oriented``, and ``auto``, which picks ``fused_oriented`` for multi-stroke vocabularies) 100 us
+``fused_oriented``, and ``auto``, which picks ``fused`` for multi-stroke vocabularies) 100 us
 (``goal_us_multistroke``). ``early`` is one candidate of
 :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
 four fractions: four matchings) for the first half of each gesture, as the node publishes it

@@ -19,8 +19,8 @@ shapes, other performers than the codebook's) on the virtual skin, read by the r
 ``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph
 (:class:`~touch_sim.harness.Harness`), with a codebook of ``n_gestures`` x
 ``templates_per_gesture`` for the ``recogniser`` (default ``refereed``: with rejection off it fires on
-every gesture; the fused ones, ``fused`` and ``fused_oriented`` (the one ``auto`` picks for multi-stroke
-vocabularies), still reject a gesture where the sum names another class than the cloud's nearest,
+every gesture; the fused ones, ``fused`` (the one ``auto`` picks for multi-stroke vocabularies) and
+``fused_oriented``, still reject a gesture where the sum names another class than the cloud's nearest,
 leaving it untimed; the path from the gap to the command is the same code); it reports median and p99
 over every command.
 """
