@@ -38,7 +38,9 @@ small (``'margin'``), the stroke count is rare or unseen for the class (``'strok
 duration is out of the class's range (``'duration'``) or the one-stroke path is out of
 order (``'order'``). Measured with the cloud on the Mixed Multistroke Gestures
 (``social-touch eval skin --traces multistroke_dev.csv.gz --recognisers cloud``,
-leave-one-person-out through the virtual skin), the rare stroke counts of :mod:`.evidence`
+leave-one-person-out through the virtual skin; these two comparisons were made while the virtual
+skin still kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`), the rare
+stroke counts of :mod:`.evidence`
 and the path order of :mod:`.order_evidence` took the synthetic random touches that fire a
 command from 7.40 % to 1.20 % (most of it the stroke counts': arrow-like scribbles), correct
 commands from 89.39 % to 89.04 % and wrong ones from 2.00 % to 1.27 %. Of the 18 firings

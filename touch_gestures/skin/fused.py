@@ -25,18 +25,21 @@ near the X's templates read that way, not nearer a pitchfork.
 
 Measured leave-one-person-out through the virtual skin (``social-touch eval skin --traces
 <file> --json --recognisers fused``; docs/skin-multistroke.md), nearest class right over all
-samples: Mixed Multistroke Gestures 95.63 % against ``refereed``'s 94.70 % (98.02 % against
-97.06 % of the samples cut into one gesture; an N named H from 13 to 7; with the templates
-only as traced, 95.32 %, 97.70 % and an X named pitchfork 18 times, all by one person, who
-draws the other bar first: 1 with every order), unistroke file 99.33 % against ``trace``'s
-99.17 % (one-stroke templates have one order). Commands: wrong ones from 1.21 % to 0.48 % of
-the multi-stroke samples, correct ones from 89.89 % to 89.49 % (a class the sum names against
-the cloud's nearest is rejected), random touches firing unchanged (1.20 %).
+samples: Mixed Multistroke Gestures 97.09 % against ``refereed``'s 97.00 % and the cloud's
+96.90 % (99.55 % of the samples cut into one gesture), unistroke file 99.33 % against
+``trace``'s 99.17 % (one-stroke templates have one order). Commands: wrong ones 0.06 % of the
+multi-stroke samples against the cloud's 0.12 %, correct ones 95.46 % against 95.51 % (a class
+the sum names against the cloud's nearest is rejected), random touches firing the same (0.40 %).
+While the virtual skin kept one point per logged time (a fifth of the median sample's ink lost,
+:func:`touch_sim.skin.traces.spread_stamps`) the sum mattered more, 95.63 % against 94.70 %, and
+holding the templates in every stroke order took an X named pitchfork from 18 to 1 (all by one
+person, who draws the other bar first).
 Cost: the cloud's and the trace's search. With the compiled features, class minima and sum
 (:mod:`.cloud_accel`: the trace's features, its distances' class minima after numpy's matrix-vector product,
-and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 84 CPU us per recognition
-against the cloud's 76 on the synthetic bench (16 gestures x 30 one-stroke templates), 100 where every template
-has three strokes (6 orders each, ``fused_3_strokes``; ``social-touch bench skin``).
+and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 61 CPU us per recognition
+against the cloud's 55 on the synthetic bench (16 gestures x 30 one-stroke templates), 79 where every template
+has three strokes (6 orders each, ``fused_3_strokes``; ``social-touch bench skin``, the run of
+docs/skin-multistroke.md).
 """
 
 from __future__ import annotations

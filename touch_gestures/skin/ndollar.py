@@ -45,7 +45,8 @@ differs, it says so:
    and :mod:`.evidence` decide).
 
 **Defaults, by measurement** (leave-one-person-out on the Mixed Multistroke Gestures through the
-virtual skin, :func:`touch_lab.skin.cli.evaluate_file` with the parameters set): no rotation (the
+virtual skin, :func:`touch_lab.skin.cli.evaluate_file` with the parameters set, while the virtual skin
+still kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`): no rotation (the
 skin has a fixed frame, and within 45 degrees a plus is an X turned) was more accurate than $N's
 45 degrees in every fold (a few more random touches fire: 1.7 % against 0.6 %). ``same_strokes`` raised
 the accuracy further, but let about six times as many random touches fire (a touch of one stroke

@@ -19,8 +19,9 @@ end of a gesture and early candidates are the cloud's (:attr:`primary_`).
 
 Measured leave-one-person-out on the Mixed Multistroke Gestures through the virtual skin
 (``social-touch report skin-multistroke``, docs/skin-multistroke.md): the nearest class is right
-for 94.70 % of the samples against the cloud's 93.86 % (97.06 % of the samples cut into one
-gesture), with the same commands. A tie matches the query against the two tied classes' unistrokes
+for 97.00 % of the samples against the cloud's 96.90 %, with the same commands (94.70 against
+93.86 % while the virtual skin kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`).
+A tie matches the query against the two tied classes' unistrokes
 only (:meth:`~.ndollar.NDollarRecogniser.class_distances_among`: the whole search's distances for
 them). With the compiled search and features (:mod:`.cloud_accel`) it costs 93 against the cloud's
 73 CPU us per recognition on the synthetic bench (16 gestures x 30 templates, where 8 of the 64
