@@ -7,6 +7,7 @@ driver node in the harness (about 50 ms a sample).
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -185,3 +186,22 @@ def test_the_bench_steps_answer_as_predict(name):
     for gesture in [*probe, *scribbles, empty]:
         match, ns = predict_steps(model, gesture)
         assert match == model.predict(gesture) and set(ns) == set(STEPS) and min(ns.values()) >= 0
+
+
+def test_logged_times_say_what_a_replay_of_one_point_per_time_would_lose():
+    from touch_lab.skin.logged_times import ink_lost_one_point_per_time, logged_times
+    # A bar whose first three points the logger stamped at one time: a replay of the last one keeps no ink of them.
+    bar = TraceSample('1', 'a', 'line', '0', np.array([0.0, 10, 20, 20]), np.zeros(4), np.array([0.0, 0, 0, 16]),
+                      np.zeros(4, dtype=int))
+    assert ink_lost_one_point_per_time(bar) == 1.0
+    clean = TraceSample('1', 'a', 'line', '1', np.array([0.0, 10, 20]), np.zeros(3), np.array([0.0, 15, 31]),
+                        np.zeros(3, dtype=int))
+    dab = TraceSample('1', 'a', 'dot', '2', np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2, dtype=int))
+    assert ink_lost_one_point_per_time(clean) == 0.0 and ink_lost_one_point_per_time(dab) == 0.0
+    times = logged_times([bar, clean, dab])
+    assert times['tick_ms'] == 15.75   # the median of 16 (bar) and 15.5 (clean); the dab has no tick
+    assert times['points_sharing_a_time'] == pytest.approx(5 / 9)
+    assert times['ink_lost_one_point_per_time']['p50'] == 0.0
+    assert math.isnan(logged_times([dab])['tick_ms'])
+    with pytest.raises(ValueError, match='at least one sample'):
+        logged_times([])

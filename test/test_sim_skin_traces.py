@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from touch_driver.skin.calibration import calibrate_frames
-from touch_sim.skin.traces import TraceStimulus, clock_tick, render_frames, spread_stamps
+from touch_sim.skin.traces import TraceStimulus, clock_tick, render_frames, spread_stamps, traced_strokes
 
 PITCH = 47 / 12
 
@@ -142,3 +142,10 @@ def test_multistroke_contact_lifts_between_strokes():
     assert not out.contact[between].any()
     runs = np.flatnonzero(np.diff(out.contact.astype(int)) == 1)
     assert len(runs) == 2                                                # two touch-downs
+
+
+def test_traced_strokes_orders_strokes_in_time_and_spreads_their_runs():
+    t = np.array([100.0, 100.0, 116.0, 0.0, 0.0, 16.0])
+    strokes = traced_strokes(t, np.arange(6.0), np.zeros(6), np.array([0, 0, 0, 1, 1, 1]), 16.0)
+    assert [s[0, 1] for s in strokes] == [3.0, 0.0]                      # stroke 1 came first
+    assert strokes[0][:, 0].tolist() == [0.0, 8.0, 16.0] and strokes[1][:, 0].tolist() == [100.0, 108.0, 116.0]

@@ -11,7 +11,7 @@ MODULES = [f'touch_gestures.skin.{name}' for name in ('gesture', 'features', 'se
                                                       'codebook', 'base', 'paper', 'peers', 'commands', 'ndollar',
                                                       'fused', 'stroke_orders', 'oriented')] + \
     [f'touch_sim.skin.{name}' for name in ('synthetic', 'render')] + \
-    [f'touch_lab.skin.{name}' for name in ('datasets', 'cli', 'evaluate', 'bench', 'report')]
+    [f'touch_lab.skin.{name}' for name in ('datasets', 'cli', 'evaluate', 'bench', 'report', 'gaps', 'logged_times')]
 
 
 @pytest.mark.parametrize('name', MODULES)

@@ -43,6 +43,7 @@ from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
+from touch_lab.skin.logged_times import logged_times
 from touch_sim.skin.render import RenderedSample, RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
@@ -124,6 +125,7 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
         'gestures': trace_set.gestures, 'multi_stroke_samples': trace_set.multi_stroke_samples,
         'skipped_rows': trace_set.skipped_rows, 'gap_s': gap_s, 'wait_s': wait,
         'pauses_between_strokes_s': pause_percentiles_s(samples), 'samples_whole_per_gap': gap_table(samples),
+        'logged_times': logged_times(samples),
         'templates_per_gesture': per_gesture or 'all', 'seed': seed,
         'protocol': 'leave-one-subject-out; accuracy = nearest class right (rejection off, as the paper); '
                     'accuracy_with_rejection, rejection_rate, error_rate with the rejection rule on',

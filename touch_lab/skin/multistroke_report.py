@@ -86,6 +86,14 @@ def _vocabulary_section(r: dict) -> list[str]:
                     f"{x['gap_s']:g}" for x in r['samples_whole_per_gap']) + ' |',
                 '|---|' + '---|' * len(r['samples_whole_per_gap']),
                 '| whole % | ' + ' | '.join(_pct(x['whole']) for x in r['samples_whole_per_gap']) + ' |']
+    if r.get('logged_times', {}).get('points_sharing_a_time'):
+        lt = r['logged_times']
+        lost = lt['ink_lost_one_point_per_time']
+        out += ['', f"Logged times: the file's clock ticks every {lt['tick_ms']:g} ms (median over the samples) and "
+                f"{_pct(lt['points_sharing_a_time'])} % of its points share their time with another point of their "
+                'stroke; the virtual skin spreads them over the tick (touch_sim.skin.traces.spread_stamps). A replay '
+                'keeping one point per time would lose ' + ', '.join(f'{_pct(v)} %' for v in lost.values())
+                + f" of a sample's ink (percentiles {', '.join(k[1:] for k in lost)}; touch_lab.skin.logged_times)."]
     if r.get('ending_table'):
         out += ['', 'The end of a gesture (cloud, leave-one-person-out, codebook cut at 3 s; accuracy over all '
                 'samples, rejection off; a fixed gap has no bound; rule `fractions`: whole templates against '

@@ -115,12 +115,11 @@ class SkinScene:
 def _trace_part(sample: TraceSample, at_s: float, kind: str, person: str, force_n: float = _FORCE_N
                 ) -> tuple[Any, SceneEvent]:
     """A trace sample in mm (x, y on the skin, t_ms) traced from ``at_s``, strokes as in the sample."""
-    from touch_sim.skin.traces import TraceStimulus, clock_tick, spread_strokes
+    from touch_sim.skin.traces import TraceStimulus, clock_tick, traced_strokes
 
     t = at_s + (sample.t_ms - float(sample.t_ms.min())) / 1000.0
-    stamped = sorted((np.column_stack([t[sel], sample.x[sel], sample.y[sel]])
-                      for sel in (sample.stroke == sid for sid in np.unique(sample.stroke))), key=lambda r: r[0, 0])
-    strokes = spread_strokes(stamped, clock_tick(sample.t_ms, sample.stroke) / 1000.0)  # strictly increasing times
+    strokes = traced_strokes(t, sample.x, sample.y, sample.stroke,
+                             clock_tick(sample.t_ms, sample.stroke) / 1000.0)  # strictly increasing times
     stim = TraceStimulus(strokes, force_n=force_n, ramp_s=_RAMP_S, tail_s=0.0)
     label = sample.gesture if kind == 'gesture' else _RANDOM_NAMES[int(sample.sample) % 3]
     return stim, SceneEvent(kind, label, person, at_s, float(strokes[-1][-1, 0]))

@@ -98,16 +98,14 @@ class RenderedSample:
 
 
 def _stimulus(sample: TraceSample, settings: RenderSettings):
-    from touch_sim.skin.traces import TraceStimulus, clock_tick, spread_strokes
+    from touch_sim.skin.traces import TraceStimulus, clock_tick, traced_strokes
 
     if settings.placement == 'fit':
         return TraceStimulus.from_points(sample.x, sample.y, sample.t_ms, sample.stroke, force_n=settings.force_n,
                                          radius_mm=settings.radius_mm)
     lead = 0.55  # untouched skin first (the calibrator tares on it), then the touch-down ramp
     t = lead + (sample.t_ms - sample.t_ms.min()) / 1000.0
-    stamped = sorted((np.column_stack([t[sel], sample.x[sel], sample.y[sel]])
-                      for sel in (sample.stroke == sid for sid in np.unique(sample.stroke))), key=lambda r: r[0, 0])
-    strokes = spread_strokes(stamped, clock_tick(sample.t_ms, sample.stroke) / 1000.0)
+    strokes = traced_strokes(t, sample.x, sample.y, sample.stroke, clock_tick(sample.t_ms, sample.stroke) / 1000.0)
     return TraceStimulus(strokes, force_n=settings.force_n, radius_mm=settings.radius_mm)
 
 

@@ -41,7 +41,8 @@ from touch_driver.skin.protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
 from touch_sim.skin.contact import Contact
 from touch_sim.skin.device import render_frames
 
-__all__ = ['TraceSample', 'TraceStimulus', 'clock_tick', 'render_frames', 'spread_stamps', 'spread_strokes']
+__all__ = ['TraceSample', 'TraceStimulus', 'clock_tick', 'render_frames', 'spread_stamps', 'spread_strokes',
+           'traced_strokes']
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +141,14 @@ def spread_strokes(stamped: Sequence[np.ndarray], tick: float) -> list[np.ndarra
         times, keep = spread_stamps(rows[:, 0], tick, end)
         out.append(np.column_stack([times, rows[:, 1:]])[keep])
     return out
+
+
+def traced_strokes(t: np.ndarray, x: np.ndarray, y: np.ndarray, stroke: np.ndarray, tick: float) -> list[np.ndarray]:
+    """Points (n,) of times, positions and stroke ids -> :func:`spread_strokes` of their strokes in time order."""
+    t, x, y, stroke = (np.asarray(a) for a in (t, x, y, stroke))
+    stamped = [np.column_stack([t[sel], x[sel], y[sel]]).astype(np.float64)
+               for sel in (stroke == sid for sid in np.unique(stroke))]
+    return spread_strokes(sorted(stamped, key=lambda rows: rows[0, 0]), tick)
 
 
 class TraceStimulus:
