@@ -37,7 +37,7 @@ person, who draws the other bar first).
 Cost: the cloud's and the trace's search. With the compiled features, class minima and sum
 (:mod:`.cloud_accel`: the trace's features, its distances' class minima after numpy's matrix-vector product,
 and :func:`relative_distances` of both, one C call each, the same numbers as numpy's) 61 CPU us per recognition
-against the cloud's 55 on the synthetic bench (16 gestures x 30 one-stroke templates), 79 where every template
+against the cloud's 54 on the synthetic bench (16 gestures x 30 one-stroke templates), 77 where every template
 has three strokes (6 orders each, ``fused_3_strokes``; ``social-touch bench skin``, the run of
 docs/skin-multistroke.md).
 """

@@ -25,10 +25,10 @@ vocabulary needs follows from its codebook, so the rule is measured there, not f
        codebook has not seen reads best without losing elsewhere, within the cost goal (and
        of two that read the same, the cheaper): ``fused`` against ``fused_oriented`` (the
        oriented cloud in the sum, :mod:`.oriented`: the same accuracy and wrong commands on the
-       Mixed Multistroke Gestures, at 13 us more per recognition, at the goal's edge with
-       three-stroke templates) and the cloud refereed by $N on its near ties (:mod:`.referee`),
-       random touches firing the same (``social-touch eval skin``; figures in
-       docs/skin-multistroke.md).
+       Mixed Multistroke Gestures, at 12 us more per recognition, at the goal's edge with
+       three-stroke templates: 91 and 103 us in two runs of the report while it was the
+       default) and the cloud refereed by $N on its near ties (:mod:`.referee`), random
+       touches firing the same (``social-touch eval skin``; figures in docs/skin-multistroke.md).
     3. A single-stroke vocabulary gets the one with the higher mean per-class accuracy, the
        ordered one within ``tie`` (it is cheaper).
 

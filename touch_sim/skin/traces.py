@@ -17,9 +17,10 @@ read by :func:`touch_lab.skin.datasets.read_traces`, or synthetic, :mod:`~touch_
 - **strokes**: several strokes (``stroke`` ids) are traced in time order; the finger lifts between
   them (ramp down, ramp up; ramps shorten to fit a short gap). Overlapping strokes are an error.
 - **a coarse clock**: a logger whose clock ticks slower than its pen reports several points with
-  one time (the Mixed Multistroke logs: 15.6 ms ticks, two or three points each; keeping one point
-  per time lost a fifth of the ink of the median sample, half of it in one sample in ten).
-  :func:`spread_stamps` spreads each such run evenly over its tick, so the finger passes every point.
+  one time (the Mixed Multistroke logs: a 16 ms tick, 84 % of the points share their time; keeping
+  one point per time would lose 21 % of the median sample's ink, 51 % at the 90th percentile:
+  :mod:`touch_lab.skin.logged_times`, docs/skin-multistroke.md). :func:`spread_stamps` spreads each
+  such run evenly over its tick, so the finger passes every point.
 
 :func:`render_frames` (from :mod:`~touch_sim.skin.device`) turns the stimulus into raw frames
 with the same device model as the ``skinsim://`` URL handler, without a serial port::
