@@ -14,7 +14,7 @@ from leak_testing import assert_no_leak
 
 from touch_gestures.skin import cloud_accel
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.oriented import OrientedCloudRecogniser, oriented_cloud, raster_cells
+from touch_gestures.skin.oriented import OrientedCloudRecogniser, gather_mean, oriented_cloud, raster_cells
 
 REQUIRED = os.environ.get('SOCIAL_TOUCH_REQUIRE_SKIN_ACCEL') == '1'
 needs_accel = pytest.mark.skipif(not cloud_accel.available() and not REQUIRED,
@@ -59,10 +59,23 @@ def test_the_compiled_cells_are_numpys(points, cuts, params):
 @given(arrays(np.float32, st.tuples(st.integers(1, 30), st.integers(1, 20)),
               elements=st.floats(0.0, 4.0, width=32)), st.data())
 def test_the_compiled_mean_is_numpys_bit_for_bit(fields, data):
+    # Both add the rows in order in float32 and divide once (gather_mean); a single template's column too, which
+    # numpy's mean(axis=0) would add pairwise (hypothesis found fields [[1.232329], [0]], cells 0 x 6 + 1 x 2).
     cells = np.array(data.draw(st.lists(st.integers(0, len(fields) - 1), min_size=1, max_size=40)), dtype=np.intp)
     got = _compiled().oriented_mean(fields, cells)
     assert got.dtype == np.float32
-    np.testing.assert_array_equal(got, fields[cells].mean(axis=0))
+    np.testing.assert_array_equal(got, gather_mean(fields, cells))
+
+
+@needs_accel
+def test_a_single_template_column_is_added_in_order_not_pairwise():
+    fields = np.array([[1.232329], [0.0]], dtype=np.float32)
+    cells = np.array([0, 0, 0, 0, 0, 0, 1, 1], dtype=np.intp)
+    np.testing.assert_array_equal(_compiled().oriented_mean(fields, cells), gather_mean(fields, cells))
+    total = np.float32(0)
+    for cell in cells:                     # the rows one after the other, each sum rounded to float32
+        total = np.float32(total + fields[cell, 0])
+    assert gather_mean(fields, cells).tolist() == [total / np.float32(len(cells))]
 
 
 @needs_accel
@@ -72,7 +85,7 @@ def test_the_recogniser_answers_the_same_with_either_query_path():
     r = OrientedCloudRecogniser().fit(gestures, [f'c{k % 4}' for k in range(12)])
     for g in gestures:
         cells = raster_cells(oriented_cloud(g.trajectory, g.stroke, r.n_points), r.grid, r.bins)
-        expected = np.minimum.reduceat(r._fields[cells].mean(axis=0), r.class_starts_).astype(np.float64)
+        expected = np.minimum.reduceat(gather_mean(r._fields, cells), r.class_starts_).astype(np.float64)
         np.testing.assert_array_equal(r.class_distances(g), expected)
 
 

@@ -2,7 +2,8 @@
  * (cloud_accel.py). oriented_cells: oriented_cloud then raster_cells of one touch, numpy's arithmetic step by
  * step (the resampling is features.py's, the mean an in-order axis-0 sum over n, the orientation code
  * (dx^2 - dy^2, 2 dx dy) / (dx^2 + dy^2)); oriented_mean: the float32 mean of the fields' rows a query's cells
- * name, rows added in order as numpy's axis-0 mean adds them. The same numbers as numpy's where libm's atan2
+ * name, rows added in order in float32 and divided once, as oriented.py's gather_mean (numpy's own mean adds a
+ * single column pairwise). The same numbers as numpy's where libm's atan2
  * and numpy's agree (a bin can differ only for an orientation within an ulp of a bin's edge;
  * test/test_skin_oriented.py). */
 #define PY_SSIZE_T_CLEAN
@@ -137,7 +138,7 @@ PyObject *skin_oriented_cells(PyObject *Py_UNUSED(module), PyObject *args)
     return out;
 }
 
-/* oriented_mean(fields, cells) -> (T,) float32: fields[cells].mean(axis=0) of (C, T) float32 C-contiguous
+/* oriented_mean(fields, cells) -> (T,) float32: oriented.py's gather_mean(fields, cells) of (C, T) float32 C-contiguous
  * fields and (n,) intp cells, each below C. */
 PyObject *skin_oriented_mean(PyObject *Py_UNUSED(module), PyObject *args)
 {
@@ -174,7 +175,7 @@ PyObject *skin_oriented_mean(PyObject *Py_UNUSED(module), PyObject *args)
     const float *first = base + cell[0] * templates;
     for (npy_intp t = 0; t < templates; t++)
         acc[t] = first[t];
-    for (npy_intp i = 1; i < n; i++) {   /* rows in order, as numpy's axis-0 sum */
+    for (npy_intp i = 1; i < n; i++) {   /* rows in order, as gather_mean's np.add.accumulate */
         const float *row = base + cell[i] * templates;
         for (npy_intp t = 0; t < templates; t++)
             acc[t] += row[t];

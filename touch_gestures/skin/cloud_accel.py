@@ -77,7 +77,7 @@ trace_minima = _cloud_accel.trace_minima if _IMPLEMENTATION == 'c' else None
 relative_sum = _cloud_accel.relative_sum if _IMPLEMENTATION == 'c' else None
 #: ... and the oriented cloud's query (:mod:`.oriented`): ``oriented_cells(points, stroke, n, grid, bins)``, the
 #: raster cells of :func:`.oriented.oriented_cloud` (finite points only: a ValueError otherwise), and
-#: ``oriented_mean(fields, cells)``, ``fields[cells].mean(axis=0)`` of float32 fields; None where numpy is chosen.
+#: ``oriented_mean(fields, cells)``, oriented.py's ``gather_mean`` of float32 fields; None where numpy is chosen.
 oriented_cells = _cloud_accel.oriented_cells if _IMPLEMENTATION == 'c' else None
 oriented_mean = _cloud_accel.oriented_mean if _IMPLEMENTATION == 'c' else None
 

@@ -44,7 +44,7 @@ from .fused import FusedRecogniser, relative_sum
 from .gesture import TouchGesture
 
 __all__ = ['OrientedCloudRecogniser', 'OrientedFusedRecogniser', 'distance_field', 'exact_oriented_chamfer',
-           'oriented_cloud', 'raster_cells']
+           'gather_mean', 'oriented_cloud', 'raster_cells']
 
 #: Values per point of an oriented cloud: x, y, cos 2 theta, sin 2 theta.
 POINT_WIDTH = 4
@@ -149,6 +149,18 @@ def distance_field(cloud: np.ndarray, grid: int, bins: int, weight: float) -> np
     return (positional[:, None, :] + angular[None, :, :]).min(axis=2).ravel().astype(np.float32)
 
 
+def gather_mean(fields: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """(C, T) float32 fields, (n,) cells -> (T,) float32 mean of the rows the cells name, added in order in float32
+    and divided once, as ``cloud_accel.oriented_mean`` does. (numpy's ``mean(axis=0)`` adds rows in order too,
+    except for a single column, T = 1, which it adds pairwise: an ulp apart now and then.)
+
+    >>> gather_mean(np.array([[1.0, 2.0], [3.0, 4.0]], dtype=np.float32), np.array([0, 1, 1])).tolist()
+    [2.3333332538604736, 3.3333332538604736]
+    """
+    rows = fields[cells]
+    return np.add.accumulate(rows, axis=0)[-1] / np.float32(len(rows))
+
+
 class OrientedCloudRecogniser(TemplateRecogniser):
     """Order- and direction-free matching of clouds whose points carry the ink's orientation (module doc).
 
@@ -202,7 +214,7 @@ class OrientedCloudRecogniser(TemplateRecogniser):
 
     def _distances(self, query: np.ndarray) -> np.ndarray:
         cloud = np.asarray(query, dtype=np.float64).reshape(self.n_points, POINT_WIDTH)
-        return self._fields[raster_cells(cloud, self.grid, self.bins)].mean(axis=0)   # (T,) float32
+        return gather_mean(self._fields, raster_cells(cloud, self.grid, self.bins))   # (T,) float32
 
     def query_cells(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_points,) raster cells of ``gesture``'s oriented cloud (made from its float64 points, not from the
@@ -225,7 +237,7 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         if cloud_accel.oriented_mean is not None:
             distances = cloud_accel.oriented_mean(self._fields, cells)
         else:
-            distances = self._fields[cells].mean(axis=0)
+            distances = gather_mean(self._fields, cells)
         return np.minimum.reduceat(distances, self.class_starts_).astype(np.float64, copy=False)
 
 
