@@ -203,9 +203,8 @@ class TraceStimulus:
                     ramp_s: float = 0.05, time_scale: float = 1.0) -> TraceStimulus:
         """Place screen points (x, y px, y downward; t ms) on the skin (see the module doc).
 
-        Points with equal times are spread over the clock's tick (:func:`spread_stamps`). Raises ValueError on
-        empty, mismatched,
-        non-finite or time-reversed input, and on overlapping strokes. A stroke that starts
+        Points with equal times are spread over the clock's tick (:func:`spread_stamps`). Raises ValueError
+        on empty, mismatched, non-finite or time-reversed input, and on overlapping strokes. A stroke that starts
         when the previous one ends, to 2 ms (a dot's pen-down logged twice), joins it: a finger cannot lift
         in no time.
 
