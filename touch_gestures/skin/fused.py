@@ -185,8 +185,14 @@ class FusedRecogniser(RefereedRecogniser):
         (a subclass may hold a part of its own between, :class:`~.oriented.OrientedFusedRecogniser`)."""
         return split
 
+    def _naming_opinion(self, gesture: TouchGesture, per_class: np.ndarray) -> np.ndarray | None:
+        """The (n_classes,) distances summed with the trace's to name the class: the cloud's own here (a subclass
+        may ask another, :class:`~.oriented.OrientedFusedRecogniser`); None: it cannot read the touch."""
+        return per_class
+
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         second = self.referee_.class_distances(gesture)
-        if second is None:   # the trace cannot read it: the cloud alone
+        first = self._naming_opinion(gesture, per_class)
+        if second is None or first is None:   # the trace (or the other opinion) cannot read it: the cloud alone
             return TemplateRecogniser._nearest(self, gesture, per_class, allowed)
-        return TemplateRecogniser._nearest(self, gesture, relative_sum(per_class, second), allowed)
+        return TemplateRecogniser._nearest(self, gesture, relative_sum(first, second), allowed)

@@ -40,7 +40,7 @@ import numpy as np
 from . import cloud_accel
 from .base import TemplateRecogniser
 from .features import arc_length_resample_complex, running_ink
-from .fused import FusedRecogniser, relative_sum
+from .fused import FusedRecogniser
 from .gesture import TouchGesture
 
 __all__ = ['OrientedCloudRecogniser', 'OrientedFusedRecogniser', 'distance_field', 'exact_oriented_chamfer',
@@ -297,9 +297,5 @@ class OrientedFusedRecogniser(FusedRecogniser):
                               self.classes_[self.template_labels_], class_thresholds=unlimited)
         self.oriented_ = oriented
 
-    def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
-        second = self.referee_.class_distances(gesture)
-        first = self.oriented_.class_distances(gesture)
-        if second is None or first is None:   # the trace or the oriented cloud cannot read it: the cloud alone
-            return TemplateRecogniser._nearest(self, gesture, per_class, allowed)
-        return TemplateRecogniser._nearest(self, gesture, relative_sum(first, second), allowed)
+    def _naming_opinion(self, gesture: TouchGesture, per_class: np.ndarray) -> np.ndarray | None:
+        return self.oriented_.class_distances(gesture)   # the oriented cloud's, in the cloud's place
