@@ -148,16 +148,18 @@ def test_truncated_frames_lose_only_themselves(specs, data) -> None:
     stream = b''.join(pieces) + FLUSH
     # A frame cut short whose missing tail happens to be the bytes that follow it on the wire (e.g. a last CRC
     # byte 0xA5 before the next sync, or 0x00 before the zero flush) cannot be told from a whole frame: it
-    # arrives, and the frames whose bytes completed it are lost.
+    # arrives, and the frames whose bytes completed it are lost. The decoder goes on after those bytes, so a
+    # piece that starts inside them (two frames cut to nothing before a whole twin) completes nothing.
     owner = [k for k, piece in enumerate(pieces) for _ in piece]      # which frame each byte came from
     kept_index = {k for k, truncate in enumerate(cut) if not truncate}
-    end = 0
+    end = consumed = 0
     for k, (wire, piece) in enumerate(zip(wires, pieces, strict=True)):
-        end += len(piece)
+        start, end = end, end + len(piece)
         tail = wire[len(piece):]
-        if cut[k] and stream[end:end + len(tail)] == tail:
+        if cut[k] and start >= consumed and stream[end:end + len(tail)] == tail:
             kept_index.add(k)
             kept_index.difference_update(owner[end:end + len(tail)])
+            consumed = end + len(tail)
     kept = [f for k, f in enumerate(frames) if k in kept_index]
     dec = FrameDecoder(SIZES)
     got = dec.update(stream)
