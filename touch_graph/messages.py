@@ -5,12 +5,9 @@ type system parses them (and knows the standard ROS 2 types such as
 ``std_msgs/msg/Header``); this module turns each type into a Python class with rclpy's
 manners: keyword construction with ROS defaults for every field, checked field types,
 constants as class attributes, ``get_fields_and_field_types()``. CDR (de)serialisation,
-the bytes ROS 2 puts on the wire and in bags, comes from the compiled codec
-(:mod:`touch_graph.cdr_accel`) where it was built, else from an encoder and a decoder
-generated per type in Python (:mod:`touch_graph.cdr`); both are byte-identical to rosbags',
-which still decodes big-endian payloads and types neither codec handles.
-``SOCIAL_TOUCH_CDR=python`` forces the Python codec (``=c`` insists on the compiled one);
-:func:`codec_implementation` says which is in use.
+the bytes ROS 2 puts on the wire and in bags, comes from an encoder and a decoder generated
+per type (:mod:`touch_graph.cdr`), byte-identical to rosbags', which still decodes
+big-endian payloads and the types the generator does not handle.
 
 Type names are those of the interface package ``social_touch-export-interfaces`` writes
 (``social_touch_msgs/msg/SkinFrame``), so bags recorded here open on a ROS 2 machine.
@@ -33,7 +30,6 @@ std_msgs/msg/Header has no field 'frame_idd' (did you mean 'frame_id'?); its fie
 from __future__ import annotations
 
 import math
-import os
 import struct
 import threading
 from collections.abc import Callable
@@ -47,14 +43,13 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.base import TypesysError
 
-from . import cdr_accel
 from .cdr import Codec, UnsupportedType, make_codec
 from .errors import MessageError
 from .paths import INTERFACE_PACKAGE, share_file
 from .yamlconf import did_you_mean
 
 __all__ = [
-    'Message', 'codec_implementation', 'decoder', 'deserialize', 'encoder', 'from_dict', 'get_message',
+    'Message', 'decoder', 'deserialize', 'encoder', 'from_dict', 'get_message',
     'interface_names', 'message_definition', 'msg_files', 'normalize_type_name', 'serialize', 'to_dict', 'typestore',
 ]
 
@@ -68,32 +63,6 @@ _FLOATS = {'float32': np.float32, 'float64': np.float64}
 _DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
            'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8), 'bool': np.dtype(np.bool_),
            **{k: np.dtype(v) for k, v in _FLOATS.items()}}
-
-#: Environment variable choosing the CDR codec: ``python``, ``c``, or unset (the compiled one where built).
-CODEC_VARIABLE = 'SOCIAL_TOUCH_CDR'
-
-
-def _choose_implementation() -> str:
-    wish = os.environ.get(CODEC_VARIABLE, '').strip().lower()
-    if wish not in ('', 'c', 'python'):
-        raise MessageError(f"{CODEC_VARIABLE}={wish!r}: expected 'c' (the compiled codec), 'python', or unset")
-    if wish == 'c' and not cdr_accel.available():
-        raise MessageError(f'{CODEC_VARIABLE}=c but the compiled CDR codec is not built: {cdr_accel.IMPORT_ERROR} '
-                           '(reinstall with a C compiler and the Python headers, e.g. apt install build-essential '
-                           'python3-dev)')
-    return 'python' if wish == 'python' or not cdr_accel.available() else 'c'
-
-
-_IMPLEMENTATION = _choose_implementation()
-
-
-def codec_implementation() -> str:
-    """``'c'`` when messages go through the compiled CDR codec, ``'python'`` for the generated Python one.
-
-    Types that neither handles go through rosbags whatever this says.
-    """
-    return _IMPLEMENTATION
-
 
 _lock = threading.RLock()
 _classes: dict[str, type[Message]] = {}
@@ -385,22 +354,15 @@ def get_message(typename: str) -> type[Message]:
 
 
 def _make_codec(full: str) -> Codec | None:
-    """The compiled codec of a type, else its Python codec, else None (rosbags serves the type)."""
-    other = partial(_rosbags_decode, full)
+    """The generated codec of a type, else None (rosbags serves the type)."""
     try:
-        python = make_codec(full, typestore.fielddefs, get_message, other)
+        return make_codec(full, typestore.fielddefs, get_message, partial(_rosbags_decode, full))
     except UnsupportedType:
         return None
-    if _IMPLEMENTATION == 'python':
-        return python
-    try:
-        return cdr_accel.make_accel_codec(full, typestore.fielddefs, get_message, other, python)
-    except UnsupportedType:
-        return python
 
 
 def _codec(typename: str) -> Codec | None:
-    """The codec of a type (None: a type neither codec handles; rosbags serves it)."""
+    """The codec of a type (None: a type the generator does not handle; rosbags serves it)."""
     codec = _codecs.get(typename)
     if codec is not None:
         return codec

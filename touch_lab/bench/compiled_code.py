@@ -1,6 +1,6 @@
-"""Writes docs/compiled-code.md: what each compiled twin saves at the robot's real message rates.
+"""``social-touch report compiled-code``: what each compiled twin saves at the robot's real message rates.
 
-``python -m touch_lab.bench.compiled_code [SECTION ...]`` measures the named sections (all by default),
+``social-touch report compiled-code [SECTION ...]`` measures the named sections (all by default),
 keeps their figures in docs/compiled-code.json and renders docs/compiled-code.md from every section
 there. The design rule it serves: compiled code stays only where it saves >= 0.5 % of one core (or a
 latency a user feels) at the robot's real rates.
@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -24,7 +23,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ['SECTIONS', 'main']
+from touch_graph.errors import ConfigError
+
+__all__ = ['HELP', 'SECTIONS', 'add_arguments', 'render', 'run']
+
+HELP = "regenerate docs/compiled-code.md (each compiled twin's saving at the real rates; about 5 minutes)"
 
 ROOT = Path(__file__).resolve().parents[2]
 REPORT = ROOT / 'docs' / 'compiled-code.md'
@@ -43,13 +46,11 @@ def _commit() -> str:
         return 'unknown'
 
 
-def _stack_percent(codec: str, duration_s: float) -> float:
-    """``bench stack``'s total (% of one core) in a child process with ``SOCIAL_TOUCH_CDR=codec``."""
+def _stack_percent(duration_s: float) -> float:
+    """``bench stack``'s total (% of one core), in a child process of its own as the command runs it."""
     code = ('import json, sys; from touch_lab.bench.stack import bench_stack; '
             'print(json.dumps(bench_stack(repeats=1, duration_s=float(sys.argv[1]))["total"]["percent_of_core"]))')
-    env = {**os.environ, 'SOCIAL_TOUCH_CDR': codec}
-    out = subprocess.run([sys.executable, '-c', code, str(duration_s)], env=env, capture_output=True, text=True,
-                         check=True)
+    out = subprocess.run([sys.executable, '-c', code, str(duration_s)], capture_output=True, text=True, check=True)
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -74,44 +75,37 @@ def _percent_of_core(kinds: dict[str, Any], rates: dict[str, float], codec: str,
 
 
 def measure_cdr(repeats: int) -> dict[str, Any]:
-    """Both codecs per message kind (``bench codec``), the stack with each, the cost at the real rates."""
-    from touch_graph import messages
+    """The codec per message kind (``bench codec``), ``bench stack``, the codec's cost at the real rates.
+
+    The compiled twin's figures, measured while it was built (``compiled_measured``), are kept from the
+    figures file: the command that took them is that commit's version of this one.
+    """
     from touch_lab.bench.codec import bench_codec
-    codec = bench_codec(repeats=repeats, leak_calls=0)
+    codec = bench_codec(repeats=repeats)
     duration_s = 20.0
     rates = _message_rates(duration_s)
-    out: dict[str, Any] = {'commit': _commit(), 'date': datetime.date.today().isoformat(),
-                           'command': 'python -m touch_lab.bench.compiled_code cdr', 'rounds': repeats,
-                           'rates_hz': {k: round(v, 3) for k, v in rates.items()}, 'kinds': codec['kinds']}
-    codecs = ['python'] + (['c'] if codec['compiled_available'] else [])
-    stack: dict[str, list[float]] = {name: [] for name in codecs}
-    for _ in range(repeats):  # in turns, so a busy moment of the machine hits both
-        for name in codecs:
-            stack[name].append(_stack_percent(name, duration_s))
-    out['stack_percent'] = {name: round(statistics.median(v), 3) for name, v in stack.items()}
-    out['stack_runs'] = repeats
-    for name in codecs:
-        out[f'{name}_percent_of_core'] = _percent_of_core(codec['kinds'], rates, name, 1)
-        out[f'{name}_ceiling_percent_of_core'] = _percent_of_core(codec['kinds'], rates, name, CEILING_DECODES)
-    out['in_use'] = messages.codec_implementation()
-    if 'c' not in codecs:  # removed: keep what it saved, measured while it was here
-        previous = _load().get('cdr', {})
-        out['compiled_measured'] = previous.get('compiled_measured') or previous
-    return out
+    stack = [_stack_percent(duration_s) for _ in range(repeats)]
+    return {'commit': _commit(), 'date': datetime.date.today().isoformat(),
+            'command': 'social-touch report compiled-code cdr', 'rounds': repeats,
+            'rates_hz': {k: round(v, 3) for k, v in rates.items()}, 'kinds': codec['kinds'],
+            'stack_percent': {'python': round(statistics.median(stack), 3)}, 'stack_runs': repeats,
+            'python_percent_of_core': _percent_of_core(codec['kinds'], rates, 'python', 1),
+            'python_ceiling_percent_of_core': _percent_of_core(codec['kinds'], rates, 'python', CEILING_DECODES),
+            'compiled_measured': _load().get('cdr', {}).get('compiled_measured')}
 
 
 def render_cdr(f: dict[str, Any]) -> str:
-    before = f if 'c_percent_of_core' in f else f.get('compiled_measured', {})
+    before = f.get('compiled_measured')
     lines = ['## The CDR codec (touch_graph/cdr.py; compiled twin touch_graph/_cdr_accel.c)', '',
              'Every message that crosses processes is encoded once and decoded once per subscribing process. '
-             'Per message kind, the median us per call over the rounds (`bench codec`: both codecs in one '
+             'Per message kind, the median us per call over the rounds (`bench codec`: the codecs in one '
              'process, in turns, synthetic messages of the real sizes), then the cost at the real message '
              'rates (frames at each sensor\'s rate; gesture events at the rate the recognisers perceive them '
              'in the demo\'s people scenes, synthetic) as % of one core: one encode and one decode per message, '
              f'and a ceiling with {CEILING_DECODES} decodes (recogniser, recorder, view).', '']
     if before:
-        lines += [f'Measured at commit `{before["commit"]}` ({before["date"]}), `{before["command"]}`, '
-                  f'{before["rounds"]} rounds, while the compiled codec was built:', '',
+        lines += [f'Before: measured at commit `{before["commit"]}` ({before["date"]}), that commit\'s '
+                  f'`{before["command"]}`, {before["rounds"]} rounds, with the compiled codec built:', '',
                   '| kind | rate, Hz | bytes | Python encode + decode, us | compiled encode + decode, us |',
                   '|---|---:|---:|---:|---:|']
         for kind, k in before['kinds'].items():
@@ -132,11 +126,17 @@ def render_cdr(f: dict[str, Any]) -> str:
                   f'{"under" if ceiling < THRESHOLD_PERCENT else "over"} the {THRESHOLD_PERCENT} % threshold. '
                   '`bench stack` runs the graph in one process (no message is encoded), so its two figures '
                   'differ by the machine\'s noise only.', '']
-    if 'c_percent_of_core' not in f:
-        lines += [f'Now (commit `{f["commit"]}`, {f["date"]}): the compiled codec is removed; the Python codec '
-                  f'costs {f["python_percent_of_core"]:.3f} % of one core at the real rates '
+    if 'python_percent_of_core' in f:
+        lines += [f'After: the compiled codec is removed. Measured at commit `{f["commit"]}` ({f["date"]}), '
+                  f'`{f["command"]}`, {f["rounds"]} rounds; rosbags\' generic serialiser beside ours:', '',
+                  '| kind | rate, Hz | bytes | our codec encode + decode, us | rosbags encode + decode, us |',
+                  '|---|---:|---:|---:|---:|']
+        for kind, k in f['kinds'].items():
+            lines.append(f'| {kind} | {f["rates_hz"][kind]} | {k["bytes"]} | {k["python_encode_us"]} + '
+                         f'{k["python_decode_us"]} | {k["rosbags_encode_us"]} + {k["rosbags_decode_us"]} |')
+        lines += ['', f'The codec costs {f["python_percent_of_core"]:.3f} % of one core at the real rates '
                   f'({f["python_ceiling_percent_of_core"]:.3f} % with {CEILING_DECODES} decodes); `bench stack` '
-                  f'total {f["stack_percent"]["python"]:.2f} % of one core.', '']
+                  f'total: {f["stack_percent"]["python"]:.2f} % of one core (median of {f["stack_runs"]}).', '']
     return '\n'.join(lines)
 
 
@@ -153,22 +153,23 @@ def _load() -> dict[str, Any]:
 def render(figures: dict[str, Any]) -> str:
     """The whole report from every section's figures."""
     head = ['# Compiled code: what each compiled twin saves', '',
-            'Generated by `python -m touch_lab.bench.compiled_code` (figures in docs/compiled-code.json); do '
+            'Generated by `social-touch report compiled-code` (figures in docs/compiled-code.json); do '
             'not edit by hand. The design rule: compiled code only where it saves at least '
             f'{THRESHOLD_PERCENT} % of one core, or a latency a user feels, at the robot\'s real rates.', '']
     body = [SECTIONS[name][1](figures[name]) for name in SECTIONS if name in figures]
     return '\n'.join(head + body).rstrip() + '\n'
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.bench.compiled_code', description=__doc__.split('\n')[0])
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('sections', nargs='*', help=f'what to measure, of {", ".join(SECTIONS)} (default: all)')
     parser.add_argument('--repeats', type=int, default=5, help='rounds to take the median of (default 5)')
     parser.add_argument('--render-only', action='store_true', help='rewrite the .md from the .json')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
     unknown = set(args.sections) - set(SECTIONS)
     if unknown:
-        parser.error(f'unknown section(s) {", ".join(sorted(unknown))}; known: {", ".join(SECTIONS)}')
+        raise ConfigError(f'unknown section(s) {", ".join(sorted(unknown))}; known: {", ".join(SECTIONS)}')
     figures = _load()
     if not args.render_only:
         for name in args.sections or list(SECTIONS):
@@ -177,7 +178,3 @@ def main(argv: list[str] | None = None) -> int:
     REPORT.write_text(render(figures))
     print(REPORT)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

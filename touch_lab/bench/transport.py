@@ -296,7 +296,7 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
             else:
                 os.environ[key] = value
     return {'message': 'synthetic messages of the real sizes; latency is half the round trip to an echo process',
-            'cdr_codec': messages.codec_implementation(), 'domain': domain, 'rounds': repeats,
+            'domain': domain, 'rounds': repeats,
             'pings_per_round': pings, 'block': BLOCK,
             'versions': _versions(), 'load': machine, 'kinds': results}
 
