@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import doctest
 import importlib
 
 import pytest
+from doctest_testing import check_doctests
 
 MODULES = ['touch_gestures.bear.sensor_level', 'touch_gestures.bear.features', 'touch_gestures.bear.subtype',
            'touch_gestures.bear.subtype_labels', 'touch_gestures.bear.subtype_model', 'touch_sim.bear.people',
@@ -14,5 +14,4 @@ MODULES = ['touch_gestures.bear.sensor_level', 'touch_gestures.bear.features', '
 
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name: str) -> None:
-    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
-    assert result.failed == 0 and result.attempted > 0
+    check_doctests(importlib.import_module(name))

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import doctest
 import importlib
 
 import pytest
+from doctest_testing import check_doctests
 
 from touch_sim.virtual_port import forget_devices
 
@@ -17,5 +17,4 @@ MODULES = ['touch_driver.bear.body_map', 'touch_driver.bear.protocol', 'touch_dr
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name: str) -> None:
     forget_devices()
-    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
-    assert result.failed == 0 and result.attempted > 0
+    check_doctests(importlib.import_module(name))

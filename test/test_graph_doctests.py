@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import doctest
 import importlib
 
 import pytest
+from doctest_testing import check_doctests
 
 MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', 'touch_graph.yamlconf',
            'social_touch_msgs.msg', 'touch_graph.srv_types', 'touch_graph.runtime.parameter_messages',
@@ -14,5 +14,4 @@ MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', '
 
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name: str) -> None:
-    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
-    assert result.failed == 0 and result.attempted > 0
+    check_doctests(importlib.import_module(name))

@@ -1,9 +1,9 @@
 """Readers of labelled patch recordings: CoST-layout CSV and rosbag2 bags with a YAML manifest."""
 
-import doctest
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 from rosbags.rosbag2 import Writer
 
 from touch_graph.errors import ConfigError
@@ -143,4 +143,4 @@ def test_bag_of_another_message_type_is_refused(tmp_path):
 
 
 def test_doctests():
-    assert doctest.testmod(datasets_module).failed == 0
+    check_doctests(datasets_module)

@@ -1,10 +1,10 @@
 """Leave-one-subject-out evaluation of the patch gestures: matching rules, metrics, streaming = batch."""
 
-import doctest
 import json
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 
 from touch_gestures.patch.classifier import NOT_RECOGNISED, Detection, PatchGestureClassifier
 from touch_gestures.patch.features import WindowFeatures, window_features
@@ -141,7 +141,7 @@ def test_leave_one_subject_out_refuses_what_it_cannot_do(small_sessions):
 
 
 def test_doctests():
-    assert doctest.testmod(evaluate_module).failed == 0
+    check_doctests(evaluate_module)
 
 
 def test_bench_frame_reports_its_figures():

@@ -1,11 +1,11 @@
 """One Gaussian mixture per class, direct log-domain posterior, and the event rule (sympartner2018 6.2)."""
 
-import doctest
 import math
 import warnings
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import logsumexp
@@ -208,4 +208,4 @@ def test_event_detector_rejects_bad_settings():
 
 
 def test_doctests():
-    assert doctest.testmod(classifier_module).failed == 0
+    check_doctests(classifier_module)

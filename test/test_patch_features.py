@@ -1,11 +1,11 @@
 """Window features of the textile patch (sympartner2018 6.2): incremental, batch and from scratch agree."""
 
-import doctest
 import itertools
 import math
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -197,4 +197,4 @@ def test_reset_starts_a_new_window():
 
 
 def test_doctests():
-    assert doctest.testmod(features_module).failed == 0
+    check_doctests(features_module)

@@ -1,10 +1,10 @@
 """Patch model files: .npz without pickle, versioned, checked at load."""
 
-import doctest
 import pickle
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 
 from touch_gestures.patch import model_io
 from touch_gestures.patch.classifier import PatchGestureClassifier
@@ -131,4 +131,4 @@ def test_missing_and_truncated_files(tmp_path, model):
 
 
 def test_doctests():
-    assert doctest.testmod(model_io).failed == 0
+    check_doctests(model_io)

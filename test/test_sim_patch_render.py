@@ -1,10 +1,10 @@
 """Simulated patch scenes as the robot perceives them: virtual patch -> patch_driver -> /patch/frame (SYNTHETIC)."""
 
 import argparse
-import doctest
 
 import numpy as np
 import pytest
+from doctest_testing import check_doctests
 
 from touch_driver.patch.calibration import PanelCalibrator, PatchCalibrator
 from touch_driver.patch.protocol import PatchDecoder
@@ -148,7 +148,7 @@ def test_simulated_sessions_are_labelled_synthetic(monkeypatch, push_scene, rend
 
 
 def test_doctests():
-    assert doctest.testmod(render_module).failed == 0
+    check_doctests(render_module)
 
 
 def test_a_run_whose_end_rounds_down_to_whole_nanoseconds_ends(push_scene):

@@ -1,16 +1,14 @@
 """The doctests of the skin node's modules (screening, scene, frames, record CLI, ...)."""
 
-import doctest
 import importlib
 
 import pytest
+from doctest_testing import check_doctests
 
-MODULES = [f'touch_gestures.skin.{name}' for name in ('screening', 'frames', 'node')] + \
-    ['touch_sim.skin.people'] + [f'touch_lab.skin.{name}' for name in ('recording', 'record_cli', 'session_eval')]
+MODULES = ['touch_gestures.skin.screening', 'touch_sim.skin.people'] + \
+    [f'touch_lab.skin.{name}' for name in ('record_cli', 'session_eval')]
 
 
 @pytest.mark.parametrize('name', MODULES)
 def test_doctests(name):
-    module = importlib.import_module(name)
-    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
-    assert result.failed == 0
+    check_doctests(importlib.import_module(name))
