@@ -70,8 +70,7 @@ def graph_env(domain):
     """The environment of the test's graph: its own DDS domain, discovery on this host only."""
     env = {k: v for k, v in os.environ.items() if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_STATIC_PEERS',
                                                              'CYCLONEDDS_URI', 'ROS_DISTRO')}
-    return {**env, 'ROS_DOMAIN_ID': str(domain), 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST',
-            'PYTHONPATH': str(REPO)}
+    return {**env, 'ROS_DOMAIN_ID': str(domain), 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST'}
 
 
 def running_graph(script=GRAPH, commands=GRAPH_COMMANDS, ready=lambda graph: '/patch/frame' in graph.topics):

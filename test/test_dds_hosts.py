@@ -77,7 +77,7 @@ def lab():
 def host_env(domain):
     env = {k: v for k, v in os.environ.items()
            if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'CYCLONEDDS_URI')}
-    return {**env, 'ROS_DOMAIN_ID': str(domain), 'PYTHONPATH': str(REPO)}
+    return {**env, 'ROS_DOMAIN_ID': str(domain)}
 
 
 class Lines:

@@ -35,7 +35,7 @@ rclpy.spin(node)
 
 def child_env(domain):
     env = {k: v for k, v in os.environ.items() if k != 'SOCIAL_TOUCH_NETWORK'}
-    return {**env, 'ROS_DOMAIN_ID': str(domain), 'PYTHONPATH': str(REPO)}
+    return {**env, 'ROS_DOMAIN_ID': str(domain)}
 
 
 def stop(proc):

@@ -30,7 +30,7 @@ class Launch:
 
     def __init__(self, *argv, env=None):
         self.proc = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', *map(str, argv)],
-                                     cwd=REPO, env=env or {**os.environ, 'PYTHONPATH': str(REPO)},
+                                     cwd=REPO, env=env,
                                      stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
         self.lines = []
         self._thread = threading.Thread(target=self._read, daemon=True)

@@ -149,19 +149,19 @@ def test_classes_are_all_resolved_before_anything_starts():
     assert runner.context is None
 
 
-def test_source_tree_nodes_reads_setup_py_without_running_it(tmp_path):
-    setup = tmp_path / 'setup.py'
-    setup.write_text(textwrap.dedent("""\
-        import sys; sys.exit('must not run')
-        NODES: dict[str, tuple[str, str]] = {
-            'talker': ('test_launch_runner', 'Talker'),
-            'odd': 'not a pair',
-        }
+def test_source_tree_nodes_reads_the_node_group_of_pyproject(tmp_path):
+    pyproject = tmp_path / 'pyproject.toml'
+    pyproject.write_text(textwrap.dedent("""\
+        [project.entry-points."social_touch.nodes"]
+        talker = "test_launch_runner:Talker"
+        odd = 3
         """))
-    nodes = source_tree_nodes(setup)
+    nodes = source_tree_nodes(pyproject)
     assert list(nodes) == [('social_touch', 'talker')]
     assert nodes[('social_touch', 'talker')].value == 'test_launch_runner:Talker'
-    assert source_tree_nodes(tmp_path / 'missing.py') == {}
+    assert source_tree_nodes(tmp_path / 'missing.toml') == {}
+    pyproject.write_text('[project\n')
+    assert source_tree_nodes(pyproject) == {}
     assert isinstance(entry_point_registry(), dict)
 
 

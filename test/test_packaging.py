@@ -1,5 +1,7 @@
 """The ROS 2 package: colcon builds it with the node executables, export-interfaces writes the msgs package."""
 
+import ast
+import re
 import shutil
 import subprocess
 import sys
@@ -8,6 +10,12 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 import pytest
+from doctest_testing import check_doctests
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the test extra installs tomli
+    import tomli as tomllib
 
 from touch_graph.cli.export_interfaces import export_interfaces
 from touch_graph.errors import ConfigError
@@ -17,19 +25,25 @@ ROOT = Path(__file__).resolve().parent.parent
 NODES = ('bear_driver', 'patch_driver', 'skin_driver', 'bear_gestures', 'patch_gestures', 'haptic_commands',
          'touch_monitor',
          'recorder', 'player')
+PROJECT = tomllib.loads((ROOT / 'pyproject.toml').read_text())['project']
+#: pyproject.toml's dependency -> package.xml's rosdep key for it.
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scikit-learn': 'python3-sklearn', 'scipy': 'python3-scipy',
+               'pyserial': 'python3-serial', 'pyyaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
+               'rosbags': 'python3-rosbags-pip', 'cyclonedds': 'python3-cyclonedds-pip', 'mcap': 'python3-mcap-pip',
+               'foxglove-sdk': 'python3-foxglove-sdk-pip'}
 
 
-def _setup_constant(name: str) -> dict:
-    import ast
-    tree = ast.parse((ROOT / 'setup.py').read_text())
-    for node in ast.walk(tree):
-        if isinstance(node, ast.AnnAssign) and getattr(node.target, 'id', None) == name:
-            return ast.literal_eval(node.value)
-    raise AssertionError(f'{name} not found in setup.py')
+def _pyproject_nodes() -> dict[str, tuple[str, str]]:
+    """Executable name -> (module, node class), from pyproject.toml's social_touch.nodes group."""
+    return {name: tuple(value.split(':')) for name, value in PROJECT['entry-points']['social_touch.nodes'].items()}
 
 
-def _setup_nodes() -> dict:
-    return _setup_constant('NODES')
+def _bounds(requirement: str) -> tuple[str, dict[str, str]]:
+    """``'numpy>=2.0.2,<2.5  # why'`` -> ``('numpy', {'version_gte': '2.0.2', 'version_lt': '2.5'})``."""
+    match = re.fullmatch(r'([A-Za-z0-9_.-]+)((?:\s*(?:>=|<)\s*[0-9.]+\s*,?)*)', requirement.strip())
+    assert match, requirement
+    names = {'>=': 'version_gte', '<': 'version_lt'}
+    return match[1].lower(), {names[op]: version for op, version in re.findall(r'(>=|<)\s*([0-9.]+)', match[2])}
 
 
 def test_package_xml_is_format_3_ament_python_with_declared_dependencies():
@@ -41,9 +55,48 @@ def test_package_xml_is_format_3_ament_python_with_declared_dependencies():
             'python3-pytest', 'python3-hypothesis'} <= depends
 
 
+def test_package_xml_is_in_step_with_pyproject():
+    """Name, version, licence, description and every dependency with its bounds, in both files."""
+    root = ET.parse(ROOT / 'package.xml').getroot()
+    assert root.findtext('name') == PROJECT['name']
+    assert root.findtext('version') == PROJECT['version']
+    assert root.findtext('license') == PROJECT['license']['text']
+    assert ' '.join(root.findtext('description').split()) == PROJECT['description']
+    stated = {e.text: {k: v for k, v in e.attrib.items() if k.startswith('version_')}
+              for e in root if e.tag.endswith('depend')}
+    required = dict(_bounds(line) for line in PROJECT['dependencies'])
+    assert set(required) == set(ROSDEP_KEYS), 'a dependency without its rosdep key here (ROSDEP_KEYS)'
+    for name, bounds in required.items():
+        assert stated.get(ROSDEP_KEYS[name]) == bounds, f'package.xml: {ROSDEP_KEYS[name]} {bounds}'
+
+
+def test_bounds_parse_as_written():
+    assert _bounds('numpy>=2.0.2,<2.5') == ('numpy', {'version_gte': '2.0.2', 'version_lt': '2.5'})
+    assert _bounds('PyYAML >= 6.0') == ('pyyaml', {'version_gte': '6.0'})
+
+
+def test_the_lowest_versions_ci_installs_are_the_lower_bounds():
+    """constraints/lowest.txt pins each dependency at its lower bound (CI installs both ends)."""
+    pins = dict(line.split('==') for line in (ROOT / 'constraints' / 'lowest.txt').read_text().split('\n')
+                if '==' in line and not line.startswith('#'))
+    pins = {name.lower(): version for name, version in pins.items()}
+    for name, bounds in dict(_bounds(line) for line in PROJECT['dependencies']).items():
+        assert pins.get(name) == bounds['version_gte'], name
+
+
+def test_setup_py_holds_only_what_colcon_needs():
+    """The metadata is pyproject.toml's: setup() gets the files installed under share/ and python_requires."""
+    tree = ast.parse((ROOT / 'setup.py').read_text())
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call) and getattr(n.func, 'id', None) == 'setup']
+    assert len(calls) == 1 and {k.arg for k in calls[0].keywords} == {'data_files', 'python_requires'}
+    python_requires = next(k.value.value for k in calls[0].keywords if k.arg == 'python_requires')
+    assert python_requires == '>=3.10' and PROJECT['dynamic'] == ['requires-python']
+
+
 def test_every_node_module_has_a_main_and_its_class():
     import importlib
-    nodes = _setup_nodes()
+    nodes = _pyproject_nodes()
+    assert set(PROJECT['scripts']) == {'social-touch', *nodes}
     assert set(NODES) <= set(nodes)
     for name, (module_name, class_name) in nodes.items():
         module = importlib.import_module(module_name)
@@ -51,25 +104,23 @@ def test_every_node_module_has_a_main_and_its_class():
         assert isinstance(getattr(module, class_name), type), name
 
 
-def test_installed_entry_points_match_setup_py():
+def test_installed_entry_points_match_pyproject():
     installed = {e.name: e.value for e in entry_points(group='social_touch.nodes')}
-    if not installed:
-        pytest.skip('the package is not installed (pip install .): entry points come from its metadata')
-    assert installed == {name: f'{m}:{c}' for name, (m, c) in _setup_nodes().items()}
+    assert installed == {name: f'{m}:{c}' for name, (m, c) in _pyproject_nodes().items()}, \
+        'reinstall (pip install -e .) after changing pyproject.toml'
+    scripts = {e.name: e.value for e in entry_points(group='console_scripts') if e.dist.name == PROJECT['name']}
+    assert scripts == PROJECT['scripts']
 
 
-def test_every_plug_in_group_is_installed_as_setup_py_declares_it_and_loads():
+def test_every_plug_in_group_is_installed_as_pyproject_declares_it_and_loads():
     """Commands, lab targets, benchmarks, scene generators and URL handlers: one entry point each."""
-    groups = _setup_constant('ENTRY_POINT_GROUPS')
-    assert {'social_touch.commands', 'social_touch.eval', 'social_touch.train', 'social_touch.codebook',
-            'social_touch.report', 'social_touch.bench', 'social_touch.scene_generators',
-            'social_touch.serial_url_handlers'} <= set(groups)
-    if not list(entry_points(group='social_touch.commands')):
-        pytest.skip('the package is not installed (pip install .): entry points come from its metadata')
-    for group, lines in groups.items():
-        declared = dict(line.replace(' ', '').split('=') for line in lines)
+    groups = PROJECT['entry-points']
+    assert {'social_touch.nodes', 'social_touch.commands', 'social_touch.eval', 'social_touch.train',
+            'social_touch.codebook', 'social_touch.report', 'social_touch.bench', 'social_touch.scene_generators',
+            'social_touch.serial_url_handlers'} == set(groups)
+    for group, declared in groups.items():
         installed = {e.name: e.value for e in entry_points(group=group)}
-        assert installed == declared, f'{group}: reinstall (pip install -e .) after changing setup.py'
+        assert installed == declared, f'{group}: reinstall (pip install -e .) after changing pyproject.toml'
         for ep in entry_points(group=group):
             loaded = ep.load()
             if group in ('social_touch.commands', 'social_touch.eval', 'social_touch.train', 'social_touch.codebook',
@@ -147,11 +198,8 @@ def test_colcon_builds_the_package_and_installs_the_executables(tmp_path):
 
 
 def test_cli_doctests():
-    import doctest
-
     import touch_graph.cli.main
-    result = doctest.testmod(touch_graph.cli.main)
-    assert result.failed == 0 and result.attempted > 0
+    check_doctests(touch_graph.cli.main)
 
 
 def test_lines_counts_every_layer(capsys):

@@ -212,7 +212,7 @@ class LiveGraph:
         self.ctx.init()
         self.executor = SingleThreadedExecutor(context=self.ctx)
         self.lines: list[str] = []
-        env = {**os.environ, 'ROS_DOMAIN_ID': str(domain), 'PYTHONPATH': str(REPO)}
+        env = {**os.environ, 'ROS_DOMAIN_ID': str(domain)}
         command = [sys.executable, '-m', 'touch_graph.cli.main', 'codebook', 'record', '--wait', '0.2', *argv]
         self.proc = subprocess.Popen(command, cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE,
                                      text=True)

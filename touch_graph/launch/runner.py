@@ -33,7 +33,6 @@ them in file order.
 
 from __future__ import annotations
 
-import ast
 import importlib
 import importlib.metadata
 import importlib.util
@@ -45,6 +44,11 @@ import types
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: a source checkout's nodes come from the installed metadata only
+    tomllib = None
 
 from ..errors import LaunchError, SocialTouchError
 from ..yamlconf import did_you_mean
@@ -66,31 +70,24 @@ def _normalize(name: str) -> str:
     return name.replace('-', '_').lower()
 
 
-def source_tree_nodes(setup_py: Path | None = None, package: str = 'social_touch',
+def source_tree_nodes(pyproject: Path | None = None, package: str = 'social_touch',
                       group: str = ENTRY_POINT_GROUP) -> dict[tuple[str, str], importlib.metadata.EntryPoint]:
-    """The ``NODES`` table of a source checkout's ``setup.py`` (read with :mod:`ast`, never run).
+    """The ``group`` entry points of a source checkout's ``pyproject.toml`` (read, not installed).
 
-    So ``python -m touch_graph.cli.main launch ...`` works in a checkout that is not pip-installed.
-    Returns an empty mapping when there is no such file or table.
+    So ``launch`` finds a node added to the checkout before ``pip install -e .`` ran again.
+    Returns an empty mapping when there is no such file or group, or no TOML reader (Python 3.10).
     """
-    setup_py = setup_py or Path(__file__).resolve().parents[2] / 'setup.py'
-    try:
-        tree = ast.parse(setup_py.read_text(encoding='utf-8'))
-    except (OSError, SyntaxError, ValueError):
+    pyproject = pyproject or Path(__file__).resolve().parents[2] / 'pyproject.toml'
+    if tomllib is None:
         return {}
-    for statement in tree.body:
-        target = getattr(statement, 'target', None) or (getattr(statement, 'targets', None) or [None])[0]
-        if isinstance(target, ast.Name) and target.id == 'NODES' and getattr(statement, 'value', None) is not None:
-            try:
-                table = ast.literal_eval(statement.value)
-            except ValueError:
-                return {}
-            if not isinstance(table, dict):
-                return {}
-            return {(_normalize(package), name): importlib.metadata.EntryPoint(name, f'{item[0]}:{item[1]}', group)
-                    for name, item in table.items()
-                    if isinstance(name, str) and isinstance(item, tuple) and len(item) == 2}
-    return {}
+    try:
+        table = tomllib.loads(pyproject.read_text(encoding='utf-8'))['project']['entry-points'][group]
+    except (OSError, ValueError, KeyError, TypeError):
+        return {}
+    if not isinstance(table, dict):
+        return {}
+    return {(_normalize(package), name): importlib.metadata.EntryPoint(name, value, group)
+            for name, value in table.items() if isinstance(name, str) and isinstance(value, str)}
 
 
 def entry_point_registry(group: str = ENTRY_POINT_GROUP, *, include_source_tree: bool = True,
@@ -98,7 +95,7 @@ def entry_point_registry(group: str = ENTRY_POINT_GROUP, *, include_source_tree:
     """``(package, executable) -> EntryPoint`` for every node executable (classes are not imported yet).
 
     Installed entry points win; with ``include_source_tree``, executables of this source
-    checkout's ``setup.py`` that are not installed fill the gaps (see :func:`source_tree_nodes`).
+    checkout's ``pyproject.toml`` that are not installed fill the gaps (see :func:`source_tree_nodes`).
     """
     out = source_tree_nodes(group=group) if include_source_tree else {}
     for entry_point in importlib.metadata.entry_points(group=group):
