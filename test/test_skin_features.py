@@ -53,6 +53,16 @@ def test_minmax_output_is_finite_and_in_unit_range(values):
     with np.errstate(divide='raise', invalid='raise', over='raise'):  # underflow of tiny values is fine
         out = minmax_normalise(values)
     assert np.all(np.isfinite(out)) and out.min() >= 0.0 and out.max() <= 1.0
+    # Not only the range: each column is the affine map that takes its minimum to 0 and its maximum to 1
+    # (order kept), and a column without extent is 0.5 throughout.
+    for column, got in zip(values.T, out.T, strict=True):
+        span = column.max() - column.min()
+        if span < 1e-6:
+            assert (got == 0.5).all()
+            continue
+        assert got[column.argmin()] == 0.0 and got[column.argmax()] == 1.0
+        np.testing.assert_allclose(got * span + column.min(), column, rtol=1e-9, atol=1e-9 * max(1.0, abs(span)))
+        assert (np.diff(got[np.argsort(column, kind='stable')]) >= 0).all()
 
 
 def test_maps_empty_single_and_line():

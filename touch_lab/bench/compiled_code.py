@@ -94,6 +94,16 @@ def measure_cdr(repeats: int) -> dict[str, Any]:
             'compiled_measured': _load().get('cdr', {}).get('compiled_measured')}
 
 
+def _kinds_table(figures: dict[str, Any], *codecs: tuple[str, str]) -> list[str]:
+    """Markdown rows: per kind its rate, bytes and each codec's encode + decode us (``(key, title)`` each)."""
+    rows = ['| kind | rate, Hz | bytes | ' + ' | '.join(f'{title} encode + decode, us' for _, title in codecs) + ' |',
+            '|---|---:|---:|' + '---:|' * len(codecs)]
+    for kind, k in figures['kinds'].items():
+        rows.append(f'| {kind} | {figures["rates_hz"][kind]} | {k["bytes"]} | '
+                    + ' | '.join(f'{k[f"{key}_encode_us"]} + {k[f"{key}_decode_us"]}' for key, _ in codecs) + ' |')
+    return rows
+
+
 def render_cdr(f: dict[str, Any]) -> str:
     before = f.get('compiled_measured')
     lines = ['## The CDR codec (touch_graph/cdr.py; compiled twin touch_graph/_cdr_accel.c)', '',
@@ -106,11 +116,7 @@ def render_cdr(f: dict[str, Any]) -> str:
     if before:
         lines += [f'Before: measured at commit `{before["commit"]}` ({before["date"]}), that commit\'s '
                   f'`{before["command"]}`, {before["rounds"]} rounds, with the compiled codec built:', '',
-                  '| kind | rate, Hz | bytes | Python encode + decode, us | compiled encode + decode, us |',
-                  '|---|---:|---:|---:|---:|']
-        for kind, k in before['kinds'].items():
-            lines.append(f'| {kind} | {before["rates_hz"][kind]} | {k["bytes"]} | {k["python_encode_us"]} + '
-                         f'{k["python_decode_us"]} | {k["c_encode_us"]} + {k["c_decode_us"]} |')
+                  *_kinds_table(before, ('python', 'Python'), ('c', 'compiled'))]
         saving = before['python_percent_of_core'] - before['c_percent_of_core']
         ceiling = before['python_ceiling_percent_of_core'] - before['c_ceiling_percent_of_core']
         lines += ['', '| | Python codec | compiled codec | saving |', '|---|---:|---:|---:|',
@@ -129,11 +135,7 @@ def render_cdr(f: dict[str, Any]) -> str:
     if 'python_percent_of_core' in f:
         lines += [f'After: the compiled codec is removed. Measured at commit `{f["commit"]}` ({f["date"]}), '
                   f'`{f["command"]}`, {f["rounds"]} rounds; rosbags\' generic serialiser beside ours:', '',
-                  '| kind | rate, Hz | bytes | our codec encode + decode, us | rosbags encode + decode, us |',
-                  '|---|---:|---:|---:|---:|']
-        for kind, k in f['kinds'].items():
-            lines.append(f'| {kind} | {f["rates_hz"][kind]} | {k["bytes"]} | {k["python_encode_us"]} + '
-                         f'{k["python_decode_us"]} | {k["rosbags_encode_us"]} + {k["rosbags_decode_us"]} |')
+                  *_kinds_table(f, ('python', 'our codec'), ('rosbags', 'rosbags'))]
         lines += ['', f'The codec costs {f["python_percent_of_core"]:.3f} % of one core at the real rates '
                   f'({f["python_ceiling_percent_of_core"]:.3f} % with {CEILING_DECODES} decodes); `bench stack` '
                   f'total: {f["stack_percent"]["python"]:.2f} % of one core (median of {f["stack_runs"]}).', '']
