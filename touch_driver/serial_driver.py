@@ -46,7 +46,7 @@ from .framing import DecoderStats, ScanT, SensorStreamDecoder
 __all__ = ['URL_HANDLER_GROUP', 'DecodedFrame', 'DriverError', 'PortDisconnected', 'PortURLError', 'SerialDriver',
            'prepare_port_url', 'url_handler_packages']
 
-#: Entry point group of pyserial URL handlers: ``scheme = package`` (setup.py).
+#: Entry point group of pyserial URL handlers: ``scheme = package`` (pyproject.toml).
 URL_HANDLER_GROUP = 'social_touch.serial_url_handlers'
 
 

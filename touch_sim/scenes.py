@@ -352,7 +352,7 @@ def _pair(item: YamlDict, key: str, what: str) -> tuple[float, float]:
     return float(value[0]), float(value[1])
 
 
-#: The entry point group of scene generators: ``name = module:function`` (setup.py). A scene file
+#: The entry point group of scene generators: ``name = module:function`` (pyproject.toml). A scene file
 #: names a generator, never a module: a config file imports no code of its own choosing.
 GENERATOR_GROUP = 'social_touch.scene_generators'
 

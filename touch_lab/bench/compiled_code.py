@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -81,11 +82,13 @@ def measure_cdr(repeats: int) -> dict[str, Any]:
     figures file: the command that took them is that commit's version of this one.
     """
     from touch_lab.bench.codec import bench_codec
+    load = os.getloadavg()[0]  # before the measuring adds its own
     codec = bench_codec(repeats=repeats)
     duration_s = 20.0
     rates = _message_rates(duration_s)
     stack = [_stack_percent(duration_s) for _ in range(repeats)]
-    return {'commit': _commit(), 'date': datetime.date.today().isoformat(),
+    return {'commit': _commit(), 'date': datetime.date.today().isoformat(), 'load_average_1min': round(load, 1),
+            'cores': os.cpu_count(),
             'command': 'social-touch report compiled-code cdr', 'rounds': repeats,
             'rates_hz': {k: round(v, 3) for k, v in rates.items()}, 'kinds': codec['kinds'],
             'stack_percent': {'python': round(statistics.median(stack), 3)}, 'stack_runs': repeats,
@@ -134,7 +137,8 @@ def render_cdr(f: dict[str, Any]) -> str:
                   'differ by the machine\'s noise only.', '']
     if 'python_percent_of_core' in f:
         lines += [f'After: the compiled codec is removed. Measured at commit `{f["commit"]}` ({f["date"]}), '
-                  f'`{f["command"]}`, {f["rounds"]} rounds; rosbags\' generic serialiser beside ours:', '',
+                  f'`{f["command"]}`, {f["rounds"]} rounds, machine load average {f["load_average_1min"]} on '
+                  f'{f["cores"]} cores; CPU time per call, rosbags\' generic serialiser beside ours:', '',
                   *_kinds_table(f, ('python', 'our codec'), ('rosbags', 'rosbags'))]
         lines += ['', f'The codec costs {f["python_percent_of_core"]:.3f} % of one core at the real rates '
                   f'({f["python_ceiling_percent_of_core"]:.3f} % with {CEILING_DECODES} decodes); `bench stack` '
@@ -177,6 +181,6 @@ def run(args: argparse.Namespace) -> int:
         for name in args.sections or list(SECTIONS):
             figures[name] = SECTIONS[name][0](args.repeats)
         FIGURES.write_text(json.dumps(figures, indent=1, sort_keys=True) + '\n')
-    REPORT.write_text(render(figures))
+    REPORT.write_text(render(_load()))  # as read back (keys sorted), so the report is its file's rendering
     print(REPORT)
     return 0
