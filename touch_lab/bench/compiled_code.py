@@ -142,7 +142,10 @@ def render_cdr(f: dict[str, Any]) -> str:
                   *_kinds_table(f, ('python', 'our codec'), ('rosbags', 'rosbags'))]
         lines += ['', f'The codec costs {f["python_percent_of_core"]:.3f} % of one core at the real rates '
                   f'({f["python_ceiling_percent_of_core"]:.3f} % with {CEILING_DECODES} decodes); `bench stack` '
-                  f'total: {f["stack_percent"]["python"]:.2f} % of one core (median of {f["stack_runs"]}).', '']
+                  f'total: {f["stack_percent"]["python"]:.2f} % of one core (median of {f["stack_runs"]}). A compiled '
+                  'codec could save at most the whole codec\'s cost: '
+                  f'{"under" if f["python_ceiling_percent_of_core"] < THRESHOLD_PERCENT else "over"} the '
+                  f'{THRESHOLD_PERCENT} % threshold.', '']
     return '\n'.join(lines)
 
 
