@@ -89,7 +89,7 @@ def _origin_ns(frames: list, period_s: float) -> int:
 def test_patch_loop_recognises_people_it_has_not_seen(tmp_path, capsys):
     model, report, _ = collect_train_eval(tmp_path, capsys, 'patch', 'stroke,tickle,push,slap',
                                        ['--components', '3', '--evaluate', '-o'],
-                                       ['--components', '3', '--thresholds', '0.99', '--holds-s', '0.25'])
+                                       ['--components', '3', '--thresholds', '0.99', '--dwells-s', '0.25'])
     assert report['n_events'] == 3 * 4 * 3 and report['event_correct_rate'] > 0.6
     from touch_sim.patch.people import people_scene
     options = {'n_people': 2, 'seed': 77, 'gestures': ['stroke', 'tickle', 'push', 'slap'], 'events_per_gesture': 1,

@@ -46,13 +46,13 @@ def cost_csv(tmp_path_factory):
 def test_train_and_eval_on_a_cost_csv(tmp_path, cost_csv, capsys):
     model_path = tmp_path / 'patch.npz'
     assert main(['train', '--csv', str(cost_csv), '--grid', '8x8', '--rate', '20', '--gain', str(1 / 400),
-                 '--components', '2', '--hold-s', '0.25', '-o', str(model_path)]) == 0
+                 '--components', '2', '--dwell-s', '0.25', '-o', str(model_path)]) == 0
     model = load_model(model_path, grid=(8, 8))
     assert model.classes == ('push', 'slap', 'stroke', 'tickle')
-    assert (model.window, model.hold, model.rate_hz) == (60, 5, 20.0)
+    assert (model.window, model.dwell, model.rate_hz) == (60, 5, 20.0)
     assert 'wrote' in capsys.readouterr().err
     assert main(['eval', '--csv', str(cost_csv), '--grid', '8x8', '--rate', '20', '--gain', str(1 / 400),
-                 '--components', '1,2', '--thresholds', '0.99', '--holds-s', '0.4', '--json', '--quiet']) == 0
+                 '--components', '1,2', '--thresholds', '0.99', '--dwells-s', '0.4', '--json', '--quiet']) == 0
     out = json.loads(capsys.readouterr().out)
     for key in ('event_correct', 'false_detections', 'misses', 'median_detection_latency_s', 'us_per_frame'):
         assert key in out
@@ -62,7 +62,7 @@ def test_train_and_eval_on_a_cost_csv(tmp_path, cost_csv, capsys):
 
 def test_eval_simulated_people_json(capsys):
     assert main(['eval', '--simulate', '2', '--events', '1', '--components', '1',
-                 '--thresholds', '0.99', '--holds-s', '0.4', '--json', '--quiet']) == 0
+                 '--thresholds', '0.99', '--dwells-s', '0.4', '--json', '--quiet']) == 0
     out = json.loads(capsys.readouterr().out)
     assert out['synthetic'] is True and out['source'].startswith('simulated people: 2')
     assert out['n_events'] == 8
@@ -70,7 +70,7 @@ def test_eval_simulated_people_json(capsys):
 
 def test_eval_text_report(capsys):
     assert main(['eval', '--simulate', '2', '--events', '1', '--components', '1',
-                 '--thresholds', '0.99', '--holds-s', '0.4']) == 0
+                 '--thresholds', '0.99', '--dwells-s', '0.4']) == 0
     captured = capsys.readouterr()
     assert 'SYNTHETIC' in captured.out and 'event confusion' in captured.out and 'not recognised' in captured.out
     assert '[patch] simulating p1' in captured.err
@@ -98,3 +98,18 @@ def test_parsers_can_be_mounted_elsewhere():
     add_eval_arguments(parser)
     args = parser.parse_args(['--bags', 'm.yaml', '--components', '3,5'])
     assert args.components == [3, 5] and args.thresholds == [0.9, 0.99, 0.999]
+
+
+@pytest.mark.parametrize('add, old, new, dest, value', [
+    (add_train_arguments, '--hold-s', '--dwell-s', 'dwell_s', 0.25),
+    (add_eval_arguments, '--holds-s', '--dwells-s', 'dwells_s', [0.25]),
+])
+def test_old_dwell_option_spelling_still_works_with_a_warning(add, old, new, dest, value, capsys):
+    parser = argparse.ArgumentParser()
+    add(parser)
+    argv = ['--simulate', '2', '-o', 'unused.npz'] if add is add_train_arguments else ['--simulate', '2']
+    assert getattr(parser.parse_args([*argv, new, '0.25']), dest) == value
+    assert 'deprecated' not in capsys.readouterr().err
+    assert getattr(parser.parse_args([*argv, old, '0.25']), dest) == value
+    assert f'{old} is deprecated: use {new}' in capsys.readouterr().err
+    assert old not in parser.format_help()

@@ -101,10 +101,10 @@ def test_streaming_equals_the_batch_evaluation_path(small_sessions):
     classes = tuple(clf.classes_)
     for s in test:
         lp = clf.predict_log_proba(window_features(s.activations, 60))
-        batch = run_detector(lp, onset_ages(s.activations, 60), classes, 0.99, 0.9, 20.0, hold=3)
+        batch = run_detector(lp, onset_ages(s.activations, 60), classes, 0.99, 0.9, 20.0, dwell=3)
         wf = WindowFeatures(60)
         from touch_gestures.patch.classifier import EventDetector
-        detector = EventDetector(classes, threshold=0.99, release=0.9, hold=3)
+        detector = EventDetector(classes, threshold=0.99, release=0.9, dwell=3)
         stream = []
         for frame in s.activations:
             hit = detector.update(clf.log_posterior(wf.update(frame)), wf.onset_age)
@@ -115,7 +115,7 @@ def test_streaming_equals_the_batch_evaluation_path(small_sessions):
 
 
 def test_leave_one_subject_out_reports_fig6(small_sessions):
-    res = leave_one_subject_out(small_sessions, n_components=(1, 2), thresholds=(0.9, 0.99), holds_s=(0.05, 0.4))
+    res = leave_one_subject_out(small_sessions, n_components=(1, 2), thresholds=(0.9, 0.99), dwells_s=(0.05, 0.4))
     d = res.as_dict()
     assert d['synthetic'] and d['subjects'] == ['p1', 'p2', 'p3'] and d['window_frames'] == 60
     assert len(d['grid']) == 8 and d['n_events'] == 24

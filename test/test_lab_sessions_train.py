@@ -34,7 +34,7 @@ def test_patch_trains_and_evaluates_from_session_bags(sessions, tmp_path, capsys
     assert list(loaded.classes) == ['slap', 'stroke'] and loaded.rate_hz == pytest.approx(20.0, rel=1e-3)
     capsys.readouterr()
     assert cli_main(['eval', 'patch', '--bags', *sessions['patch'], '--components', '2', '--thresholds', '0.99',
-                     '--holds-s', '0.25', '--json']) == 0
+                     '--dwells-s', '0.25', '--json']) == 0
     report = json.loads(capsys.readouterr().out)
     assert report['synthetic'] and len(report['subjects']) == 3
     assert report['n_events'] == 12   # 3 people x 2 classes x 2 repetitions, one event per trial
@@ -48,7 +48,7 @@ def test_patch_accepts_rates_that_jitter_as_real_drivers_do(sessions):
     recordings[0].stamps_s['/patch/frame'] = recordings[0].stamps_s['/patch/frame'] / 1.0008   # 0.08 % faster
     trials = trial_sessions(recordings)
     assert len({round(s.rate_hz, 6) for s in trials}) == 2
-    result = leave_one_subject_out(trials, n_components=(2,), thresholds=(0.99,), holds_s=(0.25,))
+    result = leave_one_subject_out(trials, n_components=(2,), thresholds=(0.99,), dwells_s=(0.25,))
     assert result.as_dict()['n_events'] == 12
     recordings[0].stamps_s['/patch/frame'] = recordings[0].stamps_s['/patch/frame'] / 1.5
     with pytest.raises(ValueError, match=r'frame rates differ by more than 2 %: .*patch_p01'):

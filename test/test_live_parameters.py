@@ -54,8 +54,8 @@ def test_patch_gestures_applies_its_event_rule_at_once(graph):
     start, set_parameters = graph
     node = start(PatchGesturesNode)
     before = node.detector
-    assert set_parameters(node, threshold=0.95, hold_s=0.1) == [(True, ''), (True, '')]
-    assert (node.detector.threshold, node.detector.hold) == (0.95, 2) and node.detector is not before
+    assert set_parameters(node, threshold=0.95, dwell_s=0.1) == [(True, ''), (True, '')]
+    assert (node.detector.threshold, node.detector.dwell) == (0.95, 2) and node.detector is not before
     [(ok, why)] = set_parameters(node, threshold=0.5)  # below the release in force (0.9 from the model)
     assert not ok and 'release' in why and 'in [0, threshold = 0.5]' in why
     assert node.detector.threshold == 0.95

@@ -190,8 +190,8 @@ def test_release_and_idle_window_allow_the_same_class_again():
     assert det.update(post(0.995, 0.005), 0) is not None             # a new touch: reported again
 
 
-def test_hold_needs_consecutive_frames():
-    det = EventDetector(['a', 'b'], threshold=0.99, hold=3)
+def test_dwell_needs_consecutive_frames():
+    det = EventDetector(['a', 'b'], threshold=0.99, dwell=3)
     assert det.update(post(0.995, 0.005), 0) is None
     assert det.update(post(0.005, 0.995), 1) is None   # another class resets the run
     assert det.update(post(0.005, 0.995), 2) is None
@@ -203,8 +203,8 @@ def test_event_detector_rejects_bad_settings():
         EventDetector(['a'], threshold=0)
     with pytest.raises(ValueError, match='release'):
         EventDetector(['a'], threshold=0.9, release=0.95)
-    with pytest.raises(ValueError, match='hold'):
-        EventDetector(['a'], hold=0)
+    with pytest.raises(ValueError, match='dwell'):
+        EventDetector(['a'], dwell=0)
 
 
 def test_doctests():

@@ -19,7 +19,7 @@ def model():
     X = np.concatenate([rng.normal(i, 1.0, (150, 12)) for i in range(3)])
     y = np.repeat(['push', 'slap', 'stroke'], 150)
     clf = PatchGestureClassifier(n_components=3, threshold=0.995).fit(X, y)
-    return PatchModel(clf, window=40, rate_hz=20.0, k=0.08, grid=(16, 16), release=0.8, hold=6), X
+    return PatchModel(clf, window=40, rate_hz=20.0, k=0.08, grid=(16, 16), release=0.8, dwell=6), X
 
 
 def saved(tmp_path, model):
@@ -44,11 +44,11 @@ def test_round_trip_gives_the_same_posteriors(tmp_path, model):
     loaded = load_model(saved(tmp_path, m))
     assert loaded.classes == ('push', 'slap', 'stroke')
     assert (loaded.window, loaded.rate_hz, loaded.k, loaded.grid) == (40, 20.0, 0.08, (16, 16))
-    assert (loaded.release, loaded.hold, loaded.classifier.threshold) == (0.8, 6, 0.995)
+    assert (loaded.release, loaded.dwell, loaded.classifier.threshold) == (0.8, 6, 0.995)
     np.testing.assert_allclose(loaded.classifier.predict_log_proba(X), m.classifier.predict_log_proba(X), atol=1e-10)
     np.testing.assert_allclose(loaded.classifier.log_posterior(X[3]), m.classifier.log_posterior(X[3]), atol=1e-10)
     det = loaded.detector()
-    assert det.hold == 6 and det.threshold == 0.995 and det.classes == loaded.classes
+    assert det.dwell == 6 and det.threshold == 0.995 and det.classes == loaded.classes
     assert loaded.features().window == 40
 
 

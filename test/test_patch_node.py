@@ -86,13 +86,13 @@ def small_model(tmp_path, name='m.npz', grid=(16, 16), window=60, **model_kwargs
     return path
 
 
-def offline_events(model: PatchModel, activations, threshold=None, hold=None):
+def offline_events(model: PatchModel, activations, threshold=None, dwell=None):
     """What the recogniser does without the graph: features, direct posterior, event rule."""
     features, classifier = model.features(), model.classifier
     det = model.detector()
     if threshold is not None:
         det = EventDetector(model.classes, threshold=threshold, release=min(det.release, threshold),
-                            rate_hz=model.rate_hz, hold=hold or det.hold)
+                            rate_hz=model.rate_hz, dwell=dwell or det.dwell)
     out = []
     for act in activations:
         hit = det.update(classifier.log_posterior(features.update(act)), features.onset_age)
@@ -163,15 +163,15 @@ def test_parameters_default_to_the_model_and_can_be_overridden(session_frames):
     try:
         model = h.node.model
         assert h.node.get_parameter('threshold').value == model.classifier.threshold
-        assert h.node.get_parameter('hold_s').value == pytest.approx(model.hold / model.rate_hz)
+        assert h.node.get_parameter('dwell_s').value == pytest.approx(model.dwell / model.rate_hz)
         assert h.node.get_parameter('window').value == model.window
-        assert h.node.detector.hold == model.hold
+        assert h.node.detector.dwell == model.dwell
     finally:
         h.close()
     frames = session_frames[0]
-    h = Harness(threshold=0.9, hold_s=0.0, window=60)
+    h = Harness(threshold=0.9, dwell_s=0.0, window=60)
     try:
-        assert (h.node.detector.threshold, h.node.detector.hold, h.node.detector.release) == (0.9, 1, 0.9)
+        assert (h.node.detector.threshold, h.node.detector.dwell, h.node.detector.release) == (0.9, 1, 0.9)
         h.update(frames[:300])
         assert [(round((e.header.stamp.sec * NS + e.header.stamp.nanosec - T0_NS) / (NS / 20)), e.gesture)
                 for e in h.events] == [x[:2] for x in offline_events(h.node.model, frames[:300], 0.9, 1)]
@@ -179,10 +179,44 @@ def test_parameters_default_to_the_model_and_can_be_overridden(session_frames):
         h.close()
 
 
+def _node_from_params_file(tmp_path, ctx, params: dict):
+    path = tmp_path / 'patch_gestures.yaml'
+    body = ''.join(f'      {k}: {v}\n' for k, v in params.items())
+    path.write_text(f'/patch/patch_gestures:\n  ros__parameters:\n{body}')
+    return PatchGesturesNode(context=ctx, namespace='patch', cli_args=['--ros-args', '--params-file', str(path)])
+
+
+def test_old_parameter_name_hold_s_still_works_with_a_warning(tmp_path, capfd):
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        node = _node_from_params_file(tmp_path, ctx, {'hold_s': 0.25})
+        assert node.detector.dwell == 5 and node.get_parameter('dwell_s').value == 0.25
+        err = capfd.readouterr().err
+        assert err.count("parameter 'hold_s' is deprecated: rename it 'dwell_s'") == 1
+        node = _node_from_params_file(tmp_path, ctx, {'dwell_s': 0.25})
+        assert node.detector.dwell == 5 and 'deprecated' not in capfd.readouterr().err
+        node = _node_from_params_file(tmp_path, ctx, {'dwell_s': 0.1, 'hold_s': 0.25})
+        assert node.detector.dwell == 2
+        assert "parameter 'hold_s' is deprecated and ignored, since 'dwell_s' is given" in capfd.readouterr().err
+    finally:
+        ctx.shutdown()
+
+
+def test_old_parameter_name_hold_s_is_checked_like_the_new_one(tmp_path):
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        with pytest.raises(ParameterError, match="'dwell_s'"):
+            _node_from_params_file(tmp_path, ctx, {'hold_s': -1.0})
+    finally:
+        ctx.shutdown()
+
+
 @pytest.mark.parametrize('params, fragment', [
     ({'window': 40}, "'window' of /patch/patch_gestures is 40 frames, but"),
     ({'threshold': 1.5}, "'threshold' of /patch/patch_gestures must be a posterior in (0, 1]"),
-    ({'hold_s': -1.0}, "'hold_s'"),
+    ({'dwell_s': -1.0}, "'dwell_s'"),
     ({'release': 0.995}, "'release' of /patch/patch_gestures must be in [0, threshold = 0.99]"),
     ({'max_gap_s': 0.0}, "'max_gap_s'"),
 ])

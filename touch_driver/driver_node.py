@@ -29,7 +29,7 @@ in :meth:`SerialDriverNode.handle_frame`. This base
   ``error_error_fraction``, WARN when the rate falls below ``min_rate_fraction`` of the expected.
 
 Parameters set while it runs (``ros2 param set``, ``social-touch param set``): those in
-:attr:`SerialDriverNode.live_parameters` take effect at once; every other one is read when
+:attr:`SerialDriverNode.LIVE_PARAMETERS` take effect at once; every other one is read when
 the driver starts (the port, the timers, the calibration), so a change is refused with that
 reason instead of being accepted and ignored.
 """
@@ -124,7 +124,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
     default_port = 'loop://'
     frame_rate_hz = 10.0
     #: Parameters the driver applies at once when set; the others are read at start.
-    live_parameters = frozenset({'frame_id', 'reconnect_period_s'})
+    LIVE_PARAMETERS = frozenset({'frame_id', 'reconnect_period_s'})
 
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
@@ -202,11 +202,11 @@ class SerialDriverNode(Node, Generic[ScanT]):
 
     # ------------------------------------------------------------------ internals
     def _on_set_parameters(self, params: list[Any]) -> Any:
-        """Apply :attr:`live_parameters` at once; refuse the ones read at start (use_sim_time is the runtime's)."""
+        """Apply :attr:`LIVE_PARAMETERS` at once; refuse the ones read at start (use_sim_time is the runtime's)."""
         for param in params:
             if param.name == 'use_sim_time':
                 continue
-            if param.name not in self.live_parameters:
+            if param.name not in self.LIVE_PARAMETERS:
                 return SetParametersResult(successful=False, reason=f"'{param.name}' is read when the driver "
                                            'starts; relaunch the node to change it')
             if param.name == 'reconnect_period_s' and not param.value > 0:

@@ -1,6 +1,6 @@
 """CDR encoders and decoders generated per message type, byte-identical to rosbags (and to ROS 2).
 
-rosbags' generic (de)serialiser costs 5-14 us per message of ours: one struct call per
+rosbags' generic (de)serialiser is slow on messages of ours: one struct call per
 scalar, a size pass before the write pass, a copy of the payload before decoding, and the
 message built through the class's checking ``__init__``. Here each type gets two
 functions, generated once from its field definitions (Python source compiled with

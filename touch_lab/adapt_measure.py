@@ -76,7 +76,7 @@ def _patch(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
             correct = 0
             for i in test_idx:
                 lp = clf.predict_log_proba(feats[i])
-                dets = run_detector(lp, onset_ages(trials[i].activations, window), classes, 0.99, 0.9, rate, hold=5)
+                dets = run_detector(lp, onset_ages(trials[i].activations, window), classes, 0.99, 0.9, rate, dwell=5)
                 m = score(dets, trials[i].events, trials[i].gesture, decide(lp, 0.99), classes, rate,
                           late_s=window / rate)
                 correct += m.event_correct

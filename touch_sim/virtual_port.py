@@ -2,7 +2,7 @@
 
 A virtual device is opened like real hardware, ``serial.serial_for_url('skinsim://demo')``,
 and yields the bytes the hardware would send, paced by a clock. The sensor-specific part
-is a :class:`DeviceModel` (``touch_driver/<sensor>/device.py``) that turns the stimulus
+is a :class:`DeviceModel` (``touch_sim/<sensor>/device.py``) that turns the stimulus
 of a scene into wire frames; this module supplies the pyserial plumbing shared by the
 three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_loop``):
 

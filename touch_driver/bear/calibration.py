@@ -19,8 +19,8 @@ Sensor faults are detected per channel and reported as a bit mask:
 - ``FAULT_DEAD``: stuck at 0 counts (open electrode, broken wire) for ``fault_after_s``;
 - ``FAULT_SATURATED``: stuck at full scale (1023) for ``saturated_after_s`` (5 min). A real
   direct touch saturates too (knight2009 IV.D) and, clipped, is as constant as a shorted
-  sensor, so only the duration tells them apart: the default is far above Table II's
-  holds (4-20 s) but a hug held longer than that would be flagged;
+  sensor, so only the duration tells them apart: the default is far above the holds of
+  knight2009 Table II (4-20 s) but a hug held longer than that would be flagged;
 - ``FAULT_STUCK``: no variation at all (peak-to-peak <= ``stuck_tolerance``) elsewhere;
 - ``FAULT_INVALID``: this frame's sample was NaN, infinite or outside 0..1023.
 

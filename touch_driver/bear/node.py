@@ -2,8 +2,8 @@
 
 Reads scans from ``port`` (``/dev/ttyACM0`` on the robot, ``bearsim://...`` for the virtual
 bear), calibrates them (:class:`~touch_driver.bear.calibration.BearCalibrator`: baseline and
-gain to 0..1, activation at 30 %, fault flags) and publishes a ``BearFrame`` per scan on
-``frame`` (``/bear/frame`` in the ``bear`` namespace), plus status and diagnostics.
+gain to 0..1, activation over 30 % as in knight2009 V.A, fault flags) and publishes a
+``BearFrame`` per scan on ``frame`` (``/bear/frame`` in the ``bear`` namespace), plus status and diagnostics.
 """
 
 from __future__ import annotations

@@ -8,11 +8,12 @@ The chain, per cell (i, j) of the 16x16 matrix:
 2. **Running minimum**, eq. (1): ``m_t = min{a_t, m_{t-1} + tau (a_t - m_{t-1})}``.
    As printed, this follows the signal *down at once* (when ``a_t < m_{t-1}`` the second
    term is above ``a_t``, so ``m_t = a_t``) and *up slowly*, by the fraction ``tau`` of
-   the gap per frame (time constant ``1 / (tau * 20 Hz)``: 50 s for the default
-   ``tau = 0.001``). So the resting state may creep up after a press (sympartner2018 5.3)
-   without a press being learned quickly: a 3 s push loses ``1 - exp(-3 * 20 * tau)``,
-   about 6 %, of its activation. On a stationary signal m settles a few noise standard
-   deviations below the mean and stays there (bounded, no drift).
+   the gap per frame (time constant ``1 / (tau * 20 Hz)``; for the default ``tau = 0.001``
+   = 50 s). So the resting state may creep up after a press (sympartner2018 5.3) without
+   a press being learned quickly: a push of ``d`` seconds loses the fraction
+   ``1 - exp(-d * 20 * tau)`` of its activation (= 0.058 for d = 3 s and the default tau).
+   On a stationary signal m settles a few noise standard deviations below the mean and
+   stays there (bounded, no drift).
 3. **Normalised activation**, eq. (2): ``r_t = min{max{g (a_t - m_t), k}, 1}`` with a
    per-cell gain ``g`` and the floor ``k = 0.08`` that "cancels out noise and crosstalk
    activations". Cells outside the patch outline (config/patch_outline.yaml) read 0.

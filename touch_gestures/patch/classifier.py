@@ -368,22 +368,23 @@ class EventDetector:
     lower ``release`` adds hysteresis against a posterior flickering around the threshold.
     No event is sent from a window without any active frame.
 
-    ``hold`` asks the same class to stay above the threshold for that many consecutive
-    frames before the event is sent (1 = the paper's rule). A sliding window sees only the
-    beginning of a gesture at first: the first frames of a push look like a slap, those of
-    a stroke like a tickle; a short hold lets the window see a little more before the
-    robot reacts, at the price of ``hold - 1`` frames of latency.
+    ``dwell`` asks the same class to stay above the threshold for that many consecutive
+    frames before the event is sent (1 = the paper's rule; the bear's symbolic gestures call
+    the same wait ``dwell_s``). A sliding window sees only the beginning of a gesture at
+    first: the first frames of a push look like a slap, those of a stroke like a tickle; a
+    short dwell lets the window see a little more before the robot reacts, at the price of
+    ``dwell - 1`` frames of latency.
 
     Args:
         classes: class names, in the classifier's order.
         threshold: posterior needed for an event (paper: 0.99).
         release: posterior below which the current class is forgotten (default 0.9).
         rate_hz: frame rate, to turn frame counts into seconds (patch: 20 Hz).
-        hold: consecutive frames above the threshold before an event (paper: 1).
+        dwell: consecutive frames above the threshold before an event (paper: 1).
     """
 
     def __init__(self, classes: tuple[str, ...] | list[str], threshold: float = 0.99, release: float = 0.9,
-                 rate_hz: float = 20.0, hold: int = 1) -> None:
+                 rate_hz: float = 20.0, dwell: int = 1) -> None:
         if not 0.0 < threshold <= 1.0:
             raise ValueError(f'threshold must be in (0, 1]; got {threshold!r}')
         if not 0.0 <= release <= threshold:
@@ -393,10 +394,10 @@ class EventDetector:
         self.classes = tuple(classes)
         self.threshold = threshold
         self.release = release
-        if int(hold) != hold or hold < 1:
-            raise ValueError(f'hold must be a positive number of frames; got {hold!r}')
+        if int(dwell) != dwell or dwell < 1:
+            raise ValueError(f'dwell must be a positive number of frames; got {dwell!r}')
         self.rate_hz = float(rate_hz)
-        self.hold = int(hold)
+        self.dwell = int(dwell)
         self._candidate = -1
         self._run = 0
         self._log_threshold = math.log(threshold)
@@ -431,7 +432,7 @@ class EventDetector:
             self._candidate = best
         else:
             self._run = 0
-        if self._run >= self.hold and best != self.current:
+        if self._run >= self.dwell and best != self.current:
             self.current = best
             self.events += 1
             t = self.frame / self.rate_hz if time_s is None else time_s

@@ -17,7 +17,7 @@ k                   () float64     activation floor of eq. (2) (paper: 0.08)
 grid                (2,) int64     activation map rows, cols (patch: 16, 16)
 threshold           () float64     posterior threshold for events (paper: 0.99)
 release             () float64     event rule: posterior below which the class is forgotten
-hold                () int64       event rule: frames above the threshold before an event (paper: 1)
+hold                () int64       event rule: the dwell, frames above the threshold before an event (paper: 1)
 covariance_type     () str         what EM fitted (stored covariances are always full)
 component_class     (K,) int64     class index of each mixture component
 weights             (K,) float64   component weights, sum to 1 within each class
@@ -78,7 +78,8 @@ class PatchModel:
         window: window length in frames. rate_hz: frame rate, Hz. k: activation floor.
         grid: (rows, cols) of the activation maps.
         feature_names: the features the classifier expects, in order.
-        release, hold: the event rule's settings (see :class:`EventDetector`).
+        release, dwell: the event rule's settings (see :class:`EventDetector`); the file stores
+            ``dwell`` (frames) under its older key ``hold``, so files stay readable both ways.
         metadata: how the model was made (training data, command, ``synthetic``): JSON-able
             scalars by name, stored in the file's optional ``metadata`` key.
     """
@@ -90,7 +91,7 @@ class PatchModel:
     grid: tuple[int, int] = (16, 16)
     feature_names: tuple[str, ...] = FEATURE_NAMES
     release: float = 0.9
-    hold: int = 1
+    dwell: int = 1
     metadata: dict = field(default_factory=dict)
 
     @property
@@ -110,7 +111,7 @@ class PatchModel:
         """A fresh :class:`EventDetector` with the model's classes and event-rule settings."""
         return EventDetector(self.classes, threshold=self.classifier.threshold,
                              release=min(self.release, self.classifier.threshold), rate_hz=self.rate_hz,
-                             hold=self.hold)
+                             dwell=self.dwell)
 
 
 def save_model(path: str | os.PathLike, model: PatchModel) -> None:
@@ -123,7 +124,7 @@ def save_model(path: str | os.PathLike, model: PatchModel) -> None:
         'window': np.array(model.window, dtype=np.int64), 'rate_hz': np.array(model.rate_hz, dtype=np.float64),
         'k': np.array(model.k, dtype=np.float64), 'grid': np.array(model.grid, dtype=np.int64),
         'threshold': np.array(clf.threshold, dtype=np.float64),
-        'release': np.array(model.release, dtype=np.float64), 'hold': np.array(model.hold, dtype=np.int64),
+        'release': np.array(model.release, dtype=np.float64), 'hold': np.array(model.dwell, dtype=np.int64),
         'covariance_type': np.array(clf.covariance_type),
         'component_class': params.component_class.astype(np.int64), 'weights': params.weights,
         'means': params.means, 'covariances': params.covariances,
@@ -224,16 +225,16 @@ def load_model(path: str | os.PathLike, feature_names: tuple[str, ...] = FEATURE
     k = float(_scalar(data, 'k', 'fiu', where))
     threshold = float(_scalar(data, 'threshold', 'fiu', where))
     release = float(_scalar(data, 'release', 'fiu', where))
-    hold = _scalar(data, 'hold', 'iu', where)
-    if window < 1 or not rate_hz > 0 or not 0 < threshold <= 1 or not np.isfinite(k) or hold < 1 \
+    dwell = _scalar(data, 'hold', 'iu', where)
+    if window < 1 or not rate_hz > 0 or not 0 < threshold <= 1 or not np.isfinite(k) or dwell < 1 \
             or not 0 <= release <= 1:
         raise ModelFileError(f'bad settings: window={window}, rate_hz={rate_hz}, threshold={threshold}, k={k}, '
-                             f'release={release}, hold={hold}', where)
+                             f'release={release}, hold={dwell} (the dwell, frames)', where)
     params = _check_params(data, class_names, len(names), where)
     clf = PatchGestureClassifier.from_params(params, threshold=threshold,
                                              covariance_type=str(data['covariance_type']))
     return PatchModel(clf, window=int(window), rate_hz=rate_hz, k=k, grid=file_grid, feature_names=names,
-                      release=release, hold=int(hold), metadata=_read_metadata(data, where))
+                      release=release, dwell=int(dwell), metadata=_read_metadata(data, where))
 
 
 def _check_params(data: dict, classes: tuple[str, ...], d: int, where: str) -> GaussianMixtureParams:

@@ -3,7 +3,7 @@
 Subscribes to ``frame`` (``/patch/frame`` in the ``patch`` namespace, ``PatchFrame`` from
 ``patch_driver``, 20 Hz) and publishes ``/touch/gesture`` (``GestureEvent``) when one class's
 posterior reaches the threshold and differs from the current class (the event rule of 6.2, with
-the model file's hold and release), and ``posteriors`` (``/patch/posteriors``, ``GesturePosteriors``)
+the model file's dwell and release), and ``posteriors`` (``/patch/posteriors``, ``GesturePosteriors``)
 for every frame: all classes' posteriors, the curves of the paper's Fig. 7, for views and evaluation.
 Per frame it does what the evaluation measured (docs/patch-evaluation.md): the incremental window
 features (:class:`~.features.WindowFeatures`), the log posterior of every class evaluated directly
@@ -13,13 +13,15 @@ A ``GestureEvent`` carries the frame's header (its stamp is the frame's), the cl
 posterior, all classes' posteriors, and ``latency_s``: the stamp of this frame minus the stamp
 of the first frame with contact in the window.
 
-Parameters (read once at start, except the event rule's ``threshold``, ``hold_s`` and ``release``,
+Parameters (read once at start, except the event rule's ``threshold``, ``dwell_s`` and ``release``,
 which a parameter set applies at once, e.g. ``social-touch param set /patch/patch_gestures threshold 0.95``):
 
 - ``model``: the ``.npz`` model file (default: the package's ``config/patch_gestures.npz``,
   trained on simulated people, SYNTHETIC; see ``config/patch_gestures.md``). A missing or
   incompatible file stops the node at start with one error naming the file and the problem.
-- ``threshold``, ``hold_s``, ``release``: the event rule; defaults from the model file.
+- ``threshold``, ``dwell_s``, ``release``: the event rule; defaults from the model file. ``dwell_s``
+  is the bear's word for the same wait; its old name ``hold_s`` is still read from parameter
+  files, with a WARN saying to rename it (as ROS 2 packages do for renamed parameters).
 - ``window``: the window length in frames; the model fixes it (its features were computed over
   that window), so only the model's value is accepted: another one is an error saying to retrain.
 - ``max_gap_s``: frames further apart than this (s of header time) start a new window.
@@ -35,11 +37,11 @@ from __future__ import annotations
 import math
 from collections import Counter, deque
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
+from touch_graph.compat import Node, Parameter, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 from touch_graph.node_health import NodeHealth
 
@@ -77,7 +79,7 @@ class PatchGesturesNode(Node):
     Attributes:
         model: the loaded :class:`~.model_io.PatchModel`.
         features: the :class:`~.features.WindowFeatures` (its ``nonfinite_cells`` counts NaN/inf cells).
-        detector: the :class:`~.classifier.EventDetector` (threshold, hold, release in effect).
+        detector: the :class:`~.classifier.EventDetector` (threshold, dwell, release in effect).
         frames: frames processed. events: GestureEvents published.
         skipped: reason -> frames skipped for it. resets: windows started afresh (time went back or a gap).
     """
@@ -110,13 +112,16 @@ class PatchGesturesNode(Node):
                   'recorded data' if 'synthetic' in meta else 'data the file does not describe')
         self.get_logger().info(
             f'{self.model_path}: {", ".join(self._classes)} from {origin}; window {self.model.window} frames '
-            f'at {self.model.rate_hz:g} Hz, threshold {det.threshold:g}, hold {det.hold} frames, release '
+            f'at {self.model.rate_hz:g} Hz, threshold {det.threshold:g}, dwell {det.dwell} frames, release '
             f'{det.release:g}')
         self.get_logger().info(card_log_line(self.model_path))
 
     # ------------------------------------------------------------------ parameters
     #: Parameters applied at once when set: the event rule. The others are read at start (read-only).
-    LIVE_PARAMETERS = ('threshold', 'hold_s', 'release')
+    LIVE_PARAMETERS = ('threshold', 'dwell_s', 'release')
+    #: Renamed parameters, old name -> new: the old one is declared (read-only) so that parameter
+    #: files written before the rename still work; a value given for it is used, with a WARN.
+    RENAMED_PARAMETERS: ClassVar[dict[str, str]] = {'hold_s': 'dwell_s'}
 
     def _param(self, name: str, default: Any, description: str) -> Any:
         return self.declare_parameter(name, default, ParameterDescriptor(
@@ -154,12 +159,14 @@ class PatchGesturesNode(Node):
         threshold = self._param('threshold', float(m.classifier.threshold),
                                 'posterior a class must reach for an event (sympartner2018 6.3: 0.99); default '
                                 'from the model file')
-        hold_s = self._param('hold_s', m.hold / m.rate_hz, 'time the class must stay above the threshold before '
-                                                           'the event, s (one frame = the paper rule); default '
-                                                           'from the model file')
+        default_dwell_s = m.dwell / m.rate_hz
+        dwell_s = self._param('dwell_s', default_dwell_s, 'time the class must stay above the threshold before '
+                                                          'the event, s (one frame = the paper rule); default '
+                                                          'from the model file')
+        dwell_s = self._renamed('hold_s', dwell_s, default_dwell_s)
         release = self._param('release', float(min(m.release, threshold)),
                               'posterior below which the current class is forgotten; default from the model file')
-        self.detector = self._event_detector(threshold, hold_s, release)
+        self.detector = self._event_detector(threshold, dwell_s, release)
         max_gap_s = self._param('max_gap_s', m.window / m.rate_hz,
                                 'frames further apart than this (s) start a new window (default: the window length)')
         if not (max_gap_s > 0 and math.isfinite(max_gap_s)):
@@ -167,33 +174,49 @@ class PatchGesturesNode(Node):
         self.max_gap_ns = round(max_gap_s * _NS)
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-    def _event_detector(self, threshold: float, hold_s: float, release: float) -> EventDetector:
+    def _renamed(self, old: str, value: Any, default: Any) -> Any:
+        """The value to use for the parameter ``old`` was renamed to: ``value``, or ``old``'s when only ``old``
+        was given (the new parameter then reports it too; a new value equal to its default counts as not
+        given, since parameters cannot tell). Either way a given ``old`` is WARNed about."""
+        new = self.RENAMED_PARAMETERS[old]
+        given = self._param(old, math.nan, f'deprecated: renamed {new}; read at start when {new} is not given')
+        if isinstance(given, float) and math.isnan(given):
+            return value
+        if value != default:
+            self.get_logger().warning(f"parameter '{old}' is deprecated and ignored, since '{new}' is given: "
+                                      f"remove '{old}'")
+            return value
+        self.get_logger().warning(f"parameter '{old}' is deprecated: rename it '{new}' (using {old} = {given!r})")
+        self.set_parameters([Parameter(new, value=given)])
+        return given
+
+    def _event_detector(self, threshold: float, dwell_s: float, release: float) -> EventDetector:
         """The event rule for these values; ParameterError says which one is wrong."""
         m = self.model
         if not (0.0 < threshold <= 1.0):
             raise self._bad('threshold', threshold, 'a posterior in (0, 1] (the paper uses 0.99)')
-        if not (hold_s >= 0 and math.isfinite(hold_s)):
-            raise self._bad('hold_s', hold_s, f'a number of seconds >= 0 (one frame is {1 / m.rate_hz:g} s)')
+        if not (dwell_s >= 0 and math.isfinite(dwell_s)):
+            raise self._bad('dwell_s', dwell_s, f'a number of seconds >= 0 (one frame is {1 / m.rate_hz:g} s)')
         if not (0.0 <= release <= threshold):
             raise self._bad('release', release, f'in [0, threshold = {threshold:g}]')
-        hold = max(1, round(hold_s * m.rate_hz))
-        return EventDetector(m.classes, threshold=threshold, release=release, rate_hz=m.rate_hz, hold=hold)
+        dwell = max(1, round(dwell_s * m.rate_hz))
+        return EventDetector(m.classes, threshold=threshold, release=release, rate_hz=m.rate_hz, dwell=dwell)
 
     def _on_set_parameters(self, params: list[Any]) -> Any:
-        """A new threshold, hold or release applies from the next frame; the class being reported is kept (no
-        second event for it), the hold count starts again."""
+        """A new threshold, dwell or release applies from the next frame; the class being reported is kept (no
+        second event for it), the dwell count starts again."""
         values = {name: self.get_parameter(name).value for name in self.LIVE_PARAMETERS}
         values.update({p.name: p.value for p in params if p.name in values})
         if values == {name: self.get_parameter(name).value for name in self.LIVE_PARAMETERS}:
             return SetParametersResult(successful=True)
         try:
-            detector = self._event_detector(values['threshold'], values['hold_s'], values['release'])
+            detector = self._event_detector(values['threshold'], values['dwell_s'], values['release'])
         except ParameterError as err:
             return SetParametersResult(successful=False, reason=str(err))
         old = self.detector
         detector.current, detector.frame, detector.events = old.current, old.frame, old.events
         self.detector = detector
-        self.get_logger().info(f'event rule now: threshold {detector.threshold:g}, hold {detector.hold} frames, '
+        self.get_logger().info(f'event rule now: threshold {detector.threshold:g}, dwell {detector.dwell} frames, '
                                f'release {detector.release:g}')
         return SetParametersResult(successful=True)
 

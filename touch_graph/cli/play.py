@@ -3,7 +3,7 @@
 The player joins the DDS domain and republishes, with the recorded timing (scaled by
 ``--rate``), after waiting up to ``--wait`` seconds for the subscribers the graph announces
 to match; before exiting it waits until reliable subscribers acknowledged every message.
-``--fast`` does not wait between messages (one per 0.2 ms); a slow subscriber then drops
+``--fast`` does not wait between messages (one per ``fast_period``, 0.2 ms by default); a slow subscriber then drops
 the oldest messages of its queue, as it would with a fast publisher. Message definitions
 recorded in the bag are checked against ours first; a topic whose ``.msg`` changed is
 refused with the field that differs.

@@ -71,8 +71,8 @@ qos_profile_system_default = QoSProfile(depth=10)
 qos_profile_services_default = QoSProfile(depth=10)
 #: rmw's ``rmw_qos_profile_parameter_events``: reliable, volatile, keep last 1000.
 qos_profile_parameter_events = QoSProfile(depth=1000)
-#: rcl's ``rcl_qos_profile_rosout_default``: reliable, transient local, keep last 1000 (its 10 s
-#: lifespan is not modelled: late joiners get the last 1000 lines).
+#: rcl's ``rcl_qos_profile_rosout_default``: reliable, transient local, keep last 1000 (its
+#: 10 s lifespan is not modelled: late joiners get the last 1000 lines).
 qos_profile_rosout_default = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 

@@ -51,7 +51,7 @@ class Timeline:
     detections: list[tuple[float, str]]
 
 
-def posterior_timeline(sessions: Sequence[Session], n_components: int, threshold: float, hold_frames: int,
+def posterior_timeline(sessions: Sequence[Session], n_components: int, threshold: float, dwell_frames: int,
                        window_s: float = 3.0, release: float = 0.9, k: float = 0.08, events_per_session: int = 2,
                        subject: str | None = None, random_state: int = 0) -> Timeline:
     """Train on every person but ``subject`` (default: the last by name), replay ``subject``'s sessions.
@@ -85,7 +85,7 @@ def posterior_timeline(sessions: Sequence[Session], n_components: int, threshold
         raise FigureInputError(f'{subject} has no frames to replay (empty window)')
     frames = np.concatenate(parts)
     lp = clf.predict_log_proba(window_features(frames, window, k))
-    hits = run_detector(lp, onset_ages(frames, window, k), classes, threshold, release, rate, hold=hold_frames)
+    hits = run_detector(lp, onset_ages(frames, window, k), classes, threshold, release, rate, dwell=dwell_frames)
     return Timeline(subject, classes, np.arange(len(frames)) / rate, lp, truth,
                     [(d.frame / rate, d.gesture) for d in hits])
 
@@ -105,7 +105,7 @@ def patch_figures(out_dir: str | Path, best: dict, table: Sequence[tuple[float, 
 
     Keys: ``event_confusion``, ``sample_confusion``, ``speed_error``, ``posteriors``.
     """
-    setting = (f"{best['n_components']} components, threshold {best['threshold']}, hold {best['hold_frames']} "
+    setting = (f"{best['n_components']} components, threshold {best['threshold']}, dwell {best['dwell_frames']} "
                'frames, leave-one-subject-out')
     out = {}
     rows, cols, counts = matrix_from_nested(best['event_confusion'])
@@ -134,7 +134,7 @@ def patch_figures(out_dir: str | Path, best: dict, table: Sequence[tuple[float, 
                                                                    '(threshold 0.99)', SYNTHETIC), say)
 
     def draw_posteriors(path: Path) -> Path:
-        line = posterior_timeline(sessions, best['n_components'], best['threshold'], best['hold_frames'],
+        line = posterior_timeline(sessions, best['n_components'], best['threshold'], best['dwell_frames'],
                                   best['window_s'], best.get('release', 0.9))
         return posteriors_figure(path, line.times_s, line.log_posteriors, line.classes, line.truth, line.detections,
                                  best['threshold'], f'Patch class posteriors over time, {line.subject} held out '

@@ -9,7 +9,7 @@ Sources (one of):
 
 ``train`` fits one Gaussian mixture per class on every frame of every session and writes a
 model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a grid search over
-components, threshold and hold, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
+components, threshold and dwell, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
 one JSON object). Progress goes to stderr.
 """
 
@@ -35,6 +35,18 @@ def _progress(args: argparse.Namespace):
     if getattr(args, 'quiet', False):
         return lambda _msg: None
     return lambda msg: print(f'[patch] {msg}', file=sys.stderr, flush=True)
+
+
+class _Renamed(argparse.Action):
+    """An option's old spelling: still accepted, with a warning naming the new one."""
+
+    def __init__(self, *args, new: str, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.new = new
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        print(f'warning: {option_string} is deprecated: use {self.new}', file=sys.stderr)
+        setattr(namespace, self.dest, values)
 
 
 def _floats(text: str) -> list[float]:
@@ -118,9 +130,11 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--evaluate', action='store_true',
                         help="also evaluate leave-one-person-out with these settings and record the figures in "
                         "the model's card")
-    parser.add_argument('--hold-s', type=float, default=0.4,
+    parser.add_argument('--dwell-s', type=float, default=0.4,
                         help='time a class must stay above the threshold before an event, s (default 0.4; '
                         'one frame is the paper rule)')
+    parser.add_argument('--hold-s', dest='dwell_s', type=float, action=_Renamed, new='--dwell-s',
+                        help=argparse.SUPPRESS)
 
 
 def run_train(args: argparse.Namespace) -> int:
@@ -155,7 +169,7 @@ def run_train(args: argparse.Namespace) -> int:
     except ValueError as err:  # one class only, bad settings: say so, no traceback
         raise SystemExit(f'train patch: {err}') from err
     model = PatchModel(clf, window=window, rate_hz=rate, grid=sessions[0].grid, release=args.release,
-                       hold=max(1, round(args.hold_s * rate)), metadata=_training_metadata(args, sessions, len(X)))
+                       dwell=max(1, round(args.dwell_s * rate)), metadata=_training_metadata(args, sessions, len(X)))
     save_model(args.output, model)
     synthetic = any(s.synthetic for s in sessions)
     rows = [(s.subject, s.gesture) for s in sessions for _ in range(len(s.events) if s.events else 1)]
@@ -165,7 +179,7 @@ def run_train(args: argparse.Namespace) -> int:
     if args.evaluate:
         from touch_lab.patch.evaluate import leave_one_subject_out
         result = leave_one_subject_out(sessions, n_components=[args.components], thresholds=[args.threshold],
-                                       holds_s=[args.hold_s], window_s=args.window_s, release=args.release,
+                                       dwells_s=[args.dwell_s], window_s=args.window_s, release=args.release,
                                        covariance_type=args.covariance, reg_covar=args.reg_covar,
                                        random_state=args.seed, progress=say).as_dict()
         evaluation = {'method': 'leave-one-person-out on the training data with these settings (sympartner2018 '
@@ -208,8 +222,10 @@ def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
                         help='grid of components per class (default 3,5,7)')
     parser.add_argument('--thresholds', type=_floats, default=[0.9, 0.99, 0.999],
                         help='grid of posterior thresholds (default 0.9,0.99,0.999)')
-    parser.add_argument('--holds-s', type=_floats, default=[0.05, 0.25, 0.4],
-                        help='grid of event hold times, s (default 0.05,0.25,0.4; 0.05 s = one frame = the paper)')
+    parser.add_argument('--dwells-s', type=_floats, default=[0.05, 0.25, 0.4],
+                        help='grid of event dwell times, s (default 0.05,0.25,0.4; 0.05 s = one frame = the paper)')
+    parser.add_argument('--holds-s', dest='dwells_s', type=_floats, action=_Renamed, new='--dwells-s',
+                        help=argparse.SUPPRESS)
     parser.add_argument('--json', action='store_true', help='print one JSON object')
 
 
@@ -221,7 +237,7 @@ def run_eval(args: argparse.Namespace) -> int:
     sessions = load_sessions(args, say)
     try:
         result = leave_one_subject_out(sessions, n_components=args.components, thresholds=args.thresholds,
-                                       holds_s=args.holds_s, window_s=args.window_s, release=args.release,
+                                       dwells_s=args.dwells_s, window_s=args.window_s, release=args.release,
                                        covariance_type=args.covariance, reg_covar=args.reg_covar,
                                        random_state=args.seed, progress=say)
     except ValueError as err:  # too few subjects or classes, mixed rates: say so, no traceback
@@ -255,8 +271,8 @@ def format_report(report: dict) -> str:
     lines = []
     tag = ' -- SYNTHETIC data (simulated people)' if report.get('synthetic') else ''
     lines.append(f"Leave-one-subject-out over {len(report['subjects'])} subjects{tag}")
-    lines.append(f"best: {report['n_components']} components, threshold {report['threshold']}, hold "
-                 f"{report['hold_frames']} frames, window {report['window_s']:g} s")
+    lines.append(f"best: {report['n_components']} components, threshold {report['threshold']}, dwell "
+                 f"{report['dwell_frames']} frames, window {report['window_s']:g} s")
     n = report['n_events']
     lines.append(f"events: {n}; correct {report['event_correct']} ({report['event_correct_rate']:.0%}), "
                  f"false detections {report['false_detections']} ({report['false_detection_rate']:.0%}), "
@@ -270,9 +286,9 @@ def format_report(report: dict) -> str:
     lines.append('')
     lines += _matrix('event confusion (rows: truth, columns: detected)', report['event_confusion'])
     lines.append('')
-    lines.append('grid: components threshold hold | correct false misses latency_s')
+    lines.append('grid: components threshold dwell | correct false misses latency_s')
     for g in report['grid']:
-        lines.append(f"  {g['n_components']:>3} {g['threshold']:>7} {g['hold_frames']:>3} | "
+        lines.append(f"  {g['n_components']:>3} {g['threshold']:>7} {g['dwell_frames']:>3} | "
                      f"{g['event_correct_rate']:.2f} {g['false_detection_rate']:.2f} {g['miss_rate']:.2f} "
                      f"{g['median_detection_latency_s']:.2f}")
     return '\n'.join(lines)

@@ -103,9 +103,9 @@ def onset_ages(activations: np.ndarray, window: int, k: float = 0.08) -> np.ndar
 
 
 def run_detector(log_post: np.ndarray, ages: np.ndarray, classes: Sequence[str], threshold: float,
-                 release: float, rate_hz: float, hold: int = 1) -> list:
+                 release: float, rate_hz: float, dwell: int = 1) -> list:
     """Detections of the event rule over precomputed (T, C) log posteriors and (T,) onset ages."""
-    det = EventDetector(classes, threshold=threshold, release=min(release, threshold), rate_hz=rate_hz, hold=hold)
+    det = EventDetector(classes, threshold=threshold, release=min(release, threshold), rate_hz=rate_hz, dwell=dwell)
     out = []
     for lp, age in zip(log_post, ages, strict=True):
         hit = det.update(lp, None if age < 0 else int(age))
@@ -217,11 +217,11 @@ def score(detections: list, truth: list[tuple[float, float]], label: str, decisi
 
 @dataclass
 class GridPoint:
-    """Metrics of one (n_components, threshold, hold) setting over all folds."""
+    """Metrics of one (n_components, threshold, dwell) setting over all folds."""
 
     n_components: int
     threshold: float
-    hold: int
+    dwell: int
     metrics: Metrics
     us_per_frame: float = math.nan
 
@@ -229,7 +229,7 @@ class GridPoint:
         d = self.metrics.as_dict()
         keys = ('event_correct', 'false_detections', 'misses', 'n_events', 'event_correct_rate',
                 'false_detection_rate', 'miss_rate', 'median_detection_latency_s')
-        return {'n_components': self.n_components, 'threshold': self.threshold, 'hold_frames': self.hold,
+        return {'n_components': self.n_components, 'threshold': self.threshold, 'dwell_frames': self.dwell,
                 **{k: d[k] for k in keys}, 'us_per_frame': self.us_per_frame}
 
 
@@ -251,7 +251,7 @@ class EvaluationResult:
             'synthetic': self.synthetic, 'subjects': self.subjects, 'window_frames': self.window,
             'window_s': self.window / self.rate_hz, 'rate_hz': self.rate_hz,
             'n_components': self.best.n_components, 'threshold': self.best.threshold,
-            'hold_frames': self.best.hold, 'release': self.release,
+            'dwell_frames': self.best.dwell, 'release': self.release,
             **{k: best[k] for k in ('event_correct', 'false_detections', 'misses', 'n_events',
                                     'event_correct_rate', 'false_detection_rate', 'miss_rate',
                                     'median_detection_latency_s', 'p90_detection_latency_s',
@@ -281,7 +281,7 @@ def _stream_cost(clf: PatchGestureClassifier, sessions: list[Session], window: i
 
 
 def leave_one_subject_out(sessions: list[Session], n_components: Sequence[int] = (5,),
-                          thresholds: Sequence[float] = (0.99,), holds_s: Sequence[float] = (0.4,),
+                          thresholds: Sequence[float] = (0.99,), dwells_s: Sequence[float] = (0.4,),
                           window_s: float = 3.0, k: float = 0.08, release: float = 0.9,
                           covariance_type: str = 'full', reg_covar: float = 1e-3,
                           random_state: int = 0, late_s: float | None = None, measure_cost: bool = True,
@@ -291,7 +291,7 @@ def leave_one_subject_out(sessions: list[Session], n_components: Sequence[int] =
     Args:
         sessions: labelled sessions of at least two subjects, all at the same frame rate.
         n_components, thresholds: the grid (paper's best: 5 and 0.99).
-        holds_s: the event rule's hold times, s (frames = max(1, round(hold_s * rate)); one
+        dwells_s: the event rule's dwell times, s (frames = max(1, round(dwell_s * rate)); one
             frame is the paper's rule).
         window_s: window length, s (paper: 3 s); frames = round(window_s * rate).
         release: the event rule's release posterior (see EventDetector).
@@ -319,9 +319,9 @@ def leave_one_subject_out(sessions: list[Session], n_components: Sequence[int] =
     feats = [window_features(s.activations, window, k) for s in sessions]
     ages = [onset_ages(s.activations, window, k) for s in sessions]
     truths = [session_truth(s, k=k) for s in sessions]
-    holds = sorted({max(1, round(h * rate)) for h in holds_s})
+    dwells = sorted({max(1, round(h * rate)) for h in dwells_s})
     grid = {(n, t, h): GridPoint(n, t, h, Metrics(classes))
-            for n in n_components for t in thresholds for h in holds}
+            for n in n_components for t in thresholds for h in dwells}
     for n in n_components:
         cost = []
         for subject in subjects:
@@ -341,8 +341,8 @@ def leave_one_subject_out(sessions: list[Session], n_components: Sequence[int] =
                 lp = clf.predict_log_proba(feats[i])
                 for thr in thresholds:
                     decisions = decide(lp, thr)
-                    for h in holds:
-                        dets = run_detector(lp, ages[i], classes, thr, release, rate, hold=h)
+                    for h in dwells:
+                        dets = run_detector(lp, ages[i], classes, thr, release, rate, dwell=h)
                         grid[(n, thr, h)].metrics.add(score(dets, truths[i], sessions[i].gesture, decisions,
                                                             classes, rate, late_s=late_s))
         for key, point in grid.items():

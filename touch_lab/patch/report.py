@@ -8,7 +8,7 @@ Regenerate with::
 Simulated people (touch_sim.patch.people) are rendered on the virtual patch read by the
 ``patch_driver`` node (touch_sim.patch.render: the driver's decoder and calibration
 when installed), then evaluated leave-one-subject-out (touch_lab.patch.evaluate):
-first a grid search over components, threshold and hold as the paper does, then the
+first a grid search over components, threshold and dwell as the paper does, then the
 speed-against-error table over window length and components at the paper's threshold.
 """
 
@@ -46,7 +46,7 @@ def _pct(x: float) -> str:
 
 
 def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8, events: int = 6, seed: int = 2026,
-                 windows_s=(1.0, 2.0, 3.0, 4.0), components=(1, 3, 5, 7), hold_s: float = 0.4,
+                 windows_s=(1.0, 2.0, 3.0, 4.0), components=(1, 3, 5, 7), dwell_s: float = 0.4,
                  quick: bool = False, say=print) -> dict:
     """Run the evaluations and write the Markdown report; returns the figures."""
     if quick:
@@ -55,12 +55,12 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
     source = sessions[0].source
     say('grid search (leave-one-subject-out)')
     main_result = leave_one_subject_out(sessions, n_components=components if quick else (3, 5, 7),
-                                        thresholds=(0.9, 0.99, 0.999), holds_s=(0.05, 0.25, 0.4), progress=say)
+                                        thresholds=(0.9, 0.99, 0.999), dwells_s=(0.05, 0.25, 0.4), progress=say)
     best = main_result.as_dict()
     rows = []
     for window_s in windows_s:
         say(f'window {window_s} s')
-        res = leave_one_subject_out(sessions, n_components=components, thresholds=(0.99,), holds_s=(hold_s,),
+        res = leave_one_subject_out(sessions, n_components=components, thresholds=(0.99,), dwells_s=(dwell_s,),
                                     window_s=window_s, progress=say)
         for point in res.grid:
             d = point.metrics.as_dict()
@@ -91,7 +91,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         '## Grid search and Fig. 6',
         '',
         f'Best setting (correct rate minus false-detection rate): **{best["n_components"]} components, threshold '
-        f'{best["threshold"]}, hold {best["hold_frames"]} frames ({best["hold_frames"] / 20:.2f} s)**, window '
+        f'{best["threshold"]}, dwell {best["dwell_frames"]} frames ({best["dwell_frames"] / 20:.2f} s)**, window '
         f'{best["window_s"]:g} s.',
         '',
         '| events | correct | false detections | misses | median latency | 90th pct latency | per frame |',
@@ -116,20 +116,20 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         '',
         figures['posteriors'],
         '',
-        'The whole grid (hold 1 frame = the paper\'s event rule read literally):',
+        'The whole grid (dwell 1 frame = the paper\'s event rule read literally):',
         '',
-        '| components | threshold | hold (frames) | correct | false | misses | median latency (s) |',
+        '| components | threshold | dwell (frames) | correct | false | misses | median latency (s) |',
         '|---|---|---|---|---|---|---|',
     ]
     for g in best['grid']:
-        lines.append(f'| {g["n_components"]} | {g["threshold"]} | {g["hold_frames"]} | '
+        lines.append(f'| {g["n_components"]} | {g["threshold"]} | {g["dwell_frames"]} | '
                      f'{_pct(g["event_correct_rate"])} | {_pct(g["false_detection_rate"])} | '
                      f'{_pct(g["miss_rate"])} | {g["median_detection_latency_s"]:.2f} |')
     lines += [
         '',
         '## Speed against error',
         '',
-        f'Threshold 0.99, hold {hold_s} s, same data. Per-frame cost: window features + log posterior of all '
+        f'Threshold 0.99, dwell {dwell_s} s, same data. Per-frame cost: window features + log posterior of all '
         'classes + event rule, median of 5 runs over 2000 held-out frames (idle and touched, as they come), '
         'measured on a shared two-core machine, so single cells can be inflated by other jobs. The window '
         'length does not change the cost (the features are updated incrementally); components add a little '

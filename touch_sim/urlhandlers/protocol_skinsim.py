@@ -2,7 +2,7 @@
 
 Options (all optional)::
 
-    scene=NAME_OR_PATH   a stimulus registered with touch_driver.skin.register_stimulus, or a YAML
+    scene=NAME_OR_PATH   a stimulus registered with touch_sim.skin.device.register_stimulus, or a YAML
                          scene file (touch_sim.skin.stimuli); default: nobody touches the skin
     noise=COUNTS         Gaussian noise, ADC counts (default 25)
     drift=COUNTS         common-mode baseline drift amplitude (default 600)
