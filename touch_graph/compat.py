@@ -90,10 +90,14 @@ def _generated(typename: str, kind: str) -> type:
                 'ws/install/setup.bash; docs/ros2.md)' if package == 'social_touch_msgs' else '')
         raise ImportError(f'{typename} needs the ROS 2 interface package {package}, which this '
                           f'Python cannot import{cure}: {err}') from err
-    try:
-        return getattr(module, name)
-    except AttributeError:
-        raise ImportError(f'{package}.{kind} has no type {name} ({typename})') from None
+    cls = getattr(module, name, None)
+    if cls is None:
+        raise ImportError(f'{package}.{kind} has no type {name} ({typename})')
+    if not hasattr(cls, '__import_type_support__'):  # the source tree's stand-in, not rosidl's
+        raise ImportError(f'{typename} came from {module.__file__}, not from the package rosidl generates: '
+                          f'rclpy cannot send it. Build {package} (social-touch export-interfaces ws/src, '
+                          'colcon build in ws, source ws/install/setup.bash; docs/ros2.md)')
+    return cls
 
 
 def sensor_data_qos(depth: int = 5) -> Any:
