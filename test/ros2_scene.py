@@ -12,9 +12,10 @@ bear_sensor_frames, touch_state, touch_monitor, and the example behaviour node) 
 and the Foxglove server on (any free ports). Its nodes are built in one process from the launch
 file's node entries, as rclpy component containers build them, on the wall clock; a counting node
 in the same process subscribes to every topic the scene's nodes publish (with each publisher's
-reliability and durability) before anything spins. Prints (``--out``: writes) one JSON object: the backend, the nodes,
-the messages per topic, and the callbacks that raised (our runtime counts them and goes on; real
-rclpy's spin ends at the first, which is then the ``error``).
+reliability and durability) before anything spins. Prints (``--out``: writes) one JSON object:
+the backend, the nodes, the messages per topic, each driver's counters (frames published...), and
+the callbacks that raised (our runtime counts them and goes on; real rclpy's spin ends at the
+first, which is then the ``error``).
 """
 
 from __future__ import annotations
@@ -103,12 +104,15 @@ def run_scene(backend: str, duration: float) -> dict:
                 error = traceback.format_exc()
                 break
         names = sorted(node.get_fully_qualified_name() for node in runner.nodes)
+        drivers = {node.get_fully_qualified_name(): node.counters()
+                   for node in runner.nodes if hasattr(node, 'counters')}
         callback_errors = getattr(runner.context, 'callback_errors', None)
         counter.destroy_node()
     finally:
         runner.shutdown()
     return {'backend': backend, 'duration_s': duration, 'start_s': round(ready_s, 2), 'nodes': names,
-            'counts': dict(sorted(counts.items())), 'callback_errors': callback_errors, 'error': error}
+            'counts': dict(sorted(counts.items())), 'drivers': drivers, 'callback_errors': callback_errors,
+            'error': error}
 
 
 def main(argv: list[str] | None = None) -> int:
