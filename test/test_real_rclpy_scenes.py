@@ -1,7 +1,7 @@
 """Every node of the shipped scenes on both backends: our runtime, and real rclpy (ROS 2 Jazzy).
 
 test/ros2_scene.py runs the demo scene with the example behaviour node, the web view and the
-Foxglove server (twelve node classes, fourteen nodes) on one backend and counts the messages of
+Foxglove server (twelve nodes) on one backend and counts the messages of
 every topic its nodes publish. On our runtime it runs in every suite; on real rclpy where
 ROS 2 is here (.ci/ros2-jazzy), and then its counts are compared with our runtime's, topic by
 topic. Both run on the wall clock for the same time, so the counts agree within the slack of two
@@ -73,7 +73,7 @@ def test_every_scene_node_runs_and_publishes_what_it_does_on_our_runtime(backend
     assert sorted(counts) == sorted(ours)
     # What the drivers published (their own counters) agrees; of the skin's 150 Hz frames, the counting
     # subscription and haptic_commands (which publishes /skin/contact per frame it gets) receive only a
-    # part on rclpy: fourteen nodes share one rclpy executor thread here, which falls behind.
+    # part on rclpy: twelve nodes and the counter share one rclpy executor thread here, which falls behind.
     drivers = {name: (driver['frames'], report['drivers'][name]['frames'])
                for name, driver in scene_counts('ours', tmp_path_factory)['drivers'].items()}
     assert {name: pair for name, pair in drivers.items() if not close(*pair)} == {}, drivers
