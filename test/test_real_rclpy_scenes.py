@@ -129,3 +129,14 @@ def test_compat_without_rclpy_is_our_runtime():
                         {**os.environ, 'SOCIAL_TOUCH_SHIM': '1'})
     assert run.returncode == 0, run.stderr
     assert run.stdout.split()[:2] == ['False', 'touch_graph.runtime.node']
+
+
+def test_compat_under_rclpy_refuses_the_source_trees_stand_in_messages_and_names_the_cure():
+    # What compat.get_message does once rclpy is importable (here on our runtime: the same function).
+    from touch_graph.compat import _generated
+    with pytest.raises(ImportError, match=r'not from the package rosidl generates: rclpy cannot send.*docs/ros2\.md'):
+        _generated('social_touch_msgs/msg/SkinFrame', 'msg')
+    with pytest.raises(ImportError, match=r'social_touch_msgs\.msg has no type NoSuchType'):
+        _generated('social_touch_msgs/NoSuchType', 'msg')
+    with pytest.raises(ValueError, match="'std_msgs/srv/String' is not a msg type name"):
+        _generated('std_msgs/srv/String', 'msg')
