@@ -103,3 +103,10 @@ def scene_launch(tmp_path):
         launch.write_text('\n'.join(parts) + '\n')
         return str(launch)
     return write
+
+
+def pytest_configure(config):
+    # Tests that start real ROS 2 (rclpy from a sourced Jazzy and a colcon-built social_touch_msgs): they
+    # skip without one, and fail instead with SOCIAL_TOUCH_REQUIRE_ROS2=1 (.ci/ros2-jazzy).
+    config.addinivalue_line('markers', 'ros2: needs real ROS 2 (rclpy and a built social_touch_msgs); '
+                                       '.ci/ros2-jazzy runs them')

@@ -6,6 +6,7 @@ from touch_graph.errors import ConfigError, ParameterError
 from touch_graph.runtime import (
     Context,
     FloatingPointRange,
+    InvalidParameterValueException,
     Node,
     Parameter,
     ParameterDescriptor,
@@ -103,6 +104,28 @@ def test_ranges_read_only_and_set_callbacks(ctx):
     assert not read_only.successful and 'read-only' in read_only.reason
     with pytest.raises(ParameterNotDeclaredException, match='gain'):
         node.get_parameter('gian')
+
+
+def test_declaring_runs_the_set_callbacks_with_each_parameter_as_rclpy_does(ctx):
+    # rclpy's declare_parameter(s) is a set: every on-set callback sees each parameter as it is declared
+    # (the override's value, not yet declared), a refusal raises and leaves it undeclared, a raise propagates.
+    node = Node('n', context=ctx, parameter_overrides=[Parameter('b', value=5)])
+    seen = []
+
+    def only_small(params):
+        seen.append([(p.name, p.value, node.has_parameter(p.name)) for p in params])
+        return SetParametersResult(successful=all(p.value < 10 for p in params), reason='too big')
+    node.add_on_set_parameters_callback(only_small)
+    node.declare_parameters('', [('a', 1), ('b', 2)])
+    assert seen == [[('a', 1, False)], [('b', 5, False)]]
+    with pytest.raises(InvalidParameterValueException, match=r"Invalid parameter value \(12\) for parameter. "
+                                                             r"Reason: too big \(parameter 'c'\)"):
+        node.declare_parameter('c', 12)
+    assert not node.has_parameter('c')
+    node.add_on_set_parameters_callback(lambda params: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        node.declare_parameter('d', 1)
+    assert not node.has_parameter('d')
 
 
 def test_node_matching_rules():

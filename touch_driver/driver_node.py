@@ -202,9 +202,12 @@ class SerialDriverNode(Node, Generic[ScanT]):
 
     # ------------------------------------------------------------------ internals
     def _on_set_parameters(self, params: list[Any]) -> Any:
-        """Apply :attr:`LIVE_PARAMETERS` at once; refuse the ones read at start (use_sim_time is the runtime's)."""
+        """Apply :attr:`LIVE_PARAMETERS` at once; refuse the ones read at start (use_sim_time is the runtime's).
+
+        A parameter not declared yet is being declared (rclpy runs these callbacks on each
+        declaration, and a subclass declares its own after this is registered): accepted."""
         for param in params:
-            if param.name == 'use_sim_time':
+            if param.name == 'use_sim_time' or not self.has_parameter(param.name):
                 continue
             if param.name not in self.LIVE_PARAMETERS:
                 return SetParametersResult(successful=False, reason=f"'{param.name}' is read when the driver "

@@ -7,8 +7,10 @@
 On a ROS 2 machine (``import rclpy`` works and ``SOCIAL_TOUCH_SHIM`` is not ``1``) these are
 rclpy's own, and ``get_message('social_touch_msgs/msg/SkinFrame')`` (``get_service('std_srvs/srv/Trigger')``)
 returns the class generated from the interface package ``social-touch export-interfaces``
-writes. Everywhere else they come from :mod:`touch_graph.runtime`, :mod:`touch_graph.messages`
-and :mod:`touch_graph.srv_types`, built from the same ``.msg`` and ``.srv`` files.
+writes (built with colcon; docs/ros2.md), imported from ``pkg.msg`` as rosidl_runtime_py does, so
+PyPI's Jazzy wheels, which lack rosidl_runtime_py, serve too. Everywhere else they come from
+:mod:`touch_graph.runtime`, :mod:`touch_graph.messages` and :mod:`touch_graph.srv_types`, built
+from the same ``.msg`` and ``.srv`` files.
 """
 
 from __future__ import annotations
@@ -44,16 +46,14 @@ if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
     from rclpy.parameter import Parameter
     from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
     from rclpy.time import Time
-    from rosidl_runtime_py.utilities import get_message as _ros_get_message
-    from rosidl_runtime_py.utilities import get_service as _ros_get_service
 
     def get_message(typename: str) -> type:
-        """The generated class of ``pkg/msg/Type``."""
-        return _ros_get_message(typename if typename.count('/') == 2 else typename.replace('/', '/msg/'))
+        """The generated class of ``pkg/msg/Type`` (``pkg/Type`` too)."""
+        return _generated(typename, 'msg')
 
     def get_service(typename: str) -> type:
-        """The generated class of ``pkg/srv/Type`` (with ``Request`` and ``Response``)."""
-        return _ros_get_service(typename if typename.count('/') == 2 else typename.replace('/', '/srv/'))
+        """The generated class of ``pkg/srv/Type`` (with ``Request`` and ``Response``; ``pkg/Type`` too)."""
+        return _generated(typename, 'srv')
 else:
     from . import runtime as rclpy
     from .messages import get_message
@@ -71,6 +71,33 @@ else:
         qos_profile_sensor_data,
     )
     from .srv_types import get_service
+
+
+def _generated(typename: str, kind: str) -> type:
+    """The class rosidl generated for ``typename`` (``pkg/kind/Type`` or ``pkg/Type``), imported from
+    ``pkg.kind`` as rosidl_runtime_py does (which PyPI's Jazzy wheels do not bring)."""
+    import importlib
+    parts = typename.split('/')
+    if len(parts) == 2:
+        parts.insert(1, kind)
+    if len(parts) != 3 or parts[1] != kind or not all(parts):
+        raise ValueError(f"'{typename}' is not a {kind} type name (pkg/{kind}/Type)")
+    package, _, name = parts
+    try:
+        module = importlib.import_module(f'{package}.{kind}')
+    except ImportError as err:
+        cure = (' (build it: social-touch export-interfaces ws/src, colcon build in ws, source '
+                'ws/install/setup.bash; docs/ros2.md)' if package == 'social_touch_msgs' else '')
+        raise ImportError(f'{typename} needs the ROS 2 interface package {package}, which this '
+                          f'Python cannot import{cure}: {err}') from err
+    cls = getattr(module, name, None)
+    if cls is None:
+        raise ImportError(f'{package}.{kind} has no type {name} ({typename})')
+    if not hasattr(cls, '__import_type_support__'):  # the source tree's stand-in, not rosidl's
+        raise ImportError(f'{typename} came from {module.__file__}, not from the package rosidl generates: '
+                          f'rclpy cannot send it. Build {package} (social-touch export-interfaces ws/src, '
+                          'colcon build in ws, source ws/install/setup.bash; docs/ros2.md)')
+    return cls
 
 
 def sensor_data_qos(depth: int = 5) -> Any:

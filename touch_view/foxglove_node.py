@@ -116,7 +116,7 @@ class FoxgloveServerNode(Node):
             except Exception as err:  # a type this process does not know: say so once, serve the rest
                 self.get_logger().warning(f"not serving '{name}': {err}", once=True)
                 continue
-            self.channels[name] = foxglove.Channel(name, schema=ros2msg_schema(msg_type.__msgtype__),
+            self.channels[name] = foxglove.Channel(name, schema=ros2msg_schema(type_name),
                                                    message_encoding='cdr', context=self.fox)
             self.forwarded[name] = 0
             self.create_subscription(msg_type, name, self._forwarder(name), QoSProfile(depth=100), raw=True)

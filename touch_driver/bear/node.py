@@ -54,7 +54,7 @@ class BearDriverNode(SerialDriverNode[BearScan]):
         levels = self.calibrator.update(frame.scan.raw)
         self.frame_pub.publish(BearFrame(
             header=self.header(frame), sequence=frame.scan.seq, raw=levels.raw, level=levels.level,
-            active=levels.active, fitted=levels.fitted, faults=levels.faults))
+            active=levels.active.tolist(), fitted=levels.fitted.tolist(), faults=levels.faults))  # bool[]: bools
 
 
 def main(args: list[str] | None = None) -> int:

@@ -82,11 +82,12 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
             return
         header = self.header(frame)
         self.panels_pub.publish(PanelContact(header=header, delta=state.delta.astype(np.float32),
-                                             contact=state.contact, any_contact=bool(state.any_contact)))
+                                             contact=state.contact.tolist(),  # bool[]: Python bools, as rclpy needs
+                                             any_contact=bool(state.any_contact)))
         if activation is not None:
             self.frame_pub.publish(PatchFrame(
                 header=header, sequence=scan.seq, raw=activation.raw.ravel(),
-                activation=activation.activation.ravel(), in_outline=activation.in_outline.ravel()))
+                activation=activation.activation.ravel(), in_outline=activation.in_outline.ravel().tolist()))
 
 
 def main(args: list[str] | None = None) -> int:

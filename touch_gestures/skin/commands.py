@@ -99,11 +99,11 @@ def haptic_command(match: Match, gesture: TouchGesture, commands: CommandMap, re
     command = commands.command_for(match.label)
     if command is None:
         return None
-    from touch_graph.messages import get_message
+    from touch_graph.compat import get_message  # rclpy's class under real rclpy (its publisher checks)
 
     header = get_message('std_msgs/msg/Header')(frame_id='skin')
     if stamp is not None:
         header.stamp = stamp
-    return get_message('HapticCommand')(
+    return get_message('social_touch_msgs/msg/HapticCommand')(
         header=header, gesture=match.label, command=command, recogniser=recogniser, distance=float(match.distance),
         margin=float(min(match.margin, 3.4e38)), duration_s=float(gesture.duration_s), frames=int(gesture.frames))

@@ -22,6 +22,7 @@ from .node import Node
 from .parameters import (
     FloatingPointRange,
     IntegerRange,
+    InvalidParameterValueException,
     Parameter,
     ParameterDescriptor,
     ParameterNotDeclaredException,
@@ -43,7 +44,8 @@ from .task import Future
 
 __all__ = [
     'Client', 'Clock', 'ClockType', 'Context', 'DurabilityPolicy', 'Duration', 'Executor',
-    'ExternalShutdownException', 'FloatingPointRange', 'Future', 'HistoryPolicy', 'IntegerRange', 'LoggingSeverity',
+    'ExternalShutdownException', 'FloatingPointRange', 'Future', 'HistoryPolicy', 'IntegerRange',
+    'InvalidParameterValueException', 'LoggingSeverity',
     'MultiThreadedExecutor', 'Node', 'Parameter', 'ParameterDescriptor', 'ParameterNotDeclaredException',
     'ParameterType', 'Publisher', 'QoSProfile', 'ReliabilityPolicy', 'Service', 'SetParametersResult',
     'SimTimeSource', 'SingleThreadedExecutor', 'Subscription', 'Time', 'Timer', 'WallTimeSource', 'create_node',

@@ -1,5 +1,9 @@
 """A node's parameters with rclpy's API and semantics, and the ``/parameter_events`` they cause.
 
+Declaring a parameter runs the node's on-set-parameters callbacks with it, as rclpy's
+``declare_parameter`` does: a refusal raises :class:`InvalidParameterValueException` and the
+parameter stays undeclared; an exception a callback raises goes to the caller. So a callback
+registered before a declaration must accept it (``has_parameter`` is still False inside).
 Declaring, setting and undeclaring a parameter publishes an ``rcl_interfaces/ParameterEvent``
 on ``/parameter_events`` (new, changed and deleted parameters, the node's name and the ROS
 time), as rclpy does. Setting runs the node's on-set-parameters callbacks, newest first;
@@ -16,6 +20,7 @@ from typing import Any
 
 from ..errors import ParameterError
 from .parameters import (
+    InvalidParameterValueException,
     Parameter,
     ParameterDescriptor,
     ParameterNotDeclaredException,
@@ -71,6 +76,10 @@ class NodeParameters:
                 param = Parameter(name, value=value)
             else:
                 param = Parameter(name, declared_type, value)  # an empty list takes the declared type
+            for callback in self._set_callbacks:  # as rclpy: each declaration is a set; a raise propagates
+                result = callback([param])
+                if not result.successful:
+                    raise InvalidParameterValueException(name, param.value, result.reason)
             if descriptor.dynamic_typing:
                 declared_type = ParameterType.NOT_SET
             descriptor.name = name

@@ -25,9 +25,9 @@ from ..errors import ConfigError, ParameterError
 from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value, pattern_matches
 
 __all__ = [
-    'FloatingPointRange', 'IntegerRange', 'OverrideValue', 'Parameter', 'ParameterDescriptor',
-    'ParameterNotDeclaredException', 'ParameterOverrides', 'ParameterSource', 'ParameterType', 'RosArgs',
-    'SetParametersResult', 'load_parameter_file', 'parse_ros_args',
+    'FloatingPointRange', 'IntegerRange', 'InvalidParameterValueException', 'OverrideValue', 'Parameter',
+    'ParameterDescriptor', 'ParameterNotDeclaredException', 'ParameterOverrides', 'ParameterSource', 'ParameterType',
+    'RosArgs', 'SetParametersResult', 'load_parameter_file', 'parse_ros_args',
 ]
 
 
@@ -161,6 +161,18 @@ class SetParametersResult:
 
 class ParameterNotDeclaredException(ParameterError):
     """``get_parameter`` of a name the node never declared."""
+
+
+class InvalidParameterValueException(ParameterError):
+    """An on-set-parameters callback refused a parameter as it was declared (rclpy's exception and text)."""
+
+    def __init__(self, parameter: str, value: Any, reason: str) -> None:
+        super().__init__(f'Invalid parameter value ({value}) for parameter. Reason: {reason}', parameter)
+        self.parameter = parameter
+        self.reason = reason
+
+    def __str__(self) -> str:
+        return f"{self.args[0]} (parameter '{self.parameter}')"
 
 
 @dataclass(frozen=True)
