@@ -3,8 +3,10 @@
 The recorder joins the DDS domain and subscribes (raw CDR, with a QoS every publisher
 matches) to the topics it is told, or to every published topic, also later ones: a
 ``social-touch launch`` in another process or on another machine, or any ROS 2 node.
-Messages are stamped with their source timestamp: the publishing graph's ROS time
-(simulated time in a simulated scene of ours; the wall clock for ROS 2 nodes). Ctrl-C or
+Each message's log time is when the recorder received it (its wall clock, as ``ros2 bag
+record`` without ``--use-sim-time``), its publish time the sample's source timestamp (the
+publishing graph's ROS time: simulated time in a simulated scene of ours), as rosbag2
+writes them; so the bag's duration is the recording's, latched samples included. Ctrl-C or
 SIGTERM closes the bag; the bag is flushed once a second, so if the recorder is killed
 instead, ``social-touch bag reindex BAG`` recovers all but the last second. Progress
 (messages and bytes per topic) goes to stderr.
@@ -125,7 +127,8 @@ class _TopicRecorder:
         bag = self.bag
 
         def write(data: bytes, message_info: dict) -> None:
-            bag.write(topic, type_name, message_info['source_timestamp'], data)
+            bag.write(topic, type_name, message_info['received_timestamp'], data,
+                      publish_ns=message_info['source_timestamp'])
         return write
 
     def tick(self) -> None:
