@@ -13,7 +13,8 @@ Foxglove (the app, or ``foxglove.websocket.v1`` clients) connects to ``ws://host
 The package's layout (``touch_view/layouts/social_touch.json``, Foxglove: Layouts > Import)
 opens the same views as the web page. Topics are found as rclpy-based bridges find them: the
 node asks the graph for its topics every ``discovery_period_s`` (and at once when a publisher
-appears in this process) and subscribes to the new ones. Nothing is sent to Foxglove before a
+appears in this process) and subscribes to the new ones with the QoS their publishers offer
+(:mod:`touch_graph.offered_qos`: best effort for the sensors' frames). Nothing is sent to Foxglove before a
 client subscribes to a channel; the server's per-client queue (``message_backlog_size``) drops
 the oldest message for a client that does not keep up, so the graph never waits for it.
 
@@ -32,7 +33,8 @@ from foxglove.channels import RawImageChannel
 from foxglove.messages import RawImage, Timestamp
 
 from touch_graph import messages
-from touch_graph.compat import Node, QoSProfile, get_message
+from touch_graph.compat import Node, get_message
+from touch_graph.offered_qos import OfferedQosSubscriptions
 
 from .colormap import heat_rgb
 from .errors import bind_error
@@ -77,6 +79,7 @@ class FoxgloveServerNode(Node):
         self.channels: dict[str, foxglove.Channel] = {}
         self.forwarded: dict[str, int] = {}
         self._images: dict[str, tuple[Any, float]] = {}
+        self.subscriptions_by_offer = OfferedQosSubscriptions(self)  # the QoS each topic's publishers offer
         try:
             self.server = foxglove.start_server(name='social_touch', host=host, port=port, context=self.fox,
                                                 message_backlog_size=backlog)
@@ -119,11 +122,11 @@ class FoxgloveServerNode(Node):
             self.channels[name] = foxglove.Channel(name, schema=ros2msg_schema(msg_type.__msgtype__),
                                                    message_encoding='cdr', context=self.fox)
             self.forwarded[name] = 0
-            self.create_subscription(msg_type, name, self._forwarder(name), QoSProfile(depth=100), raw=True)
+            self.subscriptions_by_offer.create_subscription(msg_type, name, self._forwarder(name), 100, raw=True)
             if name in IMAGE_TOPICS:
                 image_topic = IMAGE_TOPICS[name][0]
                 self._images[name] = (RawImageChannel(image_topic, context=self.fox), 0.0)
-                self.create_subscription(msg_type, name, self._imager(name), QoSProfile(depth=5))
+                self.subscriptions_by_offer.create_subscription(msg_type, name, self._imager(name), 5)
 
     def _forwarder(self, name: str) -> Any:
         channel, clock = self.channels[name], self.get_clock()

@@ -98,7 +98,6 @@ class _TopicRecorder:
         self.warned: set[str] = set()
 
     def update(self) -> None:
-        from ..dds.qos import adapted_profile
         from ..messages import get_message
         view = self.tool.graph()
         for name, info in view.published_topics().items():
@@ -115,8 +114,8 @@ class _TopicRecorder:
                 continue
             offered = [ep.qos for ep in info.publishers]
             self.bag.add_topic(name, type_name, offered[0] if offered else None)
-            self.subscriptions[name] = self.tool.node.create_subscription(
-                msg_type, name, self._writer(name, type_name), adapted_profile(offered, depth=1000), raw=True)
+            self.subscriptions[name] = self.tool.subscribe(msg_type, name, self._writer(name, type_name), 1000,
+                                                           raw=True)
 
     def _warn_once(self, topic: str, text: str) -> None:
         if topic not in self.warned:

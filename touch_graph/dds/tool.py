@@ -47,6 +47,7 @@ class GraphTool:
         self.executor: Any = None
         self.node: Any = None
         self._clients: dict[tuple[str, int], Any] = {}
+        self._adapted: Any = None
 
     def __enter__(self) -> GraphTool:
         from ..runtime import Node, SingleThreadedExecutor
@@ -180,6 +181,15 @@ class GraphTool:
             raise GraphError(f"service '{service}' did not answer within {timeout_s:g} s (is its node's executor "
                              'busy or stuck?); try again with a longer --timeout')
         return future.result()
+
+    def subscribe(self, msg_type: type, topic: str, callback: Callable[..., None], depth: int = 100,
+                  **kwargs: Any) -> Any:
+        """Subscribe with the QoS the topic's publishers offer, remade when a later publisher needs another
+        (:class:`~touch_graph.offered_qos.OfferedQosSubscriptions`; ``kwargs`` e.g. ``raw=True``)."""
+        if self._adapted is None:
+            from ..offered_qos import OfferedQosSubscriptions
+            self._adapted = OfferedQosSubscriptions(self.node)
+        return self._adapted.create_subscription(msg_type, topic, callback, depth, **kwargs)
 
     # ------------------------------------------------------------------ spinning
     def spin_until(self, predicate: Callable[[], bool], timeout_s: float | None, stop: Any = None,
