@@ -118,3 +118,17 @@ def test_recording_a_latched_topic_lasts_as_long_as_the_recording(latched_graph,
     assert info['duration']['nanoseconds'] == max(logs) - min(logs)
     assert info['duration']['nanoseconds'] < time.time_ns() - started  # not stretched back to the latched send
 
+
+
+def test_every_publisher_s_offered_qos_is_kept(tmp_path):
+    bag = tmp_path / 'qos'
+    offered = [{'history': 1, 'depth': 1, 'reliability': 1, 'durability': 1},
+               {'history': 1, 'depth': 5, 'reliability': 2, 'durability': 2}]
+    with BagRecorder(bag, flush_period_s=None) as rec:
+        rec.add_topic('/x', 'std_msgs/msg/String', offered)
+        rec.write('/x', 'std_msgs/msg/String', 1, serialize(String(data='x')))
+    profiles = metadata(bag)['topics_with_message_count'][0]['topic_metadata']['offered_qos_profiles']
+    assert [(p['depth'], p['reliability'], p['durability']) for p in profiles] == [
+        (1, 'reliable', 'transient_local'), (5, 'best_effort', 'volatile')]
+    with BagPlayer(bag) as player:
+        assert [int(q.depth) for q in player.topics['/x'].qos] == [1, 5]

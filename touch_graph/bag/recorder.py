@@ -149,6 +149,8 @@ class BagRecorder:
     def add_topic(self, topic: str, type_name: str, qos: Any = None) -> None:
         """Declare ``topic`` before its first message (to record its QoS; :meth:`write` does it otherwise).
 
+        ``qos``: the offered profile, or a list of them (one per publisher, as rosbag2 stores them).
+
         Raises:
             BagError: unknown type, or the topic already recorded with another type.
         """
@@ -172,7 +174,7 @@ class BagRecorder:
         if schema is None:
             schema = self._schemas[type_name] = self._writer.register_schema(
                 name=type_name, encoding=SCHEMA_ENCODING, data=definition.encode())
-        offered = qos_text([to_bag_qos(qos)])
+        offered = qos_text([to_bag_qos(q) for q in (qos if isinstance(qos, list) and qos else [qos])])
         record = TopicRecord(topic, type_name, 'cdr', offered, type_hash(type_name, SCHEMA_ENCODING, definition))
         channel_id = self._writer.register_channel(topic=topic, message_encoding='cdr', schema_id=schema,
                                                    metadata={'offered_qos_profiles': offered})

@@ -112,8 +112,7 @@ class _TopicRecorder:
             except SocialTouchError as err:
                 self._warn_once(name, f"'{name}': {err}; not recorded")
                 continue
-            offered = [ep.qos for ep in info.publishers]
-            self.bag.add_topic(name, type_name, offered[0] if offered else None)
+            self.bag.add_topic(name, type_name, [ep.qos for ep in info.publishers])
             self.subscriptions[name] = self.tool.subscribe(msg_type, name, self._writer(name, type_name), 1000,
                                                            raw=True)
 
