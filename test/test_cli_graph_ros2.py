@@ -62,3 +62,27 @@ def test_echo_and_hz_hear_a_best_effort_rclpy_publisher(domain_env, capsys):
         assert code == 0 and 'average rate:' in out, err
     finally:
         stop(node)
+
+
+def test_foxglove_forwards_a_best_effort_rclpy_topic(domain_env):
+    import time
+
+    from test_cli_graph_offered_qos import networked_node
+
+    from touch_view.foxglove_node import FoxgloveServerNode
+    node = start_node('fast_talker', domain_env)
+    try:
+        context, executor, fox = networked_node(FoxgloveServerNode, port=0, discovery_period_s=0.2)
+        try:
+            deadline = time.monotonic() + 20
+            while fox.forwarded.get('/fast_chatter', 0) < 10 and time.monotonic() < deadline:
+                executor.spin_once(0.05)
+            assert fox.forwarded.get('/fast_chatter', 0) >= 10, fox.forwarded
+            sub = next(s for s in fox.subscriptions_by_offer.subscriptions if s.topic == '/fast_chatter')
+            assert sub.policies == ('BEST_EFFORT', 'VOLATILE')
+        finally:
+            fox.destroy_node()
+            executor.shutdown()
+            context.try_shutdown()
+    finally:
+        stop(node)
