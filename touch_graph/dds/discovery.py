@@ -140,6 +140,7 @@ class GraphDiscovery:
         self.nudges = 0
         self._stats: dict[bytes, dict] = {}  # remote reader GUID -> its statistics
         self.version = 0  # bumps on every change (tools wait on it)
+        self.structure_version = 0  # bumps when participants, endpoints or nodes change (not statistics)
         self.undecodable_info = 0
         self._dirty = True
         self._last_stats: Any = None
@@ -304,7 +305,7 @@ class GraphDiscovery:
                 continue
             with self._lock:
                 self._stats.update(counts)
-        self._changed()
+        self._changed(structure=False)
 
     @staticmethod
     def _take_data(reader: Any, with_stamp: bool = False) -> list:
@@ -316,9 +317,12 @@ class GraphDiscovery:
             return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
         return [data for data, info in samples if info.valid_data]
 
-    def _changed(self) -> None:
+    def _changed(self, structure: bool = True) -> None:
+        """Wake the waiters; ``structure``: participants, endpoints or nodes changed (not only statistics)."""
         with self._lock:
             self.version += 1
+            if structure:
+                self.structure_version += 1
             self._lock.notify_all()
 
     # ------------------------------------------------------------------ queries (any thread)

@@ -86,12 +86,13 @@ class GraphTool:
         """Wait until the graph is complete or ``timeout_s`` passes with nobody found; True if anyone is there.
 
         Complete: someone was found, every participant found has announced its nodes and DDS has shown
-        their endpoints (:meth:`~touch_graph.dds.discovery.GraphDiscovery.incomplete`), and nothing changed
-        for :data:`SETTLE_S`. Once someone is found, waiting for the rest takes at most
+        their endpoints (:meth:`~touch_graph.dds.discovery.GraphDiscovery.incomplete`), and no participant,
+        endpoint or node changed for :data:`SETTLE_S`. Once someone is found, waiting for the rest takes at most
         :data:`COMPLETE_TIMEOUT_S` more.
         """
         start = time.monotonic()
         version = self.discovery.version
+        structure = self.discovery.structure_version
         last_change = start
         found_at: float | None = None
         while True:
@@ -104,9 +105,9 @@ class GraphTool:
                     break
             elif now - start >= timeout_s:
                 break
-            new = self.discovery.wait_for_change(version, SETTLE_S / 3)
-            if new != version:
-                version, last_change = new, time.monotonic()
+            version = self.discovery.wait_for_change(version, SETTLE_S / 3)
+            if self.discovery.structure_version != structure:  # statistics flowing in are no news
+                structure, last_change = self.discovery.structure_version, time.monotonic()
         return self.discovery.remote_participant_count() > 0
 
     def wait_until(self, predicate: Callable[[GraphView], bool], timeout_s: float) -> bool:
