@@ -88,11 +88,12 @@ def _measure(fox: _FoxgloveCounter, view_port: int, warmup_s: float, windows: in
              window_s: float) -> dict[str, list[float]]:
     fox.pump(time.monotonic() + warmup_s)
     deadline = time.monotonic() + 30.0
-    while fox.received == 0 and time.monotonic() < deadline:  # a loaded machine starts the processes slowly
-        fox.pump(time.monotonic() + 0.5)
-    if fox.received == 0:
-        raise RuntimeError(f'no skin frame reached the Foxglove client in {warmup_s + 30:g} s (channel '
-                           f"{'subscribed' if fox._subscribed else 'never advertised'})")
+    while (fox.received == 0 or _view_frames(view_port) == 0) and time.monotonic() < deadline:
+        fox.pump(time.monotonic() + 0.5)  # a loaded machine starts the processes slowly
+    if fox.received == 0 or _view_frames(view_port) == 0:
+        raise RuntimeError(f'no skin frame reached the Foxglove client ({fox.received}, channel '
+                           f"{'subscribed' if fox._subscribed else 'never advertised'}) or the view "
+                           f'({_view_frames(view_port)}) in {warmup_s + 30:g} s')
     rates: dict[str, list[float]] = {'driver_published': [], 'foxglove_received': [], 'view_received': []}
     for _ in range(windows):
         start, view0, fox0, pub0 = time.monotonic(), _view_frames(view_port), fox.received, fox.published
