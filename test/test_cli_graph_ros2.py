@@ -1,4 +1,5 @@
-"""``social-touch node list | topic list | topic echo | topic hz`` beside a real rclpy node (Jazzy, Fast DDS).
+"""``social-touch node list | topic list | topic echo | topic hz | record`` and Foxglove beside a real
+rclpy node (Jazzy, Fast DDS).
 
 Needs ``SOCIAL_TOUCH_ROS2_PYTHON`` (see ``ros2_peer.py``); skipped without it.
 """
@@ -62,6 +63,21 @@ def test_echo_and_hz_hear_a_best_effort_rclpy_publisher(domain_env, capsys):
         assert code == 0 and 'average rate:' in out, err
     finally:
         stop(node)
+
+
+def test_record_keeps_a_best_effort_rclpy_topic_with_receive_times(domain_env, capsys, tmp_path):
+    from rosbags.rosbag2 import Reader
+    node = start_node('fast_talker', domain_env)
+    bag = tmp_path / 'fast'
+    try:
+        code, _, err = cli(capsys, 'record', '/fast_chatter', '-o', str(bag), '--duration', '1.5', '--quiet')
+        assert code == 0, err
+    finally:
+        stop(node)
+    with Reader(bag) as reader:
+        assert reader.topics['/fast_chatter'].msgcount >= 10
+        assert reader.topics['/fast_chatter'].connections[0].ext.offered_qos_profiles[0].reliability.name == \
+            'BEST_EFFORT'
 
 
 def test_foxglove_forwards_a_best_effort_rclpy_topic(domain_env):
