@@ -70,9 +70,8 @@ def matches(requested: tuple[str, str], offered: tuple[str, str]) -> bool:
 
 def _qos_module(node: Any) -> Any:
     """The QoS classes of the node's backend: ours for a :mod:`touch_graph.runtime` node, else rclpy's."""
-    from .runtime import Node as RuntimeNode
-    if isinstance(node, RuntimeNode):
-        from .runtime import qos
+    if any(cls.__module__.startswith('touch_graph.runtime') for cls in type(node).__mro__):
+        from .runtime import qos  # (checked by module name: on a ROS 2 machine the runtime is not imported)
         return qos
     from rclpy import qos  # pragma: no cover - on a ROS 2 machine
     return qos  # pragma: no cover
