@@ -67,6 +67,7 @@ ENTRY_POINT_GROUPS: dict[str, list[str]] = {
     'social_touch.bench': [
         'runtime = touch_lab.bench.runtime:bench_runtime', 'drivers = touch_lab.bench.drivers:bench_drivers',
         'transport = touch_lab.bench.transport:bench_transport', 'view = touch_view.bench:bench_view',
+        'view-live = touch_view.bench_live:bench_live',
         'bear = touch_lab.bear.bench:bench_cycle',
         'patch = touch_lab.patch.bench:bench_frame', 'patch-node = touch_lab.patch.bench:bench_node',
         'skin = touch_lab.skin.bench:bench_recognition', 'skin-node = touch_lab.skin.session_eval:bench_node',

@@ -3,7 +3,7 @@
 Three processes, as a user starts them: the skin scene (``launch/skin.launch.yaml``: the skin's
 virtual device playing the package's scene of simulated people, SYNTHETIC data; its driver
 publishes ``/skin/frame`` best effort at 150 Hz, wall clock), ``social-touch view`` and
-``social-touch foxglove``. After ``warmup_s``, ``windows`` windows of ``window_s`` each:
+``social-touch foxglove``. After ``warmup_s``, ``repeats`` windows of ``window_s`` each:
 
 - the driver's rate: frames it published in the window, from the frames' sequence numbers as a
   Foxglove client receives them (``sequence`` counts every frame the driver sends);
@@ -12,7 +12,7 @@ publishes ``/skin/frame`` best effort at 150 Hz, wall clock), ``social-touch vie
 
 Medians over the windows, side by side in one run::
 
-    python -m touch_view.bench_live            # about 40 s
+    social-touch bench view-live --json      # about 40 s
 """
 
 from __future__ import annotations
@@ -105,8 +105,10 @@ def _measure(fox: _FoxgloveCounter, view_port: int, warmup_s: float, windows: in
     return rates
 
 
-def bench_live(warmup_s: float = 8.0, windows: int = 5, window_s: float = 4.0, domain: int | None = None) -> dict:
-    """Median skin frames per second: published by the driver, received by the view and by Foxglove."""
+def bench_live(repeats: int = 5, warmup_s: float = 8.0, window_s: float = 4.0, domain: int | None = None) -> dict:
+    """Median skin frames per second over ``repeats`` windows: published by the driver, received by the view
+    and by Foxglove (in DDS domain ``domain``; default one of 90-98 from the pid)."""
+    windows = repeats
     domain = domain if domain is not None else 90 + os.getpid() % 9
     env = {k: v for k, v in os.environ.items() if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_STATIC_PEERS',
                                                              'CYCLONEDDS_URI')}
@@ -146,11 +148,3 @@ def bench_live(warmup_s: float = 8.0, windows: int = 5, window_s: float = 4.0, d
     out.update({f'{name}_hz_median': round(statistics.median(values), 1) for name, values in rates.items()})
     out['runs_hz'] = {name: [round(v, 1) for v in values] for name, values in rates.items()}
     return out
-
-
-if __name__ == '__main__':
-    import argparse
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('--domain', type=int, help='ROS_DOMAIN_ID to run in (default: one from the pid, 90-98)')
-    parser.add_argument('--windows', type=int, default=5)
-    print(json.dumps(bench_live(windows=parser.parse_args().windows, domain=parser.parse_args().domain), indent=2))
