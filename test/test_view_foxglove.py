@@ -4,7 +4,7 @@ The client here is written with the ``websockets`` library and speaks the docume
 WebSocket protocol (JSON ``serverInfo``/``advertise``/``subscribe``, binary message data: opcode 1,
 uint32 subscription id, uint64 log time, payload). foxglove-sdk offers no Python client; its
 server names the protocol ``foxglove.websocket.v1`` in older releases and ``foxglove.sdk.v1``
-in newer ones (same messages), so the client offers both. The scene (SYNTHETIC): the skin's
+in newer ones (same messages); clients asking for either name alone are served. The scene (SYNTHETIC): the skin's
 virtual device plays a line traced left to right.
 """
 
@@ -109,6 +109,27 @@ def test_a_client_receives_cdr_messages_with_their_ros2msg_schemas_and_the_map_a
     assert node.forwarded['/skin/frame'] >= len(frames)
 
 
+@pytest.mark.parametrize('asked', [['foxglove.websocket.v1'], ['foxglove.sdk.v1']])
+def test_clients_asking_for_either_name_of_the_protocol_are_served(scene, asked):
+    node = scene.node('foxglove_server')
+    renamed = node.front.renamed
+    with connect(f'ws://127.0.0.1:{node.port}', subprotocols=asked, open_timeout=10) as ws:
+        assert ws.subprotocol == asked[0]
+        client = FoxgloveClient(ws)
+        client.run({'/skin/frame'}, lambda c: len(c.received.get('/skin/frame', [])) >= 5)
+    assert client.server_info is not None and client.server_info['name'] == 'social_touch'
+    frames = [messages.deserialize(p, 'social_touch_msgs/msg/SkinFrame') for _, p in client.received['/skin/frame']]
+    assert len(frames) >= 5 and all(f.pressure.shape == (144,) for f in frames)
+    assert node.front.renamed - renamed == (asked == ['foxglove.websocket.v1'])
+
+
+def test_a_client_asking_for_another_protocol_is_refused(scene):
+    from websockets.exceptions import InvalidStatus
+    node = scene.node('foxglove_server')
+    with pytest.raises(InvalidStatus, match='400'):
+        connect(f'ws://127.0.0.1:{node.port}', subprotocols=['rosbridge.v1'], open_timeout=10)
+
+
 def test_a_port_in_use_is_one_clear_error_naming_the_flag(busy_port):
     ctx = Context('sim')
     ctx.init()
@@ -144,3 +165,11 @@ def test_the_packaged_layout_opens_the_served_topics():
     assert plotted == [f'/patch/posteriors.posteriors[{k}]' for k in range(4)]
     # The plot's labels follow the class order of the shipped model (what /patch/posteriors carries).
     assert tuple(load_model(share_file('config', 'patch_gestures.npz')).classes) == POSTERIOR_CLASSES
+
+
+def test_ws_front_doctests():
+    import doctest
+
+    from touch_view import ws_front
+    result = doctest.testmod(ws_front)
+    assert result.attempted and not result.failed

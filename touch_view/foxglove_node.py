@@ -1,6 +1,8 @@
 """``foxglove_server``: every topic of the graph over the Foxglove WebSocket protocol (foxglove-sdk).
 
-Foxglove (the app, or ``foxglove.websocket.v1`` clients) connects to ``ws://host:port`` and sees:
+Foxglove (the app, or any client of the Foxglove WebSocket protocol, asking for it as
+``foxglove.sdk.v1`` or by its older name ``foxglove.websocket.v1``) connects to ``ws://host:port``
+and sees:
 
 - every topic with a publisher, as a channel with message encoding ``cdr`` (the CDR bytes ROS 2
   puts on the wire and in bags, passed through unchanged) and a ``ros2msg`` schema (the ``.msg``
@@ -13,7 +15,8 @@ Foxglove (the app, or ``foxglove.websocket.v1`` clients) connects to ``ws://host
 The package's layout (``touch_view/layouts/social_touch.json``, Foxglove: Layouts > Import)
 opens the same views as the web page. Topics are found as rclpy-based bridges find them: the
 node asks the graph for its topics every ``discovery_period_s`` (and at once when a publisher
-appears in this process) and subscribes to the new ones. Nothing is sent to Foxglove before a
+appears in this process) and subscribes to the new ones with the QoS their publishers offer
+(:mod:`touch_graph.offered_qos`: best effort for the sensors' frames). Nothing is sent to Foxglove before a
 client subscribes to a channel; the server's per-client queue (``message_backlog_size``) drops
 the oldest message for a client that does not keep up, so the graph never waits for it.
 
@@ -32,11 +35,13 @@ from foxglove.channels import RawImageChannel
 from foxglove.messages import RawImage, Timestamp
 
 from touch_graph import messages
-from touch_graph.compat import Node, QoSProfile, get_message
+from touch_graph.compat import Node, get_message
+from touch_graph.offered_qos import OfferedQosSubscriptions
 
 from .colormap import heat_rgb
 from .errors import bind_error
 from .parameters import declare_listen_parameters, declare_read_only
+from .ws_front import SubprotocolFront
 
 __all__ = ['IMAGE_TOPICS', 'FoxgloveServerNode', 'main', 'ros2msg_schema']
 
@@ -46,6 +51,7 @@ IMAGE_TOPICS = {
     '/skin/frame': ('/skin/pressure_image', 12, 12, 'pressure', None),
 }
 IMAGE_SCALE = 8
+_LOOPBACK = '127.0.0.1'
 
 
 def ros2msg_schema(type_name: str) -> foxglove.Schema:
@@ -58,7 +64,8 @@ class FoxgloveServerNode(Node):
     """Serves the graph's topics to Foxglove.
 
     Attributes:
-        server: the foxglove-sdk ``WebSocketServer`` (``server.port``).
+        server: the foxglove-sdk ``WebSocketServer`` (on a loopback port of its own).
+        front: the :class:`~touch_view.ws_front.SubprotocolFront` clients connect to (``port``).
         channels: topic -> foxglove ``Channel``.
         forwarded: topic -> messages passed to the server (whether or not a client took them).
     """
@@ -77,20 +84,28 @@ class FoxgloveServerNode(Node):
         self.channels: dict[str, foxglove.Channel] = {}
         self.forwarded: dict[str, int] = {}
         self._images: dict[str, tuple[Any, float]] = {}
+        self.subscriptions_by_offer = OfferedQosSubscriptions(self)  # the QoS each topic's publishers offer
+        # The SDK's server on a loopback port of its own; clients connect to the front, which also serves
+        # those asking for the protocol's older name (touch_view.ws_front).
         try:
-            self.server = foxglove.start_server(name='social_touch', host=host, port=port, context=self.fox,
+            self.server = foxglove.start_server(name='social_touch', host=_LOOPBACK, port=0, context=self.fox,
                                                 message_backlog_size=backlog)
         except RuntimeError as err:  # foxglove-sdk reports a bind failure as text with the OS error number
             found = re.search(r'os error (\d+)', str(err))
             if found is None:
                 raise
-            raise bind_error('the Foxglove server', host, port, OSError(int(found.group(1)), str(err)),
+            raise bind_error('the Foxglove server', _LOOPBACK, 0, OSError(int(found.group(1)), str(err)),
                              '--port') from err
+        try:
+            self.front = SubprotocolFront(host, port, self.server.port)
+        except OSError as err:
+            self.server.stop()
+            raise bind_error('the Foxglove server', host, port, err, '--port') from err
         self.create_timer(discovery_period_s, self.discover)
         if hasattr(self.context, 'add_graph_listener'):  # the shim tells at once; rclpy is polled only
             self.context.add_graph_listener(self._on_graph)
         self.discover()
-        self.get_logger().info(f'Foxglove: open ws://{host}:{self.server.port} (Foxglove app: Open connection > '
+        self.get_logger().info(f'Foxglove: open ws://{host}:{self.port} (Foxglove app: Open connection > '
                                'Foxglove WebSocket); layout: touch_view/layouts/social_touch.json')
 
     def _param(self, name: str, default: Any, description: str) -> Any:
@@ -98,7 +113,8 @@ class FoxgloveServerNode(Node):
 
     @property
     def port(self) -> int:
-        return self.server.port
+        """The port clients connect to."""
+        return self.front.port
 
     # ------------------------------------------------------------------ topics
     def _on_graph(self, event: str, endpoint: Any) -> None:
@@ -119,11 +135,11 @@ class FoxgloveServerNode(Node):
             self.channels[name] = foxglove.Channel(name, schema=ros2msg_schema(type_name),
                                                    message_encoding='cdr', context=self.fox)
             self.forwarded[name] = 0
-            self.create_subscription(msg_type, name, self._forwarder(name), QoSProfile(depth=100), raw=True)
+            self.subscriptions_by_offer.create_subscription(msg_type, name, self._forwarder(name), 100, raw=True)
             if name in IMAGE_TOPICS:
                 image_topic = IMAGE_TOPICS[name][0]
                 self._images[name] = (RawImageChannel(image_topic, context=self.fox), 0.0)
-                self.create_subscription(msg_type, name, self._imager(name), QoSProfile(depth=5))
+                self.subscriptions_by_offer.create_subscription(msg_type, name, self._imager(name), 5)
 
     def _forwarder(self, name: str) -> Any:
         channel, clock = self.channels[name], self.get_clock()
@@ -155,6 +171,7 @@ class FoxgloveServerNode(Node):
     def destroy_node(self) -> None:
         if hasattr(self.context, 'remove_graph_listener'):
             self.context.remove_graph_listener(self._on_graph)
+        self.front.close()
         self.server.stop()
         super().destroy_node()
 

@@ -32,7 +32,8 @@ from typing import Any
 
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.patch.panels import PanelCalibrator
-from touch_graph.compat import DurabilityPolicy, Node, QoSProfile, get_message, qos_profile_sensor_data
+from touch_graph.compat import Node, get_message
+from touch_graph.offered_qos import OfferedQosSubscriptions
 
 from .body_layout import VIEW_SIZE, sensor_layout
 from .parameters import declare_listen_parameters, declare_read_only
@@ -97,20 +98,22 @@ class TouchViewNode(Node):
         return declare_read_only(self, name, default, description)
 
     def _subscribe(self) -> None:
-        state, frames, events = self.state, qos_profile_sensor_data, QoSProfile(depth=50)
+        # Every subscription takes the QoS its publishers offer (best effort for the sensors' frames, latched
+        # for the prompt), so frames from a graph in another process or on real rclpy arrive.
+        state, subs = self.state, OfferedQosSubscriptions(self)
         start = SymbolicGesture.START
-        self.create_subscription(BearFrame, SENSORS['bear'], state.on_bear_frame, frames)
-        self.create_subscription(SymbolicGesture, '/touch/symbolic', lambda m: state.on_symbolic(m, start), events)
-        self.create_subscription(TouchSubtype, '/touch/subtype', state.on_subtype, QoSProfile(depth=200))
-        self.create_subscription(PatchFrame, SENSORS['patch'], state.on_patch_frame, frames)
-        self.create_subscription(PanelContact, '/patch/panels', state.on_panels, events)
-        self.create_subscription(GesturePosteriors, '/patch/posteriors', state.on_posteriors, events)
-        self.create_subscription(GestureEvent, '/touch/gesture', state.on_gesture, events)
-        self.create_subscription(SkinFrame, SENSORS['skin'], state.on_skin_frame, QoSProfile(depth=20))
-        self.create_subscription(HapticCommand, '/touch/haptic_command', state.on_command, events)
-        self.create_subscription(DiagnosticArray, '/diagnostics', state.on_diagnostics, events)
-        self.create_subscription(String, PROMPT_TOPIC, state.on_prompt,
-                                 QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        subs.create_subscription(BearFrame, SENSORS['bear'], state.on_bear_frame, 5)
+        subs.create_subscription(SymbolicGesture, '/touch/symbolic', lambda m: state.on_symbolic(m, start), 50)
+        subs.create_subscription(TouchSubtype, '/touch/subtype', state.on_subtype, 200)
+        subs.create_subscription(PatchFrame, SENSORS['patch'], state.on_patch_frame, 5)
+        subs.create_subscription(PanelContact, '/patch/panels', state.on_panels, 50)
+        subs.create_subscription(GesturePosteriors, '/patch/posteriors', state.on_posteriors, 50)
+        subs.create_subscription(GestureEvent, '/touch/gesture', state.on_gesture, 50)
+        subs.create_subscription(SkinFrame, SENSORS['skin'], state.on_skin_frame, 20)
+        subs.create_subscription(HapticCommand, '/touch/haptic_command', state.on_command, 50)
+        subs.create_subscription(DiagnosticArray, '/diagnostics', state.on_diagnostics, 50)
+        subs.create_subscription(String, PROMPT_TOPIC, state.on_prompt, 1)
+        self.subscriptions_by_offer = subs
 
     def _poll_presence(self) -> None:
         for sensor, topic in SENSORS.items():

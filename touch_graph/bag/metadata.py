@@ -13,6 +13,7 @@ a bag, and :func:`~touch_graph.bag.reindex.reindex` when it rebuilds one whose r
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,12 +22,24 @@ import yaml
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2.metadata import dump_qos_v9, parse_qos
 
-__all__ = ['SCHEMA_ENCODING', 'FileRecord', 'TopicRecord', 'bag_metadata', 'qos_text', 'to_bag_qos',
-           'type_hash', 'write_metadata']
+__all__ = ['DEFAULT_ROS_DISTRO', 'SCHEMA_ENCODING', 'FileRecord', 'TopicRecord', 'bag_metadata', 'qos_text',
+           'ros_distro', 'to_bag_qos', 'type_hash', 'write_metadata']
 
 #: MCAP schema encoding of a ROS 2 ``.msg`` definition (with its nested types), as rosbag2 writes it.
 SCHEMA_ENCODING = 'ros2msg'
 _ZERO = QosTime(0, 0)
+#: The distribution whose wire conventions the runtime follows (GID layout, type hashes) when ``ROS_DISTRO`` is unset.
+DEFAULT_ROS_DISTRO = 'jazzy'
+
+
+def ros_distro(environ: Mapping[str, str] | None = None) -> str:
+    """The ``ros_distro`` of a bag's metadata: ``ROS_DISTRO``, as rosbag2's writer stores it, else ``jazzy``.
+
+    >>> ros_distro({'ROS_DISTRO': 'humble'}), ros_distro({})
+    ('humble', 'jazzy')
+    """
+    env = os.environ if environ is None else environ
+    return env.get('ROS_DISTRO', '').strip() or DEFAULT_ROS_DISTRO
 
 
 def to_bag_qos(qos: Any) -> Qos:
@@ -107,7 +120,11 @@ def _qos_list(text: str) -> list:
 
 def bag_metadata(files: list[FileRecord], topics: list[TopicRecord],
                  custom_data: dict[str, str] | None = None) -> dict:
-    """``metadata.yaml`` content (rosbag2 version 9, MCAP storage) of a bag of ``files`` with ``topics``."""
+    """``metadata.yaml`` content (rosbag2 version 9, MCAP storage) of a bag of ``files`` with ``topics``.
+
+    Times are log times (when the recorder received each message, as rosbag2's
+    ``recv_timestamp``): the duration is the last receive time minus the first.
+    """
     counted = [f for f in files if f.message_count]
     start = min((f.start_ns for f in counted), default=0)
     end = max((f.end_ns for f in counted), default=0)
@@ -123,7 +140,7 @@ def bag_metadata(files: list[FileRecord], topics: list[TopicRecord],
         'compression_format': '', 'compression_mode': '',
         'files': [{'path': f.path, 'starting_time': {'nanoseconds_since_epoch': f.span[0]},
                    'duration': {'nanoseconds': f.span[1]}, 'message_count': f.message_count} for f in files],
-        'custom_data': dict(custom_data) if custom_data else None, 'ros_distro': 'rosbags'}}
+        'custom_data': dict(custom_data) if custom_data else None, 'ros_distro': ros_distro()}}
 
 
 def write_metadata(bag: Path, info: dict) -> None:

@@ -6,6 +6,11 @@ schema is the type's full ``.msg`` definition from :data:`touch_graph.messages.t
 ``ros2 bag``, Foxglove and the rosbags reader can decode it. Every chunk carries the CRC-32 of
 its records, so a reader detects a corrupted chunk instead of decoding garbage.
 
+Times as rosbag2 (Jazzy) writes them: a message's MCAP log time is when the recorder received
+it (``recv_timestamp``; replay timing and the bag's duration follow it), its publish time when
+its publisher sent it (``send_timestamp``), so a latched sample sent long before the recording
+started does not stretch the bag.
+
 Durability: the writer keeps messages in an in-memory chunk until it holds 1 MiB or the bag
 closes. A background thread closes the pending chunk (the writer's public ``flush()``) and
 fsyncs the file every ``flush_period_s`` (default 1 s), so a recorder killed with SIGKILL loses
@@ -144,6 +149,8 @@ class BagRecorder:
     def add_topic(self, topic: str, type_name: str, qos: Any = None) -> None:
         """Declare ``topic`` before its first message (to record its QoS; :meth:`write` does it otherwise).
 
+        ``qos``: the offered profile, or a list of them (one per publisher, as rosbag2 stores them).
+
         Raises:
             BagError: unknown type, or the topic already recorded with another type.
         """
@@ -167,7 +174,7 @@ class BagRecorder:
         if schema is None:
             schema = self._schemas[type_name] = self._writer.register_schema(
                 name=type_name, encoding=SCHEMA_ENCODING, data=definition.encode())
-        offered = qos_text([to_bag_qos(qos)])
+        offered = qos_text([to_bag_qos(q) for q in (qos if isinstance(qos, list) and qos else [qos])])
         record = TopicRecord(topic, type_name, 'cdr', offered, type_hash(type_name, SCHEMA_ENCODING, definition))
         channel_id = self._writer.register_channel(topic=topic, message_encoding='cdr', schema_id=schema,
                                                    metadata={'offered_qos_profiles': offered})
@@ -176,21 +183,24 @@ class BagRecorder:
         self.sizes[topic] = 0
         return channel
 
-    def write(self, topic: str, type_name: str, stamp_ns: int, data: bytes, qos: Any = None) -> None:
-        """Append one message (CDR bytes) stamped ``stamp_ns`` (ROS time, ns).
+    def write(self, topic: str, type_name: str, stamp_ns: int, data: bytes, qos: Any = None, *,
+              publish_ns: int | None = None) -> None:
+        """Append one message (CDR bytes) received at ``stamp_ns`` (ROS time, ns: its log time), sent at
+        ``publish_ns`` (ns, its publish time; None: the same as ``stamp_ns``).
 
         Raises:
             BagError: the bag is closed, the type is unknown, or the disk refused the write.
         """
         if stamp_ns < 0:
             raise BagError(f"message on '{topic}' has a negative stamp {stamp_ns} ns")
+        sent = int(stamp_ns if publish_ns is None or publish_ns < 0 else publish_ns)
         with self._lock:
             if self._writer is None:
                 raise BagError(f'bag {self.path} is closed; message on {topic!r} not recorded')
             channel = self._connection(topic, type_name, qos)
             stamp = int(stamp_ns)
             try:
-                self._writer.add_message(channel.id, log_time=stamp, data=bytes(data), publish_time=stamp,
+                self._writer.add_message(channel.id, log_time=stamp, data=bytes(data), publish_time=sent,
                                          sequence=self.counts[topic])
             except OSError as err:
                 raise BagError(f'cannot write to bag {self.path}: {err}') from err

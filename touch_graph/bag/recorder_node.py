@@ -3,10 +3,10 @@
 A node of the in-process graph (it uses raw subscriptions and the graph listener of
 :mod:`touch_graph.runtime`); on a ROS 2 machine use ``ros2 bag record``, which writes the
 same bags. It records ``topics`` (all topics published in the process when empty) to
-``output`` with raw subscriptions. A message is stamped with the context's ROS time when
-its callback runs, which on a fast simulated clock is the publish time exactly (time does
-not move while callbacks are pending) and on a wall clock is the receive time, as ``ros2
-bag record`` does. The bag is flushed once a second and closed when the node is destroyed
+``output`` with raw subscriptions. A message's log time is the context's ROS time when its
+callback runs (the receive time, as ``ros2 bag record`` stamps it; on a fast simulated clock
+the publish time exactly, as time does not move while callbacks are pending), its publish
+time the time its publisher sent it. The bag is flushed once a second and closed when the node is destroyed
 or the context shuts down. To record other processes' topics use ``social-touch record``.
 """
 
@@ -91,15 +91,15 @@ class RecorderNode(Node):
         self._recording[name] = self.create_subscription(
             topic.msg_type, name, self._writer(name, topic.type_name), QoSProfile(depth=1000), raw=True)
 
-    def _writer(self, name: str, type_name: str) -> Callable[[bytes], None]:
+    def _writer(self, name: str, type_name: str) -> Callable[[bytes, dict], None]:
         now_ns = self.context.now_ns
         bag = self.bag
 
-        def write(data: bytes) -> None:
+        def write(data: bytes, message_info: dict) -> None:
             if bag.closed:
                 return
             try:
-                bag.write(name, type_name, now_ns(), data)
+                bag.write(name, type_name, now_ns(), data, publish_ns=message_info['source_timestamp'])
             except BagError as err:
                 self.write_errors += 1
                 self.get_logger().error(str(err), throttle_duration_sec=1.0)

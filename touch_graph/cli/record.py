@@ -3,8 +3,10 @@
 The recorder joins the DDS domain and subscribes (raw CDR, with a QoS every publisher
 matches) to the topics it is told, or to every published topic, also later ones: a
 ``social-touch launch`` in another process or on another machine, or any ROS 2 node.
-Messages are stamped with their source timestamp: the publishing graph's ROS time
-(simulated time in a simulated scene of ours; the wall clock for ROS 2 nodes). Ctrl-C or
+Each message's log time is when the recorder received it (its wall clock, as ``ros2 bag
+record`` without ``--use-sim-time``), its publish time the sample's source timestamp (the
+publishing graph's ROS time: simulated time in a simulated scene of ours), as rosbag2
+writes them; so the bag's duration is the recording's, latched samples included. Ctrl-C or
 SIGTERM closes the bag; the bag is flushed once a second, so if the recorder is killed
 instead, ``social-touch bag reindex BAG`` recovers all but the last second. Progress
 (messages and bytes per topic) goes to stderr.
@@ -96,7 +98,6 @@ class _TopicRecorder:
         self.warned: set[str] = set()
 
     def update(self) -> None:
-        from ..dds.qos import adapted_profile
         from ..messages import get_message
         view = self.tool.graph()
         for name, info in view.published_topics().items():
@@ -111,10 +112,9 @@ class _TopicRecorder:
             except SocialTouchError as err:
                 self._warn_once(name, f"'{name}': {err}; not recorded")
                 continue
-            offered = [ep.qos for ep in info.publishers]
-            self.bag.add_topic(name, type_name, offered[0] if offered else None)
-            self.subscriptions[name] = self.tool.node.create_subscription(
-                msg_type, name, self._writer(name, type_name), adapted_profile(offered, depth=1000), raw=True)
+            self.bag.add_topic(name, type_name, [ep.qos for ep in info.publishers])
+            self.subscriptions[name] = self.tool.subscribe(msg_type, name, self._writer(name, type_name), 1000,
+                                                           raw=True)
 
     def _warn_once(self, topic: str, text: str) -> None:
         if topic not in self.warned:
@@ -125,7 +125,8 @@ class _TopicRecorder:
         bag = self.bag
 
         def write(data: bytes, message_info: dict) -> None:
-            bag.write(topic, type_name, message_info['source_timestamp'], data)
+            bag.write(topic, type_name, message_info['received_timestamp'], data,
+                      publish_ns=message_info['source_timestamp'])
         return write
 
     def tick(self) -> None:

@@ -3,7 +3,8 @@
 The commands join the DDS domain (``ROS_DOMAIN_ID``) as a hidden node, so they see the
 topics of a ``social-touch launch`` in another terminal or on another machine, and of
 any ROS 2 node. ``echo``, ``hz`` and ``record`` subscribe with a QoS every publisher
-matches (reliable only if all publishers are, as ``ros2 topic echo`` chooses it); ``hz``
+matches (reliable only if all publishers are, transient-local only if all are, as ``ros2
+topic echo`` chooses it; remade when a publisher joins that it would not match); ``hz``
 measures the rate in the publishing graph's ROS time (the samples' source timestamps:
 simulated time in a simulated scene of ours), or in wall time of arrival with
 ``--wall-time``.
@@ -196,12 +197,9 @@ def _info(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _subscribe(tool: Any, topic: str, type_name: str, callback: Any, *, raw: bool = False, depth: int = 100) -> Any:
-    """A subscription of the tool's node whose QoS every publisher of ``topic`` matches."""
-    from ..dds.qos import adapted_profile
-    info = tool.graph().topics.get(topic)
-    offered = [ep.qos for ep in info.publishers] if info is not None else []
-    return tool.node.create_subscription(messages.get_message(type_name), topic, callback,
-                                         adapted_profile(offered, depth), raw=raw)
+    """A subscription of the tool's node with the QoS the publishers of ``topic`` offer (remade if one joins
+    that it cannot match)."""
+    return tool.subscribe(messages.get_message(type_name), topic, callback, depth, raw=raw)
 
 
 def _echo(tool: Any, args: argparse.Namespace) -> int:
@@ -210,8 +208,13 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
     if limit is not None and limit < 1:
         raise ValueError(f'-n/--count must be >= 1, got {limit}')
     type_name = messages.normalize_type_name(args.type) if args.type else None
-    info = tool.require_topic(args.topic, type_name)
-    type_name = type_name or next(iter(info.types))
+    if type_name is None:
+        type_name = next(iter(tool.require_topic(args.topic).types))
+    elif not tool.graph().remote_participants():  # with a type, wait for the publishers as ros2 topic echo does
+        print(f"social-touch topic echo: {tool.no_graph_message()}; waiting for publishers of '{args.topic}'",
+              file=sys.stderr)
+    else:
+        tool.require_topic(args.topic, type_name)
     if args.field:
         check_field_path(type_name, args.field)
     printed = [0]

@@ -13,6 +13,16 @@ give a :class:`~touch_graph.dds.graph.GraphView` with foreign ROS 2 nodes in it 
 decode as each other, which is one reason Humble and Jazzy graphs do not mix. The layout
 follows ``ROS_DISTRO`` (``humble`` and older: 24, anything else or unset: 16).
 
+**Complete answers.** A participant's ``ros_discovery_info`` sample can come seconds after the
+participant: Fast DDS sends a latched sample to a newly matched reader on its first heartbeat
+to it (12 ms after matching) and then only on its periodic one (3 s); when that first
+heartbeat reaches us before we know its writer, the sample waits for the next. So when a
+remote ``ros_discovery_info`` writer is discovered before its participant's sample, a fresh
+reader is made (a *nudge*): the writer matches it and heartbeats at once. And
+:meth:`GraphDiscovery.incomplete` says which participants have not yet announced their
+nodes, or whose announced endpoints DDS has not shown yet, so a tool can wait for exactly
+that (:meth:`touch_graph.dds.tool.GraphTool.wait_for_discovery`).
+
 Every participant of ours also publishes, on the hidden topic
 ``/_social_touch/subscription_stats`` (``diagnostic_msgs/msg/DiagnosticArray``, one
 status per subscription, ``hardware_id`` = reader GID), how many samples each of its
@@ -43,7 +53,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from .. import messages
 from ..runtime.qos import DurabilityPolicy, QoSProfile
-from .cdds import forget, take_builtin
+from .cdds import delete_entity, forget, take_builtin
 from .endpoints import pad4
 from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo, ServiceEndpoint
 from .idl import idl_service_struct, idl_struct
@@ -61,6 +71,8 @@ STATS_TOPIC = '/_social_touch/subscription_stats'
 _DIAGNOSTICS = 'diagnostic_msgs/msg/DiagnosticArray'
 _ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 _ALIVE = InstanceState.Alive
+#: How long a nudge reader (see the module's docstring) lives before it is deleted, s.
+NUDGE_READER_LIFE_S = 5.0
 _OLD_DISTROS = ('ardent', 'bouncy', 'crystal', 'dashing', 'eloquent', 'foxy', 'galactic', 'humble')
 
 
@@ -121,8 +133,14 @@ class GraphDiscovery:
         self._participants: dict[bytes, str] = {}  # GUID -> enclave
         self._endpoints: dict[bytes, dict] = {}  # GUID -> {'kind', 'topic', 'type', 'participant', 'qos', ...}
         self._nodes_of: dict[bytes, list] = {}  # participant GUID -> its ros_discovery_info nodes
+        self._info_stamp: dict[bytes, int] = {}  # participant GUID -> source time of its sample taken, ns
+        self._seen_at: dict[bytes, float] = {}  # participant GUID -> when discovered (monotonic s)
+        self._nudged: set[bytes] = set()  # participants a fresh info reader was made for
+        self._nudge_readers: list[tuple[float, Any, int]] = []  # (made at, reader, waitset key)
+        self.nudges = 0
         self._stats: dict[bytes, dict] = {}  # remote reader GUID -> its statistics
         self.version = 0  # bumps on every change (tools wait on it)
+        self.structure_version = 0  # bumps when participants, endpoints or nodes change (not statistics)
         self.undecodable_info = 0
         self._dirty = True
         self._last_stats: Any = None
@@ -134,6 +152,7 @@ class GraphDiscovery:
         self._info_writer = DataWriter(p.dds_publisher, info_topic, dds_qos(latched, type_hash=info_hash))
         reader_qos = Qos(Policy.History.KeepAll, base=dds_qos(latched, type_hash=info_hash))
         self._info_reader = DataReader(p.dds_subscriber, info_topic, reader_qos)
+        self._info_topic, self._info_reader_qos = info_topic, reader_qos
         stats_topic = p.topic(STATS_TOPIC, _DIAGNOSTICS)
         stats_hash = p.type_hash(_DIAGNOSTICS)
         self._stats_writer = DataWriter(p.dds_publisher, stats_topic, dds_qos(latched, type_hash=stats_hash))
@@ -144,15 +163,15 @@ class GraphDiscovery:
         for entity in (self._info_writer, self._info_reader, self._stats_writer, self._stats_reader,
                        *self._builtin.values()):
             forget(entity)
-        self._attach(self._info_reader, self._take_info)
+        self._attach(self._info_reader, lambda: self._take_info(self._info_reader))
         self._attach(self._stats_reader, self._take_stats)
         for kind, reader in self._builtin.items():
             self._attach(reader, lambda kind=kind, reader=reader: self._take_builtin(kind, reader))
 
-    def _attach(self, reader: Any, handler: Callable[[], None]) -> None:
+    def _attach(self, reader: Any, handler: Callable[[], None]) -> tuple[int, int]:
         condition = ReadCondition(reader, _ANY)
         forget(condition)
-        self.p.attach(condition._ref, handler)
+        return condition._ref, self.p.attach(condition._ref, handler)
 
     # ------------------------------------------------------------------ what we publish
     def local_changed(self) -> None:
@@ -185,6 +204,7 @@ class GraphDiscovery:
         """Take pending discovery samples; republish what changed: ``ros_discovery_info``, statistics."""
         for kind, reader in self._builtin.items():
             self._take_builtin(kind, reader)
+        self._drop_nudge_readers(NUDGE_READER_LIFE_S)
         self._publish_info()
         stats = self.local_stats()
         snapshot = sorted((gid, tuple(sorted(s.items()))) for gid, s in stats.items())
@@ -220,9 +240,13 @@ class GraphDiscovery:
                 if kind == 'participant':
                     if alive:
                         self._participants[key] = user_data_value(s.qos, 'enclave')
+                        self._seen_at.setdefault(key, time.monotonic())
                     else:
                         self._participants.pop(key, None)
                         self._nodes_of.pop(key, None)
+                        self._info_stamp.pop(key, None)
+                        self._seen_at.pop(key, None)
+                        self._nudged.discard(key)
                 elif alive:
                     self._endpoints[key] = {
                         'kind': kind, 'topic': s.topic_name, 'type': s.type_name,
@@ -231,17 +255,45 @@ class GraphDiscovery:
                 else:
                     self._endpoints.pop(key, None)
                     self._stats.pop(key, None)
+            waiting = {e['participant'] for e in self._endpoints.values()
+                       if e['topic'] == DISCOVERY_TOPIC and e['kind'] == 'writer' and e['participant'] != self.p.gid
+                       and e['participant'] not in self._nodes_of and e['participant'] not in self._nudged}
+            self._nudged |= waiting
+        if waiting:
+            self._nudge()
         self._changed()
 
-    def _take_info(self) -> None:
-        for data in self._take_data(self._info_reader):
+    def _nudge(self) -> None:
+        """A fresh ``ros_discovery_info`` reader: writers that just matched it send their sample at once."""
+        reader = DataReader(self.p.dds_subscriber, self._info_topic, self._info_reader_qos)
+        forget(reader)
+        condition_ref, key = self._attach(reader, lambda: self._take_info(reader))
+        self._nudge_readers.append((time.monotonic(), reader, condition_ref, key))
+        self.nudges += 1
+
+    def _drop_nudge_readers(self, older_than_s: float) -> None:
+        now = time.monotonic()
+        keep = []
+        for made, reader, condition_ref, key in self._nudge_readers:
+            if now - made < older_than_s:
+                keep.append((made, reader, condition_ref, key))
+                continue
+            self._take_info(reader)
+            self.p.detach(condition_ref, key)
+            delete_entity(reader)
+        self._nudge_readers = keep
+
+    def _take_info(self, reader: Any) -> None:
+        for data, stamp in self._take_data(reader, with_stamp=True):
             try:
                 gid, nodes = self.codec.decode(data)
             except Exception:  # another distribution's layout, garbage: counted, never fatal
                 self.undecodable_info += 1
                 continue
             with self._lock:
-                self._nodes_of[gid] = nodes
+                if stamp >= self._info_stamp.get(gid, -1):  # two readers may hand over samples out of order
+                    self._nodes_of[gid] = nodes
+                    self._info_stamp[gid] = stamp
         self._changed()
 
     def _take_stats(self) -> None:
@@ -253,18 +305,24 @@ class GraphDiscovery:
                 continue
             with self._lock:
                 self._stats.update(counts)
-        self._changed()
+        self._changed(structure=False)
 
     @staticmethod
-    def _take_data(reader: Any) -> list[bytes]:
+    def _take_data(reader: Any, with_stamp: bool = False) -> list:
+        """The valid samples' data (``with_stamp``: ``(data, source timestamp ns)``)."""
         samples = ddspy_take(reader._ref, _ANY, 256)
         if not isinstance(samples, list):
             return []
+        if with_stamp:
+            return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
         return [data for data, info in samples if info.valid_data]
 
-    def _changed(self) -> None:
+    def _changed(self, structure: bool = True) -> None:
+        """Wake the waiters; ``structure``: participants, endpoints or nodes changed (not only statistics)."""
         with self._lock:
             self.version += 1
+            if structure:
+                self.structure_version += 1
             self._lock.notify_all()
 
     # ------------------------------------------------------------------ queries (any thread)
@@ -278,6 +336,27 @@ class GraphDiscovery:
                     break
                 self._lock.wait(left)
             return self.version
+
+    def incomplete(self, grace_s: float = 1.5) -> list[bytes]:
+        """Remote participants whose graph is not all here yet: their ``ros_discovery_info`` writer is known
+        but not its sample, or the sample names endpoints DDS has not shown yet, or (no such writer known)
+        they were discovered less than ``grace_s`` ago (their endpoints may still be on the way; a plain DDS
+        participant never announces nodes)."""
+        now = time.monotonic()
+        out = []
+        with self._lock:
+            announcing = {e['participant'] for e in self._endpoints.values()
+                          if e['topic'] == DISCOVERY_TOPIC and e['kind'] == 'writer'}
+            for gid in self._participants:
+                if gid == self.p.gid:
+                    continue
+                nodes = self._nodes_of.get(gid)
+                if nodes is None:
+                    if gid in announcing or now - self._seen_at.get(gid, now) < grace_s:
+                        out.append(gid)
+                elif any(g not in self._endpoints for _, _, readers, writers in nodes for g in (*readers, *writers)):
+                    out.append(gid)
+        return out
 
     def remote_participant_count(self) -> int:
         """How many other participants are alive in the domain (cheaper than :meth:`view`)."""
@@ -350,6 +429,7 @@ class GraphDiscovery:
     def close(self) -> None:
         with self._lock:
             self._lock.notify_all()
+        self._drop_nudge_readers(0.0)
 
 
 def service_endpoint(gid: bytes, entry: dict | None, node: str) -> ServiceEndpoint | None:

@@ -124,19 +124,21 @@ def describe_qos(qos: dict[str, int], indent: str = '  ') -> list[str]:
 
 
 def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfile:
-    """A subscription profile that matches every publisher offering ``offered`` (ros2cli's ``choose_qos``).
-
-    RELIABLE only when every publisher is reliable (a reliable reader does not match a
-    best-effort writer), TRANSIENT_LOCAL only when every publisher is (to get their
-    latched samples without being refused by a volatile one).
+    """A subscription profile that matches every publisher offering ``offered`` (ros2cli's ``choose_qos``;
+    the rule is :func:`touch_graph.offered_qos.adapted_policies`).
 
     >>> adapted_profile([{'reliability': 2, 'durability': 2}, {'reliability': 1, 'durability': 2}]).reliability.name
     'BEST_EFFORT'
     >>> adapted_profile([]).reliability.name
     'RELIABLE'
     """
-    reliable = all(q.get('reliability') == ReliabilityPolicy.RELIABLE for q in offered)
-    latched = bool(offered) and all(q.get('durability') == DurabilityPolicy.TRANSIENT_LOCAL for q in offered)
-    return QoSProfile(depth=depth,
-                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+    from ..offered_qos import adapted_policies
+
+    def name(enum: Any, value: Any) -> str:
+        try:
+            return enum(value).name
+        except ValueError:
+            return 'UNKNOWN'
+    reliability, durability = adapted_policies([(name(ReliabilityPolicy, q.get('reliability')),
+                                                 name(DurabilityPolicy, q.get('durability'))) for q in offered])
+    return QoSProfile(depth=depth, reliability=ReliabilityPolicy[reliability], durability=DurabilityPolicy[durability])

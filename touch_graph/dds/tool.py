@@ -3,7 +3,8 @@ DDS graph.
 
 :class:`GraphTool` gives a command its own wall-clock, networked context with a hidden
 node (``/_social_touch_<command>_<pid>``, hidden from ``node list`` as ros2cli's are),
-waits until discovery has settled, and turns the usual mistakes into clear errors: no
+waits until discovery is complete (every participant found has announced its nodes and
+their endpoints, bounded in time), and turns the usual mistakes into clear errors: no
 graph in the domain, an unknown topic or node (with a did-you-mean), a service that is not
 there or does not answer (:meth:`GraphTool.call`).
 """
@@ -25,6 +26,8 @@ __all__ = ['GraphTool', 'NoGraphError']
 
 #: Discovery counts as settled when the graph has not changed for this long, s.
 SETTLE_S = 0.3
+#: The longest a tool waits for participants found to announce their nodes and endpoints, s.
+COMPLETE_TIMEOUT_S = 5.0
 
 
 class NoGraphError(GraphError):
@@ -47,6 +50,7 @@ class GraphTool:
         self.executor: Any = None
         self.node: Any = None
         self._clients: dict[tuple[str, int], Any] = {}
+        self._adapted: Any = None
 
     def __enter__(self) -> GraphTool:
         from ..runtime import Node, SingleThreadedExecutor
@@ -79,20 +83,31 @@ class GraphTool:
         return self.discovery.view()
 
     def wait_for_discovery(self, timeout_s: float) -> bool:
-        """Wait until the graph stops changing (others found) or ``timeout_s`` passes; True if anyone is there."""
+        """Wait until the graph is complete or ``timeout_s`` passes with nobody found; True if anyone is there.
+
+        Complete: someone was found, every participant found has announced its nodes and DDS has shown
+        their endpoints (:meth:`~touch_graph.dds.discovery.GraphDiscovery.incomplete`), and no participant,
+        endpoint or node changed for :data:`SETTLE_S`. Once someone is found, waiting for the rest takes at most
+        :data:`COMPLETE_TIMEOUT_S` more.
+        """
         start = time.monotonic()
         version = self.discovery.version
+        structure = self.discovery.structure_version
         last_change = start
+        found_at: float | None = None
         while True:
             now = time.monotonic()
-            if now - start >= timeout_s:
+            if self.discovery.remote_participant_count():
+                found_at = now if found_at is None else found_at
+                if now - last_change >= SETTLE_S and not self.discovery.incomplete():
+                    break
+                if now - found_at >= COMPLETE_TIMEOUT_S:
+                    break
+            elif now - start >= timeout_s:
                 break
-            if self.discovery.remote_participant_count() and now - last_change >= SETTLE_S:
-                break
-            wait = min(SETTLE_S, timeout_s - (now - start))
-            new = self.discovery.wait_for_change(version, wait)
-            if new != version:
-                version, last_change = new, time.monotonic()
+            version = self.discovery.wait_for_change(version, SETTLE_S / 3)
+            if self.discovery.structure_version != structure:  # statistics flowing in are no news
+                structure, last_change = self.discovery.structure_version, time.monotonic()
         return self.discovery.remote_participant_count() > 0
 
     def wait_until(self, predicate: Callable[[GraphView], bool], timeout_s: float) -> bool:
@@ -180,6 +195,15 @@ class GraphTool:
             raise GraphError(f"service '{service}' did not answer within {timeout_s:g} s (is its node's executor "
                              'busy or stuck?); try again with a longer --timeout')
         return future.result()
+
+    def subscribe(self, msg_type: type, topic: str, callback: Callable[..., None], depth: int = 100,
+                  **kwargs: Any) -> Any:
+        """Subscribe with the QoS the topic's publishers offer, remade when a later publisher needs another
+        (:class:`~touch_graph.offered_qos.OfferedQosSubscriptions`; ``kwargs`` e.g. ``raw=True``)."""
+        if self._adapted is None:
+            from ..offered_qos import OfferedQosSubscriptions
+            self._adapted = OfferedQosSubscriptions(self.node)
+        return self._adapted.create_subscription(msg_type, topic, callback, depth, **kwargs)
 
     # ------------------------------------------------------------------ spinning
     def spin_until(self, predicate: Callable[[], bool], timeout_s: float | None, stop: Any = None,

@@ -400,6 +400,14 @@ class Node(NodeParameters):
             out.append((name, namespace or '/'))
         return out
 
+    def get_publishers_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        from .graph_info import endpoints_info
+        return endpoints_info(self, topic_name, 'publishers')
+
+    def get_subscriptions_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        from .graph_info import endpoints_info
+        return endpoints_info(self, topic_name, 'subscriptions')
+
     def count_publishers(self, topic_name: str) -> int:
         return self._count(topic_name, 'publishers')
 

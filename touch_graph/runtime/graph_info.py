@@ -1,0 +1,58 @@
+"""rclpy's ``TopicEndpointInfo``: who publishes or subscribes to a topic, with which QoS.
+
+What ``Node.get_publishers_info_by_topic`` / ``get_subscriptions_info_by_topic`` return, in
+process (the context's endpoints) and on a networked context (DDS discovery, every process
+of the domain), so tools can subscribe with the QoS publishers offer
+(:mod:`touch_graph.offered_qos`) the same way on both backends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from .qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+__all__ = ['TopicEndpointInfo', 'endpoints_info']
+
+
+@dataclass
+class TopicEndpointInfo:
+    """One endpoint of a topic, with rclpy's attribute names (``endpoint_type``: 'PUBLISHER' or 'SUBSCRIPTION')."""
+
+    node_name: str
+    node_namespace: str
+    topic_type: str
+    endpoint_type: str
+    endpoint_gid: list[int] = field(default_factory=list)
+    qos_profile: QoSProfile = field(default_factory=QoSProfile)
+    topic_type_hash: str = ''
+
+
+def _profile(qos: dict) -> QoSProfile:
+    """A profile from a discovered endpoint's QoS dict (policies it did not announce take the defaults)."""
+    history = HistoryPolicy(qos.get('history', HistoryPolicy.KEEP_LAST))
+    depth = int(qos.get('depth', 10))
+    if history == HistoryPolicy.KEEP_LAST and depth < 1:
+        depth = 1
+    return QoSProfile(depth=depth, history=history,
+                      reliability=ReliabilityPolicy(qos.get('reliability', ReliabilityPolicy.RELIABLE)),
+                      durability=DurabilityPolicy(qos.get('durability', DurabilityPolicy.VOLATILE)))
+
+
+def endpoints_info(node: Any, topic_name: str, kind: str) -> list[TopicEndpointInfo]:
+    """The ``kind`` ('publishers' or 'subscriptions') of ``topic_name`` (resolved by ``node``) as the node sees them."""
+    name = node.resolve_topic_name(topic_name)
+    endpoint_type = 'PUBLISHER' if kind == 'publishers' else 'SUBSCRIPTION'
+    view = node._graph_view()
+    if view is not None:
+        topic = view.topics.get(name)
+        out = []
+        for ep in getattr(topic, kind, []):
+            namespace, _, base = ep.node.rpartition('/')
+            out.append(TopicEndpointInfo(base, namespace or '/', ep.type_name, endpoint_type, list(ep.gid),
+                                         _profile(ep.qos), ep.type_hash))
+        return out
+    topic = node.context.topics.get(name)
+    return [TopicEndpointInfo(ep.node.get_name(), ep.node.get_namespace(), topic.type_name, endpoint_type,
+                              qos_profile=ep.qos_profile) for ep in getattr(topic, kind, [])]

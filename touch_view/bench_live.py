@@ -1,0 +1,150 @@
+"""How many of the skin's frames ``social-touch view`` and ``social-touch foxglove`` get from another process.
+
+Three processes, as a user starts them: the skin scene (``launch/skin.launch.yaml``: the skin's
+virtual device playing the package's scene of simulated people, SYNTHETIC data; its driver
+publishes ``/skin/frame`` best effort at 150 Hz, wall clock), ``social-touch view`` and
+``social-touch foxglove``. After ``warmup_s``, ``repeats`` windows of ``window_s`` each:
+
+- the driver's rate: frames it published in the window, from the frames' sequence numbers as a
+  Foxglove client receives them (``sequence`` counts every frame the driver sends);
+- Foxglove: frames a client subscribed to ``/skin/frame`` received, per second;
+- the view: frames its node received (``sensors.skin.frames`` of ``/state.json``), per second.
+
+Medians over the windows, side by side in one run::
+
+    social-touch bench view-live --json      # about 40 s
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import statistics
+import struct
+import subprocess
+import sys
+import time
+import urllib.request
+from typing import Any
+
+from websockets.sync.client import connect
+
+from touch_graph import messages
+from touch_graph.paths import share_file
+
+__all__ = ['bench_live']
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def _cli(*argv: str, env: dict[str, str]) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', *argv], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def _view_frames(port: int) -> int:
+    with urllib.request.urlopen(f'http://127.0.0.1:{port}/state.json', timeout=5) as answer:
+        return int(json.load(answer)['sensors']['skin']['frames'])
+
+
+class _FoxgloveCounter:
+    """A Foxglove client subscribed to /skin/frame: frames received and the last sequence number seen."""
+
+    def __init__(self, ws: Any) -> None:
+        self.ws = ws
+        self.received = 0
+        self.published = 0     # frames the driver sent since the first one received (sequence, unwrapped)
+        self._last_seq: int | None = None
+        self._subscribed = False
+
+    def pump(self, until: float) -> None:
+        while time.monotonic() < until:
+            try:
+                data = self.ws.recv(timeout=max(0.0, until - time.monotonic()))
+            except TimeoutError:
+                return
+            if isinstance(data, str):
+                message = json.loads(data)
+                if message['op'] == 'advertise' and not self._subscribed:
+                    for channel in message['channels']:
+                        if channel['topic'] == '/skin/frame':
+                            self.ws.send(json.dumps({'op': 'subscribe',
+                                                     'subscriptions': [{'id': 1, 'channelId': channel['id']}]}))
+                            self._subscribed = True
+            elif data[0] == 1 and struct.unpack_from('<I', data, 1)[0] == 1:
+                seq = messages.deserialize(bytes(data[13:]), 'social_touch_msgs/msg/SkinFrame').sequence
+                if self._last_seq is not None:
+                    self.published += (seq - self._last_seq) % 65536
+                self._last_seq = seq
+                self.received += 1
+
+
+def _measure(fox: _FoxgloveCounter, view_port: int, warmup_s: float, windows: int,
+             window_s: float) -> dict[str, list[float]]:
+    fox.pump(time.monotonic() + warmup_s)
+    deadline = time.monotonic() + 30.0
+    while (fox.received == 0 or _view_frames(view_port) == 0) and time.monotonic() < deadline:
+        fox.pump(time.monotonic() + 0.5)  # a loaded machine starts the processes slowly
+    if fox.received == 0 or _view_frames(view_port) == 0:
+        raise RuntimeError(f'no skin frame reached the Foxglove client ({fox.received}, channel '
+                           f"{'subscribed' if fox._subscribed else 'never advertised'}) or the view "
+                           f'({_view_frames(view_port)}) in {warmup_s + 30:g} s')
+    rates: dict[str, list[float]] = {'driver_published': [], 'foxglove_received': [], 'view_received': []}
+    for _ in range(windows):
+        start, view0, fox0, pub0 = time.monotonic(), _view_frames(view_port), fox.received, fox.published
+        fox.pump(start + window_s)
+        elapsed = time.monotonic() - start
+        rates['view_received'].append((_view_frames(view_port) - view0) / elapsed)
+        rates['foxglove_received'].append((fox.received - fox0) / elapsed)
+        rates['driver_published'].append((fox.published - pub0) / elapsed)
+    return rates
+
+
+def bench_live(repeats: int = 5, warmup_s: float = 8.0, window_s: float = 4.0, domain: int | None = None) -> dict:
+    """Median skin frames per second over ``repeats`` windows: published by the driver, received by the view
+    and by Foxglove (in DDS domain ``domain``; default one of 90-98 from the pid)."""
+    windows = repeats
+    domain = domain if domain is not None else 90 + os.getpid() % 9
+    env = {k: v for k, v in os.environ.items() if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_STATIC_PEERS',
+                                                             'CYCLONEDDS_URI')}
+    env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    view_port, fox_port = _free_port(), _free_port()
+    total_s = warmup_s + windows * window_s + 20
+    procs = [_cli('launch', str(share_file('launch', 'skin.launch.yaml')), 'monitor:=false', '--duration',
+                  str(total_s), env=env),
+             _cli('view', '--port', str(view_port), env=env),
+             _cli('foxglove', '--port', str(fox_port), env=env)]
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                _view_frames(view_port)
+                socket.create_connection(('127.0.0.1', fox_port), timeout=5).close()
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        with connect(f'ws://127.0.0.1:{fox_port}', subprotocols=['foxglove.websocket.v1'], open_timeout=20) as ws:
+            rates = _measure(_FoxgloveCounter(ws), view_port, warmup_s, windows, window_s)
+    finally:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(15)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+    out: dict[str, Any] = {
+        'scene': 'launch/skin.launch.yaml (virtual skin, synthetic people), wall clock; view and foxglove in '
+                 'processes of their own', 'windows': windows, 'window_s': window_s,
+        'goal_hz_at_least': 140.0}
+    out.update({f'{name}_hz_median': round(statistics.median(values), 1) for name, values in rates.items()})
+    out['runs_hz'] = {name: [round(v, 1) for v in values] for name, values in rates.items()}
+    return out
