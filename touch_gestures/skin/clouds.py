@@ -39,7 +39,7 @@ stroke orders (docs/skin-evaluation.md). The steps:
 
 Distances are in units of the gesture's size. The cloud is blind to direction: a line
 traced left-to-right and right-to-left are the same cloud. Where a vocabulary tells such
-gestures apart, :func:`~.vocabulary.choose_recogniser` picks a direction-aware recogniser.
+gestures apart, the trace (:mod:`.proposed`) or the fused recogniser (:mod:`.fused`) reads direction.
 """
 
 from __future__ import annotations
