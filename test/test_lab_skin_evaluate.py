@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import make_recogniser
 from touch_graph.cli.main import main as social_touch
 from touch_lab.skin.bench import (
     LIFT_S,
@@ -26,6 +25,7 @@ from touch_lab.skin.bench import (
 )
 from touch_lab.skin.datasets import TraceSample, write_traces
 from touch_lab.skin.evaluate import RecogniserResult, choose_codebook, leave_one_subject_out
+from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderedSample, RenderSettings, render_sample, render_samples
 from touch_sim.skin.synthetic import synthetic_traces
 

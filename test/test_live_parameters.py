@@ -9,8 +9,8 @@ from touch_driver.bear.node import BearDriverNode
 from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.monitor_node import TouchMonitorNode
 from touch_gestures.patch.node import PatchGesturesNode
-from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.codebook import save_codebook
+from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.node import HapticCommandsNode
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_graph.runtime.parameter_messages import parameter_msg
@@ -80,7 +80,7 @@ def test_haptic_commands_recomputes_its_rejection_at_once_and_keeps_the_old_on_r
 def test_new_rejection_values_keep_the_codebooks_strokes_durations_and_paths(graph, tmp_path):
     start, set_parameters = graph
     gestures, labels = codebook(np.random.default_rng(3), names=('X', 'H', 'Z'), per_class=6)
-    path = save_codebook(tmp_path / 'symbols.npz', CloudRecogniser().fit(gestures, labels), vocabulary='symbols')
+    path = save_codebook(tmp_path / 'symbols.npz', FusedRecogniser().fit(gestures, labels), vocabulary='symbols')
     commands = tmp_path / 'commands.yaml'
     commands.write_text('format_version: 1\ncommands:\n  X: stop\n')
     node = start(HapticCommandsNode, parameter_overrides=[Parameter('codebook', value=str(path)),

@@ -9,12 +9,17 @@ under 1e-12. ``ATOL`` is that bound, not a tuned number.
 
 from __future__ import annotations
 
+import copy
+import math
+import pickle
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from touch_gestures.skin.base import Match
 from touch_gestures.skin.clouds import CloudRecogniser, cloud_features
 from touch_gestures.skin.gesture import TouchGesture
 
@@ -30,10 +35,8 @@ def matching_cost(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def closest_templates(rec: CloudRecogniser, bounds: np.ndarray, k: int) -> np.ndarray:
-    """The ``k`` smallest ``bounds`` as the recogniser picks them among ties at the k-th place: the compiled
-    search (cloud_accel) the first in template order, numpy's introselect (argpartition) its own."""
-    if rec.implementation_ == 'c':
-        return np.argsort(bounds, kind='stable')[:k]
+    """The ``k`` smallest ``bounds`` as the recogniser picks them among ties at the k-th place (numpy's
+    introselect, argpartition)."""
     return np.argpartition(bounds, k - 1)[:k]
 
 
@@ -75,7 +78,7 @@ def fitted(templates: np.ndarray, labels: list[str], exact: int) -> CloudRecogni
 
 
 def assert_same_answer(rec: CloudRecogniser, query: np.ndarray) -> None:
-    fast, ref = rec._distances(query), reference(rec, query)
+    fast, ref = rec.distances(query), reference(rec, query)
     # The nearest template is the definition's nearest (or one tied with it).
     assert abs(ref[int(np.argmin(fast))] - ref.min()) <= ATOL
     assert abs(fast.min() - ref.min()) <= ATOL
@@ -107,7 +110,7 @@ def test_the_pruned_search_answers_as_solving_every_assignment(seed, n_classes, 
     # Leave one out, as the calibration and the vocabulary rule do: a template is its own query.
     i = int(rng.integers(len(templates)))
     assert_same_answer(rec, templates[i])
-    fast, ref = rec._distances(templates[i]), reference(rec, templates[i])
+    fast, ref = rec.distances(templates[i]), reference(rec, templates[i])
     fast[i] = ref[i] = np.inf   # the nearest other template, as codebook_accuracy takes it
     assert fast.min() == ref.min() == np.inf or abs(fast.min() - ref.min()) <= ATOL
 
@@ -122,7 +125,7 @@ def test_with_every_template_matched_the_classes_are_the_true_nearest(seed, per_
     query, _ = random_codebook(rng, 1, 1, 2.0)
     q = query[0].reshape(N, 2).astype(np.float64)
     truth = np.array([matching_cost(q, t.reshape(N, 2).astype(np.float64)) for t in templates])
-    f, r = class_minima(rec, rec._distances(query[0])), class_minima(rec, truth)
+    f, r = class_minima(rec, rec.distances(query[0])), class_minima(rec, truth)
     top = np.argsort(r, kind='stable')[:2]
     np.testing.assert_allclose(f[top], r[top], rtol=0, atol=ATOL)   # nearest and runner-up: exact
     rest = np.setdiff1d(np.arange(len(r)), top)
@@ -149,7 +152,7 @@ def test_identical_templates_tie_and_keep_the_runner_up_exact():
     rec = fitted(templates, labels, exact=6)
     for query in (templates[0], templates[4], random_codebook(rng, 1, 1, 1.0)[0][0]):
         assert_same_answer(rec, query)
-    d = rec._distances(templates[0])
+    d = rec.distances(templates[0])
     assert d[0] == 0.0 and d[np.flatnonzero(rec.template_labels_ == 0)].min() == 0.0
 
 
@@ -172,7 +175,7 @@ def test_a_trace_ten_times_longer_than_any_template():
     long_circle = np.column_stack([20 + 10 * np.cos(long_t), 20 + 10 * np.sin(long_t)])
     gesture = TouchGesture.from_trajectory(long_circle)
     assert rec.predict(gesture).nearest == 'circle'
-    assert_same_answer(rec, rec._features(gesture))
+    assert_same_answer(rec, rec.features(gesture))
 
 
 def test_a_raster_too_large_for_the_table_gives_the_same_field():
@@ -188,3 +191,18 @@ def test_a_raster_too_large_for_the_table_gives_the_same_field():
     # The same float64 distances rounded once to float32 (the minimum commutes with sqrt and rounding).
     np.testing.assert_array_equal(rec._query_field(cells), small._query_field(cells))
     assert_same_answer(rec, templates[0])
+
+
+def test_copies_and_pickles_search_as_the_original():
+    templates, labels = random_codebook(np.random.default_rng(8), 3, 3, 1.0)
+    rec = CloudRecogniser(n_points=N)
+    rec.set_codebook(templates, labels)
+    for other in (copy.copy(rec), copy.deepcopy(rec), pickle.loads(pickle.dumps(rec))):
+        np.testing.assert_array_equal(other.distances(templates[1]), rec.distances(templates[1]))
+
+
+def test_a_touch_with_a_nan_point_is_answered_without_an_exception():
+    templates, labels = random_codebook(np.random.default_rng(4), 3, 2, 1.0)
+    rec = fitted(templates, labels, exact=6)
+    match = rec.predict(TouchGesture.from_trajectory(np.array([[1.0, 2.0], [np.nan, 3.0], [4.0, 5.0]])))
+    assert isinstance(match, Match) and not math.isnan(match.distance) and not math.isnan(match.margin)

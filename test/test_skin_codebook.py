@@ -61,6 +61,32 @@ def test_a_bad_codebook_is_refused_with_a_reason(tmp_path, changes, message):
     assert str(path) in str(info.value)
 
 
+@pytest.mark.parametrize('name', ['refereed', 'fused_oriented', 'ndollar', 'cloud', 'dollar1'])
+def test_a_codebook_of_a_lab_recogniser_loads_in_the_lab_and_not_on_the_robot(tmp_path, name):
+    from touch_lab.skin import recognisers as lab
+    train, labels = gestures()
+    model = lab.make_recogniser(name).fit(train, labels)
+    with pytest.raises(ValueError, match='not in the registry'):
+        save_codebook(tmp_path / 'runtime.npz', model)   # the runtime's registry does not name it
+    path = lab.save_codebook(tmp_path / 'lab.npz', model)
+    assert lab.load_codebook(path).predict(train[0]) == model.predict(train[0])
+    with pytest.raises(CodebookError) as info:
+        load_codebook(path)
+    message = str(info.value)   # what, why, how to fix
+    assert f"made with recogniser '{name}', which the robot does not run" in message
+    assert 'touch_lab.skin.recognisers' in message
+    assert '--recogniser trace' in message and '--recogniser fused' in message and str(path) in message
+
+
+def test_auto_saves_the_recogniser_it_chose_which_the_robot_loads(tmp_path):
+    from touch_lab.skin import recognisers as lab
+    train, labels = gestures()
+    auto = lab.make_recogniser('auto').fit(train, labels)
+    back = load_codebook(lab.save_codebook(tmp_path / 'auto.npz', auto))
+    assert back.name == auto.choice_ in ('trace', 'fused')
+    assert back.predict(train[1]) == auto.predict(train[1])
+
+
 def test_vocabulary_and_gap_round_trip_and_version_1_still_reads(tmp_path):
     train, labels = gestures()
     model = make_recogniser('trace').fit(train, labels)

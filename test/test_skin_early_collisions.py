@@ -10,9 +10,9 @@ import pytest
 from touch_gestures.skin.collisions import CollisionDetector
 from touch_gestures.skin.early import PrefixMatcher, stable_fraction
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import make_recogniser
 from touch_lab.skin.collision_eval import evaluate_collisions, make_contact
 from touch_lab.skin.early_eval import prefix
+from touch_lab.skin.recognisers import make_recogniser
 
 RATE = 150.0
 

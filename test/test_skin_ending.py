@@ -9,6 +9,7 @@ from test_skin_multistroke import RATE, SYMBOLS, codebook, feed, polyline, symbo
 
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.ending import GestureEnd
+from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.segmentation import GestureSegmenter, Verdict
 from touch_lab.skin import ending_eval
@@ -108,7 +109,7 @@ def test_without_a_rule_the_short_gap_ends_everything_and_the_bound_is_checked()
 def test_an_unusable_gesture_is_complete_and_the_rule_needs_ordered_points(ending):
     empty = TouchGesture.from_trajectory(np.zeros((0, 2)))
     assert ending.complete(empty)
-    from touch_gestures.skin.registry import make_recogniser
+    from touch_lab.skin.recognisers import make_recogniser
     gestures, labels = codebook(np.random.default_rng(0), names=('X', 'H'), per_class=4)
     with pytest.raises(ValueError, match='ordered points'):
         GestureEnd(make_recogniser('centroid').fit(gestures, labels))
@@ -226,7 +227,7 @@ def test_the_node_waits_in_a_multistroke_vocabulary_unless_told_not_to(tmp_path)
     from touch_graph.runtime import Context, Parameter
 
     gestures, labels = codebook(np.random.default_rng(0), names=('X', 'H'), per_class=4)
-    model = CloudRecogniser().fit(gestures, labels)
+    model = FusedRecogniser().fit(gestures, labels)   # the multi-stroke recogniser the robot runs
     given = command_node_parameters(tmp_path, model, {'X': 'stop'}, vocabulary='symbols')
     ctx = Context('sim')
     ctx.init()

@@ -7,9 +7,9 @@ import pytest
 from test_skin_multistroke import codebook
 
 from touch_gestures.skin.clouds import CloudRecogniser
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.evidence import CodebookEvidence
 from touch_gestures.skin.gesture import TouchGesture
+from touch_lab.skin.recognisers import load_codebook, save_codebook
 from touch_sim.skin.synthetic import random_touches
 
 NAMES = ('X', 'H', 'T', 'Z')

@@ -6,14 +6,13 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from test_lab_skin_refereed import NAMES, held_out
 from test_skin_multistroke import codebook
-from test_skin_referee import NAMES, held_out
 
 from touch_gestures.skin.clouds import CloudRecogniser
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.early import ordered_recogniser
 from touch_gestures.skin.fused import FusedRecogniser, relative_distances
-from touch_gestures.skin.registry import make_recogniser
+from touch_lab.skin.recognisers import load_codebook, make_recogniser, save_codebook
 
 
 @pytest.fixture(scope='module')
@@ -47,23 +46,23 @@ class _Trace:
 def test_the_class_of_the_smallest_sum_of_relative_distances_is_named_among_those_allowed(fitted):
     fused, _ = fitted
     g = held_out()[0][0]
-    saved = fused.referee_
+    saved = fused.trace_
     cloud = np.array([1.0, 1.1, 3.0, 4.0, 5.0])
     try:
-        fused.referee_ = _Trace([2.0, 1.0, 9.0, 9.0, 9.0])      # sums 3.0 and 2.1: the trace's nearest wins
+        fused.trace_ = _Trace([2.0, 1.0, 9.0, 9.0, 9.0])      # sums 3.0 and 2.1: the trace's nearest wins
         assert fused._nearest(g, cloud, None) == 1
-        fused.referee_ = _Trace([1.0, 1.05, 9.0, 9.0, 9.0])     # sums 2.0 and 2.15: the cloud's nearest stays
+        fused.trace_ = _Trace([1.0, 1.05, 9.0, 9.0, 9.0])     # sums 2.0 and 2.15: the cloud's nearest stays
         assert fused._nearest(g, cloud, None) == 0
-        fused.referee_ = _Trace([2.0, 1.0, 9.0, 9.0, 9.0])
+        fused.trace_ = _Trace([2.0, 1.0, 9.0, 9.0, 9.0])
         assert fused._nearest(g, cloud, np.array([True, False, True, True, True])) == 0   # class 1 ruled out
-        fused.referee_ = _Trace(None)                            # the trace cannot read it: the cloud alone
+        fused.trace_ = _Trace(None)                            # the trace cannot read it: the cloud alone
         assert fused._nearest(g, cloud, None) == 0
-        fused.referee_ = _Trace([0.0, 1.0, 9.0, 9.0, 9.0])      # an exact match of the trace: its class
+        fused.trace_ = _Trace([0.0, 1.0, 9.0, 9.0, 9.0])      # an exact match of the trace: its class
         assert fused._nearest(g, cloud, None) == 0
-        fused.referee_ = _Trace([1.0, 0.0, 9.0, 9.0, 9.0])
+        fused.trace_ = _Trace([1.0, 0.0, 9.0, 9.0, 9.0])
         assert fused._nearest(g, cloud, None) == 1
     finally:
-        fused.referee_ = saved
+        fused.trace_ = saved
 
 
 @given(st.lists(st.floats(0.0, 1e6, allow_nan=False), min_size=1, max_size=20))
@@ -85,7 +84,7 @@ def test_unreadable_distances_stay_as_they_are():
 def test_a_fused_codebook_file_loads_with_both_parts_and_ends_gestures_by_its_cloud(fitted, tmp_path):
     fused, _ = fitted
     loaded = load_codebook(save_codebook(tmp_path / 'symbols.npz', fused, vocabulary='symbols'))
-    assert isinstance(loaded, FusedRecogniser) and ordered_recogniser(loaded) is loaded.primary_
+    assert isinstance(loaded, FusedRecogniser) and ordered_recogniser(loaded) is loaded.cloud_
     for g in held_out()[0]:
         assert loaded.predict(g) == fused.predict(g)
     for bad in (1, 0, 2.5, True):

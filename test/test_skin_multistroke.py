@@ -9,10 +9,10 @@ from hypothesis import strategies as st
 
 from touch_gestures.skin.clouds import CloudRecogniser, cloud_features
 from touch_gestures.skin.gesture import TouchGesture, ideal_frame
-from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S, GestureSegmenter, default_gap_s
-from touch_gestures.skin.vocabulary import AutoRecogniser, codebook_accuracy
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
+from touch_lab.skin.recognisers import make_recogniser
+from touch_lab.skin.recognisers.auto import AutoRecogniser, codebook_accuracy
 from touch_sim.skin.traces import TraceSample
 
 RATE = 150.0

@@ -15,10 +15,10 @@ from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.commands import load_command_map
 from touch_gestures.skin.gesture import TouchGesture, ideal_frame
 from touch_gestures.skin.node import HapticCommandsNode, default_codebook_path, default_commands_path
-from touch_gestures.skin.registry import make_recogniser
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.skin.recognisers import make_recogniser
 
 SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')

@@ -151,7 +151,7 @@ def test_skipped_gestures_are_left_out_and_the_rest_fits():
     assert rec.add(line([6.0, 20.0], [41.0, 20.0])) == (True, 'line_right 1/1')
     assert rec.skip() == 'one' and rec.current == 'line_left'
     assert rec.add(line([41.0, 20.0], [6.0, 22.0]))[0] and rec.done and rec.skip() is None
-    from touch_gestures.skin.registry import make_recogniser
+    from touch_lab.skin.recognisers import make_recogniser
     assert list(rec.fit(make_recogniser('trace')).classes_) == ['line_left', 'line_right']
     everything_skipped = CodebookRecorder(['one'], repetitions=1)
     everything_skipped.skip()

@@ -10,11 +10,11 @@ import pytest
 from test_skin_multistroke import codebook
 
 from touch_gestures.skin.clouds import CloudRecogniser
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.evidence import CodebookEvidence
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.order_evidence import _ONE_THREAD_PRODUCT, _ONE_THREAD_VECTOR, OrderEvidence, one_stroke_path
 from touch_gestures.skin.proposed import TraceRecogniser
+from touch_lab.skin.recognisers import load_codebook, save_codebook
 
 #: A five-point star's tips in the order one stroke visits them (unit circle, y down).
 _ANGLES = np.deg2rad(-90 + 144 * np.arange(6))
@@ -131,26 +131,26 @@ def test_a_stroke_count_few_templates_of_a_big_class_show_is_not_allowed():
 def test_the_cloud_hands_the_order_check_its_own_cloud_as_the_path_of_a_one_stroke_touch(fitted):
     rng = np.random.default_rng(9)
     gesture = traced(STAR, rng, start=2)
-    query = fitted._features(gesture)
-    path = fitted._one_stroke_path(gesture, query)
+    query = fitted.features(gesture)
+    path = fitted.one_stroke_path_of(gesture, query)
     np.testing.assert_array_equal(path, one_stroke_path(gesture))   # the same resampling, bit for bit
     assert path.dtype == np.float64
     # Stroke ids that change along the touch (a caller's numbering): the ink-only cloud is no path; the check
     # resamples itself. Several strokes: no path at all.
     renumbered = copy.copy(gesture)
     renumbered.stroke = np.repeat(np.array([0, 1], dtype=np.int16), [10, len(gesture.stroke) - 10])
-    assert fitted._one_stroke_path(renumbered, fitted._features(renumbered)) is None
+    assert fitted.one_stroke_path_of(renumbered, fitted.features(renumbered)) is None
     two = copy.copy(renumbered)
     two.strokes = 2
-    assert fitted._one_stroke_path(two, fitted._features(two)) is None
-    assert CloudRecogniser(n_points=16)._one_stroke_path(gesture, query[:32]) is None   # not the check's 32 points
+    assert fitted.one_stroke_path_of(two, fitted.features(two)) is None
+    assert CloudRecogniser(n_points=16).one_stroke_path_of(gesture, query[:32]) is None   # not the check's 32 points
     # Handed a path, the check reads it; handed one of another length, or none, it resamples the touch.
     star = list(fitted.classes_).index('star')
     order = fitted.order_evidence_
     assert order.check(gesture, star, path) is order.check(gesture, star) is None
     assert order.check(gesture, star, np.zeros((5, 2))) is None
     scribble = shuffled_star(rng)
-    assert order.check(scribble, star, fitted._one_stroke_path(scribble, fitted._features(scribble))) == 'order'
+    assert order.check(scribble, star, fitted.one_stroke_path_of(scribble, fitted.features(scribble))) == 'order'
     assert order.check(two, star, path) is None   # several strokes: never checked
 
 

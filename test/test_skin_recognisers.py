@@ -7,7 +7,8 @@ import pytest
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
-from touch_gestures.skin import RECOGNISERS, TouchGesture, make_recogniser
+from touch_gestures.skin import TouchGesture
+from touch_lab.skin.recognisers import RECOGNISERS, make_recogniser
 from touch_sim.skin.synthetic import PAPER_CENTROID_SET, random_touches, synthetic_traces
 
 # $1 (rotated to its indicative angle) and Protractor (free rotation) make a line and its reverse one
@@ -145,3 +146,12 @@ def test_fit_and_parameter_errors(fig8):
         make_recogniser('trace', n_point=16)
     with pytest.raises(ValueError, match='unknown recogniser'):
         make_recogniser('centriod')
+
+
+def test_the_runtime_names_what_a_robot_runs_and_points_to_the_lab_for_the_rest():
+    from touch_gestures.skin import registry as runtime
+    assert set(runtime.RECOGNISERS) < set(RECOGNISERS)
+    assert all(RECOGNISERS[name] is cls for name, cls in runtime.RECOGNISERS.items())   # the lab extends it
+    with pytest.raises(ValueError, match=r"unknown recogniser 'refereed'.*touch_lab\.skin\.recognisers"):
+        runtime.make_recogniser('refereed')
+    assert make_recogniser('refereed').name == 'refereed'

@@ -11,11 +11,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from test_skin_multistroke import SYMBOLS, polyline
 
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.ndollar import split_strokes
-from touch_gestures.skin.stroke_orders import every_order, reordered
+from touch_gestures.skin.stroke_orders import every_order, reordered, split_strokes
+from touch_lab.skin.recognisers import load_codebook, save_codebook
 
 
 def stroke_spans(stroke):
@@ -131,15 +130,15 @@ def test_the_trace_reads_an_x_written_in_another_order_as_an_x():
     as_traced = FusedRecogniser(stroke_orders=1).fit(gestures, labels)
     every = FusedRecogniser().fit(gestures, labels)
     # Two strokes: two orders per template (the rest of the 3! slots are copies, left out of the search).
-    assert len(as_traced.referee_.templates_) == 12 and len(every.referee_.templates_) == 24
+    assert len(as_traced.trace_.templates_) == 12 and len(every.trace_.templates_) == 24
     x, fork = list(every.classes_).index('X'), list(every.classes_).index('pitchfork')
-    far = as_traced.referee_.class_distances(query)
+    far = as_traced.trace_.class_distances(query)
     assert far[x] > far[fork]   # in the order traced, the trace reads a pitchfork
-    near = every.referee_.class_distances(query)
+    near = every.trace_.class_distances(query)
     assert near[x] < 0.5 * far[x] and near[x] < near[fork]   # the right bars, once the orders agree
     assert (near <= far).all()   # more readings of the same templates: never farther
     # The cloud's side is the same codebook.
-    np.testing.assert_array_equal(every.primary_.class_distances(query), as_traced.primary_.class_distances(query))
+    np.testing.assert_array_equal(every.cloud_.class_distances(query), as_traced.cloud_.class_distances(query))
 
 
 def test_a_codebook_of_one_order_per_template_still_loads_and_a_wrong_width_is_refused(tmp_path):
@@ -147,9 +146,9 @@ def test_a_codebook_of_one_order_per_template_still_loads_and_a_wrong_width_is_r
     gestures = [bars(1, 0, rng) for _ in range(4)] + [pitchfork(rng) for _ in range(4)]
     labels = ['X'] * 4 + ['pitchfork'] * 4
     one = FusedRecogniser(stroke_orders=1).fit(gestures, labels)   # the layout of codebooks made before
-    assert one.templates_.shape[1] == one._split + 64
+    assert one.templates_.shape[1] == one.cloud_width + 64
     loaded = load_codebook(save_codebook(tmp_path / 'one.npz', one, vocabulary='symbols'))
-    assert isinstance(loaded, FusedRecogniser) and len(loaded.referee_.templates_) == 8
+    assert isinstance(loaded, FusedRecogniser) and len(loaded.trace_.templates_) == 8
     for g in gestures:
         assert loaded.predict(g) == one.predict(g)
     with pytest.raises(ValueError, match='a fused codebook holds the cloud'):
@@ -158,4 +157,4 @@ def test_a_codebook_of_one_order_per_template_still_loads_and_a_wrong_width_is_r
         with pytest.raises(ValueError, match='stroke_orders'):
             FusedRecogniser(stroke_orders=bad).fit(gestures, labels)
     dab = TouchGesture.from_trajectory(np.zeros((0, 2)))
-    assert FusedRecogniser()._features(dab) is None
+    assert FusedRecogniser().features(dab) is None

@@ -6,9 +6,10 @@ labels)`` turns n gestures x m repetitions into a codebook of feature vectors
 (cirillo2017 Fig. 5, training branch), and whose ``predict(gesture)`` returns a
 :class:`Match`: the nearest class, its distance and its margin over the runner-up
 (recognition branch; "the gesture corresponding to the lowest error index is selected").
-Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | None`` and
-``_distances(query) -> (T,) float`` against the whole codebook at once (with
-``_prepare_codebook()`` to precompute what the codebook alone determines).
+Subclasses supply two vectorised pieces, public so that a recogniser made of others can
+ask them: ``features(gesture) -> (d,) float32 | None`` and ``distances(query) -> (T,)
+float`` against the whole codebook at once (with ``_prepare_codebook()`` to precompute
+what the codebook alone determines).
 
 **Rejection** (not in the paper, which always answers): no command when
 
@@ -23,39 +24,22 @@ Subclasses supply two vectorised pieces: ``_features(gesture) -> (d,) float32 | 
   distance: two classes are about equally close, the touch is ambiguous; or
 - the touch's strokes or duration are none the nearest class shows in the codebook
   (:mod:`.evidence`; where the codebook knows its templates' strokes and contact times); or
-- for an order-free recogniser (``direction_aware`` False: a point cloud), a touch of one
-  stroke whose path, in the order it was traced, is far from every one-stroke path of its
-  nearest class (:mod:`.order_evidence`, calibrated as the distance threshold: ``auto_scale``
-  times the ``auto_quantile`` quantile of leave-one-out path distances; where the codebook
-  knows its templates' paths, and not with ``max_distance`` None: no distance limits at all).
+- for an order-free recogniser (``direction_aware`` False), a touch of one stroke whose
+  path, in the order it was traced, is far from every one-stroke path of its nearest class
+  (:mod:`.order_evidence`, calibrated as the distance threshold; where the codebook knows
+  its templates' paths, and not with ``max_distance`` None: no distance limits at all).
 
 **The rule that decides**, in the order it is applied: the nearest class by distance among
 the classes written with the touch's number of strokes
 (:meth:`.evidence.CodebookEvidence.allowed`; all classes when none is, or when the codebook
 does not know its templates' strokes), its margin taken over the nearest other class of all,
-ruled out or not; no command if the distance is over the class's threshold (``'distance'``), the margin is too
-small (``'margin'``), the stroke count is rare or unseen for the class (``'strokes'``), the
-duration is out of the class's range (``'duration'``) or the one-stroke path is out of
-order (``'order'``). Measured with the cloud on the Mixed Multistroke Gestures
-(``social-touch eval skin --traces multistroke_dev.csv.gz --recognisers cloud``,
-leave-one-person-out through the virtual skin; these two comparisons were made while the virtual
-skin still kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`), the rare
-stroke counts of :mod:`.evidence`
-and the path order of :mod:`.order_evidence` took the synthetic random touches that fire a
-command from 7.40 % to 1.20 % (most of it the stroke counts': arrow-like scribbles), correct
-commands from 89.39 % to 89.04 % and wrong ones from 2.00 % to 1.27 %. Of the 18 firings
-left (150 touches x 10 folds), 17 are three one-stroke touches taken for a ``line``, and the
-one that fires most is a line: the generator's smooth curve can be straight.
-
-Naming the nearest class written with the touch's strokes, rather than the nearest of all
-(which the evidence then rejects), changes what the recogniser answers, not which commands
-fire: a class ruled out yet nearer leaves a negative margin, and the touch is rejected for
-``'strokes'`` as before. Measured the same way (``social-touch report skin-multistroke``,
-docs/skin-multistroke.md), the cloud's nearest class is right for 93.86 % of the samples
-instead of 93.05 % (an X of three strokes is no X: the nearest class written with three
-strokes is named), and correct, rejected, wrong and random commands are unchanged (89.89,
-6.47, 1.21, 1.20 %). The time in contact rejects but does not name: people trace at their own
-pace, and one slower or faster than the codebook's would be named for another class.
+ruled out or not; no command if the distance is over the class's threshold (``'distance'``),
+the margin is too small (``'margin'``), the stroke count is rare or unseen for the class
+(``'strokes'``), the duration is out of the class's range (``'duration'``) or the one-stroke
+path is out of order (``'order'``). A class ruled out yet nearer leaves a negative margin, and
+the touch is rejected for ``'strokes'``. The time in contact rejects but does not name: people
+trace at their own pace, and one slower or faster than the codebook's would be named for
+another class. What each rule does to the commands is measured in docs/skin-multistroke.md.
 
 Degenerate codebooks: a class with one template has no within-class distance and takes the
 median scale of the other classes; if no class has two templates, every class's scale is
@@ -79,7 +63,7 @@ from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
 
-__all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser']
+__all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser', 'nearest_allowed']
 
 #: The steps of :meth:`TemplateRecogniser.predict`, in its order (the evidence comes before the decision,
 #: the classes the strokes allow, and after it, the named class's strokes and duration).
@@ -127,11 +111,11 @@ class TemplateRecogniser(BaseEstimator):
     min_margin: float
 
     # ----------------------------------------------------------------- subclass API
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         """(d,) float32 feature vector of ``gesture``, or None if it has none (empty map...)."""
         raise NotImplementedError
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         """(T,) distances from ``query`` (d,) to every row of ``self.templates_`` (T, d)."""
         raise NotImplementedError
 
@@ -154,7 +138,7 @@ class TemplateRecogniser(BaseEstimator):
             raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
         feats, names, strokes, contacts, paths, dropped = [], [], [], [], [], 0
         for gesture, label in zip(gestures, labels, strict=True):
-            f = self._features(gesture)
+            f = self.features(gesture)
             if f is None:
                 dropped += 1
                 continue
@@ -239,15 +223,15 @@ class TemplateRecogniser(BaseEstimator):
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_classes,) float64 distance to the nearest template of each class, or None if unusable."""
         self._check_fitted()
-        query = self._features(gesture)
+        query = self.features(gesture)
         if query is None:
             return None
         return self.query_class_distances(query)
 
     def query_class_distances(self, query: np.ndarray) -> np.ndarray:
         """(n_classes,) float64 distance to the nearest template of each class for a query's features
-        (``_features``' output): one query against recognisers that differ in codebook only."""
-        return np.minimum.reduceat(self._distances(query), self.class_starts_).astype(np.float64, copy=False)
+        (``features``' output): one query against recognisers that differ in codebook only."""
+        return np.minimum.reduceat(self.distances(query), self.class_starts_).astype(np.float64, copy=False)
 
     def predict(self, gesture: TouchGesture) -> Match:
         """The nearest class of ``gesture`` with its distance and margin, or a rejection."""
@@ -261,7 +245,7 @@ class TemplateRecogniser(BaseEstimator):
         step('features')
         if query is None:
             return Match(None, float('inf'), 0.0, None, 'unusable')
-        distances = self._distances(query)
+        distances = self.distances(query)
         step('search')
         per_class = np.minimum.reduceat(distances, self.class_starts_).astype(np.float64, copy=False)
         step('minima')
@@ -278,13 +262,13 @@ class TemplateRecogniser(BaseEstimator):
         step('evidence')
         order = getattr(self, 'order_evidence_', None)
         if reason is None and order is not None:
-            reason = order.check(gesture, best, self._one_stroke_path(gesture, query))
+            reason = order.check(gesture, best, self.one_stroke_path_of(gesture, query))
             step('order')
         if reason is not None:
             return Match(None, match.distance, match.margin, match.nearest, reason)
         return match
 
-    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+    def one_stroke_path_of(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
         """The order check's path of ``gesture`` (:func:`~.order_evidence.one_stroke_path`) when the
         features ``query`` already hold it, else None (the check computes it)."""
         return None
@@ -294,13 +278,19 @@ class TemplateRecogniser(BaseEstimator):
         return self._decide(per_class)[0]
 
     def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
-        """The features :meth:`predict` hands to ``_distances`` (default: all of ``_features``)."""
-        return self._features(gesture)
+        """The features :meth:`predict` hands to ``distances`` (default: all of ``features``)."""
+        return self.features(gesture)
 
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         """Index of the class :meth:`predict` names: the nearest of those ``allowed`` ((n_classes,) bool,
-        at least one; None: all). A subclass may look again at near ties."""
-        return int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
+        at least one; None: all). A subclass may ask other opinions (:mod:`.fused`)."""
+        return nearest_allowed(per_class, allowed)
+
+    def deciding_recogniser(self) -> TemplateRecogniser:
+        """The fitted recogniser whose distances and codebook this one's decisions rest on: itself; for a
+        recogniser made of others, the part whose distances decide (the fused recogniser's cloud). Early
+        candidates and the end of a gesture match prefixes of its templates (:mod:`.early`, :mod:`.ending`)."""
+        return self
 
     def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None
                 ) -> tuple[Match, int]:
@@ -384,13 +374,19 @@ class TemplateRecogniser(BaseEstimator):
         bounds = np.r_[self.class_starts_, T]
         for lo, hi in itertools.pairwise(bounds):
             for i in np.unique(np.linspace(lo, hi - 1, min(hi - lo, per_class)).astype(np.intp)):
-                d = np.asarray(self._distances(self.templates_[i]), dtype=np.float64)
+                d = np.asarray(self.distances(self.templates_[i]), dtype=np.float64)
                 same = self.template_labels_ == self.template_labels_[i]
                 other = ~same
                 same[i] = False
                 within[i] = d[same].min() if same.any() else np.inf
                 between[i] = d[other].min() if other.any() else np.inf
         return within, between
+
+
+def nearest_allowed(per_class: np.ndarray, allowed: np.ndarray | None) -> int:
+    """Index of the smallest of (n_classes,) ``per_class`` among those ``allowed`` ((n_classes,) bool, at least
+    one; None: all)."""
+    return int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
 
 
 def _no_step(name: str) -> None:

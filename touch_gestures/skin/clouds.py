@@ -37,14 +37,9 @@ stroke orders (docs/skin-evaluation.md). The steps:
    templates outside the closest are raised to the largest cost or bound among them), so
    the margin is never larger either (test/test_skin_cloud_search.py).
 
-Steps 2 and 3 run in one C call where the extension was built (:mod:`.cloud_accel`,
-``touch_gestures/skin/_cloud_accel.c``: the same arrays, the same raster bounds bit for bit, the exact
-distances to a few ulp, scipy's Hungarian called back); this numpy code is the reference and the
-fall-back (``SOCIAL_TOUCH_SKIN_ACCEL=python``), test/test_skin_cloud_accel.py compares the two.
-
 Distances are in units of the gesture's size. The cloud is blind to direction: a line
 traced left-to-right and right-to-left are the same cloud. Where a vocabulary tells such
-gestures apart, :func:`~.vocabulary.choose_recogniser` picks a direction-aware recogniser.
+gestures apart, the trace (:mod:`.proposed`) or the fused recogniser (:mod:`.fused`) reads direction.
 """
 
 from __future__ import annotations
@@ -56,7 +51,6 @@ from scipy import sparse
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-from . import cloud_accel
 from .base import TemplateRecogniser
 from .features import arc_length_resample_complex
 from .gesture import TouchGesture
@@ -80,8 +74,6 @@ def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     >>> f.reshape(4, 2).round(2).tolist()   # two strokes of 4: every 8/3 along the ink, none in the air
     [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
     """
-    if cloud_accel.cloud is not None:   # the same numbers in one C call (cloud_accel)
-        return cloud_accel.cloud(points, stroke, n_points)
     cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
     cloud -= cloud.sum() / n_points
     x, y = cloud.real, cloud.imag                                   # views: cheaper than reducing (n, 2) along 0
@@ -124,15 +116,15 @@ class CloudRecogniser(TemplateRecogniser):
             raise ValueError(f'need n_points >= 2, grid >= 2 and exact >= 0; got {self.n_points}, {self.grid}, '
                              f'{self.exact}')
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:
             return None
         cloud = cloud_features(gesture.trajectory, gesture.stroke, self.n_points)
-        # A NaN or infinite point makes no cloud (and never reaches the compiled search, which refuses it):
+        # A NaN or infinite point makes no cloud (the search needs finite points):
         # one dot product, as the sum of squares of 2 n numbers within +-1 is finite exactly when they are.
         return cloud if math.isfinite(float(cloud @ cloud)) else None
 
-    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+    def one_stroke_path_of(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
         # A touch whose points are all of one stroke (ids all 0, as the segmenter numbers them) is resampled
         # the same with and without its stroke ids: the cloud is the order check's path, as float64.
         if self.n_points != PATH_POINTS or getattr(gesture, 'strokes', 1) != 1 or gesture.stroke.any():
@@ -175,26 +167,6 @@ class CloudRecogniser(TemplateRecogniser):
         self._visit_labels = self.template_labels_.tolist()
         # flat start of each (point, template) row of the (n, k, n) point distances to the k closest
         self._row_starts = np.arange(0, n * n * min(self.exact, T), n).reshape(n, min(self.exact, T))
-        # The compiled search of the same arrays (cloud_accel; None: numpy searches).
-        self._accel = cloud_accel.make_codebook(fields, self._clouds, self.template_labels_, len(self.classes_), g,
-                                                self.exact, self._cell_table)
-
-    def __getstate__(self) -> dict:
-        # Pickles carry the arrays, not the compiled codebook (built again from them where unpickled).
-        state = dict(super().__getstate__())   # a copy: object.__getstate__ gives the instance's own dict
-        state.pop('_accel', None)
-        return state
-
-    def __setstate__(self, state: dict) -> None:
-        super().__setstate__(state)
-        if hasattr(self, '_fields'):
-            self._accel = cloud_accel.make_codebook(self._fields, self._clouds, self.template_labels_,
-                                                    len(self.classes_), self.grid, self.exact, self._cell_table)
-
-    @property
-    def implementation_(self) -> str:
-        """``'c'`` when this codebook is searched by the compiled kernel (:mod:`.cloud_accel`), else ``'python'``."""
-        return 'python' if getattr(self, '_accel', None) is None else 'c'
 
     def _query_field(self, cells: np.ndarray) -> np.ndarray:
         """(g*g,) float32 distance from each raster cell's centre to the nearest cell centre occupied
@@ -206,8 +178,6 @@ class CloudRecogniser(TemplateRecogniser):
 
     def _bounds(self, q: np.ndarray) -> np.ndarray:
         """(T,) float64 symmetric Chamfer distance of the (n, 2) float64 query to every template (module doc, 2)."""
-        if self._accel is not None:
-            return self._accel.bounds(q)
         cells = self._cells(q)
         # Query -> templates: each query point reads every template's field at its cell; templates ->
         # query: every template point reads the query's field at its cell. Sums of n float32 values
@@ -216,11 +186,9 @@ class CloudRecogniser(TemplateRecogniser):
         to_templates += self._cell_counts @ self._query_field(cells)
         return np.multiply(to_templates, 0.5 / self.n_points, dtype=np.float64)   # as float64, then scaled
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         n = self.n_points
         q = query.reshape(n, 2).astype(np.float64)
-        if self._accel is not None:   # the same steps in one C call (cloud_accel); a non-finite query is refused
-            return self._accel.distances(q, linear_sum_assignment)
         out = self._bounds(q)
         k = min(self.exact, len(out))
         if not k:

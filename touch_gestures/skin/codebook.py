@@ -6,7 +6,7 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     key                 shape       dtype     what
     format              ()          str       'social_touch.skin_codebook'
     format_version      ()          int64     2 (1 is still read)
-    recogniser          ()          str       registry name, e.g. 'trace'
+    recogniser          ()          str       registry name, e.g. 'trace' (:mod:`.registry`)
     params              ()          str       JSON of the recogniser's parameters
     classes             (n,)        str       gesture names, sorted
     templates           (T, d)      float32   feature vectors, grouped by class
@@ -32,6 +32,13 @@ At load the format, version, recogniser name and parameters are checked, and so 
 feature dimension (against the features the named recogniser computes with those
 parameters): a codebook recorded with 32 points does not silently match 16-point queries.
 
+The robot runs only the recognisers of :data:`.registry.RECOGNISERS` (the paper's three,
+``trace`` and ``fused``). A codebook made with one of the lab's (:mod:`touch_lab.skin.recognisers`:
+the peers, $N, ``refereed``, the oriented pair) does not load here, even where touch_lab is
+installed: the runtime does not reach into the lab, and a robot should not run a recogniser kept to
+be measured against. The error says to record the codebook again with ``trace`` or ``fused``; the
+lab's tools load such files with the lab's registry (the ``recognisers`` argument).
+
 :class:`CodebookRecorder` collects m repetitions of each gesture from a stream of
 segmented gestures (``social-touch codebook record``, :mod:`.record_cli`, feeds it from the
 skin), refusing two-finger, truncated, empty and tiny touches; :mod:`.recording` saves what it
@@ -42,7 +49,7 @@ from __future__ import annotations
 
 import json
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -53,7 +60,7 @@ from touch_graph.yamlconf import did_you_mean
 from .base import TemplateRecogniser
 from .errors import CodebookError
 from .gesture import TouchGesture
-from .registry import RECOGNISERS, make_recogniser
+from .registry import DEFAULT_RECOGNISER, MULTISTROKE_RECOGNISER, RECOGNISERS, recogniser_from
 from .screening import MIN_EXTENT_MM, MIN_POINTS, gesture_extent_mm, screen_gesture
 from .segmentation import default_gap_s
 
@@ -70,18 +77,20 @@ _KEYS = ('format', 'format_version', 'recogniser', 'params', 'classes', 'templat
 
 
 def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description: str | None = None,
-                  vocabulary: str = 'commands', gap_s: float | None = None) -> Path:
+                  vocabulary: str = 'commands', gap_s: float | None = None,
+                  recognisers: Mapping[str, type[TemplateRecogniser]] = RECOGNISERS) -> Path:
     """Write a fitted recogniser's codebook to ``path`` (``.npz`` is appended if missing).
 
     ``description`` (optional, e.g. how it was recorded and whether the data are synthetic) is
     kept in the file and comes back as the loaded recogniser's ``description_``. ``gap_s``
     defaults to the vocabulary's (:func:`~.segmentation.default_gap_s` of the most strokes
-    a template has)."""
-    recogniser = getattr(recogniser, 'chosen_', recogniser)  # 'auto': the file holds the recogniser it chose
+    a template has). ``recognisers``: the registry the file's recogniser must be in (the lab's for its
+    own recognisers)."""
     if not hasattr(recogniser, 'templates_'):
         raise ValueError('the recogniser has no codebook yet: fit it (or record one) before saving')
-    if recogniser.name not in RECOGNISERS:
-        raise ValueError(f'recogniser {recogniser.name!r} is not in the registry; cannot name it in a file')
+    if recognisers.get(recogniser.name) is not type(recogniser):
+        raise ValueError(f'recogniser {recogniser.name!r} is not in the registry ({", ".join(recognisers)}); cannot '
+                         'name it in a file')
     max_strokes = int(getattr(recogniser, 'max_strokes_', 1))
     gap_s = default_gap_s(max_strokes) if gap_s is None else float(gap_s)
     if not (np.isfinite(gap_s) and gap_s >= 0) or not str(vocabulary).strip():
@@ -108,12 +117,14 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
     return path
 
 
-def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRecogniser:
+def load_codebook(path: str | Path, recogniser: str | None = None,
+                  recognisers: Mapping[str, type[TemplateRecogniser]] = RECOGNISERS) -> TemplateRecogniser:
     """Read a codebook file into a ready recogniser.
 
     Args:
         path: the ``.npz`` file.
         recogniser: if given, the file must have been made by this recogniser.
+        recognisers: the registry the file's recogniser must be in (default: the runtime's, module doc).
 
     Raises:
         CodebookError: missing or unreadable file, another format or version, an unknown
@@ -140,9 +151,16 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
     if version >= 2 and not all(k in data for k in ('vocabulary', 'gap_s', 'max_strokes')):
         raise CodebookError('a version 2 codebook needs vocabulary, gap_s and max_strokes', where)
     name = str(data['recogniser'])
-    if name not in RECOGNISERS:
-        raise CodebookError(f'recogniser {name!r} is unknown; known: {", ".join(RECOGNISERS)}'
-                            f'{did_you_mean(name, RECOGNISERS)}', where)
+    if name not in recognisers:
+        if recognisers is RECOGNISERS:
+            raise CodebookError(f'made with recogniser {name!r}, which the robot does not run (it runs '
+                                f'{", ".join(RECOGNISERS)}; {name!r} is not one of them: a lab recogniser, '
+                                'touch_lab.skin.recognisers, kept to be measured against, or a misspelling'
+                                f'{did_you_mean(name, RECOGNISERS)}); record the codebook again with '
+                                f'`social-touch codebook record --recogniser {DEFAULT_RECOGNISER}` (single-stroke '
+                                f'gestures) or `--recogniser {MULTISTROKE_RECOGNISER}` (multi-stroke)', where)
+        raise CodebookError(f'recogniser {name!r} is unknown; known: {", ".join(recognisers)}'
+                            f'{did_you_mean(name, recognisers)}', where)
     if recogniser is not None and name != recogniser:
         raise CodebookError(f'the codebook was made for recogniser {name!r}, not {recogniser!r}; record one for '
                             f'{recogniser!r} or use {name!r}', where)
@@ -150,7 +168,7 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
         params = json.loads(str(data['params']))
         if not isinstance(params, dict):
             raise ValueError('params must be a JSON object')
-        model = make_recogniser(name, **params)
+        model = recogniser_from(recognisers, name, params)
     except (ValueError, TypeError) as err:
         raise CodebookError(f'bad recogniser parameters: {err}', where) from err
     classes, templates = data['classes'].astype(str), data['templates']
@@ -186,7 +204,7 @@ def load_codebook(path: str | Path, recogniser: str | None = None) -> TemplateRe
 def _feature_size(model: TemplateRecogniser) -> int | None:
     """Length of the model's feature vector, from a probe gesture (a short diagonal stroke)."""
     probe = TouchGesture.from_trajectory(np.array([[10.0, 10.0], [20.0, 15.0], [30.0, 30.0]]))
-    features = model._features(probe)
+    features = model.features(probe)
     return None if features is None else len(features)
 
 

@@ -9,7 +9,7 @@ collision when
 
 - the normal force reaches ``force_n`` (a press far harder than any finger needs), or
 - it rises faster than ``rate_n_s``, measured over the last ``rate_frames`` frames at the
-  skin's frame rate (a finger landing ramps up over ~50 ms: about 30 N/s at 1.5 N; an impact
+  skin's frame rate (a finger landing ramps up over tens of milliseconds; an impact
   does it in one or two frames). Frames, not header stamps: a driver spreads the stamps of
   frames read together at the nominal rate, but a bag from another driver, or a burst squeezed
   into the time since the last poll, may carry nearly equal stamps, over which a rate would

@@ -67,7 +67,8 @@ class PrefixMatcher:
     """Candidates for gestures under way, against a fitted ``cloud`` or ``trace`` recogniser's codebook.
 
     Args:
-        recogniser: the fitted recogniser of the final decision (``auto``: the one it chose).
+        recogniser: the fitted recogniser of the final decision (its
+            :meth:`~.base.TemplateRecogniser.deciding_recogniser` is matched).
         fractions: template prefixes to match, as fractions of the template (sorted, in (0, 1]).
 
     Raises:
@@ -88,7 +89,7 @@ class PrefixMatcher:
         """Per fraction (in :attr:`fractions` order), the (n_classes,) float64 distance of ``gesture``
         (traced so far) to each class's nearest template prefix; None when the gesture is unusable."""
         # The matchers differ in codebook only: the gesture's features are computed once for all of them.
-        query = self.recogniser._features(gesture)
+        query = self.recogniser.features(gesture)
         if query is None:
             return None
         return [m.query_class_distances(query) for m in self._matchers]
@@ -111,13 +112,13 @@ class PrefixMatcher:
 
 
 def ordered_recogniser(recogniser: TemplateRecogniser) -> TemplateRecogniser:
-    """The fitted recogniser whose templates are points in order (``auto``: the one it chose).
+    """The fitted recogniser whose templates are points in order: its
+    :meth:`~.base.TemplateRecogniser.deciding_recogniser` (the fused recogniser's cloud).
 
     Raises:
         ValueError: its features are no ordered points (a map, the centroid's sequence).
     """
-    recogniser = getattr(recogniser, 'chosen_', recogniser)
-    recogniser = getattr(recogniser, 'primary_', recogniser)   # 'refereed': its cloud
+    recogniser = recogniser.deciding_recogniser()
     if recogniser.name not in _ORDERED:
         raise ValueError(f'early decisions and the end of a gesture need the ordered points of '
                          f'{" or ".join(_ORDERED)}; {recogniser.name!r} has none')

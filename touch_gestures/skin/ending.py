@@ -58,7 +58,8 @@ class GestureEnd:
     (module doc)? ``complete(gesture)``: the verdict is ``WHOLE``.
 
     Args:
-        recogniser: a fitted ``cloud`` or ``trace`` recogniser (``auto``: the one it chose; ``refereed``: its cloud).
+        recogniser: a fitted recogniser whose deciding recogniser is a ``cloud`` or ``trace``
+            (:func:`~.early.ordered_recogniser`).
         margin: how much nearer (relative) a whole template must be than the best prefix.
         strokes: also require the nearest class to have templates of at most the strokes traced.
         unfinished: strokes fewer than every template of the nearest class has are ``UNFINISHED``
@@ -97,7 +98,7 @@ class GestureEnd:
     def verdict(self, gesture: TouchGesture) -> Verdict:
         """What ``gesture`` (the strokes so far) is (module doc); an unusable one is whole (nothing to wait for)."""
         if self.prefixes == 'strokes':
-            query = self.recogniser._features(gesture)
+            query = self.recogniser.features(gesture)
             if query is None:
                 return Verdict.WHOLE
             whole = self.recogniser.query_class_distances(query)

@@ -9,11 +9,9 @@ still tell them apart, and the codebook says what each class allows:
   few templates of a big class show (fewer than ``min_share`` of them: 1 %, so in a class of
   fewer than 100 templates any count seen is allowed) is taken for an accident of the
   recording, not a way to write the symbol: two strokes joined by a lift too short to see,
-  one broken by a skip of the pen. On the Mixed Multistroke Gestures, 1 arrowhead in 294
-  has one stroke (the other 293 two), and that one template let the one-stroke scribbles
-  shaped like an arrow through: most of the random touches that fired a command before
-  this rule (docs/skin-multistroke.md); the rare counts of the file's real gestures were
-  mostly recognised wrong anyway;
+  one broken by a skip of the pen. On the Mixed Multistroke Gestures a single one-stroke
+  arrowhead among the class's two-stroke ones let the one-stroke scribbles shaped like an
+  arrow through (docs/skin-multistroke.md);
 - **duration**: a touch far faster or slower than any repetition of the class in the
   codebook (from the ``low`` to the ``high`` quantile of the class's contact times, widened
   by ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). The

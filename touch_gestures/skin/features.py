@@ -11,8 +11,6 @@ import functools
 
 import numpy as np
 
-from . import cloud_accel
-
 __all__ = [
     'arc_length_resample',
     'arc_length_resample_complex',
@@ -162,8 +160,6 @@ def arc_length_resample_complex(points: np.ndarray, n: int, stroke: np.ndarray |
     ``np.interp``, which multiplies by the reciprocal of a step where the real version divides by
     it: a coordinate may differ from interpolating x and y apart by an ulp (1e-16 relative).
     """
-    if cloud_accel.resample is not None:   # the same numbers in one C call, the same errors (cloud_accel)
-        return cloud_accel.resample(points, stroke, n)
     pts = np.ascontiguousarray(points, dtype=np.float64)
     if len(pts) == 0:
         raise ValueError('cannot resample an empty path')

@@ -47,14 +47,14 @@ class StaticRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         bitmap = gesture.binary_map if self.threshold is None else gesture.peak_map >= self.threshold
         if not bitmap.any():
             return None
         # Columns stacked (the paper's 144x1 vector of the 12 columns); any fixed order gives the same sums.
         return shift_to_corner(bitmap).T.reshape(-1).astype(np.float32)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         score = self.templates_ @ query  # eq. (2) for every template at once
         return 1.0 - score / max(float(query.sum()), 1.0)
 
@@ -81,14 +81,14 @@ class MapRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         scaled = nna_rescale(gesture.binary_map, self.size)
         return None if scaled is None else scaled.reshape(-1).astype(np.float32)
 
     def _prepare_codebook(self) -> None:
         self._ones = self.templates_.sum(axis=1)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         # For 0/1 vectors, Hamming = |t| + |q| - 2 t.q: one matrix-vector product for the codebook.
         return self._ones + query.sum() - 2.0 * (self.templates_ @ query)
 
@@ -119,7 +119,7 @@ class CentroidRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:
             return None
         g = minmax_normalise(nna_resample(gesture.trajectory, self.length))
@@ -133,7 +133,7 @@ class CentroidRecogniser(TemplateRecogniser):
         self._tx2 = np.einsum('ij,ij->i', self._tx, self._tx)
         self._ty2 = np.einsum('ij,ij->i', self._ty, self._ty)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         qx, qy = query[: self.length], query[self.length:]
         ex2 = self._tx2 - 2.0 * (self._tx @ qx) + float(qx @ qx)
         ey2 = self._ty2 - 2.0 * (self._ty @ qy) + float(qy @ qy)

@@ -10,8 +10,8 @@ the $1 traces and on synthetic performers during development:
    ``n_points`` equal bins and each bin's contact points are averaged. Like the paper's
    NNA it is uniform in time, so it keeps the speed profile, which is part of how people
    draw a shape (they slow down at corners, consistently across people); resampling the
-   same features along the arc, as $1 does, measured 1-2 points worse on the $1 traces
-   (and DTW on arc 0.6 points worse than DTW in time). Unlike NNA, the bin
+   same features along the arc, as $1 does, measured worse on the $1 traces (and DTW
+   on arc worse than DTW in time; docs/skin-evaluation.md). Unlike NNA, the bin
    mean is a box filter: it removes the contact point's jitter (sensor noise, a shaky
    finger) in proportion to the bin width, cannot alias, and stays exact when frames are
    dropped (an empty bin is interpolated from its neighbours).
@@ -21,19 +21,13 @@ the $1 traces and on synthetic performers during development:
    Table 3) and turns a slanted line into a diagonal; uniform scaling keeps proportions.
    ``aspect_floor`` < 1 divides each axis by at least that fraction of the larger extent
    (0 is eq. (6); 0.3 is the 1-D rule of $N, Anthony and Wobbrock 2010): both measured
-   no better on the $1 traces and up to 14 points worse on the synthetic lines.
+   no better on the $1 traces and worse on the synthetic lines.
 3. **Nearest neighbour by Euclidean distance** over the (x, y) points, as one
    matrix-vector product against the whole codebook (|t|^2 - 2 t.q + |q|^2 with |t|^2
    precomputed). No rotation search: on a skin a line's orientation is the command
    (Protractor, which removes rotation, confuses every line with every other).
 
 The distance is the root-mean-square point distance in units of the gesture's size.
-
-Steps 1-2 run in one C call where the extension was built (:mod:`.cloud_accel`): the same numbers bit for
-bit (the bins' sums in point order, as ``np.bincount``'s; np.interp's arithmetic), ~1.5 against ~25 us. So
-do the class minima of step 3's distances after numpy's product (equal but for the sign of a zero;
-:meth:`TraceRecogniser.query_class_distances`, which the fused recogniser asks). numpy is the reference and
-the fall-back (test/test_skin_trace_accel.py compares them).
 """
 
 from __future__ import annotations
@@ -42,7 +36,6 @@ import math
 
 import numpy as np
 
-from . import cloud_accel
 from .base import TemplateRecogniser
 from .gesture import TouchGesture
 
@@ -100,11 +93,6 @@ def trace_features(points: np.ndarray, times: np.ndarray, n_points: int = 32, as
     >>> f.reshape(3, 2).tolist()   # a horizontal line keeps its proportions: y stays 0
     [[-0.5, 0.0], [0.0, 0.0], [0.5, 0.0]]
     """
-    if cloud_accel.trace is not None:   # the same numbers in one C call, for finite points and times
-        try:
-            return cloud_accel.trace(points, times, n_points, aspect_floor)
-        except ValueError:   # refused there (a NaN or infinite point or time, an empty trajectory): numpy's answer
-            pass
     res = time_bin_resample(points, times, n_points)
     lo, hi = res.min(axis=0), res.max(axis=0)
     span = hi - lo
@@ -138,7 +126,7 @@ class TraceRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:
             return None
         return trace_features(gesture.trajectory, gesture.times, self.n_points, self.aspect_floor)
@@ -146,14 +134,6 @@ class TraceRecogniser(TemplateRecogniser):
     def _prepare_codebook(self) -> None:
         self._sq_norms = np.einsum('ij,ij->i', self.templates_, self.templates_)
 
-    def query_class_distances(self, query: np.ndarray) -> np.ndarray:
-        if cloud_accel.trace_minima is None:
-            return super().query_class_distances(query)
-        # The same float32 steps as _distances' and the class minima in one C call, after numpy's product
-        # (BLAS: its sums in its own order, which the C code would not reproduce).
-        return cloud_accel.trace_minima(self._sq_norms, self.templates_ @ query, float(query @ query), self.n_points,
-                                        self.class_starts_)
-
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         d2 = self._sq_norms - 2.0 * (self.templates_ @ query) + float(query @ query)
         return np.sqrt(np.maximum(d2, 0.0) / self.n_points)

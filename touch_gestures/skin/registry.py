@@ -1,58 +1,70 @@
-"""Every skin recogniser by name, for the CLI, codebook files and the evaluation.
+"""The skin recognisers a codebook can deploy, by name: the CLI, codebook files and the node.
 
->>> ' '.join(sorted(RECOGNISERS))
-'auto centroid cloud dollar1 dtw fused fused_oriented map ndollar oriented pdollar protractor refereed static trace'
+The paper's three (cirillo2017: the specification) and ours that ship as defaults: ``trace``
+for single-stroke vocabularies and ``fused`` for multi-stroke ones. The recognisers they are
+measured against (the peers, $N, the oriented cloud...) and ``auto``, which picks between
+``trace`` and ``fused`` while a codebook is made, are the lab's
+(:mod:`touch_lab.skin.recognisers`, whose registry extends this one).
+
+>>> ' '.join(RECOGNISERS)
+'static map centroid trace fused'
 >>> make_recogniser('trace', n_points=16).n_points
 16
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
+from touch_graph.yamlconf import did_you_mean
+
 from .base import TemplateRecogniser
-from .clouds import CloudRecogniser
 from .fused import FusedRecogniser
-from .ndollar import NDollarRecogniser
-from .oriented import OrientedCloudRecogniser, OrientedFusedRecogniser
 from .paper import CentroidRecogniser, MapRecogniser, StaticRecogniser
-from .peers import DollarOneRecogniser, DTWRecogniser, PointCloudRecogniser, ProtractorRecogniser
 from .proposed import TraceRecogniser
-from .referee import RefereedRecogniser
-from .vocabulary import AutoRecogniser
 
-__all__ = ['DEFAULT_RECOGNISER', 'PAPER', 'PEERS', 'RECOGNISERS', 'make_recogniser']
+__all__ = ['DEFAULT_RECOGNISER', 'MULTISTROKE_RECOGNISER', 'PAPER', 'RECOGNISERS', 'make_recogniser',
+           'recogniser_from']
 
-#: name -> class, in report order: the paper's three, the peers, ours (single-stroke, multi-stroke, $N, the
-#: cloud refereed by $N, the cloud and the trace summed, and ``auto``: whichever of the two the vocabulary's
-#: codebook needs, :mod:`.vocabulary`).
+#: name -> class, in report order: the paper's three, then ours (single-stroke, multi-stroke).
 RECOGNISERS: dict[str, type[TemplateRecogniser]] = {
-    cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, DollarOneRecogniser,
-                              ProtractorRecogniser, PointCloudRecogniser, DTWRecogniser, TraceRecogniser,
-                              CloudRecogniser, NDollarRecogniser, RefereedRecogniser, FusedRecogniser,
-                              OrientedCloudRecogniser, OrientedFusedRecogniser, AutoRecogniser)
+    cls.name: cls for cls in (StaticRecogniser, MapRecogniser, CentroidRecogniser, TraceRecogniser, FusedRecogniser)
 }
 PAPER = ('static', 'map', 'centroid')
-PEERS = ('dollar1', 'protractor', 'pdollar', 'dtw')
-#: the recogniser chosen by measurement (docs/skin-evaluation.md)
+#: the recogniser of a single-stroke vocabulary, chosen by measurement (docs/skin-evaluation.md)
 DEFAULT_RECOGNISER = 'trace'
+#: the recogniser of a multi-stroke vocabulary (docs/skin-multistroke.md)
+MULTISTROKE_RECOGNISER = 'fused'
+#: What to tell someone who names a recogniser this registry does not hold.
+_LAB_HINT = ('the recognisers measured against these (the peers, $N, refereed, oriented, fused_oriented, auto...) '
+             'are the lab\'s: touch_lab.skin.recognisers')
 
 
-def make_recogniser(name: str, **params: Any) -> TemplateRecogniser:
-    """A new, unfitted recogniser ``name`` with ``params``.
+def recogniser_from(registry: Mapping[str, type[TemplateRecogniser]], name: str,
+                    params: Mapping[str, Any]) -> TemplateRecogniser:
+    """A new, unfitted recogniser ``name`` of ``registry`` with ``params``.
 
     Raises:
         ValueError: unknown name or parameter (with the known ones and a did-you-mean).
     """
-    from touch_graph.yamlconf import did_you_mean
-
-    cls = RECOGNISERS.get(name)
+    cls = registry.get(name)
     if cls is None:
-        raise ValueError(f'unknown recogniser {name!r}; known: {", ".join(RECOGNISERS)}'
-                         f'{did_you_mean(name, RECOGNISERS)}')
+        hint = f' ({_LAB_HINT})' if registry is RECOGNISERS else ''
+        raise ValueError(f'unknown recogniser {name!r}; known: {", ".join(registry)}'
+                         f'{did_you_mean(name, registry)}{hint}')
     known = cls().get_params()
     for key in params:
         if key not in known:
             raise ValueError(f'recogniser {name!r} has no parameter {key!r}; its parameters are: '
                              f'{", ".join(known)}{did_you_mean(key, known)}')
     return cls(**params)
+
+
+def make_recogniser(name: str, **params: Any) -> TemplateRecogniser:
+    """A new, unfitted recogniser ``name`` (one of :data:`RECOGNISERS`) with ``params``.
+
+    Raises:
+        ValueError: unknown name or parameter (with the known ones and a did-you-mean).
+    """
+    return recogniser_from(RECOGNISERS, name, params)

@@ -62,9 +62,9 @@ __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_
 SINGLE_STROKE_GAP_S = 0.15
 #: Gap (s) for vocabularies with multi-stroke gestures. Chosen on the pauses between the strokes
 #: of the Mixed Multistroke Gestures traces (10 people, 3 speeds; `social-touch eval skin
-#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which 0.25 s more keeps fewer
-#: than 0.5 % more samples whole (1.25 s: 95.3 %, 1.5 s: 96.0 %, 1.75 s: 96.3 %). It is also the
-#: latency every command pays after the last lift, so the knee, not the tail (8 s keeps 98.4 %).
+#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which 0.25 s more keeps hardly
+#: more samples whole. It is also the latency every command pays after the last lift, so the knee
+#: of that table, not its tail.
 MULTISTROKE_GAP_S = 1.5
 #: With the vocabulary's end of a gesture (:class:`~.ending.GestureEnd`): the lift (s) that ends
 #: strokes that make a whole gesture, and the longest one that still continues strokes that look

@@ -5,7 +5,7 @@ an H's bar before or after its second post. A recogniser that follows the path i
 trace, :mod:`.proposed`) finds a person who writes in an order nobody in the codebook used
 far from every template of the class, however alike the strokes are (on the Mixed Multistroke
 traces one person of ten draws the other bar of the X first, and the trace named most of
-that person's X's a pitchfork). As $N does for its templates' unistrokes (:mod:`.ndollar`), a
+that person's X's a pitchfork). As $N does for its templates' unistrokes, a
 template of a few strokes is held in every order of its strokes (the fused recogniser's trace,
 :mod:`.fused`). Each stroke keeps its points, its times and its direction (on the skin a line's
 direction is the command; adding each stroke reversed too, as $N does, read worse on those
@@ -20,9 +20,14 @@ import itertools
 import numpy as np
 
 from .gesture import TouchGesture
-from .ndollar import split_strokes
 
-__all__ = ['every_order', 'reordered']
+__all__ = ['every_order', 'reordered', 'split_strokes']
+
+
+def split_strokes(points: np.ndarray, ids: np.ndarray) -> list[np.ndarray]:
+    """(m, 2) points with (m,) stroke ids -> each stroke's (m_i, 2) points, in traced order (a stroke
+    is a run of one id)."""
+    return np.split(points, np.flatnonzero(ids[1:] != ids[:-1]) + 1)
 
 
 def reordered(strokes: list[np.ndarray], clocks: list[np.ndarray], order: tuple[int, ...]
@@ -30,7 +35,7 @@ def reordered(strokes: list[np.ndarray], clocks: list[np.ndarray], order: tuple[
     """The path of ``strokes`` traced in ``order`` (each index once).
 
     Args:
-        strokes: each stroke's (m_i, 2) contact points, mm, in the order traced (:func:`~.ndollar.split_strokes`).
+        strokes: each stroke's (m_i, 2) contact points, mm, in the order traced (:func:`split_strokes`).
         clocks: each stroke's (m_i,) times, s, non-decreasing, in the same order.
 
     Returns:

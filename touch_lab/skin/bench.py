@@ -21,7 +21,7 @@ the centroid method, measured in the same run: ``social-touch bench skin [--json
 ``steps_cpu_us`` says where every microsecond of a ``predict`` goes: the steps of
 :meth:`~touch_gestures.skin.base.TemplateRecogniser.predict`, run in its order on the same queries
 with the thread's CPU clock read as each ends (:func:`predict_steps`; medians of the repeats, each
-step's clock reads taken off): ``features`` (``_features``), ``search`` (``_distances``: the codebook
+step's clock reads taken off): ``features`` (``features``), ``search`` (``distances``: the codebook
 against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
 classes the stroke count allows before the decision, strokes and duration of the class it names
 after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the nearest allowed class, ``refereed``'s
@@ -38,9 +38,6 @@ gestures, each cut into three strokes (thirds of its path, lifts of ``LIFT_S``),
 template is matched in all 3! = 6 orders of its strokes (:mod:`~touch_gestures.skin.stroke_orders`);
 ``templates`` there counts the trace's rows. A real vocabulary mixes one, two and three strokes and
 costs between the two.
-
-``cloud_search`` says which implementation of the cloud's search ran (:mod:`~touch_gestures.skin.cloud_accel`):
-``'c'``, the compiled kernel, or ``'python'``, numpy (``SOCIAL_TOUCH_SKIN_ACCEL=python``, or not built).
 """
 
 from __future__ import annotations
@@ -50,14 +47,12 @@ import time
 
 import numpy as np
 
-from touch_gestures.skin import cloud_accel
 from touch_gestures.skin.base import PREDICT_STEPS, Match, TemplateRecogniser
 from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import RECOGNISERS, make_recogniser
-from touch_gestures.skin.vocabulary import AutoRecogniser
 from touch_lab.bench.timing import gc_paused
+from touch_lab.skin.recognisers import RECOGNISERS, AutoRecogniser, make_recogniser
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
 __all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recognition', 'in_strokes', 'predict_steps',
@@ -65,7 +60,7 @@ __all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recogniti
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
-#: What ``auto`` picks for a multi-stroke vocabulary (:mod:`touch_gestures.skin.vocabulary`): ``fused_3_strokes``
+#: What ``auto`` picks for a multi-stroke vocabulary (:mod:`touch_lab.skin.recognisers.auto`): ``fused_3_strokes``
 #: times it.
 MULTISTROKE_DEFAULT = AutoRecogniser().order_free
 #: The lift (s) between the strokes of ``fused_3_strokes``'s gestures.
@@ -109,7 +104,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
     gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
     probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
     probe = probe[:queries]
-    out: dict = {'cloud_search': cloud_accel.implementation(), 'goal_us': GOAL_US,
+    out: dict = {'goal_us': GOAL_US,
                  'goal_us_multistroke': GOAL_US_MULTISTROKE, 'gestures': n_gestures,
                  'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
                  'data': 'synthetic gestures', 'recognisers': {}}
@@ -133,7 +128,7 @@ def bench_recognition(names: list[str] | None = None, n_gestures: int = 16, temp
         us, cpu_us = _median_us(model.predict, [in_strokes(g, 3) for g in probe], repeats)
         out['fused_3_strokes'] = {'recogniser': MULTISTROKE_DEFAULT, 'us_per_recognition': us,
                                   'cpu_us_per_recognition': cpu_us,
-                                  'templates': len(model.referee_.templates_),
+                                  'templates': len(model.trace_.templates_),
                                   'ratio_to_multistroke_goal': us / GOAL_US_MULTISTROKE}
     base = out['recognisers'].get('centroid', {}).get('us_per_recognition')
     if base:
@@ -178,7 +173,7 @@ def _steps_cpu_us(model: TemplateRecogniser, probe: list[TouchGesture], repeats:
     steps = {step: statistics.median(r[step] for r in runs) / len(probe) / 1e3 for step in STEPS}
     steps['other'] = whole_cpu_us - sum(steps.values())
     if isinstance(model, CloudRecogniser):
-        clouds = [q.reshape(-1, 2).astype(np.float64) for q in map(model._features, probe) if q is not None]
+        clouds = [q.reshape(-1, 2).astype(np.float64) for q in map(model.features, probe) if q is not None]
         steps['raster'] = _median_us(model._bounds, clouds, repeats)[1]
     return steps
 

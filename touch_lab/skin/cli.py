@@ -34,7 +34,6 @@ from pathlib import Path
 from typing import Any
 
 from touch_gestures.skin.ending import GestureEnd
-from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
@@ -44,13 +43,14 @@ from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
 from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
 from touch_lab.skin.logged_times import logged_times
+from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
 from touch_sim.skin.render import RenderedSample, RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
 __all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
 
 #: The recogniser the report calls the default: whichever the vocabulary's codebook picks
-#: (touch_gestures.skin.vocabulary).
+#: (touch_lab.skin.recognisers.auto).
 DEFAULT = 'auto'
 HELP = 'evaluate the skin recognisers on real traces through the virtual skin, leave-one-subject-out'
 

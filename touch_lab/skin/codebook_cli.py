@@ -17,9 +17,9 @@ import sys
 from collections import Counter
 
 from touch_gestures.model_card import attach_card, format_card, make_card, read_card
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_graph.errors import SocialTouchError
 from touch_lab.cli.targets import Target
+from touch_lab.skin.recognisers import load_codebook, save_codebook
 
 from .codebook_tools import merge_codebooks, remove_gestures, template_labels
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import make_recogniser
+from touch_lab.skin.recognisers import make_recogniser
 
 __all__ = ['extend_codebook', 'merge_codebooks', 'remove_gestures', 'template_labels']
 

@@ -17,11 +17,11 @@ import argparse
 import json
 import sys
 
-from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.ending_eval import CAUSES, DEFAULT_RULE, PIECE_GAP_S, RULES, ending_causes, ending_table
+from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
 __all__ = ['HELP', 'add_arguments', 'format_text', 'run']

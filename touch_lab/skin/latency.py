@@ -18,11 +18,10 @@ way instead). So the latency is two parts:
 shapes, other performers than the codebook's) on the virtual skin, read by the real
 ``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph
 (:class:`~touch_sim.harness.Harness`), with a codebook of ``n_gestures`` x
-``templates_per_gesture`` for the ``recogniser`` (default ``refereed``: with rejection off it fires on
-every gesture; the fused ones, ``fused`` (the one ``auto`` picks for multi-stroke vocabularies) and
-``fused_oriented``, still reject a gesture where the sum names another class than the cloud's nearest,
-leaving it untimed; the path from the gap to the command is the same code); it reports median and p99
-over every command.
+``templates_per_gesture`` for the ``recogniser`` (one the robot runs, :data:`touch_gestures.skin.registry.RECOGNISERS`;
+default ``fused``, the multi-stroke one; rejection is off, but ``fused`` still rejects a gesture where the sum names
+another class than the cloud's nearest, leaving it untimed: the path from the gap to the command is the same code);
+it reports median and p99 over every command.
 """
 
 from __future__ import annotations
@@ -34,9 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from touch_gestures.skin.codebook import save_codebook
-from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
+from touch_lab.skin.recognisers import MULTISTROKE_RECOGNISER, make_recogniser, save_codebook
 from touch_sim.skin.people import traced_scene
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
@@ -84,8 +82,8 @@ def _session(scene: Any, params: dict[str, Any], seed: int) -> tuple[dict[int, f
 
 
 def bench_latency(repeats: int = 1, n_gestures: int = 16, templates_per_gesture: int = 30,
-                  gestures_per_class: int = 4, recogniser: str = 'refereed', gap_s: float = MULTISTROKE_GAP_S,
-                  seed: int = 0) -> dict:
+                  gestures_per_class: int = 4, recogniser: str = MULTISTROKE_RECOGNISER,
+                  gap_s: float = MULTISTROKE_GAP_S, seed: int = 0) -> dict:
     """Median and p99 latency from the gap's end to the command (module doc); a JSON-ready dict.
 
     ``repeats`` sessions of ``n_gestures x gestures_per_class`` gestures each (seeds ``seed + 1``...).

@@ -15,7 +15,6 @@ import sys
 import time
 from pathlib import Path
 
-from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
@@ -24,6 +23,7 @@ from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.ending_eval import CAUSES, PIECE_GAP_S, ending_causes, ending_table
 from touch_lab.skin.latency import bench_latency
+from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
 __all__ = ['HELP', 'add_arguments', 'run', 'write_report']
@@ -72,7 +72,7 @@ def _vocabulary_section(r: dict) -> list[str]:
                    f"{latency} | {v['us_per_recognition']:.0f} |")
     if r.get('default'):
         choices = recs[r['default']].get('choices', {})
-        out += ['', f"Default (`{DEFAULT}`, the rule of touch_gestures.skin.vocabulary) chose: "
+        out += ['', f"Default (`{DEFAULT}`, the rule of touch_lab.skin.recognisers.auto) chose: "
                 + ', '.join(f'{k} in {n} of {sum(choices.values())} folds' for k, n in choices.items()) + '.']
     best = recs[r['best']]
     whole = 1 - best['segmentation_failures'] / best['samples']

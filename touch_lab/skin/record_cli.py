@@ -47,12 +47,19 @@ from pathlib import Path
 from typing import Any
 
 from touch_gestures.model_card import attach_card, make_card
-from touch_gestures.skin.codebook import CodebookRecorder, save_codebook
+from touch_gestures.skin.codebook import CodebookRecorder
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
+from touch_gestures.skin.registry import RECOGNISERS as RUNTIME_RECOGNISERS
 from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_graph.errors import SocialTouchError
+from touch_lab.skin.recognisers import (
+    DEFAULT_RECOGNISER,
+    RECOGNISERS,
+    AutoRecogniser,
+    make_recogniser,
+    save_codebook,
+)
 
 __all__ = ['HELP', 'LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
 
@@ -340,5 +347,9 @@ def run(args: argparse.Namespace) -> int:
     left_out = f'; left out: {", ".join(recorder.skipped)}' if recorder.skipped else ''
     _say(f'[codebook record] wrote {path}: {len(model.templates_)} templates of {len(model.classes_)} gestures '
          f'({args.recogniser}){left_out}')
+    saved = model.chosen_.name if isinstance(model, AutoRecogniser) else model.name
+    if saved not in RUNTIME_RECOGNISERS:
+        _say(f'[codebook record] note: {saved} is a lab recogniser; the robot (haptic_commands) loads codebooks '
+             f'of {", ".join(RUNTIME_RECOGNISERS)} only')
     return 0
 

@@ -21,11 +21,11 @@ import time
 from pathlib import Path
 
 from touch_gestures.skin.base import TemplateRecogniser
-from touch_gestures.skin.registry import PAPER, PEERS, RECOGNISERS, make_recogniser
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import evaluate_file
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.evaluate import leave_one_subject_out
+from touch_lab.skin.recognisers import PAPER, PEERS, RECOGNISERS, make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
 

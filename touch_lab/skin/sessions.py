@@ -24,9 +24,9 @@ import numpy as np
 
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.registry import make_recogniser
 from touch_gestures.skin.screening import screen_gesture
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
+from touch_lab.skin.recognisers import make_recogniser
 
 __all__ = ['GRACE_S', 'SkinTrial', 'leave_one_person_out', 'score', 'skin_trials']
 
@@ -214,7 +214,7 @@ def run_eval_bags(args, recogniser: str) -> int:
     try:
         trials, synthetic = load_trials(args.bags, say)
         if getattr(args, 'codebook', None):
-            from touch_gestures.skin.codebook import load_codebook
+            from touch_lab.skin.recognisers import load_codebook
             book = load_codebook(args.codebook)
             result = score(book, trials)
             people = sorted({t.label.person for t in trials})

@@ -1,6 +1,6 @@
 """Point clouds that know which way their ink runs: :class:`OrientedCloudRecogniser`.
 
-The cloud (:mod:`.clouds`) forgets stroke order and direction, which is right for symbols people
+The cloud (:mod:`touch_gestures.skin.clouds`) forgets stroke order and direction, which is right for symbols people
 write their own way, but it also forgets the *orientation* of the ink at each point, which is
 neither: an N's diagonal and an H's bar cross the same middle of the box, an I's serifs and an H's
 legs end at the same corners. Each point here carries the orientation of the ink through it, as an
@@ -37,11 +37,10 @@ import math
 
 import numpy as np
 
-from . import cloud_accel
-from .base import TemplateRecogniser
-from .features import arc_length_resample_complex, running_ink
-from .fused import FusedRecogniser
-from .gesture import TouchGesture
+from touch_gestures.skin.base import TemplateRecogniser, nearest_allowed
+from touch_gestures.skin.features import arc_length_resample_complex, running_ink
+from touch_gestures.skin.fused import FusedRecogniser, sum_rule_nearest
+from touch_gestures.skin.gesture import TouchGesture
 
 __all__ = ['OrientedCloudRecogniser', 'OrientedFusedRecogniser', 'distance_field', 'exact_oriented_chamfer',
            'gather_mean', 'oriented_cloud', 'raster_cells']
@@ -66,7 +65,7 @@ def oriented_cloud(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     """(m, 2) points with (m,) stroke ids -> (n_points, 4) float64: x, y, cos 2 theta, sin 2 theta per point.
 
     Resampled along the ink, centred on the mean, divided by the larger side of the box (as
-    :func:`~.clouds.cloud_features`). theta is the direction of the ink through the point, from its
+    :func:`~touch_gestures.skin.clouds.cloud_features`). theta is the direction of the ink through the point, from its
     neighbours of the same stroke (one neighbour at a stroke's end; none: no orientation, 0, 0).
 
     >>> c = oriented_cloud(np.array([[0.0, 0], [4, 0], [0, 4], [0, 8]]), np.array([0, 0, 1, 1]), 4)
@@ -74,7 +73,7 @@ def oriented_cloud(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     [[1.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [-1.0, 0.0]]
     """
     xy, ids = _resampled_strokes(points, stroke, n_points)
-    xy -= np.cumsum(xy, axis=0)[-1] / n_points   # the mean, summed in point order (as the compiled twin)
+    xy -= np.cumsum(xy, axis=0)[-1] / n_points   # the mean, summed in point order
     size = float(max(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])))
     if size > 1e-9:
         xy /= size
@@ -151,7 +150,7 @@ def distance_field(cloud: np.ndarray, grid: int, bins: int, weight: float) -> np
 
 def gather_mean(fields: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """(C, T) float32 fields, (n,) cells -> (T,) float32 mean of the rows the cells name, added in order in float32
-    and divided once, as ``cloud_accel.oriented_mean`` does. (numpy's ``mean(axis=0)`` adds rows in order too,
+    and divided once. (numpy's ``mean(axis=0)`` adds rows in order too,
     except for a single column, T = 1, which it adds pairwise: an ulp apart now and then.)
 
     >>> gather_mean(np.array([[1.0, 2.0], [3.0, 4.0]], dtype=np.float32), np.array([0, 1, 1])).tolist()
@@ -169,7 +168,7 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         grid: side of the position raster (cells of ``2 / grid`` gesture sizes).
         bins: orientation bins over 180 degrees (plus one code for points without orientation).
         orientation_weight: ``w`` of the point distance, gesture sizes per unit of ``|o_p - o_q|`` (0..2).
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
 
     The raster of a codebook holds ``grid**2 * (bins + 1)`` float32 per template (24, 8: 20 KiB).
     """
@@ -199,7 +198,7 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         if isinstance(w, bool) or not isinstance(w, int | float | np.floating) or not (math.isfinite(w) and w >= 0):
             raise ValueError(f'orientation_weight must be a finite number >= 0 (gesture sizes), got {w!r}')
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0 or not np.isfinite(gesture.trajectory).all():
             return None   # a NaN point would make the ink's length NaN: no cloud, not a dab
         cloud = oriented_cloud(gesture.trajectory, gesture.stroke, self.n_points).ravel()
@@ -212,7 +211,7 @@ class OrientedCloudRecogniser(TemplateRecogniser):
             fields[:, k] = distance_field(cloud, self.grid, self.bins, self.orientation_weight)
         self._fields = fields   # cells first: a query's n cells gather n contiguous rows
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         cloud = np.asarray(query, dtype=np.float64).reshape(self.n_points, POINT_WIDTH)
         return gather_mean(self._fields, raster_cells(cloud, self.grid, self.bins))   # (T,) float32
 
@@ -223,8 +222,6 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         points = gesture.trajectory
         if len(points) == 0 or not np.isfinite(points).all():
             return None
-        if cloud_accel.oriented_cells is not None:   # the same cells in one C call (cloud_accel)
-            return cloud_accel.oriented_cells(points, gesture.stroke, self.n_points, self.grid, self.bins)
         return raster_cells(oriented_cloud(points, gesture.stroke, self.n_points), self.grid, self.bins)
 
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
@@ -234,68 +231,98 @@ class OrientedCloudRecogniser(TemplateRecogniser):
         cells = self.query_cells(gesture)
         if cells is None:
             return None
-        if cloud_accel.oriented_mean is not None:
-            distances = cloud_accel.oriented_mean(self._fields, cells)
-        else:
-            distances = gather_mean(self._fields, cells)
+        distances = gather_mean(self._fields, cells)
         return np.minimum.reduceat(distances, self.class_starts_).astype(np.float64, copy=False)
 
 
-class OrientedFusedRecogniser(FusedRecogniser):
-    """:class:`~.fused.FusedRecogniser` with the oriented cloud, not the cloud, naming the class with the trace.
+class OrientedFusedRecogniser(TemplateRecogniser):
+    """The fused recogniser with the oriented cloud, not the cloud, naming the class with the trace.
 
-    The cloud stays the primary: distances, thresholds, rejection, the end of a gesture and early
-    candidates are its own, so what fires is what the cloud alone fires (as in ``fused``); the class
-    is the smallest sum of the oriented cloud's and the trace's relative distances.
+    Made of a :class:`~touch_gestures.skin.fused.FusedRecogniser` (:attr:`fused_`) and an
+    :class:`OrientedCloudRecogniser` (:attr:`oriented_`). The fused recogniser's cloud decides: distances,
+    thresholds, rejection, the end of a gesture and early candidates are its own, so what fires is what the
+    cloud alone fires (as in ``fused``); the class is the smallest sum of the oriented cloud's and the trace's
+    relative distances. A template holds the cloud's features, the oriented cloud's, then the trace's.
 
     Args:
-        n_points, trace_points, stroke_orders: as :class:`~.fused.FusedRecogniser`.
+        n_points, trace_points, stroke_orders: as :class:`~touch_gestures.skin.fused.FusedRecogniser`.
         grid, bins, orientation_weight: the oriented cloud's (:class:`OrientedCloudRecogniser`).
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base` (the cloud's distances).
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base` (the
+            cloud's distances).
 
     Attributes:
-        oriented_: the fitted oriented cloud (its codebook: the templates' part after the cloud's).
+        fused_: the fitted fused recogniser (its codebook: the templates less the oriented cloud's part).
+        oriented_: the fitted oriented cloud (the templates' part after the cloud's).
     """
 
     name = 'fused_oriented'
+    direction_aware = False
 
     def __init__(self, n_points: int = 32, trace_points: int = 32, stroke_orders: int = 3, grid: int = 24,
                  bins: int = 8, orientation_weight: float = 0.35, max_distance: float | str | None = 'auto',
                  auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        super().__init__(n_points=n_points, trace_points=trace_points, stroke_orders=stroke_orders,
-                         max_distance=max_distance, auto_scale=auto_scale, auto_quantile=auto_quantile,
-                         min_margin=min_margin)
+        self.n_points = n_points
+        self.trace_points = trace_points
+        self.stroke_orders = stroke_orders
         self.grid = grid
         self.bins = bins
         self.orientation_weight = orientation_weight
+        self.max_distance = max_distance
+        self.auto_scale = auto_scale
+        self.auto_quantile = auto_quantile
+        self.min_margin = min_margin
 
-    def _oriented(self) -> OrientedCloudRecogniser:
-        return OrientedCloudRecogniser(n_points=self.n_points, grid=self.grid, bins=self.bins,
-                                       orientation_weight=self.orientation_weight, max_distance=None)
+    def parts(self) -> tuple[FusedRecogniser, OrientedCloudRecogniser]:
+        """New, unfitted fused recogniser and oriented cloud (no limits of their own)."""
+        return (FusedRecogniser(n_points=self.n_points, trace_points=self.trace_points,
+                                stroke_orders=self.stroke_orders, max_distance=None),
+                OrientedCloudRecogniser(n_points=self.n_points, grid=self.grid, bins=self.bins,
+                                        orientation_weight=self.orientation_weight, max_distance=None))
 
     def _check_params(self) -> None:
         super()._check_params()
-        self._oriented()._check_params()
+        for part in self.parts():
+            part._check_params()
 
-    def _own_features(self, gesture: TouchGesture) -> list[np.ndarray] | None:
-        # A template holds the oriented cloud between the cloud and the trace.
-        oriented = self._oriented()._features(gesture)
-        return None if oriented is None else [oriented]
-
-    def _oriented_width(self) -> int:
-        return POINT_WIDTH * self.n_points
-
-    def _trace_start(self, split: int) -> int:
-        return split + self._oriented_width()
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
+        fused, oriented = self.parts()
+        both, own = fused.features(gesture), oriented.features(gesture)
+        if both is None or own is None:
+            return None
+        split = fused.cloud_width
+        return np.concatenate([both[:split], own, both[split:]]).astype(np.float32, copy=False)
 
     def _prepare_codebook(self) -> None:
-        super()._prepare_codebook()
-        split = self._split
-        oriented = self._oriented()
-        unlimited = np.full(len(self.classes_), np.inf)
-        oriented.set_codebook(self.templates_[:, split:split + self._oriented_width()],
-                              self.classes_[self.template_labels_], class_thresholds=unlimited)
-        self.oriented_ = oriented
+        fused, oriented = self.parts()
+        split, width = fused.cloud_width, POINT_WIDTH * self.n_points
+        trace = 2 * self.trace_points
+        if self.templates_.shape[1] <= split + width or (self.templates_.shape[1] - split - width) % trace:
+            raise ValueError(f'a {self.name} codebook holds the cloud ({split} values), the oriented cloud ({width}) '
+                             f'and the trace ({trace} values) of one or more stroke orders; got templates of '
+                             f'{self.templates_.shape[1]} (made with other n_points or trace_points?)')
+        labels = self.classes_[self.template_labels_]
+        unlimited = np.full(len(self.classes_), np.inf)   # thresholds are this recogniser's, not the parts'
+        fused.set_codebook(np.hstack([self.templates_[:, :split], self.templates_[:, split + width:]]), labels,
+                           class_thresholds=unlimited, template_strokes=self.template_strokes_,
+                           template_contact_s=self.template_contact_s_)
+        oriented.set_codebook(self.templates_[:, split:split + width], labels, class_thresholds=unlimited)
+        self.fused_, self.oriented_ = fused, oriented
 
-    def _naming_opinion(self, gesture: TouchGesture, per_class: np.ndarray) -> np.ndarray | None:
-        return self.oriented_.class_distances(gesture)   # the oriented cloud's, in the cloud's place
+    def deciding_recogniser(self) -> TemplateRecogniser:
+        return self.fused_.deciding_recogniser()
+
+    def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
+        return self.fused_.cloud_.features(gesture)
+
+    def one_stroke_path_of(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        return self.fused_.one_stroke_path_of(gesture, query)
+
+    def distances(self, query: np.ndarray) -> np.ndarray:
+        return self.fused_.distances(query)   # a template's or a query's: the cloud comes first
+
+    def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
+        trace = self.fused_.trace_.class_distances(gesture)
+        oriented = self.oriented_.class_distances(gesture)   # the oriented cloud's, in the cloud's place
+        if trace is None or oriented is None:   # either cannot read the touch: the cloud alone
+            return nearest_allowed(per_class, allowed)
+        return sum_rule_nearest(oriented, trace, allowed)

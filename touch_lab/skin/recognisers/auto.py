@@ -1,10 +1,10 @@
 """The recogniser a vocabulary needs, decided from its own codebook: :class:`AutoRecogniser`.
 
 Two families answer different vocabularies. An order-free point cloud
-(:class:`~.clouds.CloudRecogniser`) reads symbols people write with their strokes in any
+(:class:`~touch_gestures.skin.clouds.CloudRecogniser`) reads symbols people write with their strokes in any
 order and direction (an X, an H, a star: leave-one-person-out on the Mixed Multistroke
 Gestures it is right where the time-ordered trace is not, docs/skin-evaluation.md); a
-direction-aware trace (:class:`~.proposed.TraceRecogniser`) is needed where the direction is
+direction-aware trace (:class:`~touch_gestures.skin.proposed.TraceRecogniser`) is needed where the direction is
 the meaning (the skin's ``line_left`` and ``line_right`` are one cloud). Which one a
 vocabulary needs follows from its codebook, so the rule is measured there, not fixed per file:
 
@@ -16,7 +16,7 @@ vocabulary needs follows from its codebook, so the rule is measured there, not f
        one reads (at least ``separated`` better), direction is part of the vocabulary: the
        ordered recogniser (two lines in opposite directions are one cloud: 50 % each).
     2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser (by
-       default ``fused``, :mod:`.fused`: the cloud's class distances summed with the trace's,
+       default ``fused``, :mod:`touch_gestures.skin.fused`: the cloud's class distances summed with the trace's,
        each over its own nearest, to name the class; its distances and rejection are the
        cloud's): people order and direct their strokes differently, which a codebook cannot
        show (a template's nearest neighbour is mostly its own performer's repetition, traced
@@ -27,7 +27,7 @@ vocabulary needs follows from its codebook, so the rule is measured there, not f
        oriented cloud in the sum, :mod:`.oriented`: the same accuracy and wrong commands on the
        Mixed Multistroke Gestures, at 12 us more per recognition, at the goal's edge with
        three-stroke templates: 91 and 103 us in two runs of the report while it was the
-       default) and the cloud refereed by $N on its near ties (:mod:`.referee`), random
+       default) and the cloud refereed by $N on its near ties (:mod:`.refereed`), random
        touches firing the same (``social-touch eval skin``; figures in docs/skin-multistroke.md).
     3. A single-stroke vocabulary gets the one with the higher mean per-class accuracy, the
        ordered one within ``tie`` (it is cheaper).
@@ -44,8 +44,11 @@ from typing import Any
 
 import numpy as np
 
-from .base import Match, TemplateRecogniser
-from .gesture import TouchGesture
+from touch_gestures.skin.base import Match, TemplateRecogniser
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.registry import DEFAULT_RECOGNISER, MULTISTROKE_RECOGNISER, recogniser_from
+
+from .registry import CANDIDATES
 
 __all__ = ['AutoRecogniser', 'codebook_accuracy']
 
@@ -64,7 +67,7 @@ def codebook_accuracy(recogniser: TemplateRecogniser, per_class: int = 20) -> np
         picks = np.unique(np.linspace(lo, hi - 1, min(hi - lo, per_class)).astype(np.intp))
         hits = 0
         for i in picks:
-            d = np.asarray(recogniser._distances(recogniser.templates_[i]), dtype=np.float64).copy()
+            d = np.asarray(recogniser.distances(recogniser.templates_[i]), dtype=np.float64).copy()
             d[i] = np.inf
             hits += recogniser.template_labels_[int(np.argmin(d))] == c
         out[c] = hits / len(picks)
@@ -89,7 +92,8 @@ class AutoRecogniser(TemplateRecogniser):
 
     name = 'auto'
 
-    def __init__(self, ordered: str = 'trace', order_free: str = 'fused', per_class: int = 20,
+    def __init__(self, ordered: str = DEFAULT_RECOGNISER, order_free: str = MULTISTROKE_RECOGNISER,
+                 per_class: int = 20,
                  confused: float = 0.75, separated: float = 0.25, tie: float = 0.005,
                  max_distance: float | str | None = 'auto',
                  auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
@@ -105,12 +109,10 @@ class AutoRecogniser(TemplateRecogniser):
         self.min_margin = min_margin
 
     def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> AutoRecogniser:
-        from .registry import make_recogniser
-
         self._check_params()
         rejection = {k: getattr(self, k) for k in ('max_distance', 'auto_scale', 'auto_quantile', 'min_margin')}
-        ordered = make_recogniser(self.ordered, **rejection).fit(gestures, labels)
-        free = make_recogniser(self.order_free, **rejection).fit(gestures, labels)
+        ordered = recogniser_from(CANDIDATES, self.ordered, rejection).fit(gestures, labels)
+        free = recogniser_from(CANDIDATES, self.order_free, rejection).fit(gestures, labels)
         acc_o, acc_f = codebook_accuracy(ordered, self.per_class), codebook_accuracy(free, self.per_class)
         with np.errstate(invalid='ignore'):
             confused = (acc_f < self.confused) & (acc_o >= acc_f + self.separated)
@@ -133,12 +135,15 @@ class AutoRecogniser(TemplateRecogniser):
         self.direction_aware = best.direction_aware
         return self
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
-        return self.chosen_._features(gesture)
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
+        return self.chosen_.features(gesture)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
-        return self.chosen_._distances(query)
+    def distances(self, query: np.ndarray) -> np.ndarray:
+        return self.chosen_.distances(query)
 
     def predict(self, gesture: TouchGesture) -> Match:
         self._check_fitted()
         return self.chosen_.predict(gesture)
+
+    def deciding_recogniser(self) -> TemplateRecogniser:
+        return self.chosen_.deciding_recogniser()

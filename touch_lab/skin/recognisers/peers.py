@@ -22,9 +22,9 @@ import math
 
 import numpy as np
 
-from .base import TemplateRecogniser
-from .features import arc_length_resample, nna_indices
-from .gesture import TouchGesture
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.features import arc_length_resample, nna_indices
+from touch_gestures.skin.gesture import TouchGesture
 
 __all__ = ['DTWRecogniser', 'DollarOneRecogniser', 'PointCloudRecogniser', 'ProtractorRecogniser']
 
@@ -56,7 +56,7 @@ class DollarOneRecogniser(TemplateRecogniser):
             skin, where a line's orientation is the command, False keeps orientation.
         angle_range_deg: golden-section search range, +- degrees (the paper's 45).
         angle_precision_deg: search stops at this bracket (the paper's 2).
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
     """
 
     name = 'dollar1'
@@ -77,7 +77,7 @@ class DollarOneRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         path = _path(gesture)
         if path is None:
             return None
@@ -90,7 +90,7 @@ class DollarOneRecogniser(TemplateRecogniser):
         pts = pts / np.where(span > 1e-9, span, 1.0)
         return pts.reshape(-1).astype(np.float32)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         templates = self.templates_
         qx, qy = query[0::2].astype(np.float64), query[1::2].astype(np.float64)
         tx, ty = templates[:, 0::2], templates[:, 1::2]
@@ -128,7 +128,7 @@ class ProtractorRecogniser(TemplateRecogniser):
         n_points: resampled points (Protractor's 16).
         orientation_sensitive: snap the indicative angle to 8 base orientations instead of
             removing it (Protractor's orientation-sensitive mode), so a line's direction counts.
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
     """
 
     name = 'protractor'
@@ -144,7 +144,7 @@ class ProtractorRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         path = _path(gesture)
         if path is None:
             return None
@@ -160,7 +160,7 @@ class ProtractorRecogniser(TemplateRecogniser):
         # A point that never moved has no shape: a zero vector, at distance pi/2 from everything.
         return (vec / norm if norm > 1e-9 else np.zeros_like(vec)).astype(np.float32)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         templates = self.templates_
         qx, qy = query[0::2], query[1::2]
         tx, ty = templates[:, 0::2], templates[:, 1::2]
@@ -182,7 +182,7 @@ class PointCloudRecogniser(TemplateRecogniser):
         epsilon: start points are every ``floor(n ** (1 - epsilon))`` (0.5 in $P).
         preselect: run the greedy matching only on this many templates closest by Chamfer
             distance (as $Q prunes the codebook; None matches every template, exact $P).
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
     """
 
     name = 'pdollar'
@@ -199,7 +199,7 @@ class PointCloudRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         path = _path(gesture)
         if path is None:
             return None
@@ -209,7 +209,7 @@ class PointCloudRecogniser(TemplateRecogniser):
         pts = (pts - pts.mean(axis=0)) / (size if size > 1e-9 else 1.0)
         return pts.reshape(-1).astype(np.float32)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         n = self.n_points
         q = query.reshape(n, 2)
         t = self.templates_.reshape(len(self.templates_), n, 2)
@@ -257,7 +257,7 @@ class DTWRecogniser(TemplateRecogniser):
         band: Sakoe-Chiba band half-width, points (a path may not stray further from the
             diagonal); ``n_points`` for no band.
         resample: ``'time'`` (nearest-neighbour in time, as cirillo2017's NNA) or ``'arc'``.
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
     """
 
     name = 'dtw'
@@ -274,7 +274,7 @@ class DTWRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if self.resample not in ('time', 'arc'):
             raise ValueError(f"resample must be 'time' or 'arc', got {self.resample!r}")
         path = _path(gesture)
@@ -289,7 +289,7 @@ class DTWRecogniser(TemplateRecogniser):
         pts = (pts - 0.5 * (lo + hi)) / (size if size > 1e-9 else 1.0)
         return pts.reshape(-1).astype(np.float32)
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         templates = self.templates_
         n, band = self.n_points, max(0, int(self.band))
         q = query.reshape(n, 2)

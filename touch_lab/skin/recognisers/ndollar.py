@@ -12,7 +12,7 @@ the authors' JavaScript reference (``ndollar.js``: ``MakeUnistrokes``, ``Resampl
 ``AngleSimilarityThreshold`` 30 degrees, ``OptimalCosineDistance``); where this module
 differs, it says so:
 
-1. **Features** (``_features``, what a codebook file stores): the strokes resampled along
+1. **Features** (``features``, what a codebook file stores): the strokes resampled along
    the ink to ``ink_points`` points, each stroke keeping 2 points plus its share of the rest
    by ink length (a share that does not depend on the order, so a template's strokes give
    the same points whatever order they were traced in), centred and divided by the larger
@@ -41,8 +41,8 @@ differs, it says so:
    kept sorted by start angle, so the ones compared are one or two contiguous slices); with
    ``same_strokes``, only templates of as many strokes as the query ($N's
    ``requireSameNoOfStrokes``). When these leave no template at all, every unistroke is
-   compared (the reference answers "no match"; here the rejection rules of :mod:`.base`
-   and :mod:`.evidence` decide).
+   compared (the reference answers "no match"; here the rejection rules of :mod:`touch_gestures.skin.base`
+   and :mod:`touch_gestures.skin.evidence` decide).
 
 **Defaults, by measurement** (leave-one-person-out on the Mixed Multistroke Gestures through the
 virtual skin, :func:`touch_lab.skin.cli.evaluate_file` with the parameters set, while the virtual skin
@@ -55,7 +55,7 @@ written with a stroke count its class's templates lack is matched against the ot
 only: off by default. The start-angle pruning changed the accuracy less than either and saves about three
 quarters of the comparisons.
 
-``_distances`` gives one distance per codebook template: the smallest over its unistrokes
+``distances`` gives one distance per codebook template: the smallest over its unistrokes
 (inf where none was compared), so rejection, ``auto`` and codebook files work as for every
 recogniser. $N joins both directions of every stroke: a line left and a line right are the
 same template, so it is direction-blind unless ``reverse_strokes=False`` (orders only).
@@ -70,10 +70,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import cloud_accel
-from .base import TemplateRecogniser
-from .features import arc_length_resample
-from .gesture import TouchGesture
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.features import arc_length_resample
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.stroke_orders import split_strokes
 
 __all__ = ['NDollarRecogniser', 'expansion_orders', 'ink_features']
 
@@ -94,8 +94,6 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     if len(pts) == 0:
         return None
-    if cloud_accel.ink is not None:   # the same numbers in one C call (cloud_accel)
-        return cloud_accel.ink(pts, None if stroke is None else np.asarray(stroke).reshape(-1), ink_points)
     strokes = [pts] if stroke is None else split_strokes(pts, np.asarray(stroke).reshape(-1))
     k = len(strokes)
     if k > ink_points:
@@ -120,12 +118,6 @@ def ink_features(points: np.ndarray, stroke: np.ndarray | None, ink_points: int 
         ink /= size
     out[at:] = ink[-1]   # padding repeats the last point: finite, and never read
     return np.concatenate([out.reshape(-1), sid]).astype(np.float32)
-
-
-def split_strokes(points: np.ndarray, ids: np.ndarray) -> list[np.ndarray]:
-    """(m, 2) points with (m,) stroke ids -> each stroke's (m_i, 2) points, in traced order (a stroke
-    is a run of one id)."""
-    return np.split(points, np.flatnonzero(ids[1:] != ids[:-1]) + 1)
 
 
 @lru_cache(maxsize=16)
@@ -188,9 +180,6 @@ def _rotate(points: np.ndarray, angle: np.ndarray) -> np.ndarray:
 def unistroke_vectors(paths: np.ndarray, n_points: int, one_d_ratio: float) -> tuple[np.ndarray, np.ndarray]:
     """(U, m, 2) joined strokes -> (U, 2 n) float64 unit vectors and (U,) start angles, radians
     (NaN where the start does not move): module doc, 3."""
-    if len(paths) == 1 and cloud_accel.unistroke is not None:   # a query: one C call (cloud_accel)
-        vec, angle = cloud_accel.unistroke(paths[0], n_points, one_d_ratio)
-        return vec[None], np.array([angle])
     pts = _resample_paths(paths, n_points)
     centre = pts.mean(axis=1, keepdims=True)
     pts = pts - centre
@@ -231,7 +220,7 @@ class NDollarRecogniser(TemplateRecogniser):
             (None: all are).
         same_strokes: compare only templates of as many strokes as the query.
         one_d_ratio: a box thinner than this (short side / long side) is a line, scaled uniformly.
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`.
 
     Attributes (after fit or load):
         unistroke_owner_: (U,) the codebook template each unistroke comes from, sorted by start angle.
@@ -274,7 +263,7 @@ class NDollarRecogniser(TemplateRecogniser):
         if not 0 <= self.one_d_ratio <= 1:
             raise ValueError(f'one_d_ratio must be in [0, 1], got {self.one_d_ratio!r}')
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         return ink_features(gesture.trajectory, gesture.stroke, self.ink_points)
 
     def _strokes(self, features: np.ndarray) -> list[np.ndarray]:
@@ -379,7 +368,7 @@ class NDollarRecogniser(TemplateRecogniser):
         queries[1, 0::2], queries[1, 1::2] = vec[0, 1::2], -vec[0, 0::2]   # turned by 90 degrees
         return queries, float(angles[0]), k
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
+    def distances(self, query: np.ndarray) -> np.ndarray:
         queries, angle, k = self._query(query)
         out = self._search(self._windows(angle), queries, k)
         if not np.isfinite(out).any():   # pruning left nothing: compare all (module doc, 5)
@@ -393,7 +382,7 @@ class NDollarRecogniser(TemplateRecogniser):
         The start-angle window and the stroke-count rule are the whole search's: whether pruning left
         nothing at all to compare (then every unistroke is, module doc 5) is decided over the whole codebook."""
         self._check_fitted()
-        features = self._features(gesture)
+        features = self.features(gesture)
         if features is None:
             return None
         queries, angle, k = self._query(features)

@@ -1,4 +1,4 @@
-"""Clouds whose points carry the ink's orientation (touch_gestures.skin.oriented), on synthetic symbols."""
+"""Clouds whose points carry the ink's orientation (touch_lab.skin.recognisers.oriented), on synthetic symbols."""
 
 from __future__ import annotations
 
@@ -9,20 +9,21 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from test_lab_skin_refereed import NAMES, held_out
 from test_skin_multistroke import codebook
-from test_skin_referee import NAMES, held_out
 
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.early import ordered_recogniser
 from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.oriented import (
+from touch_lab.skin.recognisers import load_codebook, make_recogniser, save_codebook
+from touch_lab.skin.recognisers.oriented import (
     OrientedCloudRecogniser,
     OrientedFusedRecogniser,
     exact_oriented_chamfer,
+    gather_mean,
     oriented_cloud,
+    raster_cells,
 )
-from touch_gestures.skin.registry import make_recogniser
 
 
 def strokes_gesture(strokes: list[np.ndarray]) -> TouchGesture:
@@ -99,7 +100,7 @@ def test_the_raster_distance_is_within_its_cells_and_bins_of_the_exact_one(a, b,
     template, query = (TouchGesture.from_trajectory(p) for p in (a, b))
     r.fit([template], ['a'])
     exact = exact_oriented_chamfer(*(oriented_cloud(g.trajectory, g.stroke, 16) for g in (query, template)), weight)
-    raster = float(r._distances(r._features(query))[0])
+    raster = float(r.distances(r.features(query))[0])
     # Each point is read at its cell's and bin's centre; float32 fields add ~1e-7 relative to distances below 4.
     assert raster == pytest.approx(exact, abs=_raster_bound(r) + 1e-5)
 
@@ -107,14 +108,14 @@ def test_the_raster_distance_is_within_its_cells_and_bins_of_the_exact_one(a, b,
 def test_a_template_is_within_the_raster_bound_of_itself():
     g = strokes_gesture([segment([0, 0], [30, 30]), segment([30, 0], [0, 30])])
     r = OrientedCloudRecogniser(max_distance=None).fit([g, g], ['X', 'X'])
-    d = r._distances(r._features(g))
+    d = r.distances(r.features(g))
     assert (d >= 0).all() and (d <= _raster_bound(r) + 1e-6).all()
 
 
 def test_bad_points_make_no_features_and_bad_parameters_are_refused():
     r = OrientedCloudRecogniser()
     bad = TouchGesture.from_trajectory(np.array([[0.0, 0.0], [np.nan, 1.0], [2.0, 2.0]]))
-    assert r._features(bad) is None
+    assert r.features(bad) is None
     for key, value in (('grid', 1), ('bins', 0), ('n_points', 1.5), ('orientation_weight', -0.1),
                        ('orientation_weight', float('nan')), ('bins', True)):
         with pytest.raises(ValueError, match=key):
@@ -143,7 +144,7 @@ def test_fused_oriented_fires_only_what_the_cloud_fires_and_names_mostly_the_rig
 def test_a_fused_oriented_codebook_file_loads_with_its_three_parts(fitted, tmp_path):
     oriented, _ = fitted
     loaded = load_codebook(save_codebook(tmp_path / 'symbols.npz', oriented, vocabulary='symbols'))
-    assert isinstance(loaded, OrientedFusedRecogniser) and ordered_recogniser(loaded) is loaded.primary_
+    assert isinstance(loaded, OrientedFusedRecogniser) and ordered_recogniser(loaded) is loaded.fused_.cloud_
     for g in held_out()[0]:
         assert loaded.predict(g) == oriented.predict(g)
     with pytest.raises(ValueError, match='a fused_oriented codebook holds the cloud'):
@@ -161,8 +162,29 @@ def test_a_touch_of_one_point_and_a_trace_ten_times_longer_than_any_template_get
     apart = TouchGesture(np.zeros((12, 12), bool), np.zeros((12, 12), np.float32),
                          np.array([[0.0, 0.0], [big, big], [-big, 3.0]]), np.arange(3) / 150.0)
     assert np.isfinite(oriented.oriented_.class_distances(apart)).all()
-    assert np.isfinite(oriented.oriented_._features(apart)).all()
+    assert np.isfinite(oriented.oriented_.features(apart)).all()
     rng = np.random.default_rng(11)
     long = TouchGesture.from_trajectory(np.cumsum(rng.normal(0, 1.5, (4000, 2)), axis=0))
     assert np.isfinite(oriented.oriented_.class_distances(long)).all()
     oriented.predict(long)
+
+
+def test_a_single_template_column_is_added_in_order_not_pairwise():
+    # numpy's mean(axis=0) adds one column pairwise; gather_mean adds the rows in order, each sum in float32
+    # (hypothesis found fields [[1.232329], [0]], cells 0 x 6 + 1 x 2 when a compiled twin summed in order).
+    fields = np.array([[1.232329], [0.0]], dtype=np.float32)
+    cells = np.array([0, 0, 0, 0, 0, 0, 1, 1], dtype=np.intp)
+    total = np.float32(0)
+    for cell in cells:
+        total = np.float32(total + fields[cell, 0])
+    assert gather_mean(fields, cells).tolist() == [total / np.float32(len(cells))]
+
+
+def test_the_class_distances_read_the_cells_of_the_features():
+    rng = np.random.default_rng(3)
+    gestures = [TouchGesture.from_trajectory(np.cumsum(rng.normal(0, 2, (40, 2)), axis=0)) for _ in range(12)]
+    r = OrientedCloudRecogniser().fit(gestures, [f'c{k % 4}' for k in range(12)])
+    for g in gestures:
+        cells = raster_cells(oriented_cloud(g.trajectory, g.stroke, r.n_points), r.grid, r.bins)
+        expected = np.minimum.reduceat(gather_mean(r._fields, cells), r.class_starts_).astype(np.float64)
+        np.testing.assert_array_equal(r.class_distances(g), expected)

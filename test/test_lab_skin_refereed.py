@@ -1,4 +1,4 @@
-"""The cloud refereed by $N on its near ties (touch_gestures.skin.referee), on synthetic symbols."""
+"""The cloud refereed by $N on its near ties (touch_lab.skin.recognisers.refereed), on synthetic symbols."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pytest
 from test_skin_multistroke import codebook
 
 from touch_gestures.skin.clouds import CloudRecogniser
-from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_gestures.skin.early import ordered_recogniser
-from touch_gestures.skin.referee import RefereedRecogniser
+from touch_lab.skin.recognisers import load_codebook, save_codebook
+from touch_lab.skin.recognisers.refereed import RefereedRecogniser
 
 NAMES = ('X', 'plus', 'H', 'T', 'Z')
 
@@ -49,9 +49,9 @@ class _Referee:
 def test_the_referee_is_asked_only_when_the_two_nearest_tie_by_the_margin_rule(fitted):
     refereed, _ = fitted
     judge, g = _Referee(), held_out()[0][0]
-    saved = refereed.referee_
+    saved = refereed.ndollar_
     try:
-        refereed.referee_ = judge
+        refereed.ndollar_ = judge
         tie = np.array([1.0, 1.0 + 0.5 * refereed.min_margin, 3.0, 4.0, 5.0])
         assert refereed._nearest(g, tie, None) == 1 and judge.calls == 1
         clear = np.array([1.0, 1.0 + 2 * refereed.min_margin, 3.0, 4.0, 5.0])
@@ -61,13 +61,13 @@ def test_the_referee_is_asked_only_when_the_two_nearest_tie_by_the_margin_rule(f
         assert refereed._nearest(g, tie, allowed) == 0 and judge.calls == 1
         assert refereed._nearest(g, tie, np.array([True, False, False, False, False])) == 0   # no rival
     finally:
-        refereed.referee_ = saved
+        refereed.ndollar_ = saved
 
 
 def test_a_refereed_codebook_file_loads_with_both_parts_and_ends_gestures_by_its_cloud(fitted, tmp_path):
     refereed, _ = fitted
     loaded = load_codebook(save_codebook(tmp_path / 'symbols.npz', refereed, vocabulary='symbols'))
-    assert isinstance(loaded, RefereedRecogniser) and ordered_recogniser(loaded) is loaded.primary_
+    assert isinstance(loaded, RefereedRecogniser) and ordered_recogniser(loaded) is loaded.cloud_
     for g in held_out()[0]:
         assert loaded.predict(g) == refereed.predict(g)
     with pytest.raises(ValueError, match='n_points'):

@@ -1,13 +1,13 @@
 """A point cloud with a referee for its near ties: :class:`RefereedRecogniser`.
 
-The order-free cloud (:mod:`.clouds`) tells most multi-stroke symbols apart, but a few pairs
+The order-free cloud (:mod:`touch_gestures.skin.clouds`) tells most multi-stroke symbols apart, but a few pairs
 are nearly the same cloud: an N and an H (two bars and what joins them), an asterisk and an
 X. The order of the strokes and their directions tell those apart, which is what $N matches
 (:mod:`.ndollar`: every stroke order and direction of the templates, each as one unistroke).
 $N alone is less accurate than the cloud and costs more, so it is asked only where the cloud
 cannot decide: when its two nearest classes are closer than its own ambiguity rule's margin
 (``min_margin`` times the nearest distance, the rule that rejects a touch as ambiguous,
-:mod:`.base`), the referee's distances choose between those two. Nothing is tuned for it:
+:mod:`touch_gestures.skin.base`), the referee's distances choose between those two. Nothing is tuned for it:
 the tie is the cloud's own rule, the choice the referee's nearest of two.
 
 The referee names the class; it does not make a command fire: the tie stays a tie for the
@@ -15,7 +15,7 @@ rejection rule (the margin over the other class is below ``min_margin``, or nega
 the referee chose the farther one), so what fires is what the cloud alone fires. Each
 template's features are the cloud's and the referee's side by side (one vector, so codebook
 files, ``auto`` and the evaluation handle it as any recogniser); distances, thresholds, the
-end of a gesture and early candidates are the cloud's (:attr:`primary_`).
+end of a gesture and early candidates are the cloud's (:attr:`RefereedRecogniser.cloud_`).
 
 Measured leave-one-person-out on the Mixed Multistroke Gestures through the virtual skin
 (``social-touch report skin-multistroke``, docs/skin-multistroke.md): the nearest class is right
@@ -23,38 +23,33 @@ for 97.00 % of the samples against the cloud's 96.90 %, with the same commands (
 93.86 % while the virtual skin kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`).
 A tie matches the query against the two tied classes' unistrokes
 only (:meth:`~.ndollar.NDollarRecogniser.class_distances_among`: the whole search's distances for
-them). With the compiled search and features (:mod:`.cloud_accel`) it costs 93 against the cloud's
-73 CPU us per recognition on the synthetic bench (16 gestures x 30 templates, where 8 of the 64
-queries tie; medians of three runs of ``social-touch bench skin``; numpy: 267 against 194).
+them). Its cost per recognition against the cloud's: ``social-touch bench skin``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .base import TemplateRecogniser
-from .clouds import CloudRecogniser
-from .gesture import TouchGesture
+from touch_gestures.skin.base import TemplateRecogniser, nearest_allowed
+from touch_gestures.skin.clouds import CloudRecogniser
+from touch_gestures.skin.gesture import TouchGesture
+
 from .ndollar import NDollarRecogniser
 
 __all__ = ['RefereedRecogniser']
-
-#: A short diagonal stroke: its features' length is the primary's share of a template.
-_PROBE = np.array([[10.0, 10.0], [20.0, 15.0], [30.0, 30.0]])
-
 
 class RefereedRecogniser(TemplateRecogniser):
     """The cloud, with $N choosing between its two nearest classes when they tie (module doc).
 
     Args:
-        n_points: points of the cloud (:class:`~.clouds.CloudRecogniser`).
+        n_points: points of the cloud (:class:`~touch_gestures.skin.clouds.CloudRecogniser`).
         referee_points: points of the referee's unistrokes (:class:`~.ndollar.NDollarRecogniser`).
-        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base`; ``min_margin``
-            is also the tie the referee decides.
+        max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`touch_gestures.skin.base`;
+            ``min_margin`` is also the tie the referee decides.
 
     Attributes:
-        primary_: the fitted cloud (its codebook: the templates' first part).
-        referee_: the fitted $N (the second part).
+        cloud_: the fitted cloud (its codebook: the templates' first ``2 n_points`` values), whose distances decide.
+        ndollar_: the fitted $N, the referee (the templates' other values).
         referee_calls_: how many recognitions asked the referee (each such call matches the query against the
             two tied classes' unistrokes only).
     """
@@ -73,53 +68,56 @@ class RefereedRecogniser(TemplateRecogniser):
 
     def _check_params(self) -> None:
         super()._check_params()
-        for part in self._parts():
+        for part in self.parts():
             part._check_params()
 
-    def _parts(self) -> tuple[TemplateRecogniser, TemplateRecogniser]:
+    def parts(self) -> tuple[CloudRecogniser, NDollarRecogniser]:
         """New, unfitted cloud and referee (no limits of their own: only their distances are read)."""
         return (CloudRecogniser(n_points=self.n_points, max_distance=None),
                 NDollarRecogniser(n_points=self.referee_points, max_distance=None))
 
-    def _features(self, gesture: TouchGesture) -> np.ndarray | None:
+    @property
+    def cloud_width(self) -> int:
+        """How many of a template's first values are the cloud's."""
+        return 2 * self.n_points
+
+    def features(self, gesture: TouchGesture) -> np.ndarray | None:
         # Parts of the current parameters, not the fitted ones: a fit after set_params makes templates of the
         # new sizes (the features need no codebook; predict reads the cloud's through _query_features).
-        primary, referee = self._parts()
-        cloud, unistrokes = primary._features(gesture), referee._features(gesture)
-        if cloud is None or unistrokes is None:
+        cloud, ndollar = self.parts()
+        points, unistrokes = cloud.features(gesture), ndollar.features(gesture)
+        if points is None or unistrokes is None:
             return None
-        return np.concatenate([cloud, unistrokes]).astype(np.float32, copy=False)
+        return np.concatenate([points, unistrokes]).astype(np.float32, copy=False)
 
     def _prepare_codebook(self) -> None:
-        primary, referee = self._parts()
-        split = self._primary_width(primary)
+        cloud, ndollar = self.parts()
+        split = self.cloud_width
         if self.templates_.shape[1] <= split:
             raise ValueError(f'a refereed codebook holds the cloud ({split} values) and the referee side by side; '
                              f'got templates of {self.templates_.shape[1]}')
         labels = self.classes_[self.template_labels_]
         unlimited = np.full(len(self.classes_), np.inf)   # thresholds are this recogniser's, not the parts'
-        for part, templates in ((primary, self.templates_[:, :split]), (referee, self.templates_[:, split:])):
+        for part, templates in ((cloud, self.templates_[:, :split]), (ndollar, self.templates_[:, split:])):
             part.set_codebook(templates, labels, class_thresholds=unlimited, template_strokes=self.template_strokes_,
                               template_contact_s=self.template_contact_s_)
-        self.primary_, self.referee_, self._split = primary, referee, split
+        self.cloud_, self.ndollar_ = cloud, ndollar
         self.referee_calls_ = 0
 
-    @staticmethod
-    def _primary_width(primary: TemplateRecogniser) -> int:
-        """How many of a template's values are the primary's (they come first)."""
-        return len(primary._features(TouchGesture.from_trajectory(_PROBE)))
+    def deciding_recogniser(self) -> TemplateRecogniser:
+        return self.cloud_
 
     def _query_features(self, gesture: TouchGesture) -> np.ndarray | None:
-        return self.primary_._features(gesture)   # the referee's only on a tie (they cost more than the cloud's)
+        return self.cloud_.features(gesture)   # the referee's only on a tie (they cost more than the cloud's)
 
-    def _one_stroke_path(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
-        return self.primary_._one_stroke_path(gesture, query[:self._split])   # the cloud's features come first
+    def one_stroke_path_of(self, gesture: TouchGesture, query: np.ndarray) -> np.ndarray | None:
+        return self.cloud_.one_stroke_path_of(gesture, query[:self.cloud_width])   # the cloud's features come first
 
-    def _distances(self, query: np.ndarray) -> np.ndarray:
-        return self.primary_._distances(query[:self._split])   # a template's or a query's: the cloud comes first
+    def distances(self, query: np.ndarray) -> np.ndarray:
+        return self.cloud_.distances(query[:self.cloud_width])   # a template's or a query's: the cloud comes first
 
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
-        best = super()._nearest(gesture, per_class, allowed)
+        best = nearest_allowed(per_class, allowed)
         rivals = per_class.copy() if allowed is None else np.where(allowed, per_class, np.inf)
         rivals[best] = np.inf
         second = int(np.argmin(rivals))
@@ -127,7 +125,7 @@ class RefereedRecogniser(TemplateRecogniser):
         if not rivals[second] - d1 < self.min_margin * d1:   # no tie (or no rival: inf)
             return best
         self.referee_calls_ += 1
-        judged = self.referee_.class_distances_among(gesture, (best, second))   # only the two tied classes
+        judged = self.ndollar_.class_distances_among(gesture, (best, second))   # only the two tied classes
         if judged is None:
             return best
         return second if judged[1] < judged[0] else best

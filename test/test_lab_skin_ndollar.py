@@ -1,4 +1,4 @@
-"""$N (touch_gestures.skin.ndollar): the expansion, its invariance, hard cases, estimator and codebook files.
+"""$N (touch_lab.skin.recognisers.ndollar): the expansion, its invariance, hard cases, estimator and codebook files.
 
 Synthetic gestures only (strokes of corners in mm with a little tremor, as test_skin_multistroke's).
 """
@@ -16,9 +16,9 @@ from sklearn.base import clone
 from test_skin_multistroke import SYMBOLS
 from test_skin_multistroke import polyline as tremor_polyline
 
-from touch_gestures.skin import load_codebook, make_recogniser, save_codebook
 from touch_gestures.skin.gesture import TouchGesture
-from touch_gestures.skin.ndollar import NDollarRecogniser, expansion_orders, ink_features, unistroke_vectors
+from touch_lab.skin.recognisers import load_codebook, make_recogniser, save_codebook
+from touch_lab.skin.recognisers.ndollar import NDollarRecogniser, expansion_orders, ink_features, unistroke_vectors
 
 # Distances are angles between unit vectors of 2 * 96 float32 numbers: each dot product carries a
 # relative error up to about 192 float32 roundings (192 x 6e-8 ~ 1.2e-5), and acos(1 - e) ~ sqrt(2 e):
@@ -144,13 +144,13 @@ def test_start_angle_pruning_and_same_strokes_only_leave_templates_out():
     limit = math.radians(pruned.start_angle_deg)
     for name in SYMBOLS:
         q = symbol(name, rng)
-        features = pruned._features(q)
-        d_full = full._distances(features)
-        d_pruned = pruned._distances(features)
+        features = pruned.features(q)
+        d_full = full.distances(features)
+        d_pruned = pruned.distances(features)
         # By brute force: the unistrokes that start within 30 degrees of the query (across +-pi too).
         vec, angles, _ = pruned._expand(features, as_traced=True)
         turn = np.abs(np.angle(np.exp(1j * (pruned._angles - angles[0]))))
-        d_each = full._distances(features)   # per template with all compared: the lower bound
+        d_each = full.distances(features)   # per template with all compared: the lower bound
         expected = np.full(len(d_full), np.inf)
         queries = np.stack([vec[0], _perp(vec[0])]).astype(np.float32)
         unistroke_d = np.arccos(np.clip(pruned._similarities(slice(0, len(turn)), queries), -1, 1))
@@ -159,7 +159,7 @@ def test_start_angle_pruning_and_same_strokes_only_leave_templates_out():
         np.testing.assert_allclose(d_pruned, expected, atol=1e-12)
         assert np.isfinite(d_pruned).any() and (d_pruned >= d_each - 1e-12).all()
         assert pruned.predict(q).nearest == full.predict(q).nearest == name
-        d_counted = counted._distances(features)
+        d_counted = counted.distances(features)
         assert np.isinf(d_counted[counted._template_counts != q.strokes]).all()
         assert counted.predict(q).nearest == name
 
@@ -179,7 +179,7 @@ def test_the_distances_among_some_classes_are_those_of_the_whole_search(params):
     fell_back = 0
     for q in queries:
         whole = rec.class_distances(q)
-        _, angle, k = rec._query(rec._features(q))
+        _, angle, k = rec._query(rec.features(q))
         fell_back += not rec._compares_any(rec._windows(angle), k)
         for pair in [(0, 1), (n - 1, 0), (2, 2), tuple(np.argsort(whole)[:2])]:
             np.testing.assert_allclose(rec.class_distances_among(q, pair), whole[list(pair)], rtol=0, atol=1e-12)
