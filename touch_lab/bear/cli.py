@@ -65,6 +65,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         'hands (touch_sim/bear/hand_people.py, written independently) (script)')
     parser.add_argument('--train-family', choices=(*FAMILIES, 'both'), default='script',
                         help='family of the training scene, or both (script)')
+    parser.add_argument('--cross', action='store_true',
+                        help='across populations: a model fit on each family (and on all, and --model) measured on '
+                        'the held-out people of every family')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 
@@ -144,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
     if args.gestures:
         print('social-touch eval bear: error: --gestures goes with --bags', file=sys.stderr)
         return 2
+    if args.cross:
+        return _run_cross(args)
     try:
         model = _load_model(args) if args.model else None
         result = evaluate(_config(args), progress=None if args.quiet else stderr_progress, model=model)
@@ -196,6 +201,21 @@ def _run_bags(args: argparse.Namespace) -> int:
         print(json.dumps(result, default=_plain))
     else:
         print(format_scores(result, synthetic))
+    return 0
+
+
+def _run_cross(args: argparse.Namespace) -> int:
+    """``eval bear --cross``: :func:`~.transfer.cross_population`."""
+    from touch_graph.errors import SocialTouchError
+
+    from .transfer import cross_population, format_cross
+    try:
+        models = {f'given {args.model}': _load_model(args)} if args.model else None
+        result = cross_population(_config(args), models, progress=None if args.quiet else stderr_progress)
+    except (SocialTouchError, ValueError) as err:
+        print(f'social-touch eval bear: error: {err}', file=sys.stderr)
+        return 2
+    print(json.dumps(result) if args.json else format_cross(result))
     return 0
 
 

@@ -62,6 +62,7 @@ __all__ = [
     'run_scene',
     'score_subtypes',
     'score_symbolic',
+    'start_grace_s',
     'train_subtype_model',
 ]
 
@@ -72,6 +73,12 @@ PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
 FAMILIES = ('script', 'hands')
 #: Seconds after a labelled gesture's end during which its START still counts.
 SYMBOLIC_GRACE_S = 1.0
+
+
+def start_grace_s(gesture) -> float:
+    """Seconds after a trial of ``gesture`` (a ``GestureFilter``) during which its START counts: a brief
+    gesture (``max_s``) STARTs at its release, ``gap_s`` after its last contact, so it has that much more."""
+    return SYMBOLIC_GRACE_S + (gesture.gap_s if gesture.max_s is not None else 0.0)
 
 
 @dataclass
@@ -276,7 +283,7 @@ def score_symbolic(scene: BearScene, run: SceneRun, events: list, library: Gestu
     truth, pred, latencies = [], [], {n: [] for n in names}
     detected_by_attempt: dict[tuple[str, int, int], bool] = {}
     for lab in sym:
-        lo, hi = lab.start_s, lab.end_s + SYMBOLIC_GRACE_S
+        lo, hi = lab.start_s, lab.end_s + start_grace_s(library[lab.label])
         inside = [i for i, e in enumerate(starts) if lo <= e.t <= hi]
         for i in inside:
             used[i] = True

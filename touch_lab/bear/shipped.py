@@ -8,7 +8,7 @@ library, fed the model's subtype codes, over each whole session.
 Symbolic scoring, per gesture ``g`` (every figure pooled over all trials of all people):
 
 - *detected*: trials labelled ``symbolic/g`` during which ``g`` STARTed (from the trial's start to
-  :data:`~.evaluate.SYMBOLIC_GRACE_S` after its end), over the trials of ``g``;
+  :func:`~.evaluate.start_grace_s` after its end), over the trials of ``g``;
 - *false starts*: STARTs of ``g`` that no trial of ``g`` explains: during another gesture's trial,
   during a single-sensor subtype trial of another subtype than the one ``g`` is performed with (a pat
   on the shoulder is not a shoulder tap; a pat on the crown is a head pat), or outside every trial.
@@ -30,7 +30,7 @@ from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_sim.bear.people import PERFORMANCES, split_label
 
-from .evaluate import SYMBOLIC_GRACE_S
+from .evaluate import SYMBOLIC_GRACE_S, start_grace_s
 from .sessions import BearTrials, pool_scores, score_trials
 from .suggest import _run_library, trial_codes
 
@@ -54,17 +54,18 @@ def _own_subtype(gesture: str) -> str | None:
 
 
 def score_symbolic_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]],
-                          names: list[str]) -> dict[str, dict]:
-    """Per gesture of ``names``: trials, detected, false starts (and by cause), latencies (module doc).
-
-    ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
+                          library: GestureLibrary) -> dict[str, dict]:
+    """Per detectable gesture of ``library``: trials, detected, false starts (and by cause), latencies
+    (module doc). ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
     """
+    names = [g.name for g in library.detectable]
+    grace = {n: start_grace_s(library[n]) for n in names}
     out = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
                'false_starts_by_cause': {'other_gesture': 0, 'subtype_trial': 0, 'outside_trials': 0}}
            for n in names}
     for run, run_starts in zip(runs, starts, strict=True):
-        spans = [(lab.start_s, lab.end_s + SYMBOLIC_GRACE_S, *split_label(lab.gesture))
-                 for lab in (*run.labels, *run.gestures)]
+        spans = [(lab.start_s, lab.end_s + grace.get(split_label(lab.gesture)[1], SYMBOLIC_GRACE_S),
+                  *split_label(lab.gesture)) for lab in (*run.labels, *run.gestures)]
         explained = np.zeros(len(run_starts), dtype=bool)
         for lo, hi, kind, name in spans:
             if kind != 'symbolic' or name not in out:
@@ -121,7 +122,6 @@ def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map
     say = progress or (lambda _m: None)
     body_map = body_map or BodyMap.default()
     people = sorted({lab.person for run in runs for lab in (*run.labels, *run.gestures)})
-    names = [g.name for g in library.detectable]
     subtype, rule, starts = {}, {}, []
     runs_in_order = []
     for person in people:
@@ -135,7 +135,7 @@ def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map
             say(f'symbolic gestures over {run.session.path}')
             starts.append(_run_library(run, trial_codes(run, predictor), library, body_map))
             runs_in_order.append(run)
-    symbolic = _summarise(score_symbolic_starts(runs_in_order, starts, names))
+    symbolic = _summarise(score_symbolic_starts(runs_in_order, starts, library))
     return {'people': people, 'model': pool_scores(subtype), 'rule': pool_scores(rule),
             'per_person': {p: subtype[p]['accuracy'] for p in people},
             'symbolic': symbolic, 'statistics': STATISTICS}

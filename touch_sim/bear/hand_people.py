@@ -92,10 +92,11 @@ class HandPerson:
 
 
 #: Per subtype: base duration range, s (before persistence), and base rhythm, Hz (before tempo). From
-#: Table I's descriptions; nothing here is taken from :mod:`.people`.
+#: Table I's descriptions and Table II's poke (1 s); nothing here is taken from :mod:`.people`.
+#: Brief touches (tap, poke) vary with the square root of persistence: a poke stays a poke.
 _STYLE = {
     'hold': ((4.0, 12.0), 0.0), 'pet': ((4.0, 12.0), 0.8), 'rub': ((3.0, 9.0), 2.5), 'pat': ((2.0, 6.0), 2.0),
-    'tap': ((0.15, 0.35), 0.0), 'poke': ((0.4, 1.5), 0.0), 'tickle': ((3.0, 10.0), 7.0), 'shake': ((2.0, 6.0), 3.0),
+    'tap': ((0.15, 0.35), 0.0), 'poke': ((0.8, 1.2), 0.0), 'tickle': ((3.0, 10.0), 7.0), 'shake': ((2.0, 6.0), 3.0),
 }
 
 
@@ -170,6 +171,7 @@ class HandScene:
         self.description = description
         rng = np.random.default_rng((seed, 0x4A4D))
         self.channels = np.array([s.channel for s in body_map.sensors])
+        self._unfitted = ~np.isin(np.arange(N_CHANNELS), self.channels)
         self.centres = np.zeros((N_CHANNELS, 3))
         self.half = np.full((N_CHANNELS, 2), 0.02)
         for s in body_map.sensors:
@@ -206,12 +208,13 @@ class HandScene:
             near = 1.0 - height / SENSE_HEIGHT_M
             radius = c.radius_m * math.sqrt(max(press, 0.1))
             for centre in centres:
-                dist = np.linalg.norm(self.centres - centre[None, :], axis=1)
+                gap = self.centres - centre[None, :]
+                dist = np.sqrt(np.einsum('ij,ij->i', gap, gap))
                 # Overlap of the contact disc with the plate's equal-area disc, smoothed, over the plate's area.
                 overlap = np.clip((radius + self.plate_r - dist) / (2 * np.minimum(radius, self.plate_r)), 0.0, 1.0)
                 covered = overlap * np.minimum(1.0, radius ** 2 / self.plate_r ** 2)
                 out += 1.0 - np.exp(-COUPLING_GAIN * covered * near * near)
-        out[~np.isin(np.arange(N_CHANNELS), self.channels)] = 0.0
+        out[self._unfitted] = 0.0
         if self.crosstalk:
             boards = out.reshape(-1, 8)
             out = out + self.crosstalk * (boards.sum(axis=1, keepdims=True) - boards).ravel()
@@ -235,11 +238,12 @@ def _touch(person: HandPerson, subtype: str, channel: int, start_s: float, rng: 
     """One touch of ``subtype`` by ``person`` aimed at ``channel``."""
     centres, plate_r = scene_ctx
     (lo, hi), rate = _STYLE[subtype]
-    duration = duration_s if duration_s is not None else float(rng.uniform(lo, hi)) * person.persistence
-    if subtype == 'tap':
-        duration = float(rng.uniform(lo, hi)) * (0.7 + 0.6 * person.persistence / 1.8)
-    duration = max(duration, 0.1)
+    brief = subtype in ('tap', 'poke')
+    stretch = math.sqrt(person.persistence) if brief else person.persistence
+    duration = duration_s if duration_s is not None and not brief else float(rng.uniform(lo, hi)) * stretch
     anchor = centres[channel] + rng.normal(0.0, person.aim_m, 3)
+    edge = np.where(plate_r > 0, np.linalg.norm(centres - anchor[None, :], axis=1) - plate_r, np.inf)
+    channel = int(np.argmin(edge))           # the plate the hand lands on (aim may miss the target)
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
     fingertip = subtype in ('poke', 'tap', 'tickle')
