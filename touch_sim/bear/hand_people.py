@@ -164,7 +164,7 @@ class HandScene:
     synthetic = True
 
     def __init__(self, touches: list[HandTouch], labels: list[Label], duration_s: float, body_map, seed: int,
-                 description: str = '') -> None:
+                 description: str = '', sessions: tuple[float, ...] = (0.0,)) -> None:
         self.touches = sorted(touches, key=lambda c: c.start_s)
         self.labels = sorted(labels, key=lambda lab: lab.start_s)
         self.duration_s = float(duration_s)
@@ -183,7 +183,9 @@ class HandScene:
         self.drift_omega = 2 * np.pi / rng.uniform(60.0, 400.0, N_CHANNELS)
         self.drift_phase = rng.uniform(0, 2 * np.pi, N_CHANNELS)
         self.crosstalk = float(rng.uniform(0.0, 0.03))   # shielded plates: little cross-triggering (IV.D)
-        self.clock_error = float(rng.uniform(-0.004, 0.004))
+        # A cheap resonator: within +-0.05 % (500 ppm) of the people's clock, from each session's start.
+        self.clock_error = float(rng.uniform(-5e-4, 5e-4))
+        self.sessions = np.asarray(sessions, dtype=np.float64)
         per_hour = rng.uniform(0.0, 1.0, N_CHANNELS)
         self.glitches = [(float(t), int(ch), float(rng.uniform(0.2, 0.7)))
                          for ch in self.channels for t in np.sort(rng.uniform(0, duration_s,
@@ -197,9 +199,15 @@ class HandScene:
         lo = int(np.searchsorted(self._starts, t - self._longest, side='left'))
         return [c for c in self.touches[lo:hi] if c.start_s <= t < c.end_s]
 
+    def true_time(self, t: float) -> float:
+        """The people's time at the bear's time ``t``: the bear's clock runs ``clock_error`` fast or slow from
+        the start of each session (a session is one person's, recorded from its own start)."""
+        start = self.sessions[max(int(np.searchsorted(self.sessions, t, side='right')) - 1, 0)]
+        return t + self.clock_error * (t - start)
+
     def proximity(self, t: float) -> np.ndarray:
         """(64,) float64 levels in [0, 1] the plates see at the bear's time ``t`` (s)."""
-        true_t = t * (1.0 + self.clock_error)
+        true_t = self.true_time(t)
         out = np.zeros(N_CHANNELS)
         for c in self._under_way(true_t):
             centres, height, press = c.pose(true_t)
@@ -227,7 +235,7 @@ class HandScene:
     def subtype_truth(self, t: float) -> dict[int, str]:
         """Channel -> subtype of the touches under way at ``t`` (their target plate and the plates they reach)."""
         out = {}
-        for c in self._under_way(t * (1.0 + self.clock_error)):
+        for c in self._under_way(self.true_time(t)):
             for ch in (c.channel, *c.reach):
                 out[ch] = c.subtype
         return out
@@ -339,18 +347,18 @@ def make_hand_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, ges
         raise ValueError(f'n_people must be >= 1; got {n_people}')
     root = np.random.default_rng((seed, 0x4A4E))
     touches, labels = [], []
-    t, scenes = 4.0, []
+    t, starts = 4.0, []
     for p in range(n_people):
+        starts.append(t if p else 0.0)
         plan = [(s, 1.0) for s in TOUCH_SUBTYPES for _ in range(subtype_reps)]
         plan += [(f'symbolic/{g}', 1.0) for g in PERFORMANCES for _ in range(gesture_reps)]
         plan = [plan[i] for i in root.permutation(len(plan))]
         one = hand_trial_scene(p, plan, seed=seed, lead_in_s=t, pause_s=pause_s, body_map=body_map)
-        scenes.append(one)
         touches += one.touches
         labels += one.labels
         t = one.duration_s
     if body_map is None:
         from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
-    return HandScene(touches, labels, t, body_map, seed,
-                     f'synthetic: {n_people} hand-model people (seed {seed})')
+    return HandScene(touches, labels, t, body_map, seed, f'synthetic: {n_people} hand-model people (seed {seed})',
+                     sessions=tuple(starts))
