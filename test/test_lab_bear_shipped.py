@@ -69,3 +69,24 @@ def test_eval_bear_model_scores_the_given_file_on_every_person(bags, capsys, tmp
 def test_train_bear_out_is_a_deprecated_alias_of_output(bags, tmp_path, capsys):
     assert cli_main(['train', 'bear', '--bags', *bags, '--out', str(tmp_path / 'm.npz')]) == 0
     assert '--out is deprecated; use -o/--output' in capsys.readouterr().err and (tmp_path / 'm.npz').exists()
+
+
+def test_the_report_section_names_each_family_and_the_shipped_model():
+    from touch_gestures.bear.subtype_labels import SUBTYPES
+    from touch_lab.bear.report import populations_md
+    labels = list(SUBTYPES)
+    confusion = [[0] * len(labels) for _ in labels]
+    confusion[1][1] = 3
+    one = {'subtype_accuracy': 0.5, 'lowest_class_recall': 0.0, 'recall': {'pet': 1.0}, 'median_subtype_latency_s': 0.9,
+           'symbolic_detected': 0.75, 'symbolic_labelled': 4, 'symbolic_false_alarms': 2,
+           'symbolic_false_alarms_by_gesture': {'head_pat': 0, 'shoulder_tap': 2},
+           'symbolic_starts_during_subtype_touches': 1, 'median_symbolic_latency_s': 2.4,
+           'symbolic_recall': {'head_pat': 1.0, 'shoulder_tap': 0.5},
+           'symbolic_labelled_by_gesture': {'head_pat': 2, 'shoulder_tap': 2}, 'confusion': confusion, 'labels': labels}
+    cross = {'families': ['script', 'hands'], 'scores': {'fit on script': {'script': one, 'hands': one},
+                                                         'shipped model': {'script': one, 'hands': one}},
+             'config': {'n_people': 6, 'train_people': 8, 'seed': 0}}
+    text = '\n'.join(populations_md(cross, 'shipped model'))
+    assert '### Shipped model on the `hands` family' in text and '### Shipped model on the `script` family' in text
+    assert '| shoulder_tap | 2 | 0.50 | 2 |' in text and '| all | 4 | 0.75 | 2 |' in text
+    assert '| shipped model | 0.50 | 0.00 | 0.75 | 2 | 0.50 | 0.00 | 0.75 | 2 |' in text
