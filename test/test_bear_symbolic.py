@@ -182,3 +182,21 @@ def test_body_map_without_a_configured_sensor() -> None:
 def test_with_default_gap_changes_only_default_gaps() -> None:
     wider = LIB.with_default_gap(3.0)
     assert wider['head_pat'].gap_s == 3.0 and wider['shoulder_tap'].gap_s == LIB['shoulder_tap'].gap_s
+
+
+def test_a_tap_on_the_shoulder_starts_at_its_release_and_a_pat_there_never_does() -> None:
+    tap = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['shoulder_left'] if 1.0 <= t < 1.3 else [], 4.0)
+    gap = LIB['shoulder_tap'].gap_s
+    assert [(g, s) for g, s, _ in summary(tap)] == [('shoulder_tap', 'START'), ('shoulder_tap', 'END')]
+    assert tap[0].t == tap[1].t and tap[0].onset == 1.0 and 1.2 + gap < tap[0].t <= 1.2 + gap + 0.1 + 1e-9
+    # Pats at 1.5 Hz, the hand lifting for 0.4 s between them: one long touch, not a tap.
+    pats = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['shoulder_left'] if 1.0 <= t < 5.0 and (t * 1.5) % 1 < 0.4
+                 else [], 8.0)
+    assert [e for e in pats if e.gesture == 'shoulder_tap'] == []
+
+
+def test_max_s_below_dwell_is_a_config_error(tmp_path) -> None:
+    path = tmp_path / 'g.yaml'
+    path.write_text('gestures:\n  poke_head:\n    sensors: [head1]\n    dwell_s: 1.0\n    max_s: 0.5\n')
+    with pytest.raises(ConfigError, match=r'max_s \(0.5 s\) must be at least dwell_s'):
+        GestureLibrary.load(path, BODY)

@@ -132,7 +132,7 @@ def test_train_refuses_to_write_the_suggestion_over_its_config_before_any_work(t
     from touch_graph.cli.main import main as cli_main
     config = tmp_path / 'gestures.yaml'
     config.write_text(Path(GestureLibrary.default(BODY).source).read_text())
-    assert cli_main(['train', 'bear', '--bags', str(tmp_path / 'no_bag'), '--out', str(tmp_path / 'm.npz'),
+    assert cli_main(['train', 'bear', '--bags', str(tmp_path / 'no_bag'), '-o', str(tmp_path / 'm.npz'),
                      '--gestures-config', str(config), '--suggest-out', str(config)]) == 2
     assert 'is the gesture config the suggestion is made from' in capsys.readouterr().err
     assert not (tmp_path / 'm.npz').exists()
@@ -170,6 +170,6 @@ def test_train_evaluate_with_one_person_saves_the_model_and_says_why_no_evaluati
                      '--pause-s', '2', '--seed', '3', '--out', str(bags)]) == 0
     model = tmp_path / 'm.npz'
     capsys.readouterr()
-    assert cli_main(['train', 'bear', '--bags', *map(str, bags.iterdir()), '--evaluate', '--out', str(model)]) == 0
+    assert cli_main(['train', 'bear', '--bags', *map(str, bags.iterdir()), '--evaluate', '-o', str(model)]) == 0
     assert '--evaluate holds out one person at a time and the bags hold 1' in capsys.readouterr().err
     assert model.exists()

@@ -79,7 +79,8 @@ def adapt_bear(model, X: np.ndarray, y: np.ndarray, lam: float = 1.0, max_iter: 
     keep = np.array([name in index for name in labels])
     if not keep.any():
         return model
-    Zs = (_transform(np.asarray(X)[keep]).astype(np.float64) - model.mean_) / model.scale_
+    relative = getattr(model, 'relative', False)
+    Zs = (_transform(np.asarray(X)[keep], relative).astype(np.float64) - model.mean_) / model.scale_
     t = np.array([index[n] for n, k in zip(labels, keep, strict=True) if k])
     W0 = np.concatenate([model.coef_, model.intercept_[:, None]], axis=1).astype(np.float64)   # (C, d + 1)
     A = np.concatenate([Zs, np.ones((len(Zs), 1))], axis=1)
@@ -96,7 +97,7 @@ def adapt_bear(model, X: np.ndarray, y: np.ndarray, lam: float = 1.0, max_iter: 
         return float(value), grad.ravel()
 
     w = minimize(loss, W0.ravel(), jac=True, method='L-BFGS-B', options={'maxiter': max_iter}).x.reshape(W0.shape)
-    out = SubtypeClassifier(C=model.C, class_weight=model.class_weight, max_iter=model.max_iter)
+    out = SubtypeClassifier(C=model.C, class_weight=model.class_weight, max_iter=model.max_iter, relative=relative)
     out._set(names, model.mean_, model.scale_, w[:, :-1], w[:, -1])
     for attr in ('trained_rate_hz_', 'trained_buffer_len_'):
         setattr(out, attr, getattr(model, attr, None))

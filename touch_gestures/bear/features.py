@@ -227,9 +227,9 @@ class FeatureExtractor:
         detrend: see :func:`spectral_features`.
         n_channels: channels per cycle.
         window: ``'touch'`` (default): spectral features see only the current touch (see ``touch_cycles`` in
-            :func:`spectral_features`); ``'buffer'``: the whole buffer, as the paper's text reads. Measured on
-            synthetic people, 'buffer' makes the rule call every hold a pet until the onset step has left the
-            buffer (20 cycles, 5.9 s at 3.4 Hz).
+            :func:`spectral_features`); ``'buffer'``: the whole buffer, as the paper's text reads. With
+            'buffer' the step from no touch to a hold reads as a low frequency, so the rule calls every hold a
+            pet until that step has left the buffer (``buffer_len / rate_hz`` seconds).
     """
 
     def __init__(self, rate_hz: float, threshold: float = ACTIVATION_THRESHOLD, min_component: float = MIN_COMPONENT,

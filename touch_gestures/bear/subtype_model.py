@@ -4,14 +4,16 @@ Model: multinomial logistic regression on the standardised feature table of :mod
 (durations through ``log1p``, since they span 0.1 s to minutes), trained with scikit-learn's
 ``LogisticRegression`` and balanced class weights, evaluated here with numpy in the log domain.
 
-Why this model (measured by ``social-touch report bear``, table "Choice of the subtype
-model" in docs/bear-evaluation.md; synthetic people, per sensor-cycle, held-out people, 3.4 Hz, 20
-cycles): accuracy / balanced accuracy 0.90 / 0.71, against 0.94 / 0.68 for a random forest, 0.94 /
-0.65 for gradient boosting, 0.95 / 0.63 for an MLP and 0.49 / 0.29 for the paper's rule. It trails the
-others by about four points of accuracy but leads on balanced
-accuracy (the rare subtypes), and one prediction for 56 sensors costs about 15 us, against 6-9 ms for
-scikit-learn's tree ensembles, which alone would break the 200 us per cycle budget. Its file is two
-small arrays (.npz, no pickle).
+With ``relative=True`` (the default) the model also sees :data:`RELATIVE_FEATURES`: the level
+features divided by the buffer's own peak, so they describe the *shape* of a touch rather than how
+hard or how widely this person touches (a light fingertip and a firm palm doing the same pat give
+the same ratios). Format-1 files (without them) still load, with ``relative=False``.
+
+Why this model: ``social-touch report bear`` compares it with tree ensembles and an MLP on held-out
+simulated people (table "Choice of the subtype model" in docs/bear-evaluation.md, where the figures
+are): it leads on balanced accuracy (the rare subtypes) and one prediction for 56 sensors costs a
+small fraction of the per-cycle budget that the tree ensembles alone would exceed. Its file is a
+few small arrays (.npz, no pickle).
 
 >>> rng = np.random.default_rng(0)
 >>> X = rng.random((60, len(FEATURE_NAMES)), dtype=np.float32)
@@ -34,17 +36,30 @@ from .features import FEATURE_NAMES
 from .subtype import check_feature_table
 from .subtype_labels import SUBTYPES, subtype_index
 
-__all__ = ['MODEL_FORMAT', 'SubtypeClassifier']
+__all__ = ['MODEL_FORMAT', 'RELATIVE_FEATURES', 'SubtypeClassifier']
 
 #: Version of the .npz model file written by :meth:`SubtypeClassifier.save`.
-MODEL_FORMAT = 1
+MODEL_FORMAT = 2
 _LOG_COLUMNS = [FEATURE_NAMES.index('duration_s'), FEATURE_NAMES.index('since_active_s')]
+#: Level features the model also sees divided by the buffer's peak (``relative=True``), named ``<feature>/peak``.
+RELATIVE_FEATURES = ('mean_level', 'std_level', 'latest_level', 'roughness_per_s')
+_RELATIVE_COLUMNS = [FEATURE_NAMES.index(n) for n in RELATIVE_FEATURES]
+#: Peak below which the ratios use this floor instead (an untouched sensor's noise is not a shape).
+_PEAK_FLOOR = 0.05
 
 
-def _transform(X: np.ndarray) -> np.ndarray:
+def design_names(relative: bool) -> tuple[str, ...]:
+    """Names of the model's input columns: the feature table's, then the relative ones."""
+    return FEATURE_NAMES + (tuple(f'{n}/peak' for n in RELATIVE_FEATURES) if relative else ())
+
+
+def _transform(X: np.ndarray, relative: bool) -> np.ndarray:
     out = X.astype(np.float32, copy=True)
     out[:, _LOG_COLUMNS] = np.log1p(np.maximum(out[:, _LOG_COLUMNS], 0.0))
-    return out
+    if not relative:
+        return out
+    peak = np.maximum(X[:, 0], _PEAK_FLOOR)[:, None]
+    return np.hstack([out, (X[:, _RELATIVE_COLUMNS] / peak).astype(np.float32)])
 
 
 class SubtypeClassifier(ClassifierMixin, BaseEstimator):
@@ -54,15 +69,18 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         C: inverse L2 regularisation strength (scikit-learn's ``LogisticRegression.C``).
         class_weight: ``'balanced'`` (default: rare subtypes such as tap count as much as 'none') or None.
         max_iter: L-BFGS iterations.
+        relative: also use :data:`RELATIVE_FEATURES` over the buffer's peak (module doc).
 
     Learned attributes: ``classes_`` (subtype names), ``mean_`` and ``scale_`` (feature standardisation),
-    ``coef_`` ((n_classes, n_features) float32) and ``intercept_`` ((n_classes,) float32).
+    ``coef_`` ((n_classes, len(design_names(relative))) float32) and ``intercept_`` ((n_classes,) float32).
     """
 
-    def __init__(self, C: float = 1.0, class_weight: str | None = 'balanced', max_iter: int = 2000) -> None:
+    def __init__(self, C: float = 1.0, class_weight: str | None = 'balanced', max_iter: int = 2000,
+                 relative: bool = True) -> None:
         self.C = C
         self.class_weight = class_weight
         self.max_iter = max_iter
+        self.relative = relative
 
     def fit(self, X, y) -> SubtypeClassifier:
         """Train on ``X`` ((n, len(FEATURE_NAMES)) feature rows) and ``y`` (subtype names or codes)."""
@@ -76,7 +94,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         classes = [s for s in SUBTYPES if s in set(names)]
         if len(classes) < 2:
             raise ValueError(f'need at least two subtypes to train; got only {classes}')
-        Z = _transform(X)
+        Z = _transform(X, self.relative)
         mean = Z.mean(axis=0)
         scale = Z.std(axis=0)
         scale = np.where(scale > 1e-6, scale, 1.0)   # a constant feature: leave it unscaled, not divided by 0
@@ -110,7 +128,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
     def decision_function(self, X) -> np.ndarray:
         """(n_samples, n_classes) float32 class scores (logits)."""
         self._check_fitted()
-        return _transform(check_feature_table(X)) @ self._w + self._b
+        return _transform(check_feature_table(X), self.relative) @ self._w + self._b
 
     def predict_log_proba(self, X) -> np.ndarray:
         """(n_samples, n_classes) float64 log probabilities (log-softmax with max subtraction)."""
@@ -142,6 +160,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         trained_at = np.array([np.nan if rate_hz is None else float(rate_hz),
                                np.nan if buffer_len is None else float(buffer_len)])
         np.savez(path, format=np.int64(MODEL_FORMAT), feature_names=np.array(FEATURE_NAMES), classes=self.classes_,
+                 design_names=np.array(design_names(self.relative)),
                  mean=self.mean_, scale=self.scale_, coef=self.coef_, intercept=self.intercept_,
                  params=np.array([float(self.C), float(self.max_iter)]), trained_at=trained_at)
 
@@ -162,17 +181,22 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
                 classes = [str(s) for s in data['classes']]
                 arrays = [data[k] for k in ('mean', 'scale', 'coef', 'intercept')]
                 trained_at = data['trained_at'] if 'trained_at' in data else np.array([np.nan, np.nan])
+                design = tuple(str(s) for s in data['design_names']) if 'design_names' in data else FEATURE_NAMES
             except KeyError as err:
                 raise ValueError(f'{path}: not a bear subtype model (missing {err}); write one with '
                                  'SubtypeClassifier.save') from None
-        if version != MODEL_FORMAT:
-            raise ValueError(f'{path}: model format {version}, this code reads format {MODEL_FORMAT}; retrain it')
+        if version not in (1, MODEL_FORMAT):
+            raise ValueError(f'{path}: model format {version}, this code reads formats 1 and {MODEL_FORMAT}; '
+                             'retrain it')
         if features != FEATURE_NAMES:
             raise ValueError(f'{path}: trained on features {features}, this code computes {FEATURE_NAMES}; retrain it')
         unknown = [c for c in classes if c not in SUBTYPES]
         if unknown:
             raise ValueError(f'{path}: unknown subtype classes {unknown}; expected some of {SUBTYPES}')
-        n, f = len(classes), len(FEATURE_NAMES)
+        relative = design == design_names(True)
+        if design not in (design_names(True), design_names(False)):
+            raise ValueError(f'{path}: model inputs {design} are not this code\'s {design_names(True)}; retrain it')
+        n, f = len(classes), len(design)
         shapes = [(f,), (f,), (n, f), (n,)]
         if [a.shape for a in arrays] != shapes:
             raise ValueError(f'{path}: array shapes {[a.shape for a in arrays]} do not match {shapes}')
@@ -182,7 +206,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
                                  'the model is damaged: retrain it')
         if not (arrays[1] > 0).all():
             raise ValueError(f'{path}: feature scales must be > 0; the model is damaged: retrain it')
-        model = cls()
+        model = cls(relative=relative)
         model._set(classes, *arrays)
         #: scan rate (Hz) and buffer length (cycles) the model was trained at; None when unknown
         model.trained_rate_hz_ = None if np.isnan(trained_at[0]) else float(trained_at[0])

@@ -19,6 +19,10 @@ Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) 
 - START when a candidate, not suppressed, matches now and ``t - onset >= dwell_s``; END when it stops
   being a candidate or becomes suppressed. Gestures that do not supersede one another can be active
   at the same time.
+- a *brief* gesture (``max_s`` set, e.g. a shoulder tap) is told by its end: it STARTs when its
+  candidate is released (a gap longer than ``gap_s``) after matching for at least ``dwell_s`` and at
+  most ``max_s`` seconds, and ENDs in the same cycle. A longer touch on its filter (a pat, a pet, a
+  hold on the shoulder) never STARTs it.
 """
 
 from __future__ import annotations
@@ -49,8 +53,8 @@ START, END = 1, 2
 FORMAT_VERSION = 1
 
 _NAME = re.compile(r'^[a-z][a-z0-9_]*$')
-_GESTURE_KEYS = ('sensors', 'regions', 'min_active', 'dwell_s', 'gap_s', 'both_sides', 'subtype', 'supersedes',
-                 'detectable', 'table_i', 'paper', 'note')
+_GESTURE_KEYS = ('sensors', 'regions', 'min_active', 'dwell_s', 'gap_s', 'max_s', 'both_sides', 'subtype',
+                 'supersedes', 'detectable', 'table_i', 'paper', 'note')
 
 
 @dataclass(frozen=True)
@@ -71,6 +75,7 @@ class GestureFilter:
         table_i: the name in knight2009 Table I.
         paper: one of the four the paper implemented.
         note: free text from the config.
+        max_s: for a brief gesture, the longest it may match and still be it (None: no limit; module doc).
     """
 
     name: str
@@ -86,6 +91,7 @@ class GestureFilter:
     table_i: str
     paper: bool
     note: str
+    max_s: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -276,10 +282,13 @@ def _parse_gesture(name, spec, items, body_map: BodyMap, default_dwell: float, d
                                    f'subtypes are: {", ".join(TOUCH_SUBTYPES)}', i)
         subtypes = tuple(listed)
     supersedes = tuple(_string_list(spec, 'supersedes', what)) if 'supersedes' in spec else ()
+    dwell = _non_negative(spec, 'dwell_s', what, default_dwell)
+    max_s = _non_negative(spec, 'max_s', what, 0.0) if 'max_s' in spec else None
+    if max_s is not None and max_s < dwell:
+        raise spec.error(f'{what}: max_s ({max_s} s) must be at least dwell_s ({dwell} s)', 'max_s')
     return GestureFilter(name, np.array(order, dtype=np.intp), tuple(channels[c] for c in order), min_active,
-                         _non_negative(spec, 'dwell_s', what, default_dwell),
-                         _non_negative(spec, 'gap_s', what, default_gap), both_sides, subtypes, supersedes, True,
-                         table_i, paper, note)
+                         dwell, _non_negative(spec, 'gap_s', what, default_gap), both_sides, subtypes, supersedes,
+                         True, table_i, paper, note, max_s)
 
 
 def _regions_of(body_map: BodyMap) -> set[str]:
@@ -404,7 +413,13 @@ class SymbolicRecogniser:
                 last[i] = t
                 self._last_counting[i] = counting[i]
             elif last[i] is not None and t - last[i] > g.gap_s + 1e-9:   # 1e-9: float time steps
+                if g.max_s is not None and not self._suppressed(i, live) and \
+                        g.dwell_s <= last[i] - onset[i] <= g.max_s + 1e-9:
+                    starts += self._brief(g, i, t, onset[i])
                 onset[i] = last[i] = None
+            if g.max_s is not None:                  # brief gestures START only at their release (above)
+                live[i] = onset[i] is not None and not self._suppressed(i, live)
+                continue
             candidate = onset[i] is not None
             by = [h for h in self._superseded_by[i] if live[h]]
             live[i] = candidate and not by
@@ -418,3 +433,12 @@ class SymbolicRecogniser:
                 self._start_onset[i] = onset[i]
                 starts.append(SymbolicEvent(g.name, START, t, onset[i], t - onset[i], self._sensor_names(i)))
         return ends + starts
+
+    def _suppressed(self, i: int, live: list[bool]) -> bool:
+        return any(live[h] for h in self._superseded_by[i])
+
+    def _brief(self, g: GestureFilter, i: int, t: float, onset: float) -> list[SymbolicEvent]:
+        """START and END of brief gesture ``i``, released at ``t`` (module doc)."""
+        names = self._sensor_names(i)
+        return [SymbolicEvent(g.name, START, t, onset, t - onset, names),
+                SymbolicEvent(g.name, END, t, onset, t - onset, names, 'released')]

@@ -13,7 +13,7 @@ import math
 import sys
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
-from touch_lab.bear.evaluate import EvalConfig, evaluate, stderr_progress
+from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, stderr_progress
 
 __all__ = ['HELP', 'add_arguments', 'format_text', 'run']
 
@@ -54,14 +54,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='session bags (social-touch collect bear): leave-one-person-out on them instead of '
-                        'simulated scenes')
+                        'simulated scenes (or, with --model, that model scored on every person in them)')
+    parser.add_argument('--model', metavar='FILE',
+                        help='with --bags: score this subtype model (.npz, e.g. config/bear_subtype_model.npz) as it '
+                        'is, on people it has not seen, instead of retraining leave-one-person-out')
+    parser.add_argument('--gestures', metavar='YAML',
+                        help='with --bags: the symbolic gesture library (default: config/bear_gestures.yaml)')
+    parser.add_argument('--family', choices=FAMILIES, default='script',
+                        help='family of simulated people in the test scene: script (touch_sim/bear/people.py) or '
+                        'hands (touch_sim/bear/hand_people.py, written independently) (script)')
+    parser.add_argument('--train-family', choices=(*FAMILIES, 'both'), default='script',
+                        help='family of the training scene, or both (script)')
+    parser.add_argument('--cross', action='store_true',
+                        help='across populations: a model fit on each family (and on all, and --model) measured on '
+                        'the held-out people of every family')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 
 def _config(args: argparse.Namespace) -> EvalConfig:
     return EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, n_people=args.people,
                       train_people=args.train_people, seed=args.seed, subtype_reps=args.reps,
-                      gesture_reps=args.reps)
+                      gesture_reps=args.reps, family=args.family, train_families=train_families(args.train_family))
+
+
+def train_families(choice: str) -> tuple[str, ...]:
+    """``--train-family`` as the families it names."""
+    return FAMILIES if choice == 'both' else (choice,)
 
 
 def _pct(value) -> str:
@@ -77,7 +95,8 @@ def format_text(result: dict) -> str:
     m, r, cfg = result['model'], result['rule'], result['config']
     lines = [
         f"Sensate Bear recognisers, {cfg['rate_hz']} Hz scan, buffer {cfg['buffer_len']} cycles, "
-        f"{cfg['n_people']} simulated people (seed {cfg['seed']}), through the bear_driver node",
+        f"{cfg['n_people']} simulated people of the {cfg['family']!r} family (seed {cfg['seed']}), through the "
+        'bear_driver node',
         f"DATA: {result['data']}",
         '',
         f"{'':40s} {'trained model':>14s} {'paper rule':>12s}",
@@ -125,8 +144,14 @@ def run(args: argparse.Namespace) -> int:
 
     if args.bags:
         return _run_bags(args)
+    if args.gestures:
+        print('social-touch eval bear: error: --gestures goes with --bags', file=sys.stderr)
+        return 2
+    if args.cross:
+        return _run_cross(args)
     try:
-        result = evaluate(_config(args), progress=None if args.quiet else stderr_progress)
+        model = _load_model(args) if args.model else None
+        result = evaluate(_config(args), progress=None if args.quiet else stderr_progress, model=model)
     except (SocialTouchError, ValueError) as err:
         print(f'social-touch eval bear: error: {err}', file=sys.stderr)
         return 2
@@ -139,23 +164,72 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_bags(args: argparse.Namespace) -> int:
-    """``eval bear --bags``: leave-one-person-out on recorded sessions (:mod:`.sessions`)."""
+    """``eval bear --bags``: the given ``--model`` scored on recorded sessions as it ships, or leave-one-person-out
+    (:mod:`.sessions`, :mod:`.shipped`); symbolic gestures with the model's subtype codes either way."""
+    from touch_driver.bear.body_map import BodyMap
+    from touch_gestures.bear.symbolic import GestureLibrary
     from touch_graph.errors import SocialTouchError
+    from touch_graph.paths import share_file
+    from touch_lab.collect.session_bag import SessionError
 
-    from .sessions import format_lopo, leave_one_person_out, load_runs
+    from .sessions import fold_models, load_runs
+    from .shipped import format_scores, score_model
     say = (lambda _m: None) if args.quiet else stderr_progress
     try:
+        body_map = BodyMap.default()
+        library = GestureLibrary.load(args.gestures or share_file('config', 'bear_gestures.yaml'), body_map)
+        model = _load_model(args) if args.model else None
         runs = load_runs(args.bags, args.rate, args.buffer, say)
-        result = leave_one_person_out(runs, seed=args.seed, progress=say)
+        if model is not None:
+            result = score_model(runs, model, library, body_map, say)
+            method = f'the given model {args.model}, not retrained, on every person of the bags'
+        else:
+            people = sorted({lab.person for r in runs for lab in r.labels})
+            if len(people) < 2:
+                raise SessionError(f'leave-one-person-out needs sessions of at least two people; got {people} '
+                                   '(or give --model FILE to score a trained model on them)')
+            folds = fold_models(runs, people, seed=args.seed, progress=say)
+            result = score_model(runs, None, library, body_map, say, fold_models=folds)
+            method = 'leave-one-person-out: each person scored by a model trained on the others'
     except (SocialTouchError, ValueError) as err:
         print(f'social-touch eval bear: error: {err}', file=sys.stderr)
         return 2
     synthetic = any(r.session.synthetic for r in runs)
+    result = {'method': method, **result, 'synthetic': synthetic, 'bags': list(args.bags),
+              'gestures': str(library.source)}
     if args.json:
-        print(json.dumps({**result, 'synthetic': synthetic, 'bags': list(args.bags)}, default=_plain))
+        print(json.dumps(result, default=_plain))
     else:
-        print(format_lopo(result, synthetic))
+        print(format_scores(result, synthetic))
     return 0
+
+
+def _run_cross(args: argparse.Namespace) -> int:
+    """``eval bear --cross``: :func:`~.transfer.cross_population`."""
+    from touch_graph.errors import SocialTouchError
+
+    from .transfer import cross_population, format_cross
+    try:
+        models = {f'given {args.model}': _load_model(args)} if args.model else None
+        result = cross_population(_config(args), models, progress=None if args.quiet else stderr_progress)
+    except (SocialTouchError, ValueError) as err:
+        print(f'social-touch eval bear: error: {err}', file=sys.stderr)
+        return 2
+    print(json.dumps(result) if args.json else format_cross(result))
+    return 0
+
+
+def _load_model(args: argparse.Namespace):
+    """The ``--model`` file; ValueError when it was trained at another scan rate or buffer length."""
+    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    model = SubtypeClassifier.load(args.model)
+    rate, buffer = model.trained_rate_hz_, model.trained_buffer_len_
+    if rate is not None and abs(rate / args.rate - 1) > 0.05:
+        raise ValueError(f'{args.model} was trained at {rate:g} Hz; these bags are scored at --rate {args.rate:g} Hz '
+                         '(the features depend on the scan rate)')
+    if buffer is not None and buffer != args.buffer:
+        raise ValueError(f'{args.model} was trained with a {buffer}-cycle buffer, not --buffer {args.buffer}')
+    return model
 
 
 def _plain(value):

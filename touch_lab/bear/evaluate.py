@@ -47,24 +47,38 @@ from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import START, GestureLibrary
+from touch_sim.bear.hand_people import PORT_OPTIONS, HandScene, make_hand_scene
 from touch_sim.bear.people import BearScene, make_scene
 from touch_sim.bear.render import BearCycles
 
 __all__ = [
+    'FAMILIES',
     'EvalConfig',
     'SceneRun',
     'bear_cycles',
     'collect_training_rows',
     'evaluate',
+    'family_scene',
     'run_scene',
     'score_subtypes',
     'score_symbolic',
+    'start_grace_s',
     'train_subtype_model',
 ]
 
 PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
+#: The families of simulated people: ``script`` (touch_sim/bear/people.py: level waveforms with knight2009
+#: Table II statistics) and ``hands`` (touch_sim/bear/hand_people.py: hands over plates, written
+#: independently from knight2009). Both are synthetic.
+FAMILIES = ('script', 'hands')
 #: Seconds after a labelled gesture's end during which its START still counts.
 SYMBOLIC_GRACE_S = 1.0
+
+
+def start_grace_s(gesture) -> float:
+    """Seconds after a trial of ``gesture`` (a ``GestureFilter``) during which its START counts: a brief
+    gesture (``max_s``) STARTs at its release, ``gap_s`` after its last contact, so it has that much more."""
+    return SYMBOLIC_GRACE_S + (gesture.gap_s if gesture.max_s is not None else 0.0)
 
 
 @dataclass
@@ -81,6 +95,8 @@ class EvalConfig:
         detrend: feature detrending, see :mod:`.features`.
         no_touch_gate: the trained model answers 'none' where the buffer never reached the threshold
             (knight2009 V.D's first rule line, :class:`~.gate.NoTouchGate`), as the node does.
+        family: the family of simulated people of the test scene (:data:`FAMILIES`).
+        train_families: the families of the training scene (one scene of ``train_people`` each).
     """
 
     rate_hz: float = REAL_RATE_HZ
@@ -93,6 +109,20 @@ class EvalConfig:
     device_options: dict = field(default_factory=dict)
     detrend: str = 'constant'
     no_touch_gate: bool = True
+    family: str = 'script'
+    train_families: tuple[str, ...] = ('script',)
+
+    def __post_init__(self) -> None:
+        for name in (self.family, *self.train_families):
+            if name not in FAMILIES:
+                raise ValueError(f'unknown family of simulated people {name!r}; families: {", ".join(FAMILIES)}')
+
+
+def family_scene(family: str, n_people: int, seed: int, subtype_reps: int, gesture_reps: int):
+    """A labelled scene of ``n_people`` of ``family`` (:data:`FAMILIES`). Synthetic."""
+    if family == 'hands':
+        return make_hand_scene(n_people=n_people, seed=seed, subtype_reps=subtype_reps, gesture_reps=gesture_reps)
+    return make_scene(n_people=n_people, seed=seed, subtype_reps=subtype_reps, gesture_reps=gesture_reps)
 
 
 def bear_cycles(stimulus, config: EvalConfig, seed: int) -> BearCycles:
@@ -101,7 +131,8 @@ def bear_cycles(stimulus, config: EvalConfig, seed: int) -> BearCycles:
     # The real bear reads its 56 channels one by one (5 ms each): that fits up to ~3.57 Hz. Faster
     # rates need the Midplanes read in parallel (8 x 5 ms = 40 ms, the ideal 25 Hz).
     options.setdefault('scan', 'sequential' if config.rate_hz <= 1 / (56 * 0.005) + 1e-9 else 'parallel')
-    return BearCycles(stimulus, config.rate_hz, seed=seed, device_options=options)
+    port = PORT_OPTIONS if isinstance(stimulus, HandScene) else None     # that family's link drops frames
+    return BearCycles(stimulus, config.rate_hz, seed=seed, device_options=options, port_options=port)
 
 
 @dataclass
@@ -175,14 +206,18 @@ def collect_training_rows(run: SceneRun, fitted: np.ndarray, idle_fraction: floa
 
 
 def train_subtype_model(config: EvalConfig, progress: Callable[[str], None] | None = None) -> SubtypeClassifier:
-    """Train the eight-subtype model on a training scene (people other than the test scene's)."""
-    scene = make_scene(n_people=config.train_people, seed=config.seed + 1000, subtype_reps=config.subtype_reps + 1,
-                       gesture_reps=1)
-    rec = BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False)
-    run = run_scene(scene, bear_cycles(scene, config, config.seed + 1000), {'features': rec}, keep_features=True,
-                    progress=progress)
-    X, y = collect_training_rows(run, rec.fitted, seed=config.seed)
-    return SubtypeClassifier().fit(X, y)
+    """Train the eight-subtype model on a training scene of each of ``config.train_families`` (people other
+    than the test scene's: seed + 1000)."""
+    rows, codes = [], []
+    for family in config.train_families:
+        scene = family_scene(family, config.train_people, config.seed + 1000, config.subtype_reps + 1, 1)
+        rec = BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False)
+        run = run_scene(scene, bear_cycles(scene, config, config.seed + 1000), {'features': rec}, keep_features=True,
+                        progress=progress)
+        X, y = collect_training_rows(run, rec.fitted, seed=config.seed)
+        rows.append(X)
+        codes.append(y)
+    return SubtypeClassifier().fit(np.concatenate(rows), np.concatenate(codes))
 
 
 def _confusion(truth: list[str], pred: list[str], labels: list[str]) -> np.ndarray:
@@ -248,7 +283,7 @@ def score_symbolic(scene: BearScene, run: SceneRun, events: list, library: Gestu
     truth, pred, latencies = [], [], {n: [] for n in names}
     detected_by_attempt: dict[tuple[str, int, int], bool] = {}
     for lab in sym:
-        lo, hi = lab.start_s, lab.end_s + SYMBOLIC_GRACE_S
+        lo, hi = lab.start_s, lab.end_s + start_grace_s(library[lab.label])
         inside = [i for i, e in enumerate(starts) if lo <= e.t <= hi]
         for i in inside:
             used[i] = True
@@ -316,20 +351,24 @@ def _table_iii(scene: BearScene, run: SceneRun, library: GestureLibrary, detecte
     return out
 
 
-def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) -> dict:
+def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
+             model: SubtypeClassifier | None = None) -> dict:
     """Train on one synthetic scene, score rule and model on another; one JSON-ready dict.
+
+    ``model``, when given, is scored as it is (no training scene).
 
     Top-level keys (the trained model's figures): ``subtype_accuracy``, ``symbolic_accuracy``,
     ``median_detection_latency_s`` (symbolic START from gesture start), ``median_subtype_latency_s``,
     ``us_per_cycle``; then ``model`` and ``rule`` with the full scores of each, and the config.
     """
     say = progress or (lambda msg: None)
-    say(f'training scene: {config.train_people} simulated people at {config.rate_hz} Hz, buffer {config.buffer_len}')
-    model = train_subtype_model(config, progress=say)
+    if model is None:
+        say(f'training scene: {config.train_people} simulated people at {config.rate_hz} Hz, '
+            f'buffer {config.buffer_len}')
+        model = train_subtype_model(config, progress=say)
     classifier = NoTouchGate(model, ACTIVATION_THRESHOLD) if config.no_touch_gate else model
-    scene = make_scene(n_people=config.n_people, seed=config.seed, subtype_reps=config.subtype_reps,
-                       gesture_reps=config.gesture_reps)
-    say(f'test scene: {config.n_people} simulated people, {len(scene.labels)} labelled interactions, '
+    scene = family_scene(config.family, config.n_people, config.seed, config.subtype_reps, config.gesture_reps)
+    say(f'test scene: {config.n_people} simulated people ({config.family}), {len(scene.labels)} labelled interactions, '
         f'{scene.duration_s:.0f} s')
     recognisers = {
         'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
@@ -349,7 +388,8 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None) 
         }
     best = results['model']
     return {
-        'data': 'synthetic: simulated people (knight2009 Table II statistics), not recordings of real people',
+        'data': f'synthetic: simulated people of the {config.family!r} family (test) and '
+                f'{"+".join(config.train_families)!r} (training), not recordings of real people',
         'subtype_accuracy': best['subtype']['accuracy'],
         'symbolic_accuracy': best['symbolic']['accuracy'],
         'median_detection_latency_s': best['symbolic']['median_latency_s'],

@@ -11,6 +11,8 @@ non-'none' subtype the touched sensors carried for the most cycles between the t
 cycle after its end ('none' if never); latency is from the trial's start to the first cycle in which
 a touched sensor carries the true subtype. Leave-one-person-out: a model trained on everybody else
 classifies each person's trials, behind the ``NoTouchGate`` as in the ``bear_gestures`` node.
+Pooled figures are over all trials of all people: accuracy is correct / trials, and
+``median_latency_s`` the median over every detected trial (never a median of per-person medians).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
 from touch_sim.bear.people import split_label
 
-__all__ = ['BearTrials', 'bear_trials', 'leave_one_person_out', 'score_trials', 'train_rows']
+__all__ = ['BearTrials', 'bear_trials', 'leave_one_person_out', 'pool_scores', 'score_trials', 'train_rows']
 
 
 @dataclass
@@ -144,7 +146,8 @@ def score_trials(runs: list[BearTrials], predictor) -> dict:
     return {'trials': len(truth), 'correct': int(sum(a == b for a, b in zip(truth, pred, strict=True))),
             'accuracy': float(np.mean([a == b for a, b in zip(truth, pred, strict=True)])) if truth else None,
             'confusion': confusion, 'median_latency_s': float(np.median(latencies)) if latencies else None,
-            'p90_latency_s': float(np.percentile(latencies, 90)) if latencies else None}
+            'p90_latency_s': float(np.percentile(latencies, 90)) if latencies else None,
+            'latencies_s': latencies}
 
 
 def _rate(run: BearTrials) -> float:
@@ -201,17 +204,19 @@ def leave_one_person_out(runs: list[BearTrials], seed: int = 0, progress: Callab
     for person in people:
         results[person] = score_trials(by_person[person], NoTouchGate(models[person]))
         rule[person] = score_trials(by_person[person], NoTouchGate(PaperRuleClassifier()))
-    return {'people': people, 'model': _pool(results), 'rule': _pool(rule),
+    return {'people': people, 'model': pool_scores(results), 'rule': pool_scores(rule),
             'per_person': {p: results[p]['accuracy'] for p in people}}
 
 
-def _pool(per_person: dict[str, dict]) -> dict:
+def pool_scores(per_person: dict[str, dict]) -> dict:
+    """:func:`score_trials` results of several people as one: every figure over all their trials."""
     trials = sum(r['trials'] for r in per_person.values())
     correct = sum(r['correct'] for r in per_person.values())
-    latencies = [r['median_latency_s'] for r in per_person.values() if r['median_latency_s'] is not None]
+    latencies = [v for r in per_person.values() for v in r['latencies_s']]
     return {'trials': trials, 'correct': correct, 'accuracy': correct / trials if trials else None,
             'confusion': sum(r['confusion'] for r in per_person.values()),
-            'median_latency_s': float(np.median(latencies)) if latencies else None}
+            'median_latency_s': float(np.median(latencies)) if latencies else None,
+            'p90_latency_s': float(np.percentile(latencies, 90)) if latencies else None}
 
 
 # ----------------------------------------------------------------------------- commands
@@ -224,30 +229,3 @@ def load_runs(paths: list[str], rate_hz: float, buffer_len: int, progress: Calla
         progress(f'features of {session.path} ({i + 1}/{len(sessions)}, {len(session.labels)} trials)')
         runs.append(bear_trials(session, rate_hz, buffer_len, lambda m: progress(f'warning: {m}')))
     return runs
-
-
-def format_lopo(result: dict, synthetic: bool) -> str:
-    """The text report of :func:`leave_one_person_out`."""
-    m, r = result['model'], result['rule']
-    data = 'SYNTHETIC: simulated people' if synthetic else 'recorded sessions'
-    lines = [f"Sensate Bear subtypes, leave-one-person-out over {len(result['people'])} people ({data})",
-             f"{'':34s} {'trained model':>14s} {'paper rule':>12s}",
-             f"{'subtype accuracy (per trial)':34s} {_pct(m['accuracy']):>14s} {_pct(r['accuracy']):>12s}",
-             f"{'trials':34s} {m['trials']:>14d} {r['trials']:>12d}",
-             f"{'median detection latency':34s} {_sec(m['median_latency_s']):>14s} {_sec(r['median_latency_s']):>12s}",
-             '', 'per person (trained model): ' + ', '.join(f'{p} {_pct(a).strip()}'
-                                                          for p, a in result['per_person'].items()),
-             '', 'confusion (trained model; rows true, columns predicted)',
-             '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *SUBTYPES])]
-    for name, row in zip(SUBTYPES, m['confusion'], strict=True):
-        if row.sum():
-            lines.append('  ' + f'{name[:6]:>6s} ' + ' '.join(f'{int(v):6d}' for v in row))
-    return '\n'.join(lines)
-
-
-def _pct(value) -> str:
-    return 'n/a' if value is None else f'{100 * value:5.1f} %'
-
-
-def _sec(value) -> str:
-    return 'n/a' if value is None else f'{value:.2f} s'

@@ -1,19 +1,21 @@
 """``social-touch train bear``: train the eight-subtype model on simulated people and write it as .npz (no pickle).
 
-    social-touch train bear --out config/bear_subtype_model.npz [--rate 3.4] [--buffer 20] [--people 8]
-    social-touch train bear --bags sessions/bear/* --out bear.npz   # + bear.gestures.yaml from symbolic trials
+    social-touch train bear -o config/bear_subtype_model.npz [--family both] [--rate 3.4] [--buffer 20] [--people 8]
+    social-touch train bear --bags sessions/bear/* -o bear.npz   # + bear.gestures.yaml from symbolic trials
 
 The model is tied to the scan rate and buffer length it was trained at (its features are); both are
 stored in the file (``trained_rate_hz_`` and ``trained_buffer_len_`` after ``SubtypeClassifier.load``),
-so a node can refuse a model trained for another rate. The training data is synthetic (simulated
-people, knight2009 Table II statistics); retrain on labelled recordings of the real bear when there
-are some.
+so a node can refuse a model trained for another rate. The training data is synthetic: simulated
+people of one or both families (``--family``: the Table II level waveforms of touch_sim/bear/people.py,
+the hands over plates of touch_sim/bear/hand_people.py); retrain on labelled recordings of the real
+bear when there are some.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
@@ -21,8 +23,12 @@ from touch_gestures.model_card import attach_card, make_card
 from touch_lab.cards import session_data
 from touch_lab.collect.session_bag import SessionError
 
-from .cli import positive_float, positive_int
-from .evaluate import EvalConfig, stderr_progress, train_subtype_model
+from .cli import positive_float, positive_int, train_families
+from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
+
+#: What each family of simulated people is, for the model card.
+FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 Table II statistics',
+               'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009'}
 
 __all__ = ['HELP', 'add_arguments', 'run']
 
@@ -31,52 +37,73 @@ HELP = 'train the Sensate Bear subtype model on simulated people (synthetic) and
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch train bear``."""
-    parser.add_argument('--out', required=True, help='the .npz file to write')
+    out = parser.add_mutually_exclusive_group(required=True)
+    out.add_argument('-o', '--output', help='the .npz file to write')
+    out.add_argument('--out', dest='deprecated_out', metavar='OUTPUT', help='deprecated spelling of -o/--output')
     parser.add_argument('--rate', type=positive_float, default=3.4, help='scan rate, Hz (3.4)')
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20)')
     parser.add_argument('--people', type=positive_int, default=8, help='simulated people to train on (8)')
     parser.add_argument('--seed', type=int, default=0, help='training scene seed is seed + 1000 (0)')
+    parser.add_argument('--family', choices=(*FAMILIES, 'both'), default='both',
+                        help='families of simulated people to train on, --people of each: script '
+                        '(touch_sim/bear/people.py), hands (touch_sim/bear/hand_people.py) or both (both)')
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='train on these session bags (social-touch collect bear) instead of simulated people')
     parser.add_argument('--gestures-config', metavar='YAML',
                         help='--bags: the symbolic gesture config whose min_active / dwell_s are suggested from the '
                         "bags' symbolic/<gesture> trials (default: the package's config/bear_gestures.yaml)")
     parser.add_argument('--suggest-out', metavar='YAML',
-                        help='--bags: where to write the suggested gesture config (default: beside --out, '
+                        help='--bags: where to write the suggested gesture config (default: beside -o/--output, '
                         'MODEL.gestures.yaml; never the config it is made from)')
     parser.add_argument('--evaluate', action='store_true',
                         help="also measure the model's figures (bags: leave-one-person-out; simulated: held-out "
                         "simulated people, `eval bear`) and record them in the file's card")
 
 
+def _output(args: argparse.Namespace) -> None:
+    """``--out`` (deprecated, with a warning) as ``--output``, as in ``train patch`` and ``train skin``."""
+    if getattr(args, 'deprecated_out', None):
+        print('social-touch train bear: warning: --out is deprecated; use -o/--output (as train patch and train '
+              'skin do)', file=sys.stderr)
+        args.output = args.deprecated_out
+
+
 def run(args: argparse.Namespace) -> int:
     """Train and write the model; progress on stderr."""
+    _output(args)
     if args.bags:
         return _run_bags(args)
-    config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed)
+    families = train_families(args.family)
+    config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed,
+                        train_families=families)
     model = train_subtype_model(config, progress=stderr_progress)
-    model.save(args.out, rate_hz=args.rate, buffer_len=args.buffer)
+    model.save(args.output, rate_hz=args.rate, buffer_len=args.buffer)
     reps = config.subtype_reps + 1   # train_subtype_model's scene
-    data = {'synthetic': True, 'source': 'simulated people (touch_sim/bear/people.py, knight2009 Table II '
-            f'statistics), scene seed {args.seed + 1000}, through the virtual bear and bear_driver',
-            'people': args.people, 'trials_per_class': {s: reps * args.people for s in TOUCH_SUBTYPES},
+    population = '; '.join(f'{args.people} of the {f!r} family ({FAMILY_TEXT[f]})' for f in families)
+    data = {'synthetic': True, 'source': 'simulated people through the virtual bear and bear_driver, scene seed '
+            f'{args.seed + 1000}: {population}',
+            'families': list(families), 'people': args.people * len(families),
+            'trials_per_class': {s: reps * args.people * len(families) for s in TOUCH_SUBTYPES},
             'rate_hz': args.rate, 'buffer_cycles': args.buffer}
     evaluation = None
     if args.evaluate:
         from .evaluate import evaluate
-        result = evaluate(config, progress=stderr_progress)
-        m = result['model']
-        evaluation = {'method': f'held-out simulated people (scene seed {args.seed}), `social-touch eval bear '
-                      f'--seed {args.seed} --rate {args.rate} --buffer {args.buffer} --train-people {args.people}`',
-                      'synthetic': True, 'subtype_accuracy': m['subtype']['accuracy'],
-                      'subtype_frame_accuracy': m['subtype']['frame_accuracy'],
-                      'median_subtype_latency_s': m['subtype']['median_latency_s'],
-                      'symbolic_accuracy': m['symbolic']['accuracy'],
-                      'median_symbolic_latency_s': m['symbolic']['median_latency_s'],
-                      'paper_rule_subtype_accuracy': result['rule']['subtype']['accuracy']}
-    attach_card(args.out, make_card('bear_subtype_model', data=data, evaluation=evaluation))
-    print(f'wrote {args.out}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
-          f'on {args.people} simulated people (synthetic)', file=sys.stderr)
+        evaluation = {'method': f'held-out simulated people of each family (scene seed {args.seed}), `social-touch '
+                      f'eval bear --model {args.output} --family F --seed {args.seed} --rate {args.rate} --buffer '
+                      f'{args.buffer}`', 'synthetic': True}
+        for family in FAMILIES:
+            result = evaluate(replace(config, family=family), progress=stderr_progress, model=model)
+            m = result['model']
+            evaluation[family] = {
+                'subtype_accuracy': m['subtype']['accuracy'], 'subtype_frame_accuracy': m['subtype']['frame_accuracy'],
+                'median_subtype_latency_s': m['subtype']['median_latency_s'],
+                'symbolic_accuracy': m['symbolic']['accuracy'],
+                'symbolic_false_alarms': m['symbolic']['false_alarms'],
+                'median_symbolic_latency_s': m['symbolic']['median_latency_s'],
+                'paper_rule_subtype_accuracy': result['rule']['subtype']['accuracy']}
+    attach_card(args.output, make_card('bear_subtype_model', data=data, evaluation=evaluation))
+    print(f'wrote {args.output}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
+          f'on {args.people} simulated people of each of {", ".join(families)} (synthetic)', file=sys.stderr)
     return 0
 
 
@@ -95,7 +122,7 @@ def _run_bags(args: argparse.Namespace) -> int:
         body_map = BodyMap.default()
         config = args.gestures_config or share_file('config', 'bear_gestures.yaml')
         library = GestureLibrary.load(config, body_map)
-        out = Path(args.suggest_out or default_output(args.out))
+        out = Path(args.suggest_out or default_output(args.output))
         if out.resolve() == Path(config).resolve():
             raise SessionError(f'--suggest-out {out} is the gesture config the suggestion is made from; the '
                                'suggestion goes to a new file')
@@ -114,7 +141,7 @@ def _run_bags(args: argparse.Namespace) -> int:
     except (SocialTouchError, ValueError) as err:
         print(f'social-touch train bear: error: {err}', file=sys.stderr)
         return 2
-    model.save(args.out, rate_hz=args.rate, buffer_len=args.buffer)
+    model.save(args.output, rate_hz=args.rate, buffer_len=args.buffer)
     synthetic = any(r.session.synthetic for r in runs)
     card_data = session_data(((lab.person, lab.gesture) for r in runs for lab in (*r.labels, *r.gestures)),
                              synthetic=synthetic, bags=args.bags)
@@ -124,7 +151,7 @@ def _run_bags(args: argparse.Namespace) -> int:
         header = (f'Suggested by `social-touch train bear --bags` from\n  {config}\nand '
                   f'{sum(len(r.gestures) for r in runs)} labelled gesture trials '
                   f'({"SYNTHETIC: simulated people" if synthetic else "recorded sessions"}); only min_active and '
-                  f'dwell_s differ.\nHow, and the leave-one-person-out figures: the model card of {args.out}.')
+                  f'dwell_s differ.\nHow, and the leave-one-person-out figures: the model card of {args.output}.')
         try:
             changed = write_config(config, out, suggestion['suggestions'], header, body_map)
         except SocialTouchError as err:
@@ -148,8 +175,8 @@ def _run_bags(args: argparse.Namespace) -> int:
                       'synthetic': synthetic, 'subtype_accuracy': result['model']['accuracy'],
                       'median_subtype_latency_s': result['model']['median_latency_s'],
                       'paper_rule_subtype_accuracy': result['rule']['accuracy'], 'people': len(result['people'])}
-    attach_card(args.out, make_card('bear_subtype_model', data=card_data, evaluation=evaluation))
+    attach_card(args.output, make_card('bear_subtype_model', data=card_data, evaluation=evaluation))
     data = 'SYNTHETIC (simulated people)' if synthetic else 'recorded'
-    print(f'wrote {args.out}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
+    print(f'wrote {args.output}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
           f'on {len(args.bags)} session bags ({data})', file=sys.stderr)
     return 0

@@ -227,6 +227,8 @@ def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--holds-s', dest='dwells_s', type=_floats, action=_Renamed, new='--dwells-s',
                         help=argparse.SUPPRESS)
     parser.add_argument('--json', action='store_true', help='print one JSON object')
+    parser.add_argument('--model', metavar='FILE', help='score this trained model (.npz) as it is on the sessions, '
+                        'without retraining (its own window, threshold and hold)')
 
 
 def run_eval(args: argparse.Namespace) -> int:
@@ -235,6 +237,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
     say = _progress(args)
     sessions = load_sessions(args, say)
+    if args.model:
+        return _eval_model(args, sessions)
     try:
         result = leave_one_subject_out(sessions, n_components=args.components, thresholds=args.thresholds,
                                        dwells_s=args.dwells_s, window_s=args.window_s, release=args.release,
@@ -249,6 +253,22 @@ def run_eval(args: argparse.Namespace) -> int:
         print(json.dumps(_jsonable(report), indent=2))
     else:
         print(format_report(report))
+    return 0
+
+
+def _eval_model(args: argparse.Namespace, sessions) -> int:
+    """``eval patch --model FILE``: :func:`~touch_lab.patch.evaluate.score_model`."""
+    from touch_gestures.patch.model_io import load_model
+    from touch_lab.patch.evaluate import score_model
+    try:
+        report = score_model(sessions, load_model(args.model))
+    except ValueError as err:   # ModelFileError is one too
+        raise SystemExit(f'eval patch: {err}') from err
+    report['model'] = args.model
+    print(json.dumps(_jsonable(report), indent=2) if args.json else
+          f"{args.model} on {len(report['subjects'])} subjects ({'SYNTHETIC' if report['synthetic'] else 'recorded'}): "
+          f"{report['event_correct']} / {report['n_events']} events correct, {report['false_detections']} false "
+          f"detections, median latency {report['median_detection_latency_s']:.2f} s (over all detected events)")
     return 0
 
 

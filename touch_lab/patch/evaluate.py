@@ -357,3 +357,26 @@ def leave_one_subject_out(sessions: list[Session], n_components: Sequence[int] =
 
     best = max(points, key=merit)
     return EvaluationResult(points, best, window, rate, subjects, any(s.synthetic for s in sessions), release)
+
+
+def score_model(sessions: list[Session], model, late_s: float | None = None) -> dict:
+    """A trained model file (``PatchModel``: classifier, window, threshold, release, hold) scored as it is on
+    every session, without retraining (``eval patch --bags ... --model FILE``). Same scores as one grid point
+    of :func:`leave_one_subject_out`; figures pooled over all sessions of all subjects."""
+    if not sessions:
+        raise ValueError('no sessions to evaluate')
+    rate = common_rate([s.rate_hz for s in sessions], [s.source or s.subject for s in sessions])
+    if abs(rate / model.rate_hz - 1) > 0.05:
+        raise ValueError(f'the model was trained at {model.rate_hz:g} Hz; these sessions run at {rate:.3g} Hz')
+    clf, classes = model.classifier, tuple(str(c) for c in model.classifier.classes_)
+    late_s = model.window / rate if late_s is None else late_s
+    metrics = Metrics(classes)
+    for s in sessions:
+        lp = clf.predict_log_proba(window_features(s.activations, model.window, model.k))
+        dets = run_detector(lp, onset_ages(s.activations, model.window, model.k), classes, clf.threshold,
+                            model.release, rate, hold=model.hold)
+        metrics.add(score(dets, session_truth(s, k=model.k), s.gesture, decide(lp, clf.threshold), classes, rate,
+                          late_s=late_s))
+    return {'synthetic': any(s.synthetic for s in sessions), 'subjects': sorted({s.subject for s in sessions}),
+            'method': 'the given model, not retrained, on every session', 'rate_hz': rate,
+            'threshold': clf.threshold, 'hold_frames': model.hold, 'release': model.release, **metrics.as_dict()}

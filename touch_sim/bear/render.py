@@ -76,6 +76,7 @@ class BearCycles:
             ``faults``), else ValueError.
         calibrator_options: ``BearCalibrator`` keywords; only the driver parameters in :data:`DRIVER_PARAMETERS`.
         poll_rate_hz: the driver's poll rate (default: the driver's own, twice the scan rate).
+        port_options: faults of the virtual port (``drop``, ``garbage``, ``corrupt``: touch_sim.virtual_port).
 
     Attributes:
         counters: after :meth:`cycles` has run: the driver's frames, dropped bytes, checksum errors,
@@ -84,7 +85,7 @@ class BearCycles:
 
     def __init__(self, stimulus: Any, rate_hz: float = REAL_RATE_HZ, seed: int = 0,
                  device_options: dict | None = None, calibrator_options: dict | None = None,
-                 poll_rate_hz: float | None = None) -> None:
+                 poll_rate_hz: float | None = None, port_options: dict | None = None) -> None:
         if not (rate_hz > 0 and math.isfinite(rate_hz)):
             raise ValueError(f'rate_hz must be a positive number of scans per second; got {rate_hz}')
         if poll_rate_hz is not None and not (poll_rate_hz > 0 and math.isfinite(poll_rate_hz)):
@@ -98,6 +99,7 @@ class BearCycles:
         self.seed = int(seed)
         self.frame_period = 1.0 / self.rate_hz
         self.url_options = url_options(rate_hz, device_options)   # ValueError now, not when iterating
+        self.url_options.update({k: str(v) for k, v in (port_options or {}).items()})
         self.parameters: dict[str, Any] = {'expected_rate_hz': self.rate_hz, **(calibrator_options or {})}
         if poll_rate_hz is not None:
             self.parameters['poll_rate_hz'] = float(poll_rate_hz)

@@ -1,0 +1,174 @@
+"""Score a given subtype model on recorded sessions without retraining (``eval bear --bags ... --model FILE``).
+
+The model classifies every trial of every person in the bags as it ships (behind the ``NoTouchGate``,
+as in the ``bear_gestures`` node); the paper's rule is scored beside it. The symbolic gestures run
+through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser` with the given gesture
+library, fed the model's subtype codes, over each whole session.
+
+Symbolic scoring, per gesture ``g`` (every figure pooled over all trials of all people):
+
+- *detected*: trials labelled ``symbolic/g`` during which ``g`` STARTed (from the trial's start to
+  :func:`~.evaluate.start_grace_s` after its end), over the trials of ``g``;
+- *false starts*: STARTs of ``g`` that no trial of ``g`` explains: during another gesture's trial,
+  during a single-sensor subtype trial of another subtype than the one ``g`` is performed with (a pat
+  on the shoulder is not a shoulder tap; a pat on the crown is a head pat), or outside every trial.
+  Each START counts once; ``false_starts_by_cause`` splits them by where they fell;
+- *latency*: seconds from the trial's start to ``g``'s first START in it; ``median_latency_s`` is the
+  median over every detected trial.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from touch_driver.bear.body_map import BodyMap
+from touch_gestures.bear.gate import NoTouchGate
+from touch_gestures.bear.subtype import PaperRuleClassifier
+from touch_gestures.bear.subtype_labels import SUBTYPES
+from touch_gestures.bear.symbolic import GestureLibrary
+from touch_sim.bear.people import PERFORMANCES, split_label
+
+from .evaluate import SYMBOLIC_GRACE_S, start_grace_s
+from .sessions import BearTrials, pool_scores, score_trials
+from .suggest import _run_library, trial_codes
+
+__all__ = ['STATISTICS', 'format_scores', 'score_model', 'score_symbolic_starts']
+
+#: What each pooled figure of :func:`score_model` is, in words (the JSON carries it).
+STATISTICS = {
+    'accuracy': 'correct trials / trials, over all trials of all people',
+    'median_latency_s': 'median over all detected trials of all people (not a median of per-person medians)',
+    'p90_latency_s': '90th percentile over all detected trials of all people',
+    'per_person': 'accuracy over each person\'s own trials',
+    'detected': 'trials of the gesture during which it STARTed, over all trials of all people',
+    'false_starts': 'STARTs of the gesture no trial of it explains, summed over all sessions',
+}
+
+
+def _own_subtype(gesture: str) -> str | None:
+    """The touch subtype people perform ``gesture`` with (None for gestures not scripted)."""
+    perf = PERFORMANCES.get(gesture)
+    return perf.subtype if perf is not None else None
+
+
+def score_symbolic_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]],
+                          library: GestureLibrary) -> dict[str, dict]:
+    """Per detectable gesture of ``library``: trials, detected, false starts (and by cause), latencies
+    (module doc). ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
+    """
+    names = [g.name for g in library.detectable]
+    grace = {n: start_grace_s(library[n]) for n in names}
+    out = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
+               'false_starts_by_cause': {'other_gesture': 0, 'subtype_trial': 0, 'outside_trials': 0}}
+           for n in names}
+    for run, run_starts in zip(runs, starts, strict=True):
+        spans = [(lab.start_s, lab.end_s + grace.get(split_label(lab.gesture)[1], SYMBOLIC_GRACE_S),
+                  *split_label(lab.gesture)) for lab in (*run.labels, *run.gestures)]
+        explained = np.zeros(len(run_starts), dtype=bool)
+        for lo, hi, kind, name in spans:
+            if kind != 'symbolic' or name not in out:
+                continue
+            out[name]['trials'] += 1
+            own = [i for i, (g, t) in enumerate(run_starts) if g == name and lo <= t <= hi]
+            if own:
+                out[name]['detected'] += 1
+                out[name]['latencies_s'].append(run_starts[own[0]][1] - lo)
+                explained[own] = True
+        for i, (g, t) in enumerate(run_starts):
+            if explained[i] or g not in out:
+                continue
+            during = [(kind, name) for lo, hi, kind, name in spans if lo <= t <= hi]
+            if not during:
+                cause = 'outside_trials'
+            elif any(kind == 'subtype' and name == _own_subtype(g) for kind, name in during):
+                continue                     # the gesture's own touch on its filter: not false
+            elif any(kind == 'symbolic' for kind, _ in during):
+                cause = 'other_gesture'
+            else:
+                cause = 'subtype_trial'
+            out[g]['false_starts'] += 1
+            out[g]['false_starts_by_cause'][cause] += 1
+    return out
+
+
+def _summarise(per_gesture: dict[str, dict]) -> dict:
+    """Per gesture and in total: detected / trials, false starts, latency medians (over all trials)."""
+    gestures = {}
+    for name, s in per_gesture.items():
+        lat = s['latencies_s']
+        gestures[name] = {'trials': s['trials'], 'detected': s['detected'],
+                          'detected_fraction': s['detected'] / s['trials'] if s['trials'] else None,
+                          'false_starts': s['false_starts'], 'false_starts_by_cause': s['false_starts_by_cause'],
+                          'median_latency_s': float(np.median(lat)) if lat else None}
+    trials = sum(s['trials'] for s in per_gesture.values())
+    detected = sum(s['detected'] for s in per_gesture.values())
+    lat = [v for s in per_gesture.values() for v in s['latencies_s']]
+    return {'trials': trials, 'detected': detected, 'detected_fraction': detected / trials if trials else None,
+            'false_starts': sum(s['false_starts'] for s in per_gesture.values()),
+            'median_latency_s': float(np.median(lat)) if lat else None, 'per_gesture': gestures}
+
+
+def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map: BodyMap | None = None,
+                progress: Callable[[str], None] | None = None, fold_models: dict | None = None) -> dict:
+    """Scores of ``model`` (a ``SubtypeClassifier``, as it ships) on every person of ``runs``, and of the rule.
+
+    ``fold_models`` (person -> model), when given, classifies each person's sessions instead of ``model``
+    (leave-one-person-out). Returns ``people``, ``model`` and ``rule`` (pooled subtype scores of
+    :func:`~.sessions.score_trials`), ``per_person`` (model accuracy), ``symbolic`` (detections, false
+    starts and latency per gesture with the model's codes) and ``statistics`` (what each figure is).
+    """
+    say = progress or (lambda _m: None)
+    body_map = body_map or BodyMap.default()
+    people = sorted({lab.person for run in runs for lab in (*run.labels, *run.gestures)})
+    subtype, rule, starts = {}, {}, []
+    runs_in_order = []
+    for person in people:
+        mine = [r for r in runs if any(lab.person == person for lab in (*r.labels, *r.gestures))]
+        predictor = NoTouchGate((fold_models or {}).get(person, model))
+        subtype[person] = score_trials(mine, predictor)
+        rule[person] = score_trials(mine, NoTouchGate(PaperRuleClassifier()))
+        for run in mine:
+            if any(run is r for r in runs_in_order):
+                continue
+            say(f'symbolic gestures over {run.session.path}')
+            starts.append(_run_library(run, trial_codes(run, predictor), library, body_map))
+            runs_in_order.append(run)
+    symbolic = _summarise(score_symbolic_starts(runs_in_order, starts, library))
+    return {'people': people, 'model': pool_scores(subtype), 'rule': pool_scores(rule),
+            'per_person': {p: subtype[p]['accuracy'] for p in people},
+            'symbolic': symbolic, 'statistics': STATISTICS}
+
+
+def format_scores(result: dict, synthetic: bool) -> str:
+    """The text report of :func:`score_model` (with the ``method`` line the command adds)."""
+    from .cli import _pct, _sec
+    m, r, sym = result['model'], result['rule'], result['symbolic']
+    data = 'SYNTHETIC: simulated people' if synthetic else 'recorded sessions'
+    lines = [f"Sensate Bear on {len(result['people'])} people ({data})", f"method: {result['method']}",
+             f"{'':44s} {'subtype model':>14s} {'paper rule':>12s}",
+             f"{'subtype accuracy (over all trials)':44s} {_pct(m['accuracy']):>14s} {_pct(r['accuracy']):>12s}",
+             f"{'trials':44s} {m['trials']:>14d} {r['trials']:>12d}",
+             f"{'median detection latency (over all trials)':44s} {_sec(m['median_latency_s']):>14s} "
+             f"{_sec(r['median_latency_s']):>12s}",
+             '', 'per person (subtype model): ' + ', '.join(f'{p} {_pct(a).strip()}'
+                                                          for p, a in result['per_person'].items()),
+             '', 'subtype confusion (model; rows true, columns predicted)',
+             '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *SUBTYPES])]
+    for name, row in zip(SUBTYPES, m['confusion'], strict=True):
+        if row.sum():
+            lines.append('  ' + f'{name[:6]:>6s} ' + ' '.join(f'{int(v):6d}' for v in row))
+    lines += ['', f"symbolic gestures ({result.get('gestures', '')}): detected {sym['detected']} / {sym['trials']} "
+              f"({_pct(sym['detected_fraction']).strip()}), false starts {sym['false_starts']}, median latency "
+              f"{_sec(sym['median_latency_s'])} (over all detected trials)",
+              f"  {'gesture':13s} {'detected':>10s} {'false starts':>13s} {'(other gesture / subtype / outside)':>36s} "
+              f"{'latency':>8s}"]
+    for name, g in sym['per_gesture'].items():
+        if not g['trials'] and not g['false_starts']:
+            continue
+        c = g['false_starts_by_cause']
+        lines.append(f"  {name:13s} {g['detected']:>4d} / {g['trials']:<3d} {g['false_starts']:>13d} "
+                     f"{c['other_gesture']:>17d} / {c['subtype_trial']:>3d} / {c['outside_trials']:>3d}      "
+                     f"{_sec(g['median_latency_s']):>8s}")
+    return '\n'.join(lines)
