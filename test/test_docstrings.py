@@ -42,14 +42,6 @@ ROOT = Path(__file__).resolve().parent.parent
 #: The runtime: what a robot runs (docs/DEVELOPING.md); every module under these packages is read.
 RUNTIME = ('touch_graph', 'touch_driver', 'touch_gestures', 'social_touch_msgs')
 
-#: Parts of the runtime being rewritten on other branches while this test was written (issue 24):
-#: their figures are known and go with the rewrite. Strict xfail: the day a part is clean this test
-#: XPASSes and fails, and its entry is deleted here (the lead flips it at merge).
-PENDING = {
-    'touch_gestures/skin': 'branch slim-skin rewrites the skin recognisers and their docstrings',
-    'touch_gestures/bear': 'branch bear rewrites the bear recognisers and their docstrings',
-}
-
 #: (path relative to the repo, text of the figure's line that must contain it, reason).
 ALLOWED = (
     ('touch_gestures/monitor_node.py', '] bear      hug started', 'sample output: a stamp, not a figure'),
@@ -57,6 +49,7 @@ ALLOWED = (
     ('touch_gestures/monitor_node.py', '] skin      command', 'sample output: a stamp, not a figure'),
     ('touch_gestures/monitor_node.py', '] panels    someone', 'sample output: a stamp, not a figure'),
     ('touch_graph/subscriber_drops.py', 'dropped in the last', 'sample log line: its window is a setting'),
+    ('touch_gestures/bear/sensor_level.py', 'activation state boolean', "the paper's words (V.A), a quote across lines"),
 )
 
 FIGURE = re.compile(r'(?<![\w.])(\d+(?:[.,]\d+)*)\s?(%|ns|us|µs|ms|s)(?![\w/])')
@@ -104,11 +97,9 @@ def measured_figures(line: str) -> list[str]:
 
 
 def modules(part: str) -> list[Path]:
-    """The Python files of a package of :data:`RUNTIME` (less its :data:`PENDING` parts) or of a pending part."""
+    """The Python files of a package of :data:`RUNTIME`."""
     paths = sorted((ROOT / part).rglob('*.py'))
-    if part in RUNTIME:
-        paths = [p for p in paths if not any(p.is_relative_to(ROOT / pending) for pending in PENDING)]
-    assert paths, f'{part}: no Python file (a renamed package? update RUNTIME or PENDING)'
+    assert paths, f'{part}: no Python file (a renamed package? update RUNTIME)'
     return paths
 
 
@@ -124,8 +115,7 @@ def offenders(part: str) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize('part', [
-    *RUNTIME, *(pytest.param(p, marks=pytest.mark.xfail(strict=True, reason=why)) for p, why in PENDING.items())])
+@pytest.mark.parametrize('part', RUNTIME)
 def test_runtime_prose_quotes_no_measured_figure(part):
     found = offenders(part)
     assert not found, ('measured figures in runtime docstrings or comments; move them to the '

@@ -57,7 +57,7 @@ PAPER_FEATURES = ('peak_amplitude', 'base_frequency_hz', 'spectral_spread_hz', '
 FEATURE_NAMES = (*PAPER_FEATURES, 'mean_level', 'std_level', 'active_fraction', 'latest_level', 'onset_rate_hz',
                  'spectral_peakiness', 'roughness_per_s', 'since_active_s')
 #: Smallest sinusoid amplitude (level units, 0..1) that counts as a frequency component. Not from the
-#: paper: 0.02 is 2 % of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
+#: paper: 0.02 of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
 MIN_COMPONENT = 0.02
 
 _F = {name: i for i, name in enumerate(FEATURE_NAMES)}

@@ -41,7 +41,7 @@ from .gate import NoTouchGate
 from .pipeline import BearRecogniser
 from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, N_CHANNELS
 from .subtype import PaperRuleClassifier, SubtypePredictor
-from .subtype_model import SubtypeClassifier  # imports scikit-learn (~1 s): at class lookup, before nodes start
+from .subtype_model import SubtypeClassifier  # imports scikit-learn (slow): at class lookup, before nodes start
 from .symbolic import END, GestureLibrary
 
 __all__ = ['DEFAULT_MODEL', 'BearGesturesNode', 'main']

@@ -62,7 +62,7 @@ __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_
 SINGLE_STROKE_GAP_S = 0.15
 #: Gap (s) for vocabularies with multi-stroke gestures. Chosen on the pauses between the strokes
 #: of the Mixed Multistroke Gestures traces (10 people, 3 speeds; `social-touch eval skin
-#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which 0.25 s more keeps hardly
+#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which a longer one keeps hardly
 #: more samples whole. It is also the latency every command pays after the last lift, so the knee
 #: of that table, not its tail.
 MULTISTROKE_GAP_S = 1.5
@@ -102,9 +102,10 @@ def verdict_of(answer: bool | Verdict) -> Verdict:
 
 
 _EIGHT = np.ones((3, 3), dtype=bool)
-#: Lifts are differences of float64 seconds made from integer-nanosecond stamps (about 0.24 us apart
-#: at today's epoch): a lift of exactly gap_s frames could come out a rounding short and wait one
-#: more frame (6.7 ms at 150 Hz). 1 us covers that rounding and is far below any frame period.
+#: Lifts are differences of float64 seconds made from integer-nanosecond stamps (float64's spacing
+#: near today's epoch is a fraction of a microsecond): a lift of exactly gap_s frames could come out a
+#: rounding short and wait one more frame. The tolerance covers that rounding and is far below any
+#: frame period.
 _LIFT_TOLERANCE_S = 1e-6
 
 
@@ -135,7 +136,7 @@ class GestureSegmenter:
             strokes. Not in the paper; 0.15 s joins the gaps of a finger skipping taxels
             (single-stroke vocabularies), :data:`MULTISTROKE_GAP_S` the strokes of symbols.
         max_duration_s: a touch is cut after this long (s). Not in the paper; 10 s is
-            longer than any traced gesture of the $1 logs (7.5 s, slow).
+            longer than any traced gesture of the $1 logs (docs/skin-evaluation.md).
         min_frames: contacts with fewer frames are dropped as taps or noise.
         map_threshold: pressure (1 = full scale) a taxel must reach to enter the binary map
             (cirillo2017 3.1: "a binary image is obtained by thresholding"); 0.02 is twice the

@@ -15,7 +15,7 @@ follows ``ROS_DISTRO`` (``humble`` and older: 24, anything else or unset: 16).
 
 **Complete answers.** A participant's ``ros_discovery_info`` sample can come seconds after the
 participant: Fast DDS sends a latched sample to a newly matched reader on its first heartbeat
-to it (12 ms after matching) and then only on its periodic one (3 s); when that first
+to it, shortly after matching, and then only on its periodic one (period = 3 s); when that first
 heartbeat reaches us before we know its writer, the sample waits for the next. So when a
 remote ``ros_discovery_info`` writer is discovered before its participant's sample, a fresh
 reader is made (a *nudge*): the writer matches it and heartbeats at once. And
