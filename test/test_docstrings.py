@@ -49,7 +49,7 @@ ALLOWED = (
     ('touch_gestures/monitor_node.py', '] skin      command', 'sample output: a stamp, not a figure'),
     ('touch_gestures/monitor_node.py', '] panels    someone', 'sample output: a stamp, not a figure'),
     ('touch_graph/subscriber_drops.py', 'dropped in the last', 'sample log line: its window is a setting'),
-    ('touch_gestures/bear/sensor_level.py', 'activation state boolean', "the paper's words (V.A), a quote across lines"),
+    ('touch_gestures/bear/sensor_level.py', 'activation state boolean', "the paper's words (V.A), quoted over lines"),
 )
 
 FIGURE = re.compile(r'(?<![\w.])(\d+(?:[.,]\d+)*)\s?(%|ns|us|µs|ms|s)(?![\w/])')
