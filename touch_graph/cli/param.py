@@ -82,7 +82,8 @@ class _Params:
         self.include_hidden = args.include_hidden_nodes
 
     def node(self, name: str) -> str:
-        return self.tool.require_node(name, self.include_hidden)
+        # a Fast DDS node's ros_discovery_info can come seconds after its endpoints: wait as for a service
+        return self.tool.require_node(name, self.include_hidden, wait_s=self.timeout)
 
     def call(self, node: str, service: str, **fields: Any) -> Any:
         """The response of ``node``'s parameter service ``service`` (e.g. ``get_parameters``) to ``fields``."""
