@@ -143,7 +143,7 @@ class _Pair:
         self.waker: Any = None  # the DdsWaker of the executor taking from the reader
         self.undecodable = 0
         self.incompatible = 0
-        self._reported: set[int] = set()
+        self._reported: set[int | bytes] = set()  # writer handles or GUIDs said once
         self._fast_writers: dict[int, bool] = {}  # matched writer handle -> made by Fast DDS
 
     def qos_checks(self) -> list[tuple[Any, bool, str, str]]:
@@ -242,7 +242,7 @@ class DdsService(_Pair):
                 took = True
         return took
 
-    def _fast_dds_client(self, handle: int, counted: bool = True) -> None:
+    def _fast_dds_client(self, handle: int | bytes, counted: bool = True) -> None:
         """A Fast DDS client (or its request): it would drop any reply we can send, so none is sent; said once."""
         self.fast_dds_requests += counted
         if handle in self._reported:
@@ -269,14 +269,19 @@ class DdsService(_Pair):
             self.failed += 1
 
     def check_clients(self) -> None:
-        """Say once per client when a Fast DDS client matched our request reader (housekeeping)."""
-        try:
-            handles = self.reader.get_matched_publications()
-        except Exception:  # deleted under us (shutdown)
+        """Say once per client when the graph has a Fast DDS client of the service (housekeeping).
+
+        Read from discovery, not from our reader's matches: Cyclone does not match a Fast DDS
+        request writer whose type information lacks the request header.
+        """
+        graph = getattr(self.participant, 'graph', None)
+        if graph is None:
             return
-        for handle in handles:
-            if handle not in self._reported and self.writer_is_fast_dds(handle):
-                self._fast_dds_client(handle, counted=False)
+        with graph._lock:
+            endpoints = list(graph._endpoints.items())
+        for key, e in endpoints:
+            if e['kind'] == 'writer' and e['topic'] == self.read_topic and is_fast_dds(key):
+                self._fast_dds_client(bytes(key), counted=False)
 
     def _client_state(self, handle: int) -> str:
         """'yes' (its reply reader is matched), 'gone' (its request writer left) or 'maybe' (after waiting)."""
@@ -446,11 +451,13 @@ class DdsClient(_Pair):
         graph = getattr(self.participant, 'graph', None)
         if graph is None:
             return 0
-        mine = self.reader_gid
+        mine = {self.reader_gid}
+        if self._plain_reader is not None:
+            mine.add(self._plain_reader.get_guid().bytes)
         with graph._lock:
             endpoints = list(graph._endpoints.items())
         return sum(1 for key, e in endpoints
-                   if e['kind'] == 'reader' and e['topic'] == self.read_topic and bytes(key) != mine)
+                   if e['kind'] == 'reader' and e['topic'] == self.read_topic and bytes(key) not in mine)
 
     def drain(self) -> bool:
         """Take the replies DDS holds; ours go onto the client's queue (executor thread). True if any did."""
