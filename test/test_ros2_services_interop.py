@@ -171,3 +171,23 @@ def test_a_real_rclpy_client_of_our_server_gets_no_reply_and_we_say_why_at_once(
         if proc is not None:
             _stop(proc)
         graph.close()
+
+
+def test_real_rclpys_get_type_description_agrees_with_ours(rclpy_server) -> None:
+    """Our client asks the rclpy node (rcl's type description service) to describe the types it uses."""
+    from touch_graph import type_description
+    from touch_graph.messages import to_dict
+    from touch_graph.runtime.type_description_service import SERVICE_TYPE, description_msg
+    GetTypeDescription = get_service(SERVICE_TYPE)
+    graph = SpinningGraph()
+    try:
+        node = graph.add_node('asker')
+        client = graph.call(node.create_client, GetTypeDescription, '/rs/real_node/get_type_description')
+        assert client.wait_for_service(timeout_sec=10.0)
+        for name in ('std_srvs/srv/Trigger', 'rcl_interfaces/msg/ParameterEvent', 'rcl_interfaces/msg/Log'):
+            request = GetTypeDescription.Request(type_name=name, type_hash=type_description.type_hash(name))
+            response = client.call(request, timeout_sec=5.0)
+            assert response is not None and response.successful, (name, response)
+            assert to_dict(response.type_description) == to_dict(description_msg(name)), name
+    finally:
+        graph.close()
