@@ -271,8 +271,8 @@ class DdsService(_Pair):
     def check_clients(self) -> None:
         """Say once per client when the graph has a Fast DDS client of the service (housekeeping).
 
-        Read from discovery, not from our reader's matches: Cyclone does not match a Fast DDS
-        request writer whose type information lacks the request header.
+        Read from discovery: Cyclone matches a Fast DDS request writer but drops its requests
+        (header-less, they fail the check against our type), so none reaches :meth:`drain`.
         """
         graph = getattr(self.participant, 'graph', None)
         if graph is None:
