@@ -152,3 +152,31 @@ def test_a_foreign_request_layout_is_refused_and_reported_the_server_lives(dds_d
     finally:
         delete_entity(foreign)
         a.close()
+
+
+def test_service_endpoints_announce_the_service_types_hash_as_rmw_does(dds_domain):
+    """``serviceid=...;typehash=RIHS01_...;`` on both topics of a server, ``clientid=`` likewise."""
+    from touch_graph.dds.discovery import user_data_value
+    from touch_graph.type_description import type_hash
+    a, b = SpinningGraph(), SpinningGraph()
+    try:
+        serve(a, echo)
+        caller = b.add_node('caller')
+        b.call(lambda: caller.create_client(SetBool, '/switch'))
+        expected = type_hash('std_srvs/srv/SetBool')
+        # as ros-jazzy-std-srvs 5.3.6 installs it (share/std_srvs/srv/SetBool.json)
+        assert expected == 'RIHS01_abe9e4bb6b41b40e6789712c00ec8871923e089af3f667a79992a428cff2da0a'
+
+        def announced():
+            endpoints = dict(a.context.transport.graph._endpoints)
+            found = {(e['kind'], e['topic'], user_data_value(e['qos_raw'], 'typehash'),
+                      'server' if user_data_value(e['qos_raw'], 'serviceid') else 'client')
+                     for e in endpoints.values() if e['topic'] in ('rq/switchRequest', 'rr/switchReply')}
+            return found == {('reader', 'rq/switchRequest', expected, 'server'),
+                             ('writer', 'rr/switchReply', expected, 'server'),
+                             ('writer', 'rq/switchRequest', expected, 'client'),
+                             ('reader', 'rr/switchReply', expected, 'client')}
+        wait_until(announced, 10, 'the service endpoints with their type hash')
+    finally:
+        a.close()
+        b.close()
