@@ -28,6 +28,7 @@ pytestmark = pytest.mark.skipif(not ROS2_PYTHON, reason='SOCIAL_TOUCH_ROS2_PYTHO
 
 #: A real rclpy node (Fast DDS) with a parameter and a Trigger service.
 RCLPY_SERVER = textwrap.dedent('''
+    import time
     import rclpy
     from rclpy.node import Node
     from std_srvs.srv import Trigger
@@ -38,6 +39,14 @@ RCLPY_SERVER = textwrap.dedent('''
         response.success, response.message = True, 'real rclpy'
         return response
     node.create_service(Trigger, 'trigger', trigger)
+    calls = []
+    def slow_first(request, response):  # answers 'call N'; the first answer comes after 1.5 s
+        calls.append(1)
+        if len(calls) == 1:
+            time.sleep(1.5)
+        response.success, response.message = True, f'call {len(calls)}'
+        return response
+    node.create_service(Trigger, 'slow_first', slow_first)
     print('ready', flush=True)
     rclpy.spin(node)
 ''')
@@ -116,6 +125,20 @@ def test_our_client_calls_a_real_rclpy_trigger_service(rclpy_server) -> None:
             response = client.call(Trigger.Request(), timeout_sec=5.0)
             assert response is not None and (response.success, response.message) == (True, 'real rclpy')
         assert graph.context.transport.clients[id(client)].foreign == 0
+    finally:
+        graph.close()
+
+
+def test_a_late_reply_of_a_fast_dds_server_is_not_taken_for_the_next_call(rclpy_server) -> None:
+    Trigger = get_service('std_srvs/srv/Trigger')
+    graph = SpinningGraph()
+    try:
+        node = graph.add_node('caller')
+        client = graph.call(node.create_client, Trigger, '/rs/slow_first')
+        assert client.wait_for_service(timeout_sec=10.0)
+        assert client.call(Trigger.Request(), timeout_sec=0.5) is None  # gave up before its reply
+        response = client.call(Trigger.Request(), timeout_sec=5.0)
+        assert response is not None and response.message == 'call 2'
     finally:
         graph.close()
 

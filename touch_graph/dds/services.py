@@ -476,13 +476,15 @@ class DdsClient(_Pair):
         return took
 
     def _next_fast_dds_seq(self) -> int | None:
-        """The oldest request to a Fast DDS server still waiting for its reply (None: none waits)."""
-        pending = self.client._pending
-        while self._fast_order:
-            seq = self._fast_order.popleft()
-            if seq in pending:
-                return seq
-        return None
+        """The request a Fast DDS server's reply answers: the oldest one sent and not answered yet.
+
+        None when it is no longer waited for (timed out, removed: the reply came late and is
+        dropped) or when no request was sent (the reply is another client's).
+        """
+        if not self._fast_order:
+            return None
+        seq = self._fast_order.popleft()
+        return seq if seq in self.client._pending else None
 
     def server_ready(self) -> bool:
         """rmw_cyclonedds' test: a matched request reader and a matched reply writer of one server (``serviceid``)."""
