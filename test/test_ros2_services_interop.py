@@ -112,6 +112,8 @@ def test_our_cli_gets_lists_and_sets_a_real_rclpy_nodes_parameters(rclpy_server,
     assert (code, out.strip()) == (0, 'Double value is: 2.5'), err
     code, out, err = _cli(capsys, 'param', 'list', '/rs/real_node', '--timeout', '10')
     assert code == 0 and 'gain' in out.split(), err
+    code, out, err = _cli(capsys, 'param', 'list')  # every node: waits for the rclpy node's discovery info
+    assert code == 0 and out.splitlines()[0] == '/rs/real_node:' and '  gain' in out.splitlines(), (out, err)
 
 
 def test_our_client_calls_a_real_rclpy_trigger_service(rclpy_server) -> None:
