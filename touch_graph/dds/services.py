@@ -205,9 +205,8 @@ class _Pair:
             f"'{self.read_topic}': a sample from a writer of {writer_type(self.reader, writer_handle)} does not "
             f"decode as '{self.read_type}' ({err}); skipped. Further ones from it are counted.")
 
-    def _write(self, guid: int, seq: int, msg: Any, header: bool = True) -> bool:
-        body = messages.serialize(msg, self.write_type)
-        data = encode_request(guid, seq, body) if header else pad4(body)
+    def _write(self, guid: int, seq: int, msg: Any) -> bool:
+        data = encode_request(guid, seq, messages.serialize(msg, self.write_type))
         return ddspy_write_ts(self.writer._ref, data, self._now_ns()) >= 0
 
 
@@ -362,9 +361,10 @@ class DdsClient(_Pair):
             if why:
                 return why
             data = pad4(messages.serialize(request, self.write_type))
+            self._fast_order.append(seq)  # before writing: the reply may be taken before write returns
             if ddspy_write_ts(self._plain_writer._ref, data, self._now_ns()) < 0:
+                self._fast_order.pop()
                 return 'DDS refused the request'
-            self._fast_order.append(seq)
         elif not self._write(self.guid, seq, request):
             return 'DDS refused the request'
         self.sent += 1
