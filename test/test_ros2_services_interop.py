@@ -198,6 +198,27 @@ def test_a_real_rclpy_client_of_our_server_gets_no_reply_and_we_say_why_at_once(
         graph.close()
 
 
+def test_real_rclpy_announces_the_type_hashes_we_announce(rclpy_server) -> None:
+    """On its topics and on both topics of its services (X_Request on rq/, X_Response on rr/)."""
+    from touch_graph.dds.services import is_fast_dds
+    from touch_graph.type_description import type_hash
+    expected = {'rq/rs/triggerRequest': 'std_srvs/srv/Trigger_Request',
+                'rr/rs/triggerReply': 'std_srvs/srv/Trigger_Response',
+                'rq/rs/real_node/get_parametersRequest': 'rcl_interfaces/srv/GetParameters_Request',
+                'rr/rs/real_node/get_parametersReply': 'rcl_interfaces/srv/GetParameters_Response',
+                'rt/parameter_events': 'rcl_interfaces/msg/ParameterEvent', 'rt/rosout': 'rcl_interfaces/msg/Log'}
+    graph = SpinningGraph()
+    try:
+        def announced() -> dict[str, str]:
+            endpoints = dict(graph.context.transport.graph._endpoints)
+            return {e['topic']: e['type_hash'] for key, e in endpoints.items()
+                    if is_fast_dds(key) and e['topic'] in expected}
+        wait_until(lambda: len(announced()) == len(expected), 20.0, "the rclpy node's endpoints")
+        assert announced() == {topic: type_hash(name) for topic, name in expected.items()}
+    finally:
+        graph.close()
+
+
 def test_real_rclpys_get_type_description_agrees_with_ours(rclpy_server) -> None:
     """Our client asks the rclpy node (rcl's type description service) to describe the types it uses."""
     from touch_graph import type_description

@@ -5,7 +5,8 @@ and ``rr/xReply`` (``pkg::srv::dds_::T_Response_``). A server has a reader on th
 a writer on the second, a client the opposite; all four have the service QoS (reliable,
 volatile, keep last 10 by default) and, as user data, ``serviceid=...;`` or
 ``clientid=...;`` (one id for the reader and the writer of one server or client), which is
-how rmw_cyclonedds pairs them, then ``typehash=RIHS01_...;`` of the service type (as rmw from Iron on).
+how rmw_cyclonedds pairs them, then ``typehash=RIHS01_...;`` of the topic's type (``T_Request`` or
+``T_Response``: what Jazzy's rmw_fastrtps announces on them).
 
 **On the wire** (rmw_cyclonedds ``serdata.cpp`` / ``Serialization.cpp``): the 4-byte CDR
 encapsulation header, then the request header ``cdds_request_header_t`` (uint64 client id
@@ -114,20 +115,21 @@ class _Pair:
         csid = format_csid(participant.gid, next(participant.csids))
         self.csid = csid
         # ROS 2 names no fields of the request header, so a peer that describes its types may name them otherwise
-        # rmw (Iron and later) announces the service type's hash on both topics, after the id
-        srv_hash = participant.type_hash(entity.service_type)
-        user_data = f'{role}={csid};' + (f'typehash={srv_hash};' if srv_hash else '')
-        qos = Qos(Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True),
-                  base=dds_qos(entity.qos_profile, user_data=user_data))
+        def qos_for(type_name: str) -> Qos:
+            # after the id, the hash of the topic's own type (X_Request or X_Response), as Jazzy's rmw_fastrtps
+            digest = participant.type_hash(type_name)
+            user_data = f'{role}={csid};' + (f'typehash={digest};' if digest else '')
+            return Qos(Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True),
+                       base=dds_qos(entity.qos_profile, user_data=user_data))
         self.read_topic, self.read_type = read_topic, read_type
         self.write_topic, self.write_type = write_topic, write_type
         read_struct = idl_service_struct(read_type)
         self.reader = DataReader(participant.dds_subscriber,
-                                 participant.dds_topic(read_topic, read_type, struct=read_struct), qos)
+                                 participant.dds_topic(read_topic, read_type, struct=read_struct), qos_for(read_type))
         forget(self.reader)
         try:
             self.writer = DataWriter(participant.dds_publisher, participant.dds_topic(
-                write_topic, write_type, struct=idl_service_struct(write_type)), qos)
+                write_topic, write_type, struct=idl_service_struct(write_type)), qos_for(write_type))
         except Exception:
             from .cdds import delete_entity
             delete_entity(self.reader)
