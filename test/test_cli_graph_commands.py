@@ -154,6 +154,8 @@ def test_node_list_and_info(graph, capsys):
         ('describe_parameters', 'DescribeParameters'), ('get_parameter_types', 'GetParameterTypes'),
         ('get_parameters', 'GetParameters'), ('list_parameters', 'ListParameters'),
         ('set_parameters', 'SetParameters'), ('set_parameters_atomically', 'SetParametersAtomically'))]
+    parameter_services.insert(3, '    /demo_talker/get_type_description: '
+                                 'type_description_interfaces/srv/GetTypeDescription')
     assert out.splitlines() == [
         '/demo_talker', '  Subscribers:', '    /cmd: std_msgs/msg/String', '  Publishers:',
         '    /chatter: std_msgs/msg/String', '    /cmd_echo: std_msgs/msg/String',

@@ -13,7 +13,7 @@ from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from dds_testing import wait_until
 
-from touch_graph import messages
+from touch_graph import messages, type_description
 from touch_graph.dds import config, discovery, endpoints, graph, names, qos
 from touch_graph.dds.config import DiscoveryOptions, cyclone_config, read_discovery
 from touch_graph.dds.domain import acquire_domain, release_domain
@@ -22,7 +22,7 @@ from touch_graph.errors import GraphError
 from touch_graph.runtime.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 
-@pytest.mark.parametrize('module', [names, qos, config, discovery, endpoints, graph])
+@pytest.mark.parametrize('module', [names, qos, config, discovery, endpoints, graph, type_description])
 def test_doctests(module):
     result = doctest.testmod(module)
     assert result.attempted > 0 and result.failed == 0

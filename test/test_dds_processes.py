@@ -95,8 +95,8 @@ def test_ros_discovery_info_is_what_ros2_reads(dds_domain):
                 if sample.valid_data:
                     info = store.deserialize_cdr(data, 'rmw_dds_common/msg/ParticipantEntitiesInfo')
                     latest[bytes(info.gid.data)] = info
-            # its publisher, /parameter_events, /rosout and the six parameter services' reply writers
-            return any(n.node_name == 'haptics' and len(n.writer_gid_seq) == 9 and len(n.reader_gid_seq) == 7
+            # its publisher, /parameter_events, /rosout, the six parameter services' and get_type_description's
+            return any(n.node_name == 'haptics' and len(n.writer_gid_seq) == 10 and len(n.reader_gid_seq) == 8
                        for info in latest.values() for n in info.node_entities_info_seq)
         wait_until(read, 10, "our node with its endpoints in ros_discovery_info")
         info = next(i for i in latest.values() if any(n.node_name == 'haptics' for n in i.node_entities_info_seq))
@@ -122,10 +122,14 @@ def test_ros_discovery_info_is_what_ros2_reads(dds_domain):
                            ('rt/parameter_events', 'rcl_interfaces::msg::dds_::ParameterEvent_'),
                            ('rt/rosout', 'rcl_interfaces::msg::dds_::Log_'),
                            *((f'rr/skin/haptics/{s}Reply', f'rcl_interfaces::srv::dds_::{srv_type[s]}_Response_')
-                             for s in services)}
+                             for s in services),
+                           ('rr/skin/haptics/get_type_descriptionReply',
+                            'type_description_interfaces::srv::dds_::GetTypeDescription_Response_')}
         assert readers == {('rt/skin/frame', 'social_touch_msgs::msg::dds_::SkinFrame_'),
                            *((f'rq/skin/haptics/{s}Request', f'rcl_interfaces::srv::dds_::{srv_type[s]}_Request_')
-                             for s in services)}
+                             for s in services),
+                           ('rq/skin/haptics/get_type_descriptionRequest',
+                            'type_description_interfaces::srv::dds_::GetTypeDescription_Request_')}
     finally:
         delete_entity(reader_side)
         graph.close()

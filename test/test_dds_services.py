@@ -152,3 +152,33 @@ def test_a_foreign_request_layout_is_refused_and_reported_the_server_lives(dds_d
     finally:
         delete_entity(foreign)
         a.close()
+
+
+def test_service_endpoints_announce_their_types_hash_as_rmw_fastrtps_does(dds_domain):
+    """``serviceid=...;typehash=...;`` (``clientid=`` for a client): on ``rq/`` the request's hash, on
+    ``rr/`` the response's, as a Jazzy rclpy node on Fast DDS announces them (seen in discovery)."""
+    from touch_graph.dds.discovery import user_data_value
+    from touch_graph.type_description import type_hash
+    a, b = SpinningGraph(), SpinningGraph()
+    try:
+        serve(a, echo)
+        caller = b.add_node('caller')
+        b.call(lambda: caller.create_client(SetBool, '/switch'))
+        request, response = type_hash('std_srvs/srv/SetBool_Request'), type_hash('std_srvs/srv/SetBool_Response')
+        # as ros-jazzy-std-srvs 5.3.6 installs them (share/std_srvs/srv/SetBool.json)
+        assert request == 'RIHS01_c62fbb99d94e1b25e8ef9e109f9581956bb1b3361a45a4e5810c36a90d29932e'
+        assert response == 'RIHS01_d0814e7f7b4880ab77e9c57426c7aa1562ab69f11eef8e2e968812f9cbd0b059'
+
+        def announced():
+            endpoints = dict(a.context.transport.graph._endpoints)
+            found = {(e['kind'], e['topic'], user_data_value(e['qos_raw'], 'typehash'),
+                      'server' if user_data_value(e['qos_raw'], 'serviceid') else 'client')
+                     for e in endpoints.values() if e['topic'] in ('rq/switchRequest', 'rr/switchReply')}
+            return found == {('reader', 'rq/switchRequest', request, 'server'),
+                             ('writer', 'rr/switchReply', response, 'server'),
+                             ('writer', 'rq/switchRequest', request, 'client'),
+                             ('reader', 'rr/switchReply', response, 'client')}
+        wait_until(announced, 10, 'the service endpoints with their type hashes')
+    finally:
+        a.close()
+        b.close()

@@ -59,6 +59,7 @@ def test_the_six_services_are_there_with_ros2_names(graph):
     _, _, _, target, _, _ = graph
     assert sorted(s.srv_name for s in target.services) == [
         '/robot/target/describe_parameters', '/robot/target/get_parameter_types', '/robot/target/get_parameters',
+        '/robot/target/get_type_description',  # not a parameter service, but started with them, as in Jazzy
         '/robot/target/list_parameters', '/robot/target/set_parameters', '/robot/target/set_parameters_atomically']
 
 
@@ -165,3 +166,29 @@ def test_log_lines_go_to_rosout(graph):
     assert warn.file.endswith('test_graph_parameter_services.py') and warn.line > 0
     assert warn.function == 'test_log_lines_go_to_rosout'
     assert (info.level, info.name) == (Log.INFO, 'robot.target.calib')
+
+
+def test_get_type_description_describes_the_types_the_node_uses(graph):
+    from touch_graph import type_description
+    from touch_graph.srv_types import get_service
+    _, executor, watcher, _, _, _ = graph
+    GetTypeDescription = get_service('type_description_interfaces/srv/GetTypeDescription')
+    client = watcher.create_client(GetTypeDescription, '/robot/target/get_type_description')
+
+    def ask(**fields):
+        future = client.call_async(GetTypeDescription.Request(**fields))
+        executor.spin_until_future_complete(future, 5.0)
+        return future.result()
+    response = ask(type_name='rcl_interfaces/msg/ParameterEvent')  # its /parameter_events publisher
+    assert response.successful, response.failure_reason
+    described = response.type_description
+    assert described.type_description.type_name == 'rcl_interfaces/msg/ParameterEvent'
+    assert [t.type_name for t in described.referenced_type_descriptions] == [
+        'builtin_interfaces/msg/Time', 'rcl_interfaces/msg/Parameter', 'rcl_interfaces/msg/ParameterValue']
+    right = type_description.type_hash('rcl_interfaces/msg/ParameterEvent')
+    assert ask(type_name='rcl_interfaces/msg/ParameterEvent', type_hash=right).successful
+    wrong = ask(type_name='rcl_interfaces/msg/ParameterEvent', type_hash='RIHS01_' + '0' * 64)
+    assert not wrong.successful and right in wrong.failure_reason
+    unused = ask(type_name='std_msgs/msg/Char')
+    assert not unused.successful and 'not used by this node' in unused.failure_reason
+    assert ask(type_name='rcl_interfaces/srv/GetParameters').successful  # a service it serves

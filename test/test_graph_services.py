@@ -158,7 +158,7 @@ def test_no_server_fails_at_once_and_wait_for_service_times_out(graph):
     assert client.wait_for_service(timeout_sec=0.1) is False
     future = client.call_async(SetBool.Request())
     assert future.done()
-    with pytest.raises(ServiceCallError, match="no server for '/nobody'"):
+    with pytest.raises(ServiceCallError, match=r"cannot call '/nobody'.*no server"):
         future.result()
     with pytest.raises(ServiceCallError):
         client.call(SetBool.Request(), timeout_sec=1)

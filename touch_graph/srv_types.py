@@ -48,6 +48,10 @@ STANDARD_SERVICES: dict[str, str] = {
     'std_srvs/srv/Empty': '---\n',
     'std_srvs/srv/Trigger': '---\nbool success\nstring message\n',
     'std_srvs/srv/SetBool': 'bool data\n---\nbool success\nstring message\n',
+    'type_description_interfaces/srv/GetTypeDescription': (
+        'string type_name\nstring type_hash\nbool include_type_sources true\n---\nbool successful\n'
+        'string failure_reason\nTypeDescription type_description\nTypeSource[] type_sources\n'
+        'KeyValue[] extra_information\n'),
 }
 
 _SEPARATOR = re.compile(r'^---\s*$', re.MULTILINE)

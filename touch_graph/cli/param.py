@@ -82,7 +82,8 @@ class _Params:
         self.include_hidden = args.include_hidden_nodes
 
     def node(self, name: str) -> str:
-        return self.tool.require_node(name, self.include_hidden)
+        # a Fast DDS node's ros_discovery_info can come seconds after its endpoints: wait as for a service
+        return self.tool.require_node(name, self.include_hidden, wait_s=self.timeout)
 
     def call(self, node: str, service: str, **fields: Any) -> Any:
         """The response of ``node``'s parameter service ``service`` (e.g. ``get_parameters``) to ``fields``."""
@@ -101,6 +102,14 @@ def _list(params: _Params, args: argparse.Namespace) -> int:
     if args.node_name:
         nodes = [params.node(args.node_name)]
     else:  # every node that serves parameters (ros2 param list does the same)
+        # a Fast DDS participant's endpoints come after the participant, and its node (ros_discovery_info)
+        # seconds after its services: wait (at most 2 s) for some parameter service, then for their nodes
+        def serving(v: Any) -> set[str]:
+            return {name.rsplit('/', 1)[0] for name in v.services if name.endswith('/list_parameters')}
+        params.tool.wait_until(lambda v: bool(serving(v)), min(params.timeout, 2.0))
+        servers = serving(params.tool.graph())
+        params.tool.wait_until(lambda v: servers <= {n.name for n in v.visible_nodes(True)}, params.timeout)
+        view = params.tool.graph()
         nodes = sorted(n.name for n in view.visible_nodes(args.include_hidden_nodes)
                        if f'{n.name}/list_parameters' in n.services)
     for node in nodes:

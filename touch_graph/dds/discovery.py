@@ -51,7 +51,7 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from rosbags.typesys import Stores, get_typestore
 
-from .. import messages
+from .. import messages, type_description
 from ..runtime.qos import DurabilityPolicy, QoSProfile
 from .cdds import delete_entity, forget, take_builtin
 from .endpoints import pad4
@@ -148,7 +148,7 @@ class GraphDiscovery:
         store = self.codec.store
         info_topic = p.dds_topic(DISCOVERY_TOPIC, ENTITIES_INFO, store=store)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        info_hash = store.hash_rihs01(ENTITIES_INFO) if self.codec.size == 16 else ''
+        info_hash = type_description.type_hash(ENTITIES_INFO, store) if self.codec.size == 16 else ''
         self._info_writer = DataWriter(p.dds_publisher, info_topic, dds_qos(latched, type_hash=info_hash))
         reader_qos = Qos(Policy.History.KeepAll, base=dds_qos(latched, type_hash=info_hash))
         self._info_reader = DataReader(p.dds_subscriber, info_topic, reader_qos)

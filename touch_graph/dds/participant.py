@@ -45,7 +45,7 @@ from cyclonedds.pub import Publisher as DdsPublisherEntity
 from cyclonedds.sub import Subscriber as DdsSubscriberEntity
 from cyclonedds.topic import Topic as DdsTopic
 
-from .. import messages
+from .. import type_description
 from ..errors import GraphError
 from .cdds import WaitSet, delete_entity, forget
 from .config import DiscoveryOptions, read_discovery
@@ -119,13 +119,17 @@ class DdsParticipant:
         """The DDS topic ``rt/<ros_name>`` with ``type_name``'s DDS type (one per name)."""
         return self.dds_topic(dds_topic_name(ros_name), type_name)
 
-    def dds_topic(self, dds_name: str, type_name: str, store: Any = None, *, struct: Any = None) -> DdsTopic:
-        """The DDS topic ``dds_name`` (one per name) of ``type_name``, or of ``struct`` (a service's wire type)."""
+    def dds_topic(self, key: str, type_name: str, store: Any = None, *, struct: Any = None,
+                  dds_name: str = '') -> DdsTopic:
+        """The DDS topic ``key`` (one per key) of ``type_name``, or of ``struct`` (a service's wire type).
+
+        ``dds_name``: the topic's DDS name when it is not ``key`` (a second type on one topic).
+        """
         with self._lock:
-            topic = self._topics.get(dds_name)
+            topic = self._topics.get(key)
             if topic is None:
-                topic = self._topics[dds_name] = DdsTopic(self.participant, dds_name,
-                                                          struct or idl_struct(type_name, store))
+                topic = self._topics[key] = DdsTopic(self.participant, dds_name or key,
+                                                     struct or idl_struct(type_name, store))
                 forget(topic)
             return topic
 
@@ -135,7 +139,7 @@ class DdsParticipant:
             value = self._hashes.get(type_name)
             if value is None:
                 try:
-                    value = messages.typestore.hash_rihs01(type_name)
+                    value = type_description.type_hash(type_name)
                 except Exception:  # a type rosbags cannot hash: announce none, as rmw does then
                     value = ''
                 self._hashes[type_name] = value
@@ -241,6 +245,8 @@ class DdsParticipant:
         if pair is not None:
             if pair.waker is not None:
                 pair.waker.detach(pair)
+            if hasattr(pair, 'close_plain'):
+                pair.close_plain()
             delete_entity(pair.reader)
             delete_entity(pair.writer)
 
@@ -304,6 +310,9 @@ class DdsParticipant:
         self._incompatible = [item for item in self._incompatible if not self._report_incompatible(item)]
         for client in clients:
             client.check_server()
+        for pair in pairs:
+            if hasattr(pair, 'check_clients'):
+                pair.check_clients()
 
     def _report_incompatible(self, item: list) -> bool:
         """Log one ``[owner, is writer, DDS topic, type, change, policy, tries]``; False: try again later

@@ -5,7 +5,8 @@ and ``rr/xReply`` (``pkg::srv::dds_::T_Response_``). A server has a reader on th
 a writer on the second, a client the opposite; all four have the service QoS (reliable,
 volatile, keep last 10 by default) and, as user data, ``serviceid=...;`` or
 ``clientid=...;`` (one id for the reader and the writer of one server or client), which is
-how rmw_cyclonedds pairs them.
+how rmw_cyclonedds pairs them, then ``typehash=RIHS01_...;`` of the topic's type (``T_Request`` or
+``T_Response``: what Jazzy's rmw_fastrtps announces on them).
 
 **On the wire** (rmw_cyclonedds ``serdata.cpp`` / ``Serialization.cpp``): the 4-byte CDR
 encapsulation header, then the request header ``cdds_request_header_t`` (uint64 client id
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import struct
 import time
+from collections import deque
 from typing import TYPE_CHECKING, Any
 
 from cyclonedds._clayer import ddspy_take, ddspy_write_ts
@@ -39,7 +41,7 @@ from ..errors import MessageError
 from .cdds import forget, matched_endpoint, matched_readers
 from .discovery import user_data_value
 from .endpoints import TAKE_BATCH, pad4, writer_type
-from .idl import idl_service_struct
+from .idl import idl_service_struct, idl_struct
 from .names import dds_service_topics
 from .qos import dds_qos
 
@@ -47,7 +49,8 @@ if TYPE_CHECKING:
     from ..runtime.services import Client, Service
     from .participant import DdsParticipant
 
-__all__ = ['REQUEST_HEADER', 'DdsClient', 'DdsService', 'decode_request', 'encode_request', 'format_csid']
+__all__ = ['FAST_DDS_REMEDY', 'MISSING_WRITE_CALL', 'REQUEST_HEADER', 'DdsClient', 'DdsService', 'decode_request',
+           'encode_request', 'format_csid', 'is_fast_dds']
 
 #: ``cdds_request_header_t``: client id (uint64), sequence number (int64), little endian after the CDR header.
 REQUEST_HEADER = struct.Struct('<Qq')
@@ -56,6 +59,22 @@ _BODY = _CDR_HEADER + REQUEST_HEADER.size
 _ANY_STATE = SampleState.Any | ViewState.Any | InstanceState.Any
 #: How long a server waits for a client's reply reader to be matched before dropping the reply, s (rmw: 100 ms).
 REPLY_MATCH_WAIT_S = 0.1
+#: The first two bytes of a GUID prefix are the RTPS vendor id of the participant that made it.
+FAST_DDS_VENDOR = b'\x01\x0f'
+#: What cyclonedds-python lacks for a Fast DDS client (named in errors and docs/ros2-services.md).
+MISSING_WRITE_CALL = ('cyclonedds-python 11.0.1 cannot write a sample with the RTPS inline QoS '
+                      'PID_RELATED_SAMPLE_IDENTITY (DataWriter.write has no write-params argument, and its '
+                      'serdata has no get_related_sample_identity operation for Cyclone DDS to send one)')
+#: How long a client waits for a Fast DDS server to match its header-less endpoints, s.
+PLAIN_MATCH_WAIT_S = 1.0
+#: A remedy for a Fast DDS peer, to be said with every failure about one.
+FAST_DDS_REMEDY = ('run the rclpy node with RMW_IMPLEMENTATION=rmw_cyclonedds_cpp (same domain), or let the '
+                   'rclpy side serve and our side call (that direction works)')
+
+
+def is_fast_dds(guid: bytes) -> bool:
+    """Whether an endpoint or participant GUID was made by eProsima Fast DDS (rmw_fastrtps)."""
+    return bytes(guid[:2]) == FAST_DDS_VENDOR
 
 
 def format_csid(guid: bytes, counter: int) -> str:
@@ -91,21 +110,26 @@ class _Pair:
     def __init__(self, participant: DdsParticipant, entity: Any, read_topic: str, read_type: str,
                  write_topic: str, write_type: str, role: str) -> None:
         self.entity = entity
+        self.participant = participant
         self.node = entity.node
         csid = format_csid(participant.gid, next(participant.csids))
         self.csid = csid
         # ROS 2 names no fields of the request header, so a peer that describes its types may name them otherwise
-        qos = Qos(Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True),
-                  base=dds_qos(entity.qos_profile, user_data=f'{role}={csid};'))
+        def qos_for(type_name: str) -> Qos:
+            # after the id, the hash of the topic's own type (X_Request or X_Response), as Jazzy's rmw_fastrtps
+            digest = participant.type_hash(type_name)
+            user_data = f'{role}={csid};' + (f'typehash={digest};' if digest else '')
+            return Qos(Policy.TypeConsistency.AllowTypeCoercion(ignore_member_names=True),
+                       base=dds_qos(entity.qos_profile, user_data=user_data))
         self.read_topic, self.read_type = read_topic, read_type
         self.write_topic, self.write_type = write_topic, write_type
         read_struct = idl_service_struct(read_type)
         self.reader = DataReader(participant.dds_subscriber,
-                                 participant.dds_topic(read_topic, read_type, struct=read_struct), qos)
+                                 participant.dds_topic(read_topic, read_type, struct=read_struct), qos_for(read_type))
         forget(self.reader)
         try:
             self.writer = DataWriter(participant.dds_publisher, participant.dds_topic(
-                write_topic, write_type, struct=idl_service_struct(write_type)), qos)
+                write_topic, write_type, struct=idl_service_struct(write_type)), qos_for(write_type))
         except Exception:
             from .cdds import delete_entity
             delete_entity(self.reader)
@@ -121,7 +145,8 @@ class _Pair:
         self.waker: Any = None  # the DdsWaker of the executor taking from the reader
         self.undecodable = 0
         self.incompatible = 0
-        self._reported: set[int] = set()
+        self._reported: set[int | bytes] = set()  # writer handles or GUIDs said once
+        self._fast_writers: dict[int, bool] = {}  # matched writer handle -> made by Fast DDS
 
     def qos_checks(self) -> list[tuple[Any, bool, str, str]]:
         """``(DDS entity, is a writer, DDS topic, type)`` whose QoS statuses the participant watches."""
@@ -129,7 +154,11 @@ class _Pair:
                 (self.writer, True, self.write_topic, self.write_type)]
 
     def _take(self) -> list[tuple[int, int, Any, int]]:
-        """``(client id, seq, decoded message, writer handle)`` of every valid sample waiting on the reader."""
+        """``(client id, seq, CDR of the fields, writer handle)`` of every valid sample waiting on the reader.
+
+        A sample of a Fast DDS writer has no request header (its id travels in the RTPS inline
+        QoS, which Cyclone DDS does not give us): its client id and seq are -1.
+        """
         out = []
         while True:
             samples = ddspy_take(self.ref, _ANY_STATE, TAKE_BATCH)
@@ -138,13 +167,29 @@ class _Pair:
             for data, info in samples:
                 if not info.valid_data:
                     continue
+                handle = info.publication_handle
+                if self.writer_is_fast_dds(handle):
+                    out.append((-1, -1, bytes(data), handle))
+                    continue
                 try:
                     guid, seq, body = decode_request(data)
-                    out.append((guid, seq, body, info.publication_handle))
+                    out.append((guid, seq, body, handle))
                 except MessageError as err:
-                    self._undecodable(info.publication_handle, err)
+                    self._undecodable(handle, err)
             if len(samples) < TAKE_BATCH:
                 return out
+
+    def writer_is_fast_dds(self, handle: int) -> bool:
+        """Whether the matched writer ``handle`` (of the reader's topic) is Fast DDS's (cached per writer)."""
+        known = self._fast_writers.get(handle)
+        if known is None:
+            data = matched_endpoint(self.reader.get_matched_publication_data, handle)
+            if data is None:
+                return False  # gone already: its sample is taken as ours are
+            known = self._fast_writers[handle] = is_fast_dds(data.key.bytes)
+            if len(self._fast_writers) > 1000:
+                self._fast_writers.clear()
+        return known
 
     def _decode(self, body: bytes, handle: int) -> Any:
         try:
@@ -172,6 +217,7 @@ class DdsService(_Pair):
 
     Attributes:
         gone: replies not sent because the client's request writer was gone.
+        fast_dds_requests: requests of Fast DDS clients, not answered (see :data:`MISSING_WRITE_CALL`).
         unmatched: replies dropped because the client's reply reader was not matched in time.
         failed: replies DDS refused.
     """
@@ -181,18 +227,32 @@ class DdsService(_Pair):
         super().__init__(participant, service, request_topic, f'{service.service_type}_Request',
                          reply_topic, f'{service.service_type}_Response', 'serviceid')
         self.service = service
-        self.gone = self.unmatched = self.failed = 0
+        self.gone = self.unmatched = self.failed = self.fast_dds_requests = 0
         self._clients_seen: set[str] = set()  # client ids whose reply reader was matched
 
     def drain(self) -> bool:
         """Take the requests DDS holds onto the service's queue (executor thread); True if any came."""
         took = False
         for guid, seq, body, handle in self._take():
+            if guid == -1:
+                self._fast_dds_client(handle)
+                continue
             request = self._decode(body, handle)
             if request is not None:
                 self.service._enqueue_local((request, _DdsReply(self, guid, seq, handle)))
                 took = True
         return took
+
+    def _fast_dds_client(self, handle: int | bytes, counted: bool = True) -> None:
+        """A Fast DDS client (or its request): it would drop any reply we can send, so none is sent; said once."""
+        self.fast_dds_requests += counted
+        if handle in self._reported:
+            return
+        self._reported.add(handle)
+        self.node.get_logger().error(
+            f"service '{self.service.srv_name}': requests from a Fast DDS client (rmw_fastrtps) are not answered: "
+            'that client keeps only replies whose RTPS inline QoS PID_RELATED_SAMPLE_IDENTITY names it, and '
+            f'{MISSING_WRITE_CALL}. Remedy: {FAST_DDS_REMEDY}. Further requests from it are counted.')
 
     def send_response(self, guid: int, seq: int, handle: int, response: Any) -> None:
         """Reply to request ``seq`` of client ``guid`` (its request writer is ``handle`` here)."""
@@ -208,6 +268,21 @@ class DdsService(_Pair):
             return
         if not self._write(guid, seq, response):
             self.failed += 1
+
+    def check_clients(self) -> None:
+        """Say once per client when the graph has a Fast DDS client of the service (housekeeping).
+
+        Read from discovery: Cyclone matches a Fast DDS request writer but drops its requests
+        (header-less, they fail the check against our type), so none reaches :meth:`drain`.
+        """
+        graph = getattr(self.participant, 'graph', None)
+        if graph is None:
+            return
+        with graph._lock:
+            endpoints = list(graph._endpoints.items())
+        for key, e in endpoints:
+            if e['kind'] == 'writer' and e['topic'] == self.read_topic and is_fast_dds(key):
+                self._fast_dds_client(bytes(key), counted=False)
 
     def _client_state(self, handle: int) -> str:
         """'yes' (its reply reader is matched), 'gone' (its request writer left) or 'maybe' (after waiting)."""
@@ -262,21 +337,136 @@ class DdsClient(_Pair):
         self.guid = self.writer.get_instance_handle() & 0xFFFF_FFFF_FFFF_FFFF  # cyclonedds-python gives it signed
         self.sent = self.foreign = 0
         self._in_flight: set[int] = set()
+        self._fast_order: deque[int] = deque()  # requests sent to a Fast DDS server, oldest first
+        # made when a Fast DDS server is first called: its types have no request header
+        self._plain_writer: Any = None
+        self._plain_reader: Any = None
+        self._plain_key: Any = None
 
     def send_request(self, seq: int, request: Any) -> str:
-        """Write the request; '' when sent, else why it could not be (no server)."""
-        if matched_readers(self.writer._ref) == 0:
-            return 'no server is matched on DDS'
-        if not self._write(self.guid, seq, request):
+        """Write the request in the convention of the server matched; '' when sent, else why it could not be.
+
+        A Fast DDS server takes the request's id from the RTPS sample identity (our request
+        writer's GUID and the sample's sequence number) and wants no request header; its
+        reply names the request only in the inline QoS, which Cyclone DDS does not hand us,
+        so replies are paired with requests in order. That is sound only while no other
+        client of the service is in the graph (a Fast DDS server sends every reply to every
+        client): otherwise the call fails at once, saying so.
+        """
+        readers = self.writer.get_matched_subscriptions()
+        if not readers:
+            return 'no server is matched on DDS; wait_for_service() first'
+        fast = [is_fast_dds(data.key.bytes) for data in
+                (matched_endpoint(self.writer.get_matched_subscription_data, h) for h in readers) if data is not None]
+        if any(fast):
+            why = self._fast_dds_ambiguity(all(fast)) or self._plain_ready()
+            if why:
+                return why
+            data = pad4(messages.serialize(request, self.write_type))
+            self._fast_order.append(seq)  # before writing: the reply may be taken before write returns
+            if ddspy_write_ts(self._plain_writer._ref, data, self._now_ns()) < 0:
+                self._fast_order.pop()
+                return 'DDS refused the request'
+        elif not self._write(self.guid, seq, request):
             return 'DDS refused the request'
         self.sent += 1
         self._in_flight.add(seq)
         return ''
 
+    def _fast_dds_ambiguity(self, only_fast: bool) -> str:
+        """Why a reply of a Fast DDS server could not be known for ours ('' when it can)."""
+        cause = ('the server runs on Fast DDS (rmw_fastrtps), whose reply names its request only in the RTPS '
+                 'inline QoS PID_RELATED_SAMPLE_IDENTITY, and cyclonedds-python 11.0.1 does not return it with a '
+                 'sample (its SampleInfo, like Cyclone\'s dds_sample_info_t, has no related_sample_identity)')
+        if not only_fast:
+            return (f'servers of two conventions (Fast DDS and Cyclone DDS) are matched, and one request cannot '
+                    f'be written in both; {cause}. Remedy: {FAST_DDS_REMEDY}')
+        others = self._other_clients()
+        if others:
+            return (f'{cause}, so its replies can be told from those to the other {others} client(s) of the '
+                    f'service in the graph only by order, which is not sound. Remedy: call when no other client '
+                    f'of it runs, or {FAST_DDS_REMEDY}')
+        return ''
+
+    def _plain_ready(self) -> str:
+        """Make the header-less request writer and reply reader a Fast DDS server needs, and wait until it
+        matched them; '' when ready, else why not (within :data:`PLAIN_MATCH_WAIT_S`)."""
+        if self._plain_writer is None:
+            p, qos = self.participant, self.writer.get_qos()
+            struct_key = '+plain'
+            self._plain_writer = DataWriter(p.dds_publisher, p.dds_topic(
+                self.write_topic + struct_key, self.write_type, struct=idl_struct(self.write_type),
+                dds_name=self.write_topic), qos)
+            forget(self._plain_writer)
+            self._plain_reader = DataReader(p.dds_subscriber, p.dds_topic(
+                self.read_topic + struct_key, self.read_type, struct=idl_struct(self.read_type),
+                dds_name=self.read_topic), self.reader.get_qos())
+            forget(self._plain_reader)
+            condition = ReadCondition(self._plain_reader, _ANY_STATE)
+            forget(condition)
+            self._plain_key = (condition._ref, p.attach(condition._ref, self._drain_plain))
+        deadline = time.monotonic() + PLAIN_MATCH_WAIT_S
+        while True:
+            writers = [matched_endpoint(self._plain_reader.get_matched_publication_data, h)
+                       for h in self._plain_reader.get_matched_publications()]
+            if matched_readers(self._plain_writer._ref) and any(w is not None and is_fast_dds(w.key.bytes)
+                                                                 for w in writers):
+                return ''
+            if time.monotonic() >= deadline:
+                return (f'the Fast DDS server did not match our header-less request writer and reply reader '
+                        f'within {PLAIN_MATCH_WAIT_S:g} s; Remedy: {FAST_DDS_REMEDY}')
+            time.sleep(0.01)
+
+    def _drain_plain(self) -> None:
+        """Take the replies of a Fast DDS server (receive thread); each is the reply to our oldest request."""
+        while True:
+            samples = ddspy_take(self._plain_reader._ref, _ANY_STATE, TAKE_BATCH)
+            if not isinstance(samples, list) or not samples:
+                return
+            for data, info in samples:
+                if not info.valid_data:
+                    continue
+                seq = self._next_fast_dds_seq()
+                if seq is None:
+                    self.foreign += 1
+                    continue
+                response = self._decode(bytes(data), info.publication_handle)
+                if response is not None:
+                    self._in_flight.discard(seq)
+                    self.client._enqueue((seq, response))
+            if len(samples) < TAKE_BATCH:
+                return
+
+    def close_plain(self) -> None:
+        """Delete the Fast DDS entities, if made (with the client)."""
+        if self._plain_key is not None:
+            self.participant.detach(*self._plain_key)
+            self._plain_key = None
+        for entity in (self._plain_reader, self._plain_writer):
+            if entity is not None:
+                from .cdds import delete_entity
+                delete_entity(entity)
+        self._plain_reader = self._plain_writer = None
+
+    def _other_clients(self) -> int:
+        """How many reply readers of the service, other than ours, the graph knows."""
+        graph = getattr(self.participant, 'graph', None)
+        if graph is None:
+            return 0
+        mine = {self.reader_gid}
+        if self._plain_reader is not None:
+            mine.add(self._plain_reader.get_guid().bytes)
+        with graph._lock:
+            endpoints = list(graph._endpoints.items())
+        return sum(1 for key, e in endpoints
+                   if e['kind'] == 'reader' and e['topic'] == self.read_topic and bytes(key) not in mine)
+
     def drain(self) -> bool:
         """Take the replies DDS holds; ours go onto the client's queue (executor thread). True if any did."""
         took = False
         for guid, seq, body, handle in self._take():
+            if guid == -1:  # a Fast DDS reply that happened to fit the header type: the plain reader has it
+                continue
             if guid != self.guid:
                 self.foreign += 1
                 continue
@@ -286,6 +476,17 @@ class DdsClient(_Pair):
                 self.client._enqueue_local((seq, response))
                 took = True
         return took
+
+    def _next_fast_dds_seq(self) -> int | None:
+        """The request a Fast DDS server's reply answers: the oldest one sent and not answered yet.
+
+        None when it is no longer waited for (timed out, removed: the reply came late and is
+        dropped) or when no request was sent (the reply is another client's).
+        """
+        if not self._fast_order:
+            return None
+        seq = self._fast_order.popleft()
+        return seq if seq in self.client._pending else None
 
     def server_ready(self) -> bool:
         """rmw_cyclonedds' test: a matched request reader and a matched reply writer of one server (``serviceid``)."""

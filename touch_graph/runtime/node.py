@@ -171,6 +171,8 @@ class Node(NodeParameters):
         if start_parameter_services:
             from .parameter_service import ParameterService
             self._parameter_service = ParameterService(self)
+            from .type_description_service import TypeDescriptionService  # ~/get_type_description, as Jazzy's
+            self._type_description_service = TypeDescriptionService(self)
 
         with self.context._lock:
             self.context.nodes.append(self)

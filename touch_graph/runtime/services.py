@@ -170,12 +170,14 @@ class Client(QueuedEntity):
             local[0]._enqueue((request, _LocalReply(self, seq)))
             return future
         dds = self._dds
-        why = 'this graph is not on the network (Context(network=False))' if dds is None else dds.send_request(
-            seq, request)
+        if dds is None:
+            why = ('no server for it: this graph is not on the network (Context(network=False)); '
+                   'wait_for_service() first')
+        else:
+            why = dds.send_request(seq, request)
         if why:
             self._pending.pop(seq, None)
-            future.set_exception(ServiceCallError(f"no server for '{self.srv_name}' ({self.service_type}): {why}; "
-                                                  'wait_for_service() first'))
+            future.set_exception(ServiceCallError(f"cannot call '{self.srv_name}' ({self.service_type}): {why}"))
         return future
 
     def call(self, request: Any, timeout_sec: float | None = None) -> Any:
