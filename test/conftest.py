@@ -110,3 +110,13 @@ def pytest_configure(config):
     # skip without one, and fail instead with SOCIAL_TOUCH_REQUIRE_ROS2=1 (.ci/ros2-jazzy).
     config.addinivalue_line('markers', 'ros2: needs real ROS 2 (rclpy and a built social_touch_msgs); '
                                        '.ci/ros2-jazzy runs them')
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Under SOCIAL_TOUCH_REQUIRE_ROS2=1 a skipped ``ros2`` test fails: the ROS 2 step cannot pass by skipping."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.skipped and item.get_closest_marker('ros2') and os.environ.get('SOCIAL_TOUCH_REQUIRE_ROS2') == '1':
+        report.outcome = 'failed'
+        report.longrepr = f'SOCIAL_TOUCH_REQUIRE_ROS2=1, but this ros2 test was skipped: {report.longrepr}'

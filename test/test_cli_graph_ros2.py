@@ -12,8 +12,8 @@ from test_cli_graph_commands import GRAPH_COMMANDS, cli, graph_env
 from touch_graph.cli import main as cli_main
 from touch_graph.dds.tool import GraphTool
 
-pytestmark = pytest.mark.skipif(ros2_python() is None,
-                                reason='SOCIAL_TOUCH_ROS2_PYTHON does not name a python with rclpy')
+pytestmark = [pytest.mark.ros2, pytest.mark.skipif(ros2_python() is None,
+                                                 reason="SOCIAL_TOUCH_ROS2_PYTHON does not name a python with rclpy")]
 
 
 @pytest.fixture

@@ -24,7 +24,8 @@ from touch_graph.cli import main as cli_main
 from touch_graph.srv_types import get_service
 
 ROS2_PYTHON = os.environ.get('SOCIAL_TOUCH_ROS2_PYTHON', '')
-pytestmark = pytest.mark.skipif(not ROS2_PYTHON, reason='SOCIAL_TOUCH_ROS2_PYTHON (a ROS 2 Jazzy Python) is unset')
+pytestmark = [pytest.mark.ros2,
+              pytest.mark.skipif(not ROS2_PYTHON, reason='SOCIAL_TOUCH_ROS2_PYTHON (a ROS 2 Jazzy Python) is unset')]
 
 #: A real rclpy node (Fast DDS) with a parameter and a Trigger service.
 RCLPY_SERVER = textwrap.dedent('''

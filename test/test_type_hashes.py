@@ -73,6 +73,7 @@ def _mismatches(expected: dict[str, str]) -> list[str]:
 
 
 @needs_ros2
+@pytest.mark.ros2
 def test_every_type_of_ours_hashes_as_rosidl_does(rosidl_hashes: dict[str, dict[str, str]]) -> None:
     ours = rosidl_hashes['ours']
     expected_names = set(interface_names()) | set(service_names())
@@ -81,6 +82,7 @@ def test_every_type_of_ours_hashes_as_rosidl_does(rosidl_hashes: dict[str, dict[
 
 
 @needs_ros2
+@pytest.mark.ros2
 def test_every_standard_type_we_know_hashes_as_rosidl_does(rosidl_hashes: dict[str, dict[str, str]]) -> None:
     standard = rosidl_hashes['standard']
     known = {n: h for n, h in standard.items()
