@@ -16,6 +16,7 @@ from figures_testing import assert_report_png
 
 from touch_graph.cli.main import main as social_touch
 from touch_lab.bear import report as bear_report
+from touch_lab.bear import transfer as bear_transfer
 from touch_lab.bear.evaluate import EvalConfig
 from touch_lab.patch import report as patch_report
 from touch_lab.skin import report as skin_report
@@ -60,9 +61,12 @@ def test_report_patch_writes_and_shows_its_figures(tmp_path, monkeypatch):
 
 def test_report_bear_writes_and_shows_its_figures(tmp_path, monkeypatch):
     evaluate = bear_report.evaluate
-    monkeypatch.setattr(bear_report, 'evaluate', lambda config, progress=None: evaluate(EvalConfig(
-        n_people=1, train_people=2, subtype_reps=1, gesture_reps=1, seed=3, rate_hz=config.rate_hz,
-        buffer_len=config.buffer_len)))
+    small = {'n_people': 1, 'train_people': 2, 'subtype_reps': 1, 'gesture_reps': 1, 'seed': 3}
+    monkeypatch.setattr(bear_report, 'evaluate', lambda config, progress=None, model=None: evaluate(EvalConfig(
+        rate_hz=config.rate_hz, buffer_len=config.buffer_len, **small), model=model))
+    cross_population = bear_transfer.cross_population
+    monkeypatch.setattr(bear_transfer, 'cross_population', lambda config, models=None, progress=None: cross_population(
+        EvalConfig(rate_hz=config.rate_hz, buffer_len=config.buffer_len, **small), models))
     monkeypatch.setattr(bear_report, 'bench_cycle', _smaller(bear_report.bench_cycle, repeats=1, cycles=20))
     monkeypatch.setattr(bear_report, 'compare_models', _smaller(bear_report.compare_models, train_people=1,
                                                                 test_people=1, only=FAST_MODELS))
