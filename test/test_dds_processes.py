@@ -1,9 +1,11 @@
 """Processes on one DDS domain: a plain rclpy-style script hears a launch; ROS 2 reads our discovery info."""
 
 import os
+import queue
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -29,6 +31,7 @@ rclpy.init()
 node = Node('behaviour')
 node.create_subscription(SymbolicGesture, '/touch/symbolic',
                          lambda msg: print('gesture', msg.gesture, msg.state, flush=True), 10)
+print('subscribed', flush=True)
 rclpy.spin(node)
 '''
 
@@ -36,6 +39,26 @@ rclpy.spin(node)
 def child_env(domain):
     env = {k: v for k, v in os.environ.items() if k != 'SOCIAL_TOUCH_NETWORK'}
     return {**env, 'ROS_DOMAIN_ID': str(domain)}
+
+
+def line_reader(stream):
+    """``next_line(timeout_s, what)``: the stream's next line ('' at its end), read in a thread that closes it at
+    its end; AssertionError naming ``what`` after ``timeout_s``."""
+    lines = queue.Queue()
+
+    def pump():
+        with stream:
+            for line in stream:
+                lines.put(line)
+        lines.put('')   # end of the stream
+    threading.Thread(target=pump, daemon=True).start()
+
+    def next_line(timeout_s, what):
+        try:
+            return lines.get(timeout=timeout_s)
+        except queue.Empty:
+            raise AssertionError(f'timed out after {timeout_s} s waiting for {what}') from None
+    return next_line
 
 
 def stop(proc):
@@ -54,11 +77,15 @@ def test_a_plain_rclpy_script_hears_a_launch_and_is_listed(dds_domain, tmp_path)
     script.write_text(BEHAVIOUR)
     behaviour = subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE, text=True,
                                  stderr=subprocess.DEVNULL)
-    launch = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', 'launch/bear.launch.yaml',
-                               'monitor:=false', '--sim-time', '--rate', '10'], cwd=REPO, env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    next_line = line_reader(behaviour.stdout)
+    launch = None
     try:
-        line = behaviour.stdout.readline()  # the synthetic people of the scene hug and pat the bear
+        # The scene at 10x is over in seconds: the launch starts once the listener has subscribed.
+        assert next_line(60, 'the listener to subscribe') == 'subscribed\n'
+        launch = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', 'launch/bear.launch.yaml',
+                                   'monitor:=false', '--sim-time', '--rate', '10'], cwd=REPO, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        line = next_line(60, 'a gesture')  # the synthetic people of the scene hug and pat the bear
         assert line.startswith('gesture '), line
         listed = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'list'], cwd=REPO, env=env,
                                 capture_output=True, text=True, timeout=60)
@@ -67,9 +94,9 @@ def test_a_plain_rclpy_script_hears_a_launch_and_is_listed(dds_domain, tmp_path)
                               env=env, capture_output=True, text=True, timeout=60)
         assert '    /touch/symbolic: social_touch_msgs/msg/SymbolicGesture' in info.stdout.splitlines()
     finally:
-        stop(launch)
-        stop(behaviour)
-        behaviour.stdout.close()
+        if launch is not None:
+            stop(launch)
+        stop(behaviour)   # the reading thread closes its stdout at the end
 
 
 def test_ros_discovery_info_is_what_ros2_reads(dds_domain):

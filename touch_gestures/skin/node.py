@@ -88,6 +88,9 @@ DEFAULT_COMMANDS = ('config', 'skin_commands.yaml')
 CODEBOOK_COMMAND = ('social-touch codebook record --simulate 10 --seed 2026 --repetitions 30 '
                     '-o config/skin_codebook.npz')
 _NS = 1_000_000_000
+#: Frames the subscription holds: one second of the driver's 150 Hz. A gesture needs every frame of its touch,
+#: and a driver whose reads were held up (the node's start, a busy machine) publishes the frames it read at once.
+FRAME_QUEUE = 150
 #: GestureSegmenter's parameters that are node parameters, with its defaults and what they mean.
 _SEGMENTER_DOC = {
     'gap_s': "a lift must last this long (s) to end a gesture; shorter lifts separate its strokes (default: the "
@@ -154,7 +157,7 @@ class HapticCommandsNode(Node):
         self._setup_candidates()
         self._setup_collisions()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
-        self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(50))
+        self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(FRAME_QUEUE))
         self.health = NodeHealth(self)   # a callback that raises: ERROR on /diagnostics; dropped frames: WARN
         self.drops = self.health.drops
         self.add_on_set_parameters_callback(self._on_set_parameters)
