@@ -54,16 +54,16 @@ def test_a_plain_rclpy_script_hears_a_launch_and_is_listed(dds_domain, tmp_path)
     script.write_text(BEHAVIOUR)
     behaviour = subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE, text=True,
                                  stderr=subprocess.DEVNULL)
-    launch = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', 'launch/bear.launch.yaml',
+    launch = subprocess.Popen([sys.executable, '-m', 'touch_lab.cli.main', 'launch', 'launch/bear.launch.yaml',
                                'monitor:=false', '--sim-time', '--rate', '10'], cwd=REPO, env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         line = behaviour.stdout.readline()  # the synthetic people of the scene hug and pat the bear
         assert line.startswith('gesture '), line
-        listed = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'list'], cwd=REPO, env=env,
+        listed = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'list'], cwd=REPO, env=env,
                                 capture_output=True, text=True, timeout=60)
         assert {'/behaviour', '/bear/bear_gestures', '/bear/bear_driver'} <= set(listed.stdout.split()), listed
-        info = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'info', '/behaviour'], cwd=REPO,
+        info = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'info', '/behaviour'], cwd=REPO,
                               env=env, capture_output=True, text=True, timeout=60)
         assert '    /touch/symbolic: social_touch_msgs/msg/SymbolicGesture' in info.stdout.splitlines()
     finally:

@@ -15,9 +15,8 @@ import sys
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, stderr_progress
 
-__all__ = ['HELP', 'add_arguments', 'format_text', 'run']
+__all__ = ['add_arguments', 'format_text', 'run']
 
-HELP = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
 
 
 def positive_float(text: str) -> float:

@@ -35,10 +35,9 @@ from touch_lab.bear.evaluate import (
 )
 from touch_sim.bear.people import BearScene, Contact, make_scene
 
-__all__ = ['HELP', 'add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',
+__all__ = ['add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',
            'speed_error_table']
 
-HELP = 'regenerate docs/bear-evaluation.md and docs/bear-rates.md (simulated people; about 15 minutes)'
 
 SYNTHETIC = ('All figures: **synthetic** data (simulated people: drawn from knight2009 Table II statistics, and, '
              'where said, the second family of hands over plates; on a virtual bear read by the bear_driver node: '

@@ -30,9 +30,8 @@ from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
 FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 Table II statistics',
                'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009'}
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['add_arguments', 'run']
 
-HELP = 'train the Sensate Bear subtype model on simulated people (synthetic) and write it as .npz'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -33,9 +33,8 @@ from touch_lab.bear.cli import positive_int
 
 from .protocol import DEFAULT_GESTURES, SENSORS, Protocol
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['add_arguments', 'run']
 
-HELP = 'record labelled sessions of one sensor to rosbag2 (guided protocol; --simulate N: simulated people)'
 
 
 def _names(text: str) -> tuple[str, ...]:

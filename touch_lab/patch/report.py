@@ -26,9 +26,8 @@ from touch_lab.patch.datasets import render_session
 from touch_lab.patch.evaluate import leave_one_subject_out
 from touch_sim.patch.people import simulate_people
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/patch-evaluation.md (simulated people; about 10 minutes)'
 
 COMMAND = 'social-touch report patch'
 

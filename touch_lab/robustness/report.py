@@ -20,9 +20,8 @@ from .cases import CLEAR, CRASH, HANDLED, TRACEBACK, WRONG, Outcome, all_cases, 
 from .dds_injection import dds_injection
 from .figures import bag_corruption, flood, recorder_kill, unplug_recovery
 
-__all__ = ['HELP', 'add_arguments', 'run', 'run_all', 'write_report']
+__all__ = ['add_arguments', 'run', 'run_all', 'write_report']
 
-HELP = 'regenerate docs/robustness.md (bad input, faults, floods, unplug, kill -9; about 3 minutes)'
 RESULTS = (CLEAR, HANDLED, TRACEBACK, CRASH, WRONG)
 
 

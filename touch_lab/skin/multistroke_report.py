@@ -26,9 +26,8 @@ from touch_lab.skin.latency import bench_latency
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/skin-multistroke.md: multi-stroke vocabularies, early decisions, collisions, cost'
 #: Evaluated per vocabulary: the default, the two it chooses from (fused, trace), fused with the oriented
 #: cloud naming the class, the cloud refereed by $N (the default before fused) and the cloud alone, the
 #: oriented cloud alone, $N, the paper's centroid method.

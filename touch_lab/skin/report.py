@@ -29,9 +29,8 @@ from touch_lab.skin.recognisers import PAPER, PEERS, RECOGNISERS, make_recognise
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/skin-evaluation.md from real traces through the virtual skin (about 15 minutes)'
 
 COMMAND = 'social-touch report skin --traces ../shared/data/unistroke_dev.csv.gz'
 CONDITIONS = {
