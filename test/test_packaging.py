@@ -253,7 +253,9 @@ def test_colcon_builds_the_package_and_installs_the_executables(tmp_path):
 
 def test_cli_doctests():
     import touch_graph.cli.main
+    import touch_graph.cli.options
     check_doctests(touch_graph.cli.main)
+    check_doctests(touch_graph.cli.options)
 
 
 def test_lines_counts_every_layer(capsys):
