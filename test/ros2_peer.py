@@ -84,7 +84,7 @@ def listed_of(tries: int, domain: int) -> int:
         node = start_node(f'fast_talker_{i}', env)
         try:
             time.sleep(0.1)
-            out = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'list'], env=env,
+            out = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'list'], env=env,
                                  cwd=REPO, capture_output=True, text=True, timeout=60).stdout
             listed += f'/fast_talker_{i}' in out.split()
         finally:

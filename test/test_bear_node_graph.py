@@ -198,7 +198,7 @@ def test_eval_bear_runs_through_the_driver_node(capsys) -> None:
 def test_the_bear_launch_file_prints_gestures_as_they_happen() -> None:
     env = {**os.environ, 'SOCIAL_TOUCH_SHIM': '1'}
     launch = str(ROOT / 'launch' / 'bear.launch.yaml')
-    proc = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'launch', launch, '--sim-time', '--duration',
+    proc = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'launch', launch, '--sim-time', '--duration',
                            '60', '--no-bridge'],
                           capture_output=True, text=True, timeout=120, cwd=ROOT, env=env)
     assert proc.returncode == 0, proc.stderr

@@ -155,7 +155,7 @@ def test_echo_started_before_a_best_effort_publisher_hears_it(tmp_path):
     (tmp_path / 'graph.py').write_text(BEST_EFFORT)
     with allocate_domain() as domain:
         env = graph_env(domain)
-        echo = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'topic', 'echo', '/be',
+        echo = subprocess.Popen([sys.executable, '-m', 'touch_lab.cli.main', 'topic', 'echo', '/be',
                                  'std_msgs/msg/String', '-n', '2', '--timeout', '30'], cwd=REPO, env=env, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         publisher = None

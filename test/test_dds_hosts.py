@@ -171,7 +171,7 @@ def test_driver_recognisers_and_subscriber_on_three_hosts(lab, dds_domain):
     assert len(sent) >= 0.9 * len(frame_stamps), f'levels for only {len(sent)} of {len(frame_stamps)} frames'
 
     # The graph from the third host: nodes of all three.
-    result = subprocess.run(['ip', 'netns', 'exec', lab.hosts[2], sys.executable, '-m', 'touch_graph.cli.main',
+    result = subprocess.run(['ip', 'netns', 'exec', lab.hosts[2], sys.executable, '-m', 'touch_lab.cli.main',
                              'node', 'list'], env=env, capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     assert {'/bear/bear_driver', '/bear/bear_gestures', '/touch_listener'} <= set(result.stdout.split())

@@ -82,15 +82,15 @@ def test_a_plain_rclpy_script_hears_a_launch_and_is_listed(dds_domain, tmp_path)
     try:
         # The scene at 10x is over in seconds: the launch starts once the listener has subscribed.
         assert next_line(60, 'the listener to subscribe') == 'subscribed\n'
-        launch = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', 'launch/bear.launch.yaml',
+        launch = subprocess.Popen([sys.executable, '-m', 'touch_lab.cli.main', 'launch', 'launch/bear.launch.yaml',
                                    'monitor:=false', '--sim-time', '--rate', '10'], cwd=REPO, env=env,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         line = next_line(60, 'a gesture')  # the synthetic people of the scene hug and pat the bear
         assert line.startswith('gesture '), line
-        listed = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'list'], cwd=REPO, env=env,
+        listed = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'list'], cwd=REPO, env=env,
                                 capture_output=True, text=True, timeout=60)
         assert {'/behaviour', '/bear/bear_gestures', '/bear/bear_driver'} <= set(listed.stdout.split()), listed
-        info = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'node', 'info', '/behaviour'], cwd=REPO,
+        info = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'info', '/behaviour'], cwd=REPO,
                               env=env, capture_output=True, text=True, timeout=60)
         assert '    /touch/symbolic: social_touch_msgs/msg/SymbolicGesture' in info.stdout.splitlines()
     finally:

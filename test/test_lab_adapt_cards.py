@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from touch_gestures.model_card import attach_card, card_line, card_log_line, make_card, read_card
-from touch_graph.cli.main import main as cli_main
+from touch_lab.cli.main import main as cli_main
 
 
 def test_a_card_survives_the_file_and_the_loader_ignores_it(tmp_path):

@@ -8,8 +8,8 @@ from types import SimpleNamespace
 import pytest
 
 from touch_gestures.bear.symbolic import GestureLibrary
-from touch_graph.cli.main import main as cli_main
 from touch_lab.bear.shipped import score_symbolic_starts
+from touch_lab.cli.main import main as cli_main
 from touch_lab.collect.session_bag import LabelRow
 
 LIB = GestureLibrary.default()

@@ -129,7 +129,7 @@ def test_one_person_is_suggested_from_but_not_checked():
 
 
 def test_train_refuses_to_write_the_suggestion_over_its_config_before_any_work(tmp_path, capsys):
-    from touch_graph.cli.main import main as cli_main
+    from touch_lab.cli.main import main as cli_main
     config = tmp_path / 'gestures.yaml'
     config.write_text(Path(GestureLibrary.default(BODY).source).read_text())
     assert cli_main(['train', 'bear', '--bags', str(tmp_path / 'no_bag'), '-o', str(tmp_path / 'm.npz'),
@@ -164,7 +164,7 @@ def test_any_trials_give_settings_the_config_accepts_or_a_reason(counts, other_p
 
 
 def test_train_evaluate_with_one_person_saves_the_model_and_says_why_no_evaluation(tmp_path, capsys):
-    from touch_graph.cli.main import main as cli_main
+    from touch_lab.cli.main import main as cli_main
     bags = tmp_path / 'sessions'
     assert cli_main(['collect', 'bear', '--simulate', '1', '--gestures', 'pat,rub', '--repetitions', '4',
                      '--pause-s', '2', '--seed', '3', '--out', str(bags)]) == 0

@@ -11,10 +11,10 @@ import os
 import pytest
 
 from touch_driver.bear.protocol import BearDecoder
-from touch_graph.cli.main import main as social_touch
 from touch_lab.bench.drivers import bench_driver
 from touch_lab.bench.replay import PtyPort, record_scene
 from touch_lab.bench.stack import bench_stack
+from touch_lab.cli.main import main as social_touch
 
 
 def test_a_recording_holds_one_whole_frame_per_period():

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from touch_graph.cli.main import main as cli_main
 from touch_graph.messages import get_message
+from touch_lab.cli.main import main as cli_main
 from touch_lab.collect.protocol import Protocol
 from touch_lab.collect.session_bag import SessionError, SessionWriter, read_session
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from touch_graph.cli.main import main as cli_main
+from touch_lab.cli.main import main as cli_main
 from touch_lab.collect.live import PROMPT_TOPIC, TerminalLines, live_session
 from touch_lab.collect.protocol import Protocol
 from touch_lab.collect.session_bag import read_session

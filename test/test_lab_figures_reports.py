@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 from figures_testing import assert_report_png
 
-from touch_graph.cli.main import main as social_touch
 from touch_lab.bear import report as bear_report
 from touch_lab.bear import transfer as bear_transfer
 from touch_lab.bear.evaluate import EvalConfig
+from touch_lab.cli.main import main as social_touch
 from touch_lab.patch import report as patch_report
 from touch_lab.skin import report as skin_report
 from touch_lab.skin.datasets import write_traces

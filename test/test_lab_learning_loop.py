@@ -19,8 +19,8 @@ import pytest
 import yaml
 
 import touch_graph.launch.cli as launch_cli
-from touch_graph.cli.main import main as cli_main
 from touch_graph.messages import deserialize
+from touch_lab.cli.main import main as cli_main
 from touch_sim.virtual_port import forget_devices
 
 ROOT = Path(__file__).resolve().parent.parent

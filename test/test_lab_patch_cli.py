@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from touch_gestures.patch.model_io import load_model
-from touch_graph.cli.main import main as social_touch
+from touch_lab.cli.main import main as social_touch
 from touch_lab.patch.cli import add_eval_arguments, add_train_arguments
 from touch_sim.patch.people import simulate_people
 

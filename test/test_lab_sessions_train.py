@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from touch_graph.cli.main import main as cli_main
+from touch_lab.cli.main import main as cli_main
 from touch_lab.collect.session_bag import read_session
 
 GESTURES = {'bear': 'poke,hold,pet', 'patch': 'stroke,slap', 'skin': 'line_right,line_up'}

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from touch_gestures.skin.gesture import TouchGesture
-from touch_graph.cli.main import main as social_touch
+from touch_lab.cli.main import main as social_touch
 from touch_lab.skin.bench import (
     LIFT_S,
     MULTISTROKE_DEFAULT,

@@ -29,7 +29,7 @@ class Launch:
     """``social-touch launch`` in a process; its stderr read line by line in a thread."""
 
     def __init__(self, *argv, env=None):
-        self.proc = subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', 'launch', *map(str, argv)],
+        self.proc = subprocess.Popen([sys.executable, '-m', 'touch_lab.cli.main', 'launch', *map(str, argv)],
                                      cwd=REPO, env=env,
                                      stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
         self.lines = []

@@ -170,7 +170,7 @@ def test_a_missing_or_broken_config_file_is_one_error_naming_file_and_line_befor
 def test_the_launch_command_stops_before_starting_anything_on_a_broken_config_file(tmp_path) -> None:
     broken = tmp_path / 'gestures.yaml'
     broken.write_text('a: [1,\n')
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'launch', str(DEMO),
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'launch', str(DEMO),
                              f'gestures:={broken}', '--sim-time', '--no-network', '--duration', '1'],
                             capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert result.returncode != 0
@@ -180,7 +180,7 @@ def test_the_launch_command_stops_before_starting_anything_on_a_broken_config_fi
 
 
 def test_the_demo_checks_its_config_arguments_too(tmp_path) -> None:
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'demo', '--fast', '--duration', '1',
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'demo', '--fast', '--duration', '1',
                              f'commands:={tmp_path / "mine.yaml"}'], capture_output=True, text=True, timeout=120,
                             cwd=tmp_path)
     assert result.returncode != 0 and "parameter 'commands' of /skin/haptic_commands: no such file" in result.stderr
@@ -190,7 +190,7 @@ def test_the_demo_checks_its_config_arguments_too(tmp_path) -> None:
 def test_a_node_logs_the_config_files_it_loaded(tmp_path) -> None:
     gestures = tmp_path / 'my_gestures.yaml'
     gestures.write_text((Path(__file__).resolve().parents[1] / 'config' / 'bear_gestures.yaml').read_text())
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'launch', str(DEMO),
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'launch', str(DEMO),
                              f'gestures:={gestures}', 'use_patch:=false', 'use_skin:=false', '--sim-time',
                              '--no-network', '--duration', '0.5'], capture_output=True, text=True, timeout=180,
                             cwd=tmp_path)
@@ -240,7 +240,7 @@ def test_the_launch_command_says_it_uses_the_checkout(tmp_path) -> None:
     (checkout / 'launch' / 'one.launch.yaml').write_text(
         'launch:\n- node: {pkg: social_touch, exec: touch_state, name: from_checkout}\n')
     env = {k: v for k, v in os.environ.items() if k != paths.CHECKOUT_ENV}
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'launch', 'social_touch', 'one.launch.yaml',
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'launch', 'social_touch', 'one.launch.yaml',
                              '--print-description'], capture_output=True, text=True, timeout=120, cwd=checkout,
                             env=env)
     assert result.returncode == 0, result.stderr
@@ -255,7 +255,7 @@ def test_the_demo_reads_the_checkouts_launch_file_too(tmp_path) -> None:
         'launch:\n- node: {pkg: social_touch, exec: touch_state, name: from_checkout}\n')
     env = {k: v for k, v in os.environ.items() if k != paths.CHECKOUT_ENV}
     env['SOCIAL_TOUCH_GRAPH_DIR'] = str(tmp_path / 'graph')
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'demo', '--fast', '--duration', '1'],
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'demo', '--fast', '--duration', '1'],
                             capture_output=True, text=True, timeout=120, cwd=checkout, env=env)
     assert result.returncode == 0, result.stderr
     assert f'[demo] inside the checkout {checkout}: its config/ and launch/ are used' in result.stderr

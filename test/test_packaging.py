@@ -1,6 +1,7 @@
 """The ROS 2 package: colcon builds it with the node executables, export-interfaces writes the msgs package."""
 
 import ast
+import json
 import re
 import shutil
 import subprocess
@@ -112,33 +113,86 @@ def test_installed_entry_points_match_pyproject():
     assert scripts == PROJECT['scripts']
 
 
-def test_every_plug_in_group_is_installed_as_pyproject_declares_it_and_loads():
-    """Commands, lab targets, benchmarks, scene generators and URL handlers: one entry point each."""
+def test_entry_points_are_only_where_another_package_plugs_in_and_load():
+    """Nodes, scene generators and URL handlers: one entry point each; commands and targets are tables in code."""
     groups = PROJECT['entry-points']
-    assert {'social_touch.nodes', 'social_touch.commands', 'social_touch.eval', 'social_touch.train',
-            'social_touch.codebook', 'social_touch.report', 'social_touch.bench', 'social_touch.scene_generators',
-            'social_touch.serial_url_handlers'} == set(groups)
+    assert {'social_touch.nodes', 'social_touch.scene_generators', 'social_touch.serial_url_handlers'} == set(groups)
     for group, declared in groups.items():
         installed = {e.name: e.value for e in entry_points(group=group)}
         assert installed == declared, f'{group}: reinstall (pip install -e .) after changing pyproject.toml'
         for ep in entry_points(group=group):
             loaded = ep.load()
-            if group in ('social_touch.commands', 'social_touch.eval', 'social_touch.train', 'social_touch.codebook',
-                         'social_touch.report'):
-                assert callable(loaded.add_arguments) and callable(loaded.run), ep
-            elif group == 'social_touch.serial_url_handlers':
+            if group == 'social_touch.serial_url_handlers':
                 assert (Path(loaded.__file__).parent / f'protocol_{ep.name}.py').is_file(), ep
             else:
                 assert callable(loaded), ep
 
 
+def _tables():
+    from touch_lab.cli import bench, targets
+    from touch_lab.cli.main import COMMANDS
+    return {'social-touch': COMMANDS, 'eval': targets.EVAL_TARGETS, 'train': targets.TRAIN_TARGETS,
+            'codebook': targets.CODEBOOK_TARGETS, 'report': targets.REPORT_TARGETS, 'bench': bench.BENCHES}
+
+
+def test_every_line_of_every_command_table_loads_with_a_one_line_help():
+    from touch_graph.cli.main import load
+    for table_name, table in _tables().items():
+        for name, command in table.items():
+            assert command.help and '\n' not in command.help and len(command.help) <= 120, (table_name, name)
+            loaded = load(command.target)
+            if table_name == 'bench':
+                assert callable(loaded), (table_name, name)
+            else:
+                assert callable(loaded.add_arguments) and callable(loaded.run), (table_name, name)
+
+
+def test_the_runtime_table_names_only_runtime_modules():
+    from touch_graph.cli.main import COMMANDS
+    assert all(command.target.split('.')[0] == 'touch_graph' for command in COMMANDS.values())
+
+
+HELP_IMPORTS = '''
+import json, sys
+from touch_lab.cli.main import main
+try:
+    main(sys.argv[1:])
+except SystemExit:
+    pass
+print(json.dumps(sorted(sys.modules)))
+'''
+
+
+@pytest.mark.parametrize('argv', [['--help'], ['eval', '--help'], ['report', '--help']])
+def test_help_imports_none_of_the_modules_it_does_not_print(argv):
+    """The top-level --help and a command's list of targets read the tables, not the command modules."""
+    proc = subprocess.run([sys.executable, '-c', HELP_IMPORTS, *argv], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    modules = set(json.loads(proc.stdout.splitlines()[-1]))
+    targets = {command.target.split(':')[0] for table in _tables().values() for command in table.values()}
+    loaded = targets & modules
+    if argv[0] != '--help':
+        loaded -= {'touch_lab.cli.targets'}     # the command itself, which prints its targets
+    assert loaded == set()
+    assert not {'numpy', 'sklearn', 'cyclonedds', 'touch_sim'} & {m.split('.')[0] for m in modules}
+
+
+def test_a_target_s_help_imports_that_target_alone():
+    proc = subprocess.run([sys.executable, '-c', HELP_IMPORTS, 'eval', 'bear', '--help'], capture_output=True,
+                          text=True, timeout=60)
+    modules = set(json.loads(proc.stdout.splitlines()[-1]))
+    assert 'touch_lab.bear.cli' in modules and 'touch_lab.skin.cli' not in modules
+    assert '--repeats' in proc.stdout or 'usage: social-touch eval bear' in proc.stdout
+
+
 @pytest.mark.parametrize('argv', [['--help'], ['eval', '--help'], ['eval', 'bear', '--help'],
                                   ['train', 'bear', '--help'], ['train', 'patch', '--help'],
                                   ['report', 'skin', '--help'], ['bench', '--help'], ['codebook', 'record', '--help'],
+                                  ['codebook', 'info', '--help'], ['report', '--help'],
                                   ['lines', '--help'],
                                   ['demo', '--help']])
 def test_the_cli_is_the_one_way_in_and_every_command_explains_itself(argv, capsys):
-    from touch_graph.cli.main import main
+    from touch_lab.cli.main import main
     with pytest.raises(SystemExit) as exit_info:
         main(argv)
     assert exit_info.value.code == 0
@@ -147,12 +201,12 @@ def test_the_cli_is_the_one_way_in_and_every_command_explains_itself(argv, capsy
 
 
 def test_no_module_has_its_own_entry_point_outside_the_cli():
-    """No ``if __name__ == '__main__'`` and no argparse ``main()`` beside ``social-touch`` (the CLI's own module)."""
+    """No ``if __name__ == '__main__'`` and no argparse ``main()`` beside the runner and the console script."""
     offenders = []
     for path in sorted(ROOT.glob('touch_*/**/*.py')):
         text = path.read_text()
         rel = path.relative_to(ROOT).as_posix()
-        if rel == 'touch_graph/cli/main.py':
+        if rel in ('touch_graph/cli/main.py', 'touch_lab/cli/main.py'):  # the runner and the console script
             continue
         if "__name__ == '__main__'" in text or ('ArgumentParser(' in text and '\ndef main(' in text):
             offenders.append(rel)
@@ -199,11 +253,13 @@ def test_colcon_builds_the_package_and_installs_the_executables(tmp_path):
 
 def test_cli_doctests():
     import touch_graph.cli.main
+    import touch_graph.cli.options
     check_doctests(touch_graph.cli.main)
+    check_doctests(touch_graph.cli.options)
 
 
 def test_lines_counts_every_layer(capsys):
-    from touch_graph.cli.main import main
+    from touch_lab.cli.main import main
     assert main(['lines', '--json']) == 0
     import json
     counts = json.loads(capsys.readouterr().out)

@@ -113,7 +113,7 @@ def test_launch_exits_non_zero_naming_the_node_that_did_not_start(tmp_path: Path
             param:
             - {name: port, value: 'skinsim://x?nosie=3'}
         """))
-    run = subprocess.run([sys.executable, '-c', 'from touch_graph.cli.main import main; raise SystemExit(main())',
+    run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
                           'launch', str(launch), '--sim-time', '--duration', '1'],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert run.returncode != 0

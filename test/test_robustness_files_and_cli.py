@@ -88,7 +88,7 @@ def test_any_bytes_as_a_codebook_give_a_codebook_error(tmp_path_factory, data: b
     ['play', 'nowhere', '--rate', '0'], ['play', 'nowhere', '--rate', '-1'],
 ])
 def test_cli_arguments_that_can_never_work_are_usage_errors(tmp_path: Path, argv: list[str]) -> None:
-    run = subprocess.run([sys.executable, '-c', 'from touch_graph.cli.main import main; raise SystemExit(main())',
+    run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
                           *argv], capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert run.returncode == 2, run.stderr
     assert 'expected a number > 0' in run.stderr and 'Traceback' not in run.stderr

@@ -213,7 +213,7 @@ class LiveGraph:
         self.executor = SingleThreadedExecutor(context=self.ctx)
         self.lines: list[str] = []
         env = {**os.environ, 'ROS_DOMAIN_ID': str(domain)}
-        command = [sys.executable, '-m', 'touch_graph.cli.main', 'codebook', 'record', '--wait', '0.2', *argv]
+        command = [sys.executable, '-m', 'touch_lab.cli.main', 'codebook', 'record', '--wait', '0.2', *argv]
         self.proc = subprocess.Popen(command, cwd=REPO, env=env, stdin=subprocess.PIPE, stderr=subprocess.PIPE,
                                      text=True)
         threading.Thread(target=self._read, daemon=True).start()

@@ -36,7 +36,7 @@ def test_demo_view_and_foxglove_add_their_nodes_to_the_scene():
 
 def test_the_commands_explain_themselves():
     for command in ('view', 'foxglove'):
-        result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', command, '--help'],
+        result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', command, '--help'],
                                 capture_output=True, text=True, timeout=60)
         text = ' '.join(result.stdout.split())
         assert result.returncode == 0 and '--port' in text and '0: any free port' in text

@@ -139,13 +139,13 @@ def test_a_port_in_use_is_one_clear_error_naming_the_flag(busy_port):
             FoxgloveServerNode(context=ctx, parameter_overrides=[Parameter('port', value=busy_port)])
     finally:
         ctx.shutdown()
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'foxglove', '--port', str(busy_port)],
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'foxglove', '--port', str(busy_port)],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 1 and 'already in use' in result.stderr and '--port N' in result.stderr
 
 
 def test_the_packaged_layout_opens_the_served_topics():
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'foxglove', '--layout'],
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'foxglove', '--layout'],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0 and result.stdout.strip() == layout_path()
     with open(layout_path(), encoding='utf-8') as file:

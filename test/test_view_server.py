@@ -165,7 +165,7 @@ def test_a_failing_snapshot_is_counted_and_reported_and_serving_goes_on():
 def test_a_port_in_use_is_one_clear_error_naming_the_flag(busy_port):
     with pytest.raises(ViewError, match=rf'127.0.0.1:{busy_port}: the port is already in use.*--port N'):
         ViewServer(Picture(), {}, port=busy_port)
-    result = subprocess.run([sys.executable, '-m', 'touch_graph.cli.main', 'view', '--port', str(busy_port)],
+    result = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'view', '--port', str(busy_port)],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 1
     assert 'already in use' in result.stderr and '--port N' in result.stderr

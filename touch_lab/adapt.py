@@ -28,9 +28,8 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
-__all__ = ['HELP', 'adapt_bear', 'adapt_patch', 'add_arguments', 'run']
+__all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
-HELP = 'adapt a deployed model to one person from a few labelled examples (session bags of a short collect)'
 
 
 def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):

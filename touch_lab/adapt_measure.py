@@ -27,9 +27,8 @@ from touch_lab.collect.protocol import DEFAULT_GESTURES, Protocol
 from touch_lab.collect.session_bag import read_session
 from touch_lab.collect.simulate import simulate_session
 
-__all__ = ['HELP', 'KS', 'add_arguments', 'measure', 'run']
+__all__ = ['KS', 'add_arguments', 'measure', 'run']
 
-HELP = 'accuracy for a new person after adapting to 0, 1, 3, 5 examples per class (simulated people, SYNTHETIC)'
 
 KS = (0, 1, 3, 5)
 REPETITIONS = 8

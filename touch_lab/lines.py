@@ -14,9 +14,8 @@ import importlib
 import json
 from pathlib import Path
 
-__all__ = ['HELP', 'LAYERS', 'add_arguments', 'count_lines', 'line_counts', 'run']
+__all__ = ['LAYERS', 'add_arguments', 'count_lines', 'line_counts', 'run']
 
-HELP = 'lines of Python per layer (runtime, simulation, lab, tests) and the runtime share of the tree'
 
 #: layer -> its top-level packages.
 LAYERS: dict[str, tuple[str, ...]] = {

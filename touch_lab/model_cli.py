@@ -21,9 +21,8 @@ from typing import Any
 from touch_gestures.model_card import KINDS, attach_card, file_kind, format_card, make_card, read_card
 from touch_graph.errors import SocialTouchError
 
-__all__ = ['HELP', 'add_arguments', 'headline_figures', 'run']
+__all__ = ['add_arguments', 'headline_figures', 'run']
 
-HELP = 'show (info) or add evaluation figures to (card) the model card of a model or codebook file'
 
 #: Words that mark a figure worth a card: scores, error rates, latencies, counts of trials.
 _FIGURE_WORDS = ('accuracy', 'rate', 'latency', 'correct', 'right', 'wrong', 'missed', 'misses', 'false', 'trials',

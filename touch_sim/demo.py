@@ -21,7 +21,6 @@ from touch_graph.errors import LaunchError
 from touch_graph.launch import LaunchRunner, evaluate_launch
 from touch_graph.paths import share_file
 
-HELP = 'the demo scene on virtual sensors, printing what the robot perceives'
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')

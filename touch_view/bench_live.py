@@ -43,7 +43,7 @@ def _free_port() -> int:
 
 
 def _cli(*argv: str, env: dict[str, str]) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, '-m', 'touch_graph.cli.main', *argv], env=env,
+    return subprocess.Popen([sys.executable, '-m', 'touch_lab.cli.main', *argv], env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 

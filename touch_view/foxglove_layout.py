@@ -18,7 +18,7 @@ import argparse
 import json
 import sys
 
-__all__ = ['HELP', 'POSTERIOR_CLASSES', 'add_arguments', 'build_layout', 'run']
+__all__ = ['POSTERIOR_CLASSES', 'add_arguments', 'build_layout', 'run']
 
 #: The classes of the shipped patch model, in its order (``/patch/posteriors.classes``).
 POSTERIOR_CLASSES = ('push', 'slap', 'stroke', 'tickle')
@@ -53,7 +53,6 @@ def build_layout() -> dict:
     return json.loads(fl.Layout(content=content).to_json())
 
 
-HELP = "write the package's Foxglove layout (touch_view/layouts/social_touch.json) from this module"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -22,7 +22,7 @@ from touch_graph.paths import share_file
 from .browser import headless_chromium
 from .scene import BackgroundScene
 
-__all__ = ['HELP', 'add_arguments', 'run', 'take_screenshot']
+__all__ = ['add_arguments', 'run', 'take_screenshot']
 
 
 def take_screenshot(path: str, *, at_s: float = 17.0, rate: float = 2.0, size: tuple[int, int] = (1400, 1050)) -> None:
@@ -47,7 +47,6 @@ def take_screenshot(path: str, *, at_s: float = 17.0, rate: float = 2.0, size: t
         scene.stop()
 
 
-HELP = "the README's screenshot of the touch view on the demo scene (synthetic), in headless Chromium"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

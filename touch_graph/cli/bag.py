@@ -10,7 +10,6 @@ from .record import format_size
 __all__ = ['add_arguments', 'format_stamp', 'run']
 
 
-HELP = 'bag info, bag reindex (recover a bag whose recorder died)'
 
 def format_stamp(ns: int) -> str:
     """A ROS time as ``ros2 bag info`` prints it (local time, then seconds since the epoch)."""

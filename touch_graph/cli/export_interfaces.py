@@ -59,7 +59,6 @@ ament_package()
 _TYPE_REF = re.compile(r'^\s*([A-Za-z][A-Za-z0-9_]*)/([A-Za-z][A-Za-z0-9_]*)', re.MULTILINE)
 
 
-HELP = 'write the social_touch_msgs ament_cmake package for a ROS 2 workspace'
 
 def message_dependencies(files: list[Path]) -> list[str]:
     """Packages the ``.msg`` and ``.srv`` files refer to (``std_msgs/Header`` -> ``std_msgs``), sorted."""

@@ -6,7 +6,6 @@ import argparse
 
 from .. import messages, srv_types
 
-HELP = 'list message types or show one (like ros2 interface)'
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest='action', required=True, metavar='ACTION')

@@ -136,7 +136,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('-n', '--count', type=int, help='print N messages and exit')
     p.add_argument('--no-arr', action='store_true', help='print array fields as their type and length')
     p.add_argument('--field', help='print only this field, e.g. header.stamp')
-    p.add_argument('--timeout', type=float, help='exit with code 1 after SECONDS without a message')
+    p.add_argument('--timeout', type=float, metavar='S', help='exit with code 1 after S seconds without a message')
     p = sub.add_parser('hz', help='print the rate of a topic')
     p.add_argument('topic')
     p.add_argument('-w', '--window', type=int, default=10_000, help='messages to compute over (default 10000)')

@@ -13,11 +13,11 @@ import math
 import sys
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_graph.cli.options import deprecated_alias
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, stderr_progress
 
-__all__ = ['HELP', 'add_arguments', 'format_text', 'run']
+__all__ = ['add_arguments', 'format_text', 'run']
 
-HELP = 'evaluate the Sensate Bear recognisers on simulated people (synthetic)'
 
 
 def positive_float(text: str) -> float:
@@ -50,8 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--rate', type=positive_float, default=3.4,
                         help='scan rate, Hz: 3.4 is the real bear (knight2009 VI.B), 25 the ideal (3.4)')
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20, V.A)')
-    parser.add_argument('--reps', type=positive_int, default=2,
-                        help='repetitions of each subtype and gesture per person (2; >= 2 fills Table III)')
+    repetitions = parser.add_argument('--repetitions', type=positive_int, default=2, metavar='N',
+                                      help='repetitions of each subtype and gesture per person (2; >= 2 fills '
+                                      'Table III)')
+    deprecated_alias(parser, '--reps', repetitions)
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='session bags (social-touch collect bear): leave-one-person-out on them instead of '
                         'simulated scenes (or, with --model, that model scored on every person in them)')
@@ -73,8 +75,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _config(args: argparse.Namespace) -> EvalConfig:
     return EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, n_people=args.people,
-                      train_people=args.train_people, seed=args.seed, subtype_reps=args.reps,
-                      gesture_reps=args.reps, family=args.family, train_families=train_families(args.train_family))
+                      train_people=args.train_people, seed=args.seed, subtype_reps=args.repetitions,
+                      gesture_reps=args.repetitions, family=args.family,
+                      train_families=train_families(args.train_family))
 
 
 def train_families(choice: str) -> tuple[str, ...]:

@@ -22,6 +22,7 @@ from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import GestureLibrary
+from touch_graph.cli.options import add_output
 from touch_graph.paths import share_file
 from touch_lab.bear.bench import bench_cycle
 from touch_lab.bear.evaluate import (
@@ -35,10 +36,9 @@ from touch_lab.bear.evaluate import (
 )
 from touch_sim.bear.people import BearScene, Contact, make_scene
 
-__all__ = ['HELP', 'add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',
+__all__ = ['add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',
            'speed_error_table']
 
-HELP = 'regenerate docs/bear-evaluation.md and docs/bear-rates.md (simulated people; about 15 minutes)'
 
 SYNTHETIC = ('All figures: **synthetic** data (simulated people: drawn from knight2009 Table II statistics, and, '
              'where said, the second family of hands over plates; on a virtual bear read by the bear_driver node: '
@@ -428,15 +428,14 @@ def rates_md(sweep: list[dict], aliases: list[dict], command: str) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch report bear``."""
-    parser.add_argument('--out-dir', default=None, help='where to write the two .md files (default: docs/ of the '
-                        'source tree)')
+    add_output(parser, 'where to write the two .md files (default: docs/ of the source tree)', directory=True)
     parser.add_argument('--quick', action='store_true', help='fewer people and configurations (a preview)')
     parser.add_argument('--seed', type=int, default=0)
 
 
 def run(args: argparse.Namespace) -> int:
     """Measure everything and write docs/bear-evaluation.md and docs/bear-rates.md (about 15 minutes)."""
-    out_dir = Path(args.out_dir) if args.out_dir else Path(__file__).resolve().parents[2] / 'docs'
+    out_dir = Path(args.output_dir) if args.output_dir else Path(__file__).resolve().parents[2] / 'docs'
     command = 'social-touch report bear' + (' --quick' if args.quick else '')
     say = stderr_progress
     people = 3 if args.quick else 6

@@ -135,7 +135,7 @@ def write_config(source: str | os.PathLike, out: str | os.PathLike, suggestions:
     source, out = Path(source), Path(out)
     if out.resolve() == source.resolve():
         raise ConfigError(f'{out} is the gesture config the suggestion is made from; write the suggestion to '
-                          'another file (--suggest-out)')
+                          'another file (--suggest-output)')
     doc = yaml.safe_load(source.read_text())
     changed = 0
     for name, s in suggestions.items():

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.model_card import attach_card, make_card
+from touch_graph.cli.options import add_output, deprecated_alias
 from touch_lab.cards import session_data
 from touch_lab.collect.session_bag import SessionError
 
@@ -30,16 +31,13 @@ from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
 FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 Table II statistics',
                'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009'}
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['add_arguments', 'run']
 
-HELP = 'train the Sensate Bear subtype model on simulated people (synthetic) and write it as .npz'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch train bear``."""
-    out = parser.add_mutually_exclusive_group(required=True)
-    out.add_argument('-o', '--output', help='the .npz file to write')
-    out.add_argument('--out', dest='deprecated_out', metavar='OUTPUT', help='deprecated spelling of -o/--output')
+    add_output(parser, 'the .npz file to write', required=True)
     parser.add_argument('--rate', type=positive_float, default=3.4, help='scan rate, Hz (3.4)')
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20)')
     parser.add_argument('--people', type=positive_int, default=8, help='simulated people to train on (8)')
@@ -52,25 +50,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gestures-config', metavar='YAML',
                         help='--bags: the symbolic gesture config whose min_active / dwell_s are suggested from the '
                         "bags' symbolic/<gesture> trials (default: the package's config/bear_gestures.yaml)")
-    parser.add_argument('--suggest-out', metavar='YAML',
-                        help='--bags: where to write the suggested gesture config (default: beside -o/--output, '
-                        'MODEL.gestures.yaml; never the config it is made from)')
+    suggest = parser.add_argument('--suggest-output', metavar='YAML',
+                                  help='--bags: where to write the suggested gesture config (default: beside '
+                                  '-o/--output, MODEL.gestures.yaml; never the config it is made from)')
+    deprecated_alias(parser, '--suggest-out', suggest)
     parser.add_argument('--evaluate', action='store_true',
                         help="also measure the model's figures (bags: leave-one-person-out; simulated: held-out "
                         "simulated people, `eval bear`) and record them in the file's card")
 
 
-def _output(args: argparse.Namespace) -> None:
-    """``--out`` (deprecated, with a warning) as ``--output``, as in ``train patch`` and ``train skin``."""
-    if getattr(args, 'deprecated_out', None):
-        print('social-touch train bear: warning: --out is deprecated; use -o/--output (as train patch and train '
-              'skin do)', file=sys.stderr)
-        args.output = args.deprecated_out
-
-
 def run(args: argparse.Namespace) -> int:
     """Train and write the model; progress on stderr."""
-    _output(args)
     if args.bags:
         return _run_bags(args)
     families = train_families(args.family)
@@ -122,9 +112,9 @@ def _run_bags(args: argparse.Namespace) -> int:
         body_map = BodyMap.default()
         config = args.gestures_config or share_file('config', 'bear_gestures.yaml')
         library = GestureLibrary.load(config, body_map)
-        out = Path(args.suggest_out or default_output(args.output))
+        out = Path(args.suggest_output or default_output(args.output))
         if out.resolve() == Path(config).resolve():
-            raise SessionError(f'--suggest-out {out} is the gesture config the suggestion is made from; the '
+            raise SessionError(f'--suggest-output {out} is the gesture config the suggestion is made from; the '
                                'suggestion goes to a new file')
         runs = load_runs(args.bags, args.rate, args.buffer, stderr_progress)
         if not any(r.labels for r in runs):

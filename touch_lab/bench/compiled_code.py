@@ -26,9 +26,8 @@ from typing import Any
 
 from touch_graph.errors import ConfigError
 
-__all__ = ['HELP', 'SECTIONS', 'add_arguments', 'render', 'run']
+__all__ = ['SECTIONS', 'add_arguments', 'render', 'run']
 
-HELP = "regenerate docs/compiled-code.md (each compiled twin's saving at the real rates; about 5 minutes)"
 
 ROOT = Path(__file__).resolve().parents[2]
 REPORT = ROOT / 'docs' / 'compiled-code.md'

@@ -62,10 +62,10 @@ def _train_bear_symbolic(bags: list[str]) -> None:
     import contextlib
     import io
 
-    from touch_graph.cli.main import main as cli_main
+    from touch_lab.cli.main import main as cli_main
     with tempfile.TemporaryDirectory(prefix='bench-training-model-') as out, \
             contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        code = cli_main(['train', 'bear', '--bags', *bags, '--out', str(Path(out) / 'bear.npz')])
+        code = cli_main(['train', 'bear', '--bags', *bags, '--output', str(Path(out) / 'bear.npz')])
     if code != 0:
         raise RuntimeError(f'train bear --bags failed with exit code {code}')
 

@@ -1,12 +1,8 @@
 """``social-touch bench TARGET [--json]``: medians of repeated runs on this machine.
 
-Every target is a function ``bench(repeats=N) -> dict`` registered in the ``social_touch.bench``
-entry point group (setup.py): ``runtime`` (pub/sub throughput, latency, CDR), ``drivers`` (the
-driver nodes on recorded bytes, per frame), ``stack`` (drivers and recognisers at real sensor
-rates, CPU share), ``transport`` (our DDS path against raw cyclonedds, across processes),
-``view`` (the web view's extra CPU with five pages connected), the recognisers (``bear``,
-``patch``, ``skin``) and their nodes. Each prints a table, or with ``--json`` one JSON object,
-so figures in the docs can be regenerated and compared.
+Every target is a function ``bench(repeats=N) -> dict``, one line of :data:`BENCHES` with what
+it measures (``social-touch bench --help`` lists them). Each prints a table, or with ``--json``
+one JSON object, so figures in the docs can be regenerated and compared.
 """
 
 from __future__ import annotations
@@ -15,14 +11,37 @@ import argparse
 import json
 import platform
 
-from touch_lab.cli.targets import targets
+from touch_graph.cli.main import Command, load
 
-HELP = 'measure speed: runtime, drivers, the whole stack at sensor rates, recognisers'
-GROUP = 'social_touch.bench'
+__all__ = ['BENCHES', 'add_arguments', 'run']
+
+#: name -> (``module:function``, what it measures).
+BENCHES: dict[str, Command] = {
+    'runtime': Command('touch_lab.bench.runtime:bench_runtime', 'pub/sub throughput, latency, CDR'),
+    'drivers': Command('touch_lab.bench.drivers:bench_drivers', 'the driver nodes on recorded bytes, per frame'),
+    'transport': Command('touch_lab.bench.transport:bench_transport',
+                         'our DDS path against raw cyclonedds, across processes'),
+    'stack': Command('touch_lab.bench.stack:bench_stack', 'drivers and recognisers at real sensor rates, CPU share'),
+    'training': Command('touch_lab.bench.training:bench_training',
+                        'training on an hour of sessions, per sensor (SYNTHETIC)'),
+    'framing': Command('touch_lab.bench.framing:bench_framing', "the drivers' frame parsers"),
+    'codec': Command('touch_lab.bench.codec:bench_codec', 'the CDR codec'),
+    'cli': Command('touch_lab.bench.cli:bench_cli', 'social-touch --help against python -c pass'),
+    'view': Command('touch_view.bench:bench_view', "the web view's extra CPU with five pages connected"),
+    'view-live': Command('touch_view.bench_live:bench_live',
+                         'frames the view and foxglove get from the skin in another process'),
+    'bear': Command('touch_lab.bear.bench:bench_cycle', 'one cycle of the bear recognisers'),
+    'patch': Command('touch_lab.patch.bench:bench_frame', 'one frame of the patch recogniser'),
+    'patch-node': Command('touch_lab.patch.bench:bench_node', 'the patch recogniser node'),
+    'skin': Command('touch_lab.skin.bench:bench_recognition', 'one recognition of the skin'),
+    'skin-node': Command('touch_lab.skin.session_eval:bench_node', 'the skin nodes on simulated sessions'),
+    'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
+}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument('target', choices=list(targets(GROUP)), help='what to measure')
+    parser.add_argument('target', choices=list(BENCHES), metavar='TARGET',
+                        help='what to measure: ' + '; '.join(f'{name} ({b.help})' for name, b in BENCHES.items()))
     parser.add_argument('--json', action='store_true', help='print one JSON object')
     parser.add_argument('--repeats', type=int, default=5, help='runs to take the median of (default 5)')
 
@@ -30,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.repeats < 1:
         raise SystemExit('social-touch bench: --repeats must be >= 1')
-    result = targets(GROUP)[args.target].load()(repeats=args.repeats)
+    result = load(BENCHES[args.target].target)(repeats=args.repeats)
     result = {'target': args.target, **result,
               'machine': {'python': platform.python_version(), 'processor': platform.machine()}}
     if args.json:

@@ -29,13 +29,13 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from touch_graph.cli.options import add_output
 from touch_lab.bear.cli import positive_int
 
 from .protocol import DEFAULT_GESTURES, SENSORS, Protocol
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['add_arguments', 'run']
 
-HELP = 'record labelled sessions of one sensor to rosbag2 (guided protocol; --simulate N: simulated people)'
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -48,8 +48,7 @@ def _names(text: str) -> tuple[str, ...]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch collect``."""
     parser.add_argument('sensor', choices=SENSORS, help='the sensor whose topics are recorded')
-    parser.add_argument('--out', '-o', required=True,
-                        help='the bag to write (live), or the directory of one bag per person (--simulate)')
+    add_output(parser, 'the bag to write (live), or the directory of one bag per person (--simulate)', required=True)
     parser.add_argument('--simulate', metavar='N', type=positive_int,
                         help='run the protocol with N simulated people on the virtual device (SYNTHETIC data)')
     parser.add_argument('--gestures', type=_names,
@@ -88,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     if args.simulate is None:
         return _live(args, protocol, say)
     from .simulate import person_name, simulate_session
-    out = Path(args.out)
+    out = Path(args.output)
     bags = [out / f'{args.sensor}_{person_name(i)}' for i in range(args.simulate)]
     taken = [b for b in bags if b.exists()]
     if taken:
@@ -128,7 +127,7 @@ def _live(args: argparse.Namespace, protocol: Protocol, say: Callable[[str], Non
     if not person:
         raise SystemExit(f'collect {args.sensor}: name the person performing with --person NAME '
                          '(it goes into every label; train and eval leave one person out)')
-    out = Path(args.out)
+    out = Path(args.output)
     if out.exists():
         if not args.overwrite:
             raise SystemExit(f'collect {args.sensor}: {out} exists already; choose another --out, or pass '

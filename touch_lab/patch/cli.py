@@ -324,7 +324,5 @@ def _matrix(title: str, table: dict) -> list[str]:
 
 
 
-TRAIN = Target('train the patch gesture model (Gaussian mixtures) from a CSV, bags or simulated people',
-               add_train_arguments, run_train, __doc__)
-EVAL = Target('evaluate the patch gesture recogniser leave-one-subject-out (Fig. 6 of sympartner2018)',
-              add_eval_arguments, run_eval, __doc__)
+TRAIN = Target(add_train_arguments, run_train, __doc__)
+EVAL = Target(add_eval_arguments, run_eval, __doc__)

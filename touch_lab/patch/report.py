@@ -20,15 +20,15 @@ import platform
 import sys
 from pathlib import Path
 
+from touch_graph.cli.options import add_output
 from touch_lab.patch.bench import bench_frame
 from touch_lab.patch.cli import _matrix
 from touch_lab.patch.datasets import render_session
 from touch_lab.patch.evaluate import leave_one_subject_out
 from touch_sim.patch.people import simulate_people
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/patch-evaluation.md (simulated people; about 10 minutes)'
 
 COMMAND = 'social-touch report patch'
 
@@ -162,7 +162,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch report patch``."""
-    parser.add_argument('--output', default='docs/patch-evaluation.md', help='Markdown file to write')
+    add_output(parser, 'Markdown file to write', default='docs/patch-evaluation.md')
     parser.add_argument('--people', type=int, default=8, help='simulated people (default 8, as the paper)')
     parser.add_argument('--events', type=int, default=6, help='events per session (default 6)')
     parser.add_argument('--seed', type=int, default=2026, help='seed of the simulated people (default 2026)')

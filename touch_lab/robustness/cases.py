@@ -61,7 +61,7 @@ def run_case(area: str, case: str, fn: Callable[[], Any]) -> Outcome:
 def run_cli(area: str, case: str, argv: list[str], timeout_s: float = 120.0) -> Outcome:
     """``social-touch ARGV`` in a fresh process in an empty directory; classified by exit and stderr."""
     with tempfile.TemporaryDirectory() as cwd:
-        run = subprocess.run([sys.executable, '-c', 'from touch_graph.cli.main import main; raise SystemExit(main())',
+        run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
                               *argv], capture_output=True, text=True, timeout=timeout_s, cwd=cwd)
     last = (run.stderr.strip().splitlines() or [''])[-1][:200]
     if run.returncode < 0:

@@ -16,13 +16,14 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from touch_graph.cli.options import add_output
+
 from .cases import CLEAR, CRASH, HANDLED, TRACEBACK, WRONG, Outcome, all_cases, run_case, run_cli
 from .dds_injection import dds_injection
 from .figures import bag_corruption, flood, recorder_kill, unplug_recovery
 
-__all__ = ['HELP', 'add_arguments', 'run', 'run_all', 'write_report']
+__all__ = ['add_arguments', 'run', 'run_all', 'write_report']
 
-HELP = 'regenerate docs/robustness.md (bad input, faults, floods, unplug, kill -9; about 3 minutes)'
 RESULTS = (CLEAR, HANDLED, TRACEBACK, CRASH, WRONG)
 
 
@@ -155,12 +156,12 @@ def write_report(path: str | Path = 'docs/robustness.md', say=print, megabytes: 
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument('--out', default='docs/robustness.md', help='where to write (default docs/robustness.md)')
+    add_output(parser, 'where to write (default docs/robustness.md)', default='docs/robustness.md')
     parser.add_argument('--megabytes', type=float, default=4.0, help='MB per flood (default 4)')
 
 
 def run(args: argparse.Namespace) -> int:
     if not args.megabytes > 0:
         raise SystemExit('social-touch report robustness: --megabytes must be > 0')
-    print(f'wrote {write_report(args.out, megabytes=args.megabytes)}')
+    print(f'wrote {write_report(args.output, megabytes=args.megabytes)}')
     return 0

@@ -47,12 +47,11 @@ from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, make_rec
 from touch_sim.skin.render import RenderedSample, RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
-__all__ = ['HELP', 'add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
+__all__ = ['add_arguments', 'evaluate_file', 'format_text', 'json_safe', 'run']
 
 #: The recogniser the report calls the default: whichever the vocabulary's codebook picks
 #: (touch_lab.skin.recognisers.auto).
 DEFAULT = 'auto'
-HELP = 'evaluate the skin recognisers on real traces through the virtual skin, leave-one-subject-out'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -116,8 +116,7 @@ def _merge(args: argparse.Namespace) -> int:
                   {'synthetic': _synthetic(*args.files), 'sources': list(args.files)})
 
 
-INFO = Target('print a skin codebook: recogniser, gestures, templates, thresholds and its model card',
-              _info_arguments, _info)
-ADD = Target('add the labelled touches of skin session bags to a codebook (a new file)', _add_arguments, _add)
-REMOVE = Target('remove gestures from a codebook (a new file)', _remove_arguments, _remove)
-MERGE = Target('merge two codebooks of the same recogniser (a new file)', _merge_arguments, _merge)
+INFO = Target(_info_arguments, _info)
+ADD = Target(_add_arguments, _add)
+REMOVE = Target(_remove_arguments, _remove)
+MERGE = Target(_merge_arguments, _merge)

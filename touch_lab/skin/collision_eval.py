@@ -34,9 +34,8 @@ from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_sim.skin.device import render_frames
 from touch_sim.skin.stimuli import LineStroke, StaticPress
 
-__all__ = ['HELP', 'KINDS', 'add_arguments', 'evaluate_collisions', 'make_contact', 'run']
+__all__ = ['KINDS', 'add_arguments', 'evaluate_collisions', 'make_contact', 'run']
 
-HELP = 'collisions, presses and traced gestures on simulated contacts (SYNTHETIC): confusion and latency'
 KINDS = ('bump', 'press', 'trace')
 _RATE_HZ = 150.0
 

@@ -24,12 +24,11 @@ from touch_lab.skin.ending_eval import CAUSES, DEFAULT_RULE, PIECE_GAP_S, RULES,
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
-__all__ = ['HELP', 'add_arguments', 'format_text', 'run']
+__all__ = ['add_arguments', 'format_text', 'run']
 
 #: Column heads of the causes table.
 _SHORT = {'ended as whole': 'as whole', 'pause over the bound': '>bound', 'pause over the limit': '>limit',
           'longer than the limit': 'too long', 'pause over the gap': '>gap', 'no gesture': 'none'}
-HELP = 'why multi-stroke samples are cut into other than one gesture, per class; the end-of-gesture rules compared'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

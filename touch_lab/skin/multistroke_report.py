@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
+from touch_graph.cli.options import add_output
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
@@ -26,9 +27,8 @@ from touch_lab.skin.latency import bench_latency
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/skin-multistroke.md: multi-stroke vocabularies, early decisions, collisions, cost'
 #: Evaluated per vocabulary: the default, the two it chooses from (fused, trace), fused with the oriented
 #: cloud naming the class, the cloud refereed by $N (the default before fused) and the cloud alone, the
 #: oriented cloud alone, $N, the paper's centroid method.
@@ -211,14 +211,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--traces', action='append', required=True,
                         help='a trace file per vocabulary (repeat the option), e.g. '
                              '../shared/data/multistroke_dev.csv.gz')
-    parser.add_argument('--out', default='docs/skin-multistroke.md', help='the Markdown file to write')
+    add_output(parser, 'the Markdown file to write', default='docs/skin-multistroke.md')
     parser.add_argument('--early', type=int, default=8, help='early decisions on one held-out gesture in EARLY')
     parser.add_argument('--per-kind', type=int, default=40, help='simulated contacts of each kind for collisions')
 
 
 def run(args: argparse.Namespace) -> int:
     try:
-        path = write_report(args.traces, args.out, args.early, args.per_kind)
+        path = write_report(args.traces, args.output, args.early, args.per_kind)
     except (ValueError, OSError) as err:
         print(f'report skin-multistroke: {err}', file=sys.stderr)
         return 2

@@ -61,9 +61,8 @@ from touch_lab.skin.recognisers import (
     save_codebook,
 )
 
-__all__ = ['HELP', 'LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
+__all__ = ['LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
 
-HELP = 'record m repetitions of each gesture from the skin (live, or --simulate) into a codebook'
 
 _HELP_KEYS = "u + Enter: undo the last one, s + Enter: skip this gesture, q + Enter: stop (Ctrl-C too)"
 

@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from touch_gestures.skin.base import TemplateRecogniser
+from touch_graph.cli.options import add_output
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import evaluate_file
 from touch_lab.skin.datasets import read_traces
@@ -29,9 +30,8 @@ from touch_lab.skin.recognisers import PAPER, PEERS, RECOGNISERS, make_recognise
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import DIGITS, PAPER_CENTROID_SET, random_touches, synthetic_traces
 
-__all__ = ['HELP', 'add_arguments', 'run', 'write_report']
+__all__ = ['add_arguments', 'run', 'write_report']
 
-HELP = 'regenerate docs/skin-evaluation.md from real traces through the virtual skin (about 15 minutes)'
 
 COMMAND = 'social-touch report skin --traces ../shared/data/unistroke_dev.csv.gz'
 CONDITIONS = {
@@ -228,11 +228,11 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch report skin``."""
     parser.add_argument('--traces', required=True, help='$1 unistroke logs (CSV, e.g. unistroke_dev.csv.gz)')
-    parser.add_argument('--out', default='docs/skin-evaluation.md', help='Markdown file to write')
+    add_output(parser, 'Markdown file to write', default='docs/skin-evaluation.md')
     parser.add_argument('--quick', action='store_true', help='smaller sweeps (smoke test)')
 
 
 def run(args: argparse.Namespace) -> int:
     """Measure and write docs/skin-evaluation.md (about 15 minutes)."""
-    write_report(args.traces, args.out, args.quick)
+    write_report(args.traces, args.output, args.quick)
     return 0

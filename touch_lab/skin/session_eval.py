@@ -24,10 +24,9 @@ import numpy as np
 
 from touch_sim.skin.people import SkinScene, people_scene
 
-__all__ = ['HELP', 'SCENE_OPTIONS', 'add_arguments', 'bench_frames', 'bench_node', 'evaluate_sessions', 'run',
+__all__ = ['SCENE_OPTIONS', 'add_arguments', 'bench_frames', 'bench_node', 'evaluate_sessions', 'run',
            'run_session']
 
-HELP = 'how the skin nodes do on simulated sessions of people (SYNTHETIC): right, wrong, missed, false commands'
 
 #: The options of config/scenes/skin_people.yaml but the seed.
 SCENE_OPTIONS: dict[str, Any] = {

@@ -17,9 +17,8 @@ from touch_gestures.model_card import attach_card, make_card
 from touch_lab.cards import session_data
 from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS
 
-__all__ = ['HELP', 'add_arguments', 'run']
+__all__ = ['add_arguments', 'run']
 
-HELP = 'build (or --extend) a skin codebook from labelled session bags (social-touch collect skin)'
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
