@@ -12,11 +12,13 @@ import numpy as np
 from touch_driver.bear.node import BearDriverNode
 from touch_driver.bear.protocol import BEAR_ID, encode_payload
 from touch_driver.framing import crc16, encode_frame
+from touch_graph.compat import sensor_data_qos
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_lab.bench.replay import PtyPort
 
-__all__ = ['ERROR', 'OK', 'RAW', 'WARN', 'FailingBearDriver', 'bad_bits_frame', 'level_of', 'run_bear', 'v1_frame']
+__all__ = ['ERROR', 'OK', 'RAW', 'WARN', 'FailingBearDriver', 'bad_bits_frame', 'level_of', 'paced', 'run_bear',
+           'run_driver', 'v1_frame']
 
 OK, WARN, ERROR = 0, 1, 2
 #: A quiet bear scan: every channel at 300 counts, (64,) uint16.
@@ -53,29 +55,51 @@ def run_bear(wire: bytes, seconds: float = 2.5, node_class: type = BearDriverNod
              **params: Any) -> tuple[Any, list, list]:
     """A bear driver on a pty carrying ``wire``, simulated time; returns the node, its DriverStatus
     messages and its /diagnostics statuses."""
+    # The driver flushes its port when it opens it, and a pty holds 4 KiB: write in pieces while it
+    # reads, all within the first status period.
+    writes = [(wire[start:start + 2048], 0.2) for start in range(0, len(wire), 2048)]
+    node, statuses, diagnostics, _ = run_driver(node_class, 'bear', writes, seconds, **params)
+    return node, statuses, diagnostics
+
+
+def paced(frames: list[bytes], rate_hz: float, per_write: int = 4) -> list[tuple[bytes, float]]:
+    """``frames`` as (bytes, simulated seconds to run after writing them) pieces of ``per_write``
+    frames, so they arrive at ``rate_hz`` (a pty holds 4 KiB: keep a piece below that)."""
+    return [(b''.join(frames[i:i + per_write]), len(frames[i:i + per_write]) / rate_hz)
+            for i in range(0, len(frames), per_write)]
+
+
+def run_driver(node_class: type, namespace: str, writes: list[tuple[bytes, float]], seconds: float = 1.5,
+               **params: Any) -> tuple[Any, list, list, int]:
+    """A driver node on a real pty, simulated time: write each piece of ``writes``, run the graph the
+    piece's seconds, then ``seconds`` more. Returns the node, its DriverStatus messages, its
+    /diagnostics statuses and the count of messages it published on its frame topic."""
     port = PtyPort()
     ctx = Context('sim')
     ctx.init()
     try:
-        node = node_class(context=ctx, namespace='bear', parameter_overrides=[
+        node = node_class(context=ctx, namespace=namespace, parameter_overrides=[
             Parameter(k, value=v) for k, v in {'port': port.path, **params}.items()])
         listener = Node('listener', context=ctx)
         statuses: list = []
         diagnostics: list = []
-        listener.create_subscription(get_message('DriverStatus'), '/bear/bear_driver/status', statuses.append, 100)
+        published: list = []
+        name = node.get_name()
+        listener.create_subscription(get_message('DriverStatus'), f'/{namespace}/{name}/status', statuses.append, 100)
         listener.create_subscription(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics',
                                      diagnostics.append, 100)
+        listener.create_subscription(node.frame_pub.msg_type, node.frame_pub.topic_name, published.append,
+                                     sensor_data_qos(10_000))
         executor = SingleThreadedExecutor(context=ctx)
         executor.add_node(node)
         executor.add_node(listener)
-        # The driver flushes its port when it opens it, and a pty holds 4 KiB: write in pieces while it
-        # reads, all within the first status period.
-        for start in range(0, len(wire), 2048):
-            port.write(wire[start:start + 2048])
-            executor.spin_for(0.2)
+        for data, run_s in writes:
+            port.write(data)
+            executor.spin_for(run_s)
         executor.spin_for(seconds)
         node.destroy_node()
     finally:
         ctx.shutdown()
         port.close()
-    return node, statuses, [d.status[0] for d in diagnostics]
+    return node, statuses, [d.status[0] for d in diagnostics], len(published)
+
