@@ -7,24 +7,12 @@ side; the driver opens the terminal side's path as its port and runs on a simula
 from __future__ import annotations
 
 import math
-import random
-
-import numpy as np
 
 from touch_driver.skin.node import SkinDriverNode
-from touch_driver.skin.protocol import encode_skin_frame
-from touch_lab.robustness.pty_run import WARN, level_of, paced, run_driver
+from touch_lab.robustness.pty_run import WARN, corrupt_some, level_of, paced, run_driver, value_of
+from touch_lab.robustness.pty_run import skin_frames as frames
 
 RATE_HZ = 150.0
-TAXELS = np.full(144, 1000, dtype=np.uint16)      # an untouched skin, (144,) counts
-
-
-def frames(seqs) -> list[bytes]:
-    return [encode_skin_frame(s & 0xFFFF, TAXELS) for s in seqs]
-
-
-def value(diagnostic, key: str) -> str:
-    return next(kv.value for kv in diagnostic.values if kv.key == key)
 
 
 def run_skin(wire: list[tuple[bytes, float]], **params):
@@ -32,10 +20,10 @@ def run_skin(wire: list[tuple[bytes, float]], **params):
 
 
 def test_a_replayed_frame_is_published_once() -> None:
-    one = encode_skin_frame(4711, TAXELS)
+    one = frames([4711])[0]
     _, statuses, diagnostics, published = run_skin(paced([one] * 733, RATE_HZ))
     assert published == 1 and statuses[-1].frames == 1               # 732 replays: published 0 extra times
-    assert value(diagnostics[-1], 'repeated_frames') == '732'
+    assert value_of(diagnostics[-1], 'repeated_frames') == '732'
     assert (statuses[-1].frames_missed, statuses[-1].sequence_gaps) == (0, 0)
     assert any('resent with the last sequence number' in d.message and level_of(d) >= WARN for d in diagnostics)
 
@@ -44,7 +32,7 @@ def test_a_reboot_is_reported_once_and_nothing_is_lost() -> None:
     wire = frames(range(300)) + frames(range(300))                   # the sensor restarted at 0
     _, statuses, diagnostics, published = run_skin(paced(wire, RATE_HZ))
     assert published == 600
-    assert value(diagnostics[-1], 'sequence_resets') == '1'
+    assert value_of(diagnostics[-1], 'sequence_resets') == '1'
     assert (statuses[-1].frames_missed, statuses[-1].sequence_gaps) == (0, 0)
     assert all(s.error_fraction == 0.0 for s in statuses)             # not "99.8 % bad or lost"
     told = [d for d in diagnostics if 'jumped back' in d.message]
@@ -53,18 +41,12 @@ def test_a_reboot_is_reported_once_and_nothing_is_lost() -> None:
 
 def test_a_quarter_of_frames_corrupt_reads_a_quarter() -> None:
     n = 1500
-    rng = random.Random(25)
-    wire = frames(range(n))
-    hit = [rng.random() < 0.25 for _ in range(n - 1)] + [False]      # the last one whole: it closes the count
-    for i in (i for i, h in enumerate(hit) if h):
-        bad = bytearray(wire[i])
-        bad[rng.randrange(len(bad))] ^= rng.randrange(1, 256)       # any byte: sync, header, payload or CRC
-        wire[i] = bytes(bad)
+    wire, hit = corrupt_some(frames(range(n)), 0.25, seed=25)
     _, statuses, _diagnostics, published = run_skin(paced(wire, RATE_HZ))
     last = statuses[-1]
     lost = last.frames_missed + last.checksum_errors + last.decode_errors + last.length_errors + last.handle_errors
-    assert published == last.frames == n - sum(hit)
-    assert lost == sum(hit)                                          # each corrupt frame counted once
+    assert published == last.frames == n - hit
+    assert lost == hit                                          # each corrupt frame counted once
     # The share a driver reports is K / n with K ~ Binomial(n, 0.25): within 4 standard deviations of 25 %.
     assert abs(lost / (lost + last.frames) - 0.25) <= 4 * math.sqrt(0.25 * 0.75 / n)
 

@@ -378,9 +378,9 @@ class SerialDriverNode(Node, Generic[ScanT]):
         new = {key: sequence[key] - self._sequence_at_status[key] for key in _SEQUENCE_COUNTERS}
         self._sequence_at_status = sequence
         if new['sequence_resets']:
-            self.last_error = f'sequence counter restarted ({sequence["sequence_resets"]} since start)'
-            self.get_logger().warning(f'{self.port}: sensor sequence counter restarted '
-                                      f'{new["sequence_resets"]} time(s) (a reboot?); counting goes on from it')
+            self.last_error = f'sequence counter jumped back ({sequence["sequence_resets"]} times since start)'
+            self.get_logger().warning(f'{self.port}: sequence counter jumped back {new["sequence_resets"]} '
+                                      'time(s) (a reboot?); counting goes on from it')
         self.status_pub.publish(status)
         level, text = self._level(status, new)
         extra = {'subscriber_drops': self.subscriber_drops(), **sequence}

@@ -1,10 +1,12 @@
-"""A bear driver node reading a real pseudo-terminal, fed bytes written by the caller (synthetic frames).
+"""Driver nodes reading a real pseudo-terminal, fed bytes written by the caller (synthetic frames).
 
-Used by the report's driver-fault cases and by ``test/test_robustness_diagnostics.py``.
+Used by the report's driver-fault cases, ``test/test_robustness_diagnostics.py`` and
+``test/test_driver_pty_sequence.py``.
 """
 
 from __future__ import annotations
 
+import random
 from typing import Any
 
 import numpy as np
@@ -17,12 +19,14 @@ from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_lab.bench.replay import PtyPort
 
-__all__ = ['ERROR', 'OK', 'RAW', 'WARN', 'FailingBearDriver', 'bad_bits_frame', 'level_of', 'paced', 'run_bear',
-           'run_driver', 'v1_frame']
+__all__ = ['ERROR', 'OK', 'RAW', 'SKIN_RAW', 'WARN', 'FailingBearDriver', 'bad_bits_frame', 'corrupt_some', 'level_of',
+           'paced', 'run_bear', 'run_driver', 'skin_frames', 'v1_frame', 'value_of']
 
 OK, WARN, ERROR = 0, 1, 2
 #: A quiet bear scan: every channel at 300 counts, (64,) uint16.
 RAW = np.full(64, 300, dtype=np.uint16)
+#: An untouched skin: every taxel at 1000 counts, (144,) uint16 row-major.
+SKIN_RAW = np.full(144, 1000, dtype=np.uint16)
 
 
 class FailingBearDriver(BearDriverNode):
@@ -60,6 +64,32 @@ def run_bear(wire: bytes, seconds: float = 2.5, node_class: type = BearDriverNod
     writes = [(wire[start:start + 2048], 0.2) for start in range(0, len(wire), 2048)]
     node, statuses, diagnostics, _ = run_driver(node_class, 'bear', writes, seconds, **params)
     return node, statuses, diagnostics
+
+
+def skin_frames(seqs: Any, taxels: np.ndarray | None = None) -> list[bytes]:
+    """Skin wire frames with the sequence numbers ``seqs`` (taken mod 65536) of an untouched skin (synthetic)."""
+    from touch_driver.skin.protocol import encode_skin_frame
+    raw = SKIN_RAW if taxels is None else taxels
+    return [encode_skin_frame(s & 0xFFFF, raw) for s in seqs]
+
+
+def corrupt_some(wire: list[bytes], share: float, seed: int) -> tuple[list[bytes], int]:
+    """``wire`` with each frame but the last (which closes the count) corrupted with probability ``share``:
+    one random byte anywhere (sync, header, payload or CRC) XORed with a non-zero value. Returns the
+    frames and how many were corrupted."""
+    rng = random.Random(seed)
+    out, hit = list(wire), 0
+    for i in range(len(out) - 1):
+        if rng.random() < share:
+            bad = bytearray(out[i])
+            bad[rng.randrange(len(bad))] ^= rng.randrange(1, 256)
+            out[i], hit = bytes(bad), hit + 1
+    return out, hit
+
+
+def value_of(diagnostic: Any, key: str) -> str:
+    """The value of ``key`` among a DiagnosticStatus's key-values."""
+    return next(kv.value for kv in diagnostic.values if kv.key == key)
 
 
 def paced(frames: list[bytes], rate_hz: float, per_write: int = 4) -> list[tuple[bytes, float]]:
