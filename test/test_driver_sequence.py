@@ -7,6 +7,8 @@ The wire literals are version-2 frames of sensor id 0x53 with the 2-byte payload
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from touch_driver.framing import FrameDecoder, encode_frame
 
@@ -94,3 +96,25 @@ def test_reset_forgets_the_last_sequence_number() -> None:
     dec.reset()                                           # a reconnect: the same frame again is new data
     assert [f.seq for f in dec.update(F7)] == [7]
     assert dec.stats.repeated_frames == 0
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 0xFFFF), st.booleans()), max_size=40))
+def test_any_mix_returns_each_new_frame_once_and_counts_each_corrupt_one_once(specs) -> None:
+    wire = b''.join(corrupt(encode_frame(0x53, s, b'hi')) if bad else encode_frame(0x53, s, b'hi') for s, bad in specs)
+    seqs, dec = decode(wire)
+    good = [s for s, bad in specs if not bad]
+    assert seqs == [s for i, s in enumerate(good) if i == 0 or s != good[i - 1]]
+    assert dec.stats.repeated_frames == len(good) - len(seqs)
+    assert dec.stats.checksum_errors == len(specs) - len(good)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.booleans(), min_size=1, max_size=60), st.integers(0, 0xFFFF))
+def test_corruption_is_never_also_a_gap(hit: list[bool], first: int) -> None:
+    hit[-1] = False                                        # a last whole frame closes the count
+    wire = b''.join(corrupt(f) if h else f for f, h in
+                    zip((encode_frame(0x53, (first + i) & 0xFFFF, b'hi') for i in range(len(hit))), hit, strict=True))
+    seqs, dec = decode(wire)
+    assert len(seqs) == hit.count(False)
+    assert (dec.stats.checksum_errors, dec.stats.frames_missed, dec.stats.sequence_gaps) == (sum(hit), 0, 0)
