@@ -37,6 +37,7 @@ def test_a_reboot_is_reported_once_and_nothing_is_lost() -> None:
     assert all(s.error_fraction == 0.0 for s in statuses)             # not "99.8 % bad or lost"
     told = [d for d in diagnostics if 'jumped back' in d.message]
     assert len(told) == 1 and level_of(told[0]) == WARN
+    assert 'jumped back (1 times since start)' in statuses[-1].last_error   # and ~/status names it
 
 
 def test_a_quarter_of_frames_corrupt_reads_a_quarter() -> None:

@@ -370,10 +370,6 @@ class SerialDriverNode(Node, Generic[ScanT]):
         return sum(dropped_by_topic(self).values())
 
     def _publish_status(self) -> None:
-        status = self.status()
-        counts = self.counters()
-        self._frames_at_status = counts['frames']
-        self._bad_at_status = sum(counts[key] for key in _BAD_FRAME_COUNTERS)
         sequence = self._sequence_counts()
         new = {key: sequence[key] - self._sequence_at_status[key] for key in _SEQUENCE_COUNTERS}
         self._sequence_at_status = sequence
@@ -381,6 +377,10 @@ class SerialDriverNode(Node, Generic[ScanT]):
             self.last_error = f'sequence counter jumped back ({sequence["sequence_resets"]} times since start)'
             self.get_logger().warning(f'{self.port}: sequence counter jumped back {new["sequence_resets"]} '
                                       'time(s) (a reboot?); counting goes on from it')
+        status = self.status()                # after last_error names a reset, so ~/status carries it
+        counts = self.counters()
+        self._frames_at_status = counts['frames']
+        self._bad_at_status = sum(counts[key] for key in _BAD_FRAME_COUNTERS)
         self.status_pub.publish(status)
         level, text = self._level(status, new)
         extra = {'subscriber_drops': self.subscriber_drops(), **sequence}
