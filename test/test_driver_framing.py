@@ -31,7 +31,17 @@ frame_specs = st.lists(st.tuples(st.sampled_from(sorted(SIZES)), st.integers(0, 
 
 
 def make_frames(specs) -> list[tuple[int, int, bytes]]:
-    return [(sid, seq, rnd.randbytes(SIZES[sid])) for sid, seq, rnd in specs]
+    """Frames of the specs, a sequence number an id already used bumped until it is new: a frame with the
+    number of the id's last good one is a repeat, dropped by design (test_driver_sequence.py), and when
+    the tests lose frames on purpose any earlier one may be the last good one."""
+    used: dict[int, set[int]] = {}
+    frames = []
+    for sid, seq, rnd in specs:
+        while seq in used.setdefault(sid, set()):
+            seq = (seq + 1) & 0xFFFF
+        used[sid].add(seq)
+        frames.append((sid, seq, rnd.randbytes(SIZES[sid])))
+    return frames
 
 
 # ---------------------------------------------------------------------- byte literals

@@ -26,7 +26,13 @@ in :meth:`SerialDriverNode.handle_frame`. This base
   ERROR when disconnected, when frames arrive but none is published, or when no frame came in a
   period that should hold two or more; WARN or ERROR when the
   share of bad or lost frames in the period passes ``warn_error_fraction`` /
-  ``error_error_fraction``, WARN when the rate falls below ``min_rate_fraction`` of the expected.
+  ``error_error_fraction``, WARN when the rate falls below ``min_rate_fraction`` of the expected
+  or passes ``max_rate_factor`` times it (a device that is not the one configured, or a flood);
+- publishes each frame once: a frame resent with the last one's sequence number is counted
+  (``repeated_frames`` on /diagnostics, WARN in that period) and dropped; a sequence counter that
+  jumps back or restarts (a sensor that rebooted) is logged and reported at WARN once, in the
+  period it happened (``sequence_resets``), and counting goes on from the new number. A frame lost
+  is counted once, under its cause: a corrupt one is a checksum error, not also a sequence gap.
 
 Parameters set while it runs (``ros2 param set``, ``social-touch param set``): those in
 :attr:`SerialDriverNode.LIVE_PARAMETERS` take effect at once; every other one is read when
@@ -69,7 +75,9 @@ _BYTE_LEVEL = USING_ROS
 _BAD_FRAME_COUNTERS = ('frames_missed', 'checksum_errors', 'decode_errors', 'length_errors', 'handle_errors')
 _DIAGNOSTIC_KEYS = ('frames', 'dropped_bytes', 'header_errors', 'version_errors', 'length_errors', 'checksum_errors',
                     'decode_errors', 'sequence_gaps', 'frames_missed', 'handle_errors', 'subscriber_drops',
-                    'reconnects', 'error_fraction', 'rate_hz')
+                    'repeated_frames', 'sequence_resets', 'reconnects', 'error_fraction', 'rate_hz')
+#: Decoder counters /diagnostics carries beyond DriverStatus's fields.
+_SEQUENCE_COUNTERS = ('repeated_frames', 'sequence_resets')
 
 
 def frame_stamps_ns(count: int, now_ns: int, period_ns: int, last_ns: int | None) -> list[int]:
@@ -152,6 +160,8 @@ class SerialDriverNode(Node, Generic[ScanT]):
                                                 0.0, 1.0)).value
         self.min_rate_fraction = self.declare_parameter(
             'min_rate_fraction', 0.8, ranged('rate below this share of expected_rate_hz is WARN', 0.0, 1.0)).value
+        self.max_rate_factor = self.declare_parameter(
+            'max_rate_factor', 2.0, ranged('rate above this multiple of expected_rate_hz is WARN', 1.0, 1000.0)).value
         if not isinstance(self.port, str) or not self.port.strip():
             raise ParameterError(f"parameter 'port' of {self.get_fully_qualified_name()} must be a device path or "
                                  f"URL (e.g. /dev/ttyACM0 or {self.default_port}); got {self.port!r}")
@@ -174,6 +184,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self._frames_at_status = 0
         self._bad_at_status = 0
         self._arrived_at_status = 0
+        self._sequence_at_status = dict.fromkeys(_SEQUENCE_COUNTERS, 0)
         self._status_period = status_period
         self._next_attempt_s = 0.0
         self._was_connected = False
@@ -308,8 +319,27 @@ class SerialDriverNode(Node, Generic[ScanT]):
                             error_fraction=fraction, rate_hz=published / self._status_period,
                             last_error=self.last_error)
 
-    def _level(self, status: Any) -> tuple[int, str]:
-        """Diagnostic level and message of one status (thresholds are parameters)."""
+    def _sequence_counts(self) -> dict[str, int]:
+        """Repeated frames and sequence resets since the driver started."""
+        return {key: getattr(self.driver.stats, key) for key in _SEQUENCE_COUNTERS}
+
+    def _level(self, status: Any, new: dict[str, int] | None = None) -> tuple[int, str]:
+        """Diagnostic level and message of one status (thresholds are parameters); ``new`` holds the
+        repeated frames and sequence resets of this period."""
+        level, text = self._frame_level(status)
+        new = new or {}
+        notes = []
+        if new.get('sequence_resets'):
+            notes.append(f'sequence counter jumped back {new["sequence_resets"]} time(s): the sensor rebooted, '
+                         'another one took the port, or over 32767 frames were lost; counting goes on from it')
+        if new.get('repeated_frames'):
+            notes.append(f'{new["repeated_frames"]} frames resent with the last sequence number, not published')
+        if notes and level < _WARN:
+            return _WARN, '; '.join(notes)
+        return level, '; '.join([text, *notes])
+
+    def _frame_level(self, status: Any) -> tuple[int, str]:
+        """Level and message from the frames published and lost in the period."""
         if not status.connected:
             return _ERROR, f'disconnected: {status.last_error}'
         if status.error_fraction >= 1.0 and status.rate_hz == 0:
@@ -330,6 +360,9 @@ class SerialDriverNode(Node, Generic[ScanT]):
                             f'{status.dropped_bytes} bytes dropped since start')
         if status.rate_hz < self.min_rate_fraction * self.expected_rate_hz:
             return _WARN, f'{status.rate_hz:.1f} Hz, expected {self.expected_rate_hz:g} Hz'
+        if status.rate_hz > self.max_rate_factor * self.expected_rate_hz:
+            return _WARN, (f'{status.rate_hz:.1f} Hz, more than {self.max_rate_factor:g} x the expected '
+                           f'{self.expected_rate_hz:g} Hz: is this the configured sensor?')
         return _OK, f'{status.rate_hz:.1f} Hz'
 
     def subscriber_drops(self) -> int:
@@ -337,14 +370,22 @@ class SerialDriverNode(Node, Generic[ScanT]):
         return sum(dropped_by_topic(self).values())
 
     def _publish_status(self) -> None:
-        status = self.status()
+        sequence = self._sequence_counts()
+        new = {key: sequence[key] - self._sequence_at_status[key] for key in _SEQUENCE_COUNTERS}
+        self._sequence_at_status = sequence
+        if new['sequence_resets']:
+            self.last_error = f'sequence counter jumped back ({sequence["sequence_resets"]} times since start)'
+            self.get_logger().warning(f'{self.port}: sequence counter jumped back {new["sequence_resets"]} '
+                                      'time(s) (a reboot?); counting goes on from it')
+        status = self.status()                # after last_error names a reset, so ~/status carries it
         counts = self.counters()
         self._frames_at_status = counts['frames']
         self._bad_at_status = sum(counts[key] for key in _BAD_FRAME_COUNTERS)
         self.status_pub.publish(status)
-        level, text = self._level(status)
-        values = [KeyValue(key=key, value=str(getattr(status, key) if key != 'subscriber_drops'
-                                              else self.subscriber_drops())) for key in _DIAGNOSTIC_KEYS]
+        level, text = self._level(status, new)
+        extra = {'subscriber_drops': self.subscriber_drops(), **sequence}
+        values = [KeyValue(key=key, value=str(extra[key] if key in extra else getattr(status, key)))
+                  for key in _DIAGNOSTIC_KEYS]
         self.diagnostics_pub.publish(DiagnosticArray(header=status.header, status=[DiagnosticStatus(
             level=bytes([level]) if _BYTE_LEVEL else level,
             name=f'social_touch: {self.get_fully_qualified_name()}', message=text, hardware_id=self.port,

@@ -40,8 +40,8 @@ from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 from zlib import crc32
 
-__all__ = ['HEADER_SIZE', 'OVERHEAD', 'PROTOCOL_VERSION', 'SYNC', 'DecoderStats', 'Frame', 'FrameDecoder', 'ScanT',
-           'SensorStreamDecoder', 'crc16', 'crc32', 'encode_frame']
+__all__ = ['HEADER_SIZE', 'MAX_WRAP_GAP', 'OVERHEAD', 'PROTOCOL_VERSION', 'START_SEQ', 'SYNC', 'DecoderStats',
+           'Frame', 'FrameDecoder', 'ScanT', 'SensorStreamDecoder', 'crc16', 'crc32', 'encode_frame']
 
 SYNC = b'\xa5\x5a'
 PROTOCOL_VERSION = 2
@@ -93,13 +93,35 @@ class DecoderStats:
     version_errors: int = 0    # headers of another protocol version (version 1: a firmware to update)
     length_errors: int = 0     # checked headers with an id this port does not carry, or a length that id never has
     checksum_errors: int = 0   # frames with a good header whose CRC-32 did not match
-    sequence_gaps: int = 0     # times the counter jumped (frames lost on the way)
-    frames_missed: int = 0     # frames lost, summed over the gaps
+    sequence_gaps: int = 0     # times the counter skipped frames that never arrived (nor arrived corrupt)
+    frames_missed: int = 0     # frames lost, summed over the gaps (a corrupt frame is a checksum error only)
+    repeated_frames: int = 0   # frames resent with the last frame's sequence number: dropped, not returned
+    sequence_resets: int = 0   # times the counter jumped back or restarted (a sensor that rebooted)
     last_seq: dict[int, int] = field(default_factory=dict)
+
+
+#: A sensor's first sequence number after power-up.
+START_SEQ = 0
+#: A jump onto :data:`START_SEQ` skipping more frames than this is a restart, not a gap across the wrap.
+MAX_WRAP_GAP = 64
+#: Sequence numbers of corrupt frames remembered per sensor until its next good frame (bounded memory).
+_MAX_BAD_SEQS = 256
 
 
 class FrameDecoder:
     """Split a byte stream into checked frames, resynchronising after garbage.
+
+    Every frame is accounted once, under the cause that lost it. The sequence counter tells apart
+
+    - a **repeat**: the last frame's number again (a resent frame): counted in ``repeated_frames``,
+      its bytes in ``dropped_bytes``, not returned, so it is never data twice;
+    - a **reset**: the counter jumped back, or onto :data:`START_SEQ` skipping more than
+      :data:`MAX_WRAP_GAP` frames (a sensor that rebooted): counted in ``sequence_resets``, and
+      counting restarts from the new number (nothing is counted lost). A 16-bit counter cannot tell
+      a jump back from a loss of more than half its range (32,767 frames), so such a loss is a reset
+      too, never a made-up count of frames lost;
+    - a **gap**: frames skipped forward. Those whose header arrived but whose CRC-32 failed are
+      checksum errors already; only the others are ``frames_missed``.
 
     A sync is trusted only once the header after it passes its own check, so a fake header costs
     a CRC over 6 bytes, not a wait for and a CRC over a payload. After a bad header or a bad
@@ -120,12 +142,15 @@ class FrameDecoder:
         self.max_buffer = max(max_buffer, max(payload_sizes.values()) + OVERHEAD)
         self._buf = bytearray()
         self.stats = DecoderStats()
+        # sensor id -> sequence numbers of its frames that failed their CRC-32 since its last good frame.
+        self._bad_seqs: dict[int, list[int]] = {}
 
     def reset(self) -> None:
         """Forget buffered bytes and sequence history (after a reconnect); keep the counters."""
         self.stats.dropped_bytes += len(self._buf)
         self._buf.clear()
         self.stats.last_seq.clear()
+        self._bad_seqs.clear()
 
     @property
     def buffered(self) -> int:
@@ -180,19 +205,22 @@ class FrameDecoder:
                 view.release()
                 # Drop only the sync: the real next frame may start inside this one.
                 stats.checksum_errors += 1
+                bad = self._bad_seqs.setdefault(sensor_id, [])
+                if len(bad) < _MAX_BAD_SEQS:
+                    bad.append(seq)
                 stats.dropped_bytes += 2
                 pos += 2
+                continue
+            if self._is_repeat(sensor_id, seq):
+                view.release()
+                stats.repeated_frames += 1
+                stats.dropped_bytes += end - pos
+                pos = end
                 continue
             out.append(Frame(sensor_id, seq, bytes(view[pos + HEADER_SIZE:end - _CRC.size])))
             view.release()
             stats.frames += 1
-            last = stats.last_seq.get(sensor_id)
-            if last is not None:
-                missed = (seq - last - 1) & 0xFFFF
-                if missed:
-                    stats.sequence_gaps += 1
-                    stats.frames_missed += missed
-            stats.last_seq[sensor_id] = seq
+            self._count_sequence(sensor_id, seq)
             pos = end
         del buf[:pos]
         if len(buf) > self.max_buffer:
@@ -200,6 +228,29 @@ class FrameDecoder:
             stats.dropped_bytes += excess
             del buf[:excess]
         return out
+
+
+    def _is_repeat(self, sensor_id: int, seq: int) -> bool:
+        return self.stats.last_seq.get(sensor_id) == seq
+
+    def _count_sequence(self, sensor_id: int, seq: int) -> None:
+        """Account the jump from the sensor's last good frame to ``seq`` (a gap, a reset or nothing)."""
+        stats = self.stats
+        last = stats.last_seq.get(sensor_id)
+        stats.last_seq[sensor_id] = seq
+        bad = self._bad_seqs.pop(sensor_id, ())
+        if last is None:
+            return
+        skipped = (seq - last - 1) & 0xFFFF
+        if skipped >= 0x7FFF or (seq == START_SEQ and skipped > MAX_WRAP_GAP):
+            stats.sequence_resets += 1
+            return
+        # Frames of the gap that arrived corrupt are checksum errors already: count each loss once.
+        corrupt = {s for s in bad if 1 <= (s - last) & 0xFFFF <= skipped}
+        missed = skipped - len(corrupt)
+        if missed:
+            stats.sequence_gaps += 1
+            stats.frames_missed += missed
 
 
 class SensorStreamDecoder(Generic[ScanT]):

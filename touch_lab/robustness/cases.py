@@ -198,6 +198,42 @@ def _pty(kind: str) -> Callable[[], Any]:
     return run
 
 
+def _skin_pty(kind: str) -> Callable[[], Any]:
+    """A skin driver on a real pty fed frames that must each be data once; the check is its accounting."""
+    def run() -> Any:
+        from touch_driver.skin.node import SkinDriverNode
+        from touch_lab.robustness import pty_run as p
+        rate = SkinDriverNode.frame_rate_hz
+        if kind == 'one frame replayed 733 times':
+            writes, expected, lost = p.paced(p.skin_frames([4711]) * 733, rate), 1, 0
+        elif kind == 'a reboot: counter back to 0 after 300 frames':
+            writes, expected, lost = p.paced(p.skin_frames(range(300)) * 2, rate), 600, 0
+        elif kind == '25 % of 1500 frames corrupted':
+            wire, lost = p.corrupt_some(p.skin_frames(range(1500)), 0.25, seed=25)
+            writes, expected = p.paced(wire, rate), 1500 - lost
+        else:                                            # 10 x the rate
+            writes, expected, lost = p.paced(p.skin_frames(range(3000)), 10 * rate, per_write=12), 3000, 0
+        _, statuses, diagnostics, published = p.run_driver(SkinDriverNode, 'skin', writes)
+        last = statuses[-1]
+        counted = last.frames_missed + last.checksum_errors + last.decode_errors + last.length_errors
+        if (published, counted) != (expected, lost):
+            return False                      # a frame published twice, or a loss counted twice or never
+        said = [d for d in diagnostics if SKIN_PTY_CASES[kind] in d.message and p.level_of(d) >= p.WARN]
+        if not said:
+            return False                      # not reported on /diagnostics
+        share = f'{100 * counted / (counted + last.frames):.1f} % bad or lost since start; ' if counted else ''
+        return (f'{published} frames published; {share}repeated {p.value_of(diagnostics[-1], "repeated_frames")}, '
+                f'resets {p.value_of(diagnostics[-1], "sequence_resets")}; /diagnostics '
+                f'{("OK", "WARN", "ERROR")[p.level_of(said[0])]} {len(said)} time(s): {said[0].message}')
+    return run
+
+
+#: Skin pty case -> what its /diagnostics message must say (at WARN or ERROR).
+SKIN_PTY_CASES = {'one frame replayed 733 times': 'resent with the last sequence number',
+                  'a reboot: counter back to 0 after 300 frames': 'jumped back',
+                  '25 % of 1500 frames corrupted': '% of frames bad or lost',
+                  '10 x the rate (1500 Hz)': 'x the expected'}
+
 PTY_CASES = ('garbage only', '20 % frames with bits 10-15 set', 'only frames with bits 10-15 set',
              'a protocol-1 device', 'truncated frames between whole ones', 'handler raises')
 
@@ -238,6 +274,8 @@ def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
         cases.append(('launch $(eval)', f'$(eval {expression})', _eval(expression)))
     for kind in PTY_CASES:
         cases.append(('driver faults (real pty)', f'bear_driver: {kind}', _pty(kind)))
+    for kind in SKIN_PTY_CASES:
+        cases.append(('driver faults (real pty)', f'skin_driver: {kind}', _skin_pty(kind)))
     for level in (3e38, 1.0001, -0.5):
         cases.append(('recogniser input', f'bear_gestures level {level:g} for 2 s', _bear_level(level)))
     return cases
