@@ -40,6 +40,7 @@ import numpy as np
 
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
 from touch_sim.skin.contact import Contact, SkinStimulus
+from touch_sim.skin.traces import TraceStimulus
 
 __all__ = ['SCENE_FORMAT_VERSION', 'LineStroke', 'NoTouch', 'StaticPress', 'Timeline', 'envelope', 'load_scene',
            'scene_from_mapping']
@@ -202,7 +203,6 @@ def _event(node: Any, where: Any, index: int) -> SkinStimulus:
             return StaticPress(**kw)
         if kind == 'line':
             return LineStroke(_pair(params, 'from_mm', what), _pair(params, 'to_mm', what), **kw)
-        from touch_sim.skin.traces import TraceStimulus  # traces imports this module
         points = np.asarray(params['points'], dtype=np.float64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f'points must be a list of [x, y, t_ms]; got shape {points.shape}')
