@@ -18,6 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import GraphError
+from ..runtime import Context, Node, SingleThreadedExecutor
 from ..yamlconf import did_you_mean
 from .cdds import wait_for_acks
 from .graph import GraphView, TopicInfo
@@ -43,7 +44,6 @@ class GraphTool:
     """
 
     def __init__(self, name: str, *, discovery_timeout_s: float = 2.0) -> None:
-        from ..runtime import Context
         self.name = re.sub(r'\W', '_', name)
         self.discovery_timeout_s = discovery_timeout_s
         self.context = Context('wall', network=True)
@@ -53,7 +53,6 @@ class GraphTool:
         self._adapted: Any = None
 
     def __enter__(self) -> GraphTool:
-        from ..runtime import Node, SingleThreadedExecutor
         self.context.init([])
         try:
             self.executor = SingleThreadedExecutor(context=self.context)
