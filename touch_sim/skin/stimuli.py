@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
+from touch_sim.scenes import generated_stimulus
 from touch_sim.skin.contact import Contact, SkinStimulus
 from touch_sim.skin.traces import TraceStimulus
 
@@ -230,7 +231,6 @@ def scene_from_mapping(doc: Any) -> SkinStimulus:
         scripted = [k for k in ('events', 'duration_s') if k in doc]
         if scripted:
             raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
-        from touch_sim.scenes import generated_stimulus  # one rule for every sensor's scenes
         return generated_stimulus(doc, 'skin scene', lambda s: callable(getattr(s, 'contacts', None)),
                                   'skin_people')
     if 'options' in doc:
