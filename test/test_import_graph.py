@@ -102,6 +102,14 @@ def hidden_imports() -> list[tuple[str, int, str]]:
             for target, line, nested in imports_of(name, path, modules) if nested]
 
 
+def nested_import_statements(path: Path) -> int:
+    """How many import statements of any module (stdlib, third-party, project) sit inside functions."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    functions = [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+    inside = {id(n) for f in functions for n in ast.walk(f) if isinstance(n, (ast.Import, ast.ImportFrom))}
+    return len(inside)
+
+
 def circles(graph: dict[str, set[str]]) -> list[list[str]]:
     """The strongly connected components of more than one module (Tarjan, iterative)."""
     index: dict[str, int] = {}
@@ -181,6 +189,11 @@ if __name__ == "__main__":
     for circle in circles(import_graph()):
         print(len(circle), " ".join(circle))
     hidden = hidden_imports()
-    print(f"{len(hidden)} project imports inside functions")
+    files = module_files()
+    print(f"{len(hidden)} imports of project modules inside functions or classes, "
+          f"{sum(nested_import_statements(path) for path in files.values())} import statements of any module "
+          "inside functions")
     for package in PACKAGES:
-        print(f"  {package}: {sum(1 for f, _, _ in hidden if f.startswith(package + '/'))}")
+        paths = [path for name, path in files.items() if name.split(".")[0] == package]
+        print(f"  {package}: {sum(1 for f, _, _ in hidden if f.startswith(package + '/'))} project, "
+              f"{sum(nested_import_statements(path) for path in paths)} any")
