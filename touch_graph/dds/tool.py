@@ -18,6 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import GraphError
+from ..offered_qos import OfferedQosSubscriptions
 from ..runtime import Context, Node, SingleThreadedExecutor
 from ..yamlconf import did_you_mean
 from .cdds import wait_for_acks
@@ -200,7 +201,6 @@ class GraphTool:
         """Subscribe with the QoS the topic's publishers offer, remade when a later publisher needs another
         (:class:`~touch_graph.offered_qos.OfferedQosSubscriptions`; ``kwargs`` e.g. ``raw=True``)."""
         if self._adapted is None:
-            from ..offered_qos import OfferedQosSubscriptions
             self._adapted = OfferedQosSubscriptions(self.node)
         return self._adapted.create_subscription(msg_type, topic, callback, depth, **kwargs)
 
