@@ -13,7 +13,7 @@ from touch_graph.runtime import (
     SetParametersResult,
     SingleThreadedExecutor,
 )
-from touch_graph.runtime.parameter_messages import parameter_msg, value_of
+from touch_graph.runtime.parameters import parameter_msg, value_of
 from touch_graph.srv_types import get_service
 
 ParameterEvent = get_message('rcl_interfaces/msg/ParameterEvent')

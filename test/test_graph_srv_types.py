@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from touch_graph import messages, srv_types
+from touch_graph import messages, srv_definitions, srv_types
 from touch_graph.cli import export_interfaces as export
 from touch_graph.errors import MessageError
 
@@ -19,7 +19,7 @@ def own_srv(tmp_path, monkeypatch):
     srv = tmp_path / 'srv'
     srv.mkdir()
     (srv / 'Ping.srv').write_text(PING)
-    monkeypatch.setattr(srv_types, 'share_file', lambda *parts: tmp_path.joinpath(*parts))
+    monkeypatch.setattr(srv_definitions, 'share_file', lambda *parts: tmp_path.joinpath(*parts))
     messages.typestore.register(srv_types.parse_srv(PING, 'social_touch_msgs/srv/Ping'))
     return srv
 

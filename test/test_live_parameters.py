@@ -13,7 +13,7 @@ from touch_gestures.skin.codebook import save_codebook
 from touch_gestures.skin.fused import FusedRecogniser
 from touch_gestures.skin.node import HapticCommandsNode
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
-from touch_graph.runtime.parameter_messages import parameter_msg
+from touch_graph.runtime.parameters import parameter_msg
 from touch_graph.srv_types import get_service
 from touch_sim.virtual_port import forget_devices
 

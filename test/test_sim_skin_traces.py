@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from touch_driver.skin.calibration import calibrate_frames
-from touch_sim.skin.traces import TraceStimulus, clock_tick, render_frames, spread_stamps, traced_strokes
+from touch_sim.skin.device import render_frames
+from touch_sim.skin.traces import TraceStimulus, clock_tick, spread_stamps, traced_strokes
 
 PITCH = 47 / 12
 

@@ -46,6 +46,7 @@ from rosbags.typesys.base import TypesysError
 from .cdr import Codec, UnsupportedType, make_codec
 from .errors import MessageError
 from .paths import INTERFACE_PACKAGE, share_file
+from .srv_definitions import service_types
 from .yamlconf import did_you_mean
 
 __all__ = [
@@ -84,7 +85,6 @@ def _build_typestore():
         except (TypesysError, Exception) as err:  # the parser raises several kinds
             raise MessageError(f'{path}: cannot parse message definition: {err}') from err
     store.register(types)
-    from .srv_types import service_types  # requests and responses: after the messages they use
     store.register(service_types())
     return store
 

@@ -23,96 +23,16 @@ as in Humble to Rolling); comments are left out.
 
 from __future__ import annotations
 
-import re
 import threading
-from pathlib import Path
 from typing import Any
 
-from rosbags.typesys import get_types_from_msg
-
 from .errors import MessageError
-from .paths import INTERFACE_PACKAGE, share_file
+from .messages import get_message, typestore
+from .srv_definitions import STANDARD_SERVICES, own_services, parse_srv, service_names, srv_files
+from .yamlconf import did_you_mean
 
 __all__ = ['STANDARD_SERVICES', 'ServiceType', 'get_service', 'parse_srv', 'service_definition', 'service_names',
            'srv_files']
-
-#: ROS 2 services the runtime serves or calls, ``pkg/srv/Name`` -> ``.srv`` text.
-STANDARD_SERVICES: dict[str, str] = {
-    'rcl_interfaces/srv/DescribeParameters': 'string[] names\n---\nParameterDescriptor[] descriptors\n',
-    'rcl_interfaces/srv/GetParameters': 'string[] names\n---\nParameterValue[] values\n',
-    'rcl_interfaces/srv/GetParameterTypes': 'string[] names\n---\nuint8[] types\n',
-    'rcl_interfaces/srv/ListParameters': ('uint64 DEPTH_RECURSIVE=0\nstring[] prefixes\nuint64 depth\n---\n'
-                                          'ListParametersResult result\n'),
-    'rcl_interfaces/srv/SetParameters': 'Parameter[] parameters\n---\nSetParametersResult[] results\n',
-    'rcl_interfaces/srv/SetParametersAtomically': 'Parameter[] parameters\n---\nSetParametersResult result\n',
-    'std_srvs/srv/Empty': '---\n',
-    'std_srvs/srv/Trigger': '---\nbool success\nstring message\n',
-    'std_srvs/srv/SetBool': 'bool data\n---\nbool success\nstring message\n',
-    'type_description_interfaces/srv/GetTypeDescription': (
-        'string type_name\nstring type_hash\nbool include_type_sources true\n---\nbool successful\n'
-        'string failure_reason\nTypeDescription type_description\nTypeSource[] type_sources\n'
-        'KeyValue[] extra_information\n'),
-}
-
-_SEPARATOR = re.compile(r'^---\s*$', re.MULTILINE)
-#: What rosidl puts in an empty structure, so that it has a size.
-_PLACEHOLDER = 'uint8 structure_needs_at_least_one_member\n'
-
-
-def srv_files() -> list[Path]:
-    """The package's ``.srv`` files, sorted by name (none when the directory is missing)."""
-    directory = share_file('srv')
-    return sorted(directory.glob('*.srv')) if directory.is_dir() else []
-
-
-def _own_services() -> dict[str, str]:
-    return {f'{INTERFACE_PACKAGE}/srv/{p.stem}': p.read_text(encoding='utf-8') for p in srv_files()}
-
-
-def service_names() -> list[str]:
-    """This package's service types, e.g. ``social_touch_msgs/srv/X``."""
-    return sorted(_own_services())
-
-
-def _has_fields(text: str) -> bool:
-    return any(line.split('#')[0].strip() and '=' not in line.split('#')[0] for line in text.splitlines())
-
-
-def parse_srv(text: str, name: str) -> dict[str, Any]:
-    """rosbags type definitions of ``pkg/srv/Name``'s request and response (for ``store.register``).
-
-    Raises:
-        MessageError: when the text is not a ``.srv`` (no single ``---`` line) or a half does not parse.
-    """
-    pkg, kind, short = name.split('/')
-    if kind != 'srv':
-        raise MessageError(f"expected a service type name 'pkg/srv/Name', got {name!r}")
-    halves = _SEPARATOR.split(text)
-    if len(halves) != 2:
-        raise MessageError(f'{name}: a .srv holds a request and a response separated by one line "---"; '
-                           f'found {len(halves) - 1} such lines')
-    out: dict[str, Any] = {}
-    for part, body in zip(('Request', 'Response'), halves, strict=True):
-        if not _has_fields(body):
-            body = body + '\n' + _PLACEHOLDER
-        # Parsed as a message of the package, so bare type names resolve to pkg/msg/...; then renamed.
-        as_msg = f'{pkg}/msg/{short}_{part}'
-        try:
-            types = get_types_from_msg(body, as_msg)
-        except Exception as err:  # the parser raises several kinds
-            raise MessageError(f'{name}: cannot parse the {part.lower()}: {err}') from err
-        out[f'{pkg}/srv/{short}_{part}'] = types.pop(as_msg)
-        out.update(types)
-    return out
-
-
-def service_types() -> dict[str, Any]:
-    """Definitions of every known service's request and response (standard and this package's)."""
-    out: dict[str, Any] = {}
-    for name, text in {**STANDARD_SERVICES, **_own_services()}.items():
-        out.update(parse_srv(text, name))
-    return out
-
 
 class ServiceType:
     """Base of service classes: ``Srv.Request`` and ``Srv.Response`` message classes, as rclpy's generated ones.
@@ -150,14 +70,12 @@ def get_service(name: str) -> type[ServiceType]:
     Raises:
         MessageError: for a type that is not known (with the known ones).
     """
-    from .messages import get_message, typestore
     full = normalize_service_name(name)
     with _lock:
         cls = _classes.get(full)
         if cls is not None:
             return cls
     if f'{full}_Request' not in typestore.fielddefs:
-        from .yamlconf import did_you_mean
         known = sorted(n[:-len('_Request')] for n in typestore.fielddefs if n.endswith('_Request') and '/srv/' in n)
         raise MessageError(f"unknown service type '{name}'{did_you_mean(full, known)}; known: {', '.join(known)}")
     request, response = get_message(f'{full}_Request'), get_message(f'{full}_Response')
@@ -193,10 +111,10 @@ def service_definition(name: str) -> str:
     """
     full = normalize_service_name(name)
     get_service(full)  # raises for an unknown one
-    texts = {**STANDARD_SERVICES, **_own_services()}
+    texts = {**STANDARD_SERVICES, **own_services()}
     if full in texts:
         return texts[full]
-    from .messages import typestore  # registered by other means: rebuilt from its halves
+    # registered by other means: rebuilt from its halves
     halves = [typestore.generate_msgdef(f'{full}_{part}', ros_version=2)[0].split('\n' + '=' * 80)[0]
               for part in ('Request', 'Response')]
     return '---\n'.join(halves)

@@ -29,6 +29,7 @@ from typing import Any
 from rosbags.interfaces import Nodetype
 
 from .errors import MessageError
+from .messages import typestore
 
 __all__ = ['FIELD_TYPE_IDS', 'hash_description', 'individual_description', 'type_description', 'type_hash']
 
@@ -104,7 +105,7 @@ def individual_description(type_name: str, store: Any = None) -> dict[str, Any]:
         MessageError: for a type the type store does not know.
     """
     if store is None:
-        from .messages import typestore as store
+        store = typestore
     if type_name in store.fielddefs:
         _, fields = store.fielddefs[type_name]
         return {'type_name': type_name, 'fields': [_field(name, _field_type(desc)) for name, desc in fields]}

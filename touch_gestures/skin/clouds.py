@@ -52,7 +52,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from .base import TemplateRecogniser
-from .features import arc_length_resample_complex
+from .features import cloud_features
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS
 
@@ -62,27 +62,6 @@ __all__ = ['CloudRecogniser', 'cloud_features']
 _EXTENT = 1.0
 #: Rasters up to this many cells keep a cell-to-cell distance table (4 MiB); larger ones compute it per query.
 _TABLE_CELLS = 1024
-
-
-def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int = 32) -> np.ndarray:
-    """(m, 2) points with (m,) stroke ids -> (2 * n_points,) float32 cloud, x and y interleaved.
-
-    Resampled along the ink, centred on the mean, divided by the larger side of the box
-    (a dab that never moves stays at the origin).
-
-    >>> f = cloud_features(np.array([[0.0, 0], [4, 0], [0, 4], [4, 4]]), np.array([0, 0, 1, 1]), 4)
-    >>> f.reshape(4, 2).round(2).tolist()   # two strokes of 4: every 8/3 along the ink, none in the air
-    [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
-    """
-    cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
-    cloud -= cloud.sum() / n_points
-    x, y = cloud.real, cloud.imag                                   # views: cheaper than reducing (n, 2) along 0
-    width, height = float(x.max()) - float(x.min()), float(y.max()) - float(y.min())
-    size = width if width > height or width != width else height    # the larger side; NaN if either is, as numpy's
-    xy = cloud.view(np.float64)                                     # the same memory, x and y interleaved
-    if size > 1e-9:
-        xy /= size
-    return xy.astype(np.float32)
 
 
 class CloudRecogniser(TemplateRecogniser):

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from touch_graph.compat import get_message  # rclpy's class under real rclpy (its publisher checks)
 from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import YamlDict, check_keys, did_you_mean, load_yaml, typed
 
@@ -99,7 +100,6 @@ def haptic_command(match: Match, gesture: TouchGesture, commands: CommandMap, re
     command = commands.command_for(match.label)
     if command is None:
         return None
-    from touch_graph.compat import get_message  # rclpy's class under real rclpy (its publisher checks)
 
     header = get_message('std_msgs/msg/Header')(frame_id='skin')
     if stamp is not None:

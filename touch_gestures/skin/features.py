@@ -15,6 +15,7 @@ __all__ = [
     'arc_length_resample',
     'arc_length_resample_complex',
     'bounding_box',
+    'cloud_features',
     'minmax_normalise',
     'nna_indices',
     'nna_resample',
@@ -174,3 +175,24 @@ def arc_length_resample_complex(points: np.ndarray, n: int, stroke: np.ndarray |
     target = _steps(n) * (total / (n - 1)) if n > 1 else np.zeros(1)
     target[-1] = total if n > 1 else 0.0
     return np.interp(target, cum, path)
+
+
+def cloud_features(points: np.ndarray, stroke: np.ndarray | None, n_points: int = 32) -> np.ndarray:
+    """(m, 2) points with (m,) stroke ids -> (2 * n_points,) float32 cloud, x and y interleaved.
+
+    Resampled along the ink, centred on the mean, divided by the larger side of the box
+    (a dab that never moves stays at the origin).
+
+    >>> f = cloud_features(np.array([[0.0, 0], [4, 0], [0, 4], [4, 4]]), np.array([0, 0, 1, 1]), 4)
+    >>> f.reshape(4, 2).astype(float).round(2).tolist()   # two strokes of 4: every 8/3 along the ink, none in the air
+    [[-0.5, -0.5], [0.17, -0.5], [-0.17, 0.5], [0.5, 0.5]]
+    """
+    cloud = arc_length_resample_complex(points, n_points, stroke)   # (n,) x + 1j * y: fewer numpy calls
+    cloud -= cloud.sum() / n_points
+    x, y = cloud.real, cloud.imag                                   # views: cheaper than reducing (n, 2) along 0
+    width, height = float(x.max()) - float(x.min()), float(y.max()) - float(y.min())
+    size = width if width > height or width != width else height    # the larger side; NaN if either is, as numpy's
+    xy = cloud.view(np.float64)                                     # the same memory, x and y interleaved
+    if size > 1e-9:
+        xy /= size
+    return xy.astype(np.float32)

@@ -10,7 +10,7 @@ whether the touch, as the path it was traced, is near such a path of the class:
   nearest class (a multi-stroke symbol's strokes come in any order, which is what the cloud
   is for; a random brush of the hand is one stroke);
 - the **path distance** is the root-mean-square distance between the touch's and a
-  template's points, both resampled along the ink (:func:`~.clouds.cloud_features`, in
+  template's points, both resampled along the ink (:func:`~.features.cloud_features`, in
   units of the gesture's size), the smaller of the two directions; where the template is a
   **closed** stroke (its ends less than ``closed`` gesture sizes apart: a star, a circle),
   from any of its points as the start as well. The touch is compared with every one-stroke
@@ -39,6 +39,7 @@ import math
 
 import numpy as np
 
+from .features import cloud_features
 from .gesture import TouchGesture
 
 __all__ = ['ORDER_REASON', 'OrderEvidence', 'one_stroke_path']
@@ -57,8 +58,6 @@ _ONE_THREAD_PRODUCT = 65536 * 4
 def one_stroke_path(gesture: TouchGesture, n_points: int = PATH_POINTS) -> np.ndarray | None:
     """(n_points, 2) float64 path of a one-stroke ``gesture`` along its ink, centred and divided by
     the larger side of its box; None for a touch of several strokes or without points."""
-    from .clouds import cloud_features  # here: clouds imports base, which imports this module
-
     if int(getattr(gesture, 'strokes', 1)) != 1 or len(gesture.trajectory) == 0:
         return None
     return cloud_features(gesture.trajectory, None, n_points).reshape(n_points, 2).astype(np.float64)

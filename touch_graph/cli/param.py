@@ -126,7 +126,7 @@ def _list(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _get(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameter_messages import value_of
+    from ..runtime.parameters import value_of
     node = params.node(args.node_name)
     values = params.call(node, 'get_parameters', names=[args.parameter_name]).values
     if not values or values[0].type == 0:
@@ -142,8 +142,7 @@ def _get(params: _Params, args: argparse.Namespace) -> int:
 
 def _set(params: _Params, args: argparse.Namespace) -> int:
     from ..runtime.param_yaml import parse_parameter_value
-    from ..runtime.parameter_messages import parameter_msg
-    from ..runtime.parameters import Parameter
+    from ..runtime.parameters import Parameter, parameter_msg
     pairs = args.params_and_values
     if len(pairs) % 2:
         raise GraphError(f'parameters are name value pairs (name value [name value ...]); got {len(pairs)} '
@@ -201,7 +200,7 @@ def _describe(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _dump(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameter_messages import value_of
+    from ..runtime.parameters import value_of
     node = params.node(args.node_name)
     names = params.names(node, [])
     values = params.call(node, 'get_parameters', names=names).values if names else []
@@ -217,8 +216,7 @@ def _dump(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _load(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameter_messages import parameter_msg
-    from ..runtime.parameters import Parameter, load_parameter_file
+    from ..runtime.parameters import Parameter, load_parameter_file, parameter_msg
     node = params.node(args.node_name)
     overrides = load_parameter_file(args.parameter_file)
     chosen: dict[str, Any] = {}
@@ -240,8 +238,7 @@ def _load(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _delete(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameter_messages import parameter_msg
-    from ..runtime.parameters import Parameter, ParameterType
+    from ..runtime.parameters import Parameter, ParameterType, parameter_msg
     node = params.node(args.node_name)
     message = parameter_msg(Parameter(args.parameter_name, ParameterType.NOT_SET, None))
     [result] = params.call(node, 'set_parameters', parameters=[message]).results

@@ -27,6 +27,7 @@ from cyclonedds.idl import types as t
 from rosbags.interfaces import Nodetype
 
 from ..errors import MessageError
+from ..messages import typestore
 from .names import dds_type_name
 
 __all__ = ['REQUEST_HEADER_FIELDS', 'idl_service_struct', 'idl_struct']
@@ -56,7 +57,7 @@ def idl_struct(ros_type: str, store: Any = None) -> type[IdlStruct]:
         MessageError: for a type the store does not know or a field DDS cannot describe.
     """
     if store is None:
-        from ..messages import typestore as store
+        store = typestore
     key = (id(store), ros_type)
     with _lock:
         cls = _cache.get(key)
@@ -74,7 +75,7 @@ def idl_service_struct(ros_type: str, store: Any = None) -> type[IdlStruct]:
     Kilted announces no type information for services, so peers match it by name.
     """
     if store is None:
-        from ..messages import typestore as store
+        store = typestore
     key = (id(store), 'header+' + ros_type)
     with _lock:
         cls = _cache.get(key)

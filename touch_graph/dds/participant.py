@@ -50,11 +50,14 @@ from ..errors import GraphError
 from .cdds import WaitSet, delete_entity, forget
 from .config import DiscoveryOptions, read_discovery
 from .config import domain_id as env_domain_id
+from .discovery import GraphDiscovery
 from .domain import acquire_domain, release_domain
 from .endpoints import DdsReader, DdsWriter
 from .idl import idl_struct
 from .names import dds_topic_name, ros_topic_name
 from .qos import POLICY_NAMES, TYPE_CONSISTENCY_POLICY
+from .services import DdsClient, DdsService
+from .waker import DdsWaker
 
 __all__ = ['DdsParticipant']
 
@@ -108,7 +111,6 @@ class DdsParticipant:
         self._pending: deque[Callable[[], None]] = deque()
         self._incompatible: list[list] = []  # [endpoint, count change, policy id, tries] to report
         self.waitset = WaitSet(self.participant._ref)
-        from .discovery import GraphDiscovery  # the graph side needs the entities above
         self.graph = GraphDiscovery(self)
         context.add_graph_listener(self._on_local_graph)
         self._thread = threading.Thread(target=self._run, name=f'dds-{self.domain_id}', daemon=True)
@@ -224,7 +226,6 @@ class DdsParticipant:
             delete_entity(reader.ref)
 
     def _add_pair(self, entity: Any, is_service: bool) -> None:
-        from .services import DdsClient, DdsService
         try:
             pair = (DdsService if is_service else DdsClient)(self, entity)
         except Exception as err:  # the node goes on in process; say why others will not see it
@@ -252,7 +253,6 @@ class DdsParticipant:
 
     def make_waker(self) -> Any:
         """A :class:`~touch_graph.dds.waker.DdsWaker` for an executor of this context."""
-        from .waker import DdsWaker
         return DdsWaker(self.participant._ref, owner=self)
 
     # ------------------------------------------------------------------ receive thread

@@ -24,6 +24,7 @@ from typing import Any
 from cyclonedds.core import Policy, Qos
 from cyclonedds.util import duration
 
+from ..offered_qos import adapted_policies
 from ..runtime.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 __all__ = ['MAX_BLOCKING_S', 'POLICY_NAMES', 'adapted_profile', 'dds_qos', 'describe_qos', 'qos_to_dict']
@@ -132,8 +133,6 @@ def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfil
     >>> adapted_profile([]).reliability.name
     'RELIABLE'
     """
-    from ..offered_qos import adapted_policies
-
     def name(enum: Any, value: Any) -> str:
         try:
             return enum(value).name

@@ -38,7 +38,7 @@ from cyclonedds.sub import DataReader
 
 from .. import messages
 from ..errors import MessageError
-from .cdds import forget, matched_endpoint, matched_readers
+from .cdds import delete_entity, forget, matched_endpoint, matched_readers
 from .discovery import user_data_value
 from .endpoints import TAKE_BATCH, pad4, writer_type
 from .idl import idl_service_struct, idl_struct
@@ -131,7 +131,6 @@ class _Pair:
             self.writer = DataWriter(participant.dds_publisher, participant.dds_topic(
                 write_topic, write_type, struct=idl_service_struct(write_type)), qos_for(write_type))
         except Exception:
-            from .cdds import delete_entity
             delete_entity(self.reader)
             raise
         forget(self.writer)
@@ -444,7 +443,6 @@ class DdsClient(_Pair):
             self._plain_key = None
         for entity in (self._plain_reader, self._plain_writer):
             if entity is not None:
-                from .cdds import delete_entity
                 delete_entity(entity)
         self._plain_reader = self._plain_writer = None
 

@@ -18,6 +18,8 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import GraphError
+from ..offered_qos import OfferedQosSubscriptions
+from ..runtime import Context, Node, SingleThreadedExecutor
 from ..yamlconf import did_you_mean
 from .cdds import wait_for_acks
 from .graph import GraphView, TopicInfo
@@ -43,7 +45,6 @@ class GraphTool:
     """
 
     def __init__(self, name: str, *, discovery_timeout_s: float = 2.0) -> None:
-        from ..runtime import Context
         self.name = re.sub(r'\W', '_', name)
         self.discovery_timeout_s = discovery_timeout_s
         self.context = Context('wall', network=True)
@@ -53,7 +54,6 @@ class GraphTool:
         self._adapted: Any = None
 
     def __enter__(self) -> GraphTool:
-        from ..runtime import Node, SingleThreadedExecutor
         self.context.init([])
         try:
             self.executor = SingleThreadedExecutor(context=self.context)
@@ -201,7 +201,6 @@ class GraphTool:
         """Subscribe with the QoS the topic's publishers offer, remade when a later publisher needs another
         (:class:`~touch_graph.offered_qos.OfferedQosSubscriptions`; ``kwargs`` e.g. ``raw=True``)."""
         if self._adapted is None:
-            from ..offered_qos import OfferedQosSubscriptions
             self._adapted = OfferedQosSubscriptions(self.node)
         return self._adapted.create_subscription(msg_type, topic, callback, depth, **kwargs)
 

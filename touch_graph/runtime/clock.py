@@ -18,6 +18,8 @@ from enum import IntEnum
 from functools import total_ordering
 from typing import Any
 
+from ..messages import get_message
+
 __all__ = ['Clock', 'ClockType', 'Duration', 'SimTimeSource', 'Time', 'TimeSource', 'WallTimeSource']
 
 _NS = 1_000_000_000
@@ -43,7 +45,6 @@ class Duration:
         return self._ns
 
     def to_msg(self) -> Any:
-        from ..messages import get_message
         sec, nsec = divmod(self._ns, _NS)
         return get_message('builtin_interfaces/msg/Duration')(sec=sec, nanosec=nsec)
 
@@ -82,7 +83,6 @@ class Time:
 
     def to_msg(self) -> Any:
         """A ``builtin_interfaces/msg/Time`` for a message header."""
-        from ..messages import get_message
         sec, nsec = divmod(self._ns, _NS)
         return get_message('builtin_interfaces/msg/Time')(sec=sec, nanosec=nsec)
 

@@ -12,18 +12,21 @@ from __future__ import annotations
 
 import heapq
 import math
+import sys
 import threading
 import time
 import traceback
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import GraphError
 from .clock import SimTimeSource
 from .context import Context, ExternalShutdownException, get_default_context
-from .endpoints import Subscription, Timer
-from .node import Node
+
+if TYPE_CHECKING:  # annotations only: nodes and their endpoints import nothing of the executor
+    from .endpoints import Subscription, Timer
+    from .node import Node
 
 __all__ = ['Executor', 'MultiThreadedExecutor', 'SingleThreadedExecutor']
 
@@ -326,7 +329,6 @@ class Executor:
         if logger is not None:
             logger.error(text.rstrip(), throttle_duration_sec=None if first else 1.0)
         else:
-            import sys
             sys.stderr.write(text + '\n')
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
 from collections.abc import Callable
 from enum import IntEnum
 from typing import TextIO
@@ -51,7 +52,6 @@ class RcutilsLogger:
 
     def __init__(self, name: str = '', clock_ns: Callable[[], int] | None = None,
                  stream: TextIO | None = None) -> None:
-        import time
         self.name = name
         self._clock_ns = clock_ns or time.time_ns
         self._stream = stream

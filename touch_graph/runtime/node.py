@@ -24,11 +24,13 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from .. import messages
 from ..errors import GraphError
 from ..messages import get_message
 from .clock import Clock, ClockType
 from .context import Context, get_default_context
 from .endpoints import Publisher, Subscription, Timer
+from .graph_info import endpoints_info
 from .logging import RcutilsLogger
 from .names import (
     RemapRule,
@@ -39,6 +41,7 @@ from .names import (
     validate_node_name,
 )
 from .node_parameters import NodeParameters
+from .parameter_service import ParameterService
 from .parameters import (
     Parameter,
     ParameterDescriptor,
@@ -55,6 +58,7 @@ from .qos import (
     qos_profile_services_default,
 )
 from .services import Client, Service
+from .type_description_service import TypeDescriptionService
 
 __all__ = ['Node', 'node_arguments']
 
@@ -169,10 +173,8 @@ class Node(NodeParameters):
                     self.declare_parameter(name, value)
         self._parameter_service = None
         if start_parameter_services:
-            from .parameter_service import ParameterService
             self._parameter_service = ParameterService(self)
-            from .type_description_service import TypeDescriptionService  # ~/get_type_description, as Jazzy's
-            self._type_description_service = TypeDescriptionService(self)
+            self._type_description_service = TypeDescriptionService(self)  # ~/get_type_description, as Jazzy's
 
         with self.context._lock:
             self.context.nodes.append(self)
@@ -237,7 +239,6 @@ class Node(NodeParameters):
             if self.executor is not None:
                 sub._executor = self.executor
         if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
-            from .. import messages
             for pub in topic_obj.publishers:
                 for msg in pub._latched or ():
                     item = messages.serialize(msg, topic_obj.type_name) if raw else msg
@@ -403,11 +404,9 @@ class Node(NodeParameters):
         return out
 
     def get_publishers_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
-        from .graph_info import endpoints_info
         return endpoints_info(self, topic_name, 'publishers')
 
     def get_subscriptions_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
-        from .graph_info import endpoints_info
         return endpoints_info(self, topic_name, 'subscriptions')
 
     def count_publishers(self, topic_name: str) -> int:

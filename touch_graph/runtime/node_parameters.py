@@ -28,6 +28,7 @@ from .parameters import (
     SetParametersResult,
     check_ranges,
     coerce_to_type,
+    parameter_event,
 )
 
 __all__ = ['NodeParameters']
@@ -231,5 +232,4 @@ class NodeParameters:
         publisher = self._parameter_events
         if publisher is None or publisher._destroyed or not (new or changed or deleted):
             return
-        from .parameter_messages import parameter_event
         publisher.publish(parameter_event(self._fqn, self.get_clock().now().to_msg(), new, changed, deleted))

@@ -15,9 +15,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from ..messages import get_message
 from ..srv_types import get_service
-from .parameter_messages import descriptor_msg, parameter_from_msg, parameter_value
-from .parameters import ParameterNotDeclaredException, SetParametersResult
+from .parameters import (
+    ParameterNotDeclaredException,
+    SetParametersResult,
+    descriptor_msg,
+    parameter_from_msg,
+    parameter_value,
+)
 
 if TYPE_CHECKING:
     from .node import Node
@@ -37,7 +43,6 @@ PARAMETER_SERVICES = {
 
 
 def _result_msg(result: SetParametersResult) -> Any:
-    from ..messages import get_message
     return get_message('rcl_interfaces/msg/SetParametersResult')(successful=bool(result.successful),
                                                                     reason=str(result.reason))
 

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import GraphError, ServiceCallError
 from ..srv_types import service_type_of
 from .endpoints import QueuedEntity
+from .executors import SingleThreadedExecutor
 from .qos import KEEP_ALL_LIMIT, QoSProfile
 from .task import Future
 
@@ -199,7 +200,6 @@ class Client(QueuedEntity):
         future = self.call_async(request)
         if not future.done():
             if executor is None:
-                from .executors import SingleThreadedExecutor
                 helper = SingleThreadedExecutor(context=self.node.context)
                 helper.add_node(self.node)
                 try:

@@ -14,7 +14,7 @@ import sys
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_graph.cli.options import deprecated_alias
-from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, stderr_progress
+from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, percent_text, seconds_text, stderr_progress
 
 __all__ = ['add_arguments', 'format_text', 'run']
 
@@ -85,14 +85,6 @@ def train_families(choice: str) -> tuple[str, ...]:
     return FAMILIES if choice == 'both' else (choice,)
 
 
-def _pct(value) -> str:
-    return 'n/a' if value is None else f'{100 * value:5.1f} %'
-
-
-def _sec(value) -> str:
-    return 'n/a' if value is None else f'{value:.2f} s'
-
-
 def format_text(result: dict) -> str:
     """The human-readable report of :func:`~.evaluate.evaluate`'s result."""
     m, r, cfg = result['model'], result['rule'], result['config']
@@ -103,15 +95,16 @@ def format_text(result: dict) -> str:
         f"DATA: {result['data']}",
         '',
         f"{'':40s} {'trained model':>14s} {'paper rule':>12s}",
-        f"{'subtype accuracy (per interaction)':40s} {_pct(m['subtype']['accuracy']):>14s} "
-        f"{_pct(r['subtype']['accuracy']):>12s}",
-        f"{'subtype accuracy (per sensor-cycle)':40s} {_pct(m['subtype']['frame_accuracy']):>14s} "
-        f"{_pct(r['subtype']['frame_accuracy']):>12s}",
-        f"{'median subtype latency':40s} {_sec(m['subtype']['median_latency_s']):>14s} "
-        f"{_sec(r['subtype']['median_latency_s']):>12s}",
-        f"{'symbolic accuracy':40s} {_pct(m['symbolic']['accuracy']):>14s} {_pct(r['symbolic']['accuracy']):>12s}",
-        f"{'median symbolic latency (from onset)':40s} {_sec(m['symbolic']['median_latency_s']):>14s} "
-        f"{_sec(r['symbolic']['median_latency_s']):>12s}",
+        f"{'subtype accuracy (per interaction)':40s} {percent_text(m['subtype']['accuracy']):>14s} "
+        f"{percent_text(r['subtype']['accuracy']):>12s}",
+        f"{'subtype accuracy (per sensor-cycle)':40s} {percent_text(m['subtype']['frame_accuracy']):>14s} "
+        f"{percent_text(r['subtype']['frame_accuracy']):>12s}",
+        f"{'median subtype latency':40s} {seconds_text(m['subtype']['median_latency_s']):>14s} "
+        f"{seconds_text(r['subtype']['median_latency_s']):>12s}",
+        f"{'symbolic accuracy':40s} {percent_text(m['symbolic']['accuracy']):>14s} "
+        f"{percent_text(r['symbolic']['accuracy']):>12s}",
+        f"{'median symbolic latency (from onset)':40s} {seconds_text(m['symbolic']['median_latency_s']):>14s} "
+        f"{seconds_text(r['symbolic']['median_latency_s']):>12s}",
         f"{'symbolic false alarms':40s} {m['symbolic']['false_alarms']:>14d} {r['symbolic']['false_alarms']:>12d}",
         f"{'compute per cycle (median, 56 sensors)':40s} {m['us_per_cycle']:>11.0f} us {r['us_per_cycle']:>9.0f} us",
         '',
@@ -119,23 +112,24 @@ def format_text(result: dict) -> str:
     ]
     for s in TOUCH_SUBTYPES:
         pc = m['subtype']['per_class'][s]
-        lines.append(f"  {s:8s} {_pct(pc['precision'])} / {_pct(pc['recall'])} / "
-                     f"{_sec(m['subtype']['median_latency_by_subtype_s'][s])}")
+        lines.append(f"  {s:8s} {percent_text(pc['precision'])} / {percent_text(pc['recall'])} / "
+                     f"{seconds_text(m['subtype']['median_latency_by_subtype_s'][s])}")
     lines += ['', 'Per symbolic gesture (trained-model subtypes): precision / recall / median latency']
     for g in m['symbolic']['labels']:
         if g == 'none':
             continue
         pc = m['symbolic']['per_class'][g]
-        lines.append(f"  {g:13s} {_pct(pc['precision'])} / {_pct(pc['recall'])} / "
-                     f"{_sec(m['symbolic']['median_latency_by_gesture_s'][g])}")
+        lines.append(f"  {g:13s} {percent_text(pc['precision'])} / {percent_text(pc['recall'])} / "
+                     f"{seconds_text(m['symbolic']['median_latency_by_gesture_s'][g])}")
     lines += ['', 'Subtype confusion (trained model, per interaction; rows true, columns predicted)',
               '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *m['subtype']['labels']])]
     for name, row in zip(m['subtype']['labels'], m['subtype']['confusion'], strict=True):
         lines.append('  ' + f'{name[:6]:>6s} ' + ' '.join(f'{v:6d}' for v in row))
     lines += ['', 'Table III shape (knight2009 VI.C): first try / with explanation / regional accuracy']
     for g, v in m['symbolic']['table_iii'].items():
-        lines.append(f"  {g:9s} {_pct(v['activated_first_try'])} / {_pct(v['activated_with_explanation'])} / "
-                     f"{_pct(v['regional_accuracy'])}")
+        lines.append(f"  {g:9s} {percent_text(v['activated_first_try'])} / "
+                     f"{percent_text(v['activated_with_explanation'])} / "
+                     f"{percent_text(v['regional_accuracy'])}")
     if result.get('driver'):
         lines += ['', f"driver counters: {result['driver']}"]
     return '\n'.join(lines)

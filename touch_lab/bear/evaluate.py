@@ -59,9 +59,11 @@ __all__ = [
     'collect_training_rows',
     'evaluate',
     'family_scene',
+    'percent_text',
     'run_scene',
     'score_subtypes',
     'score_symbolic',
+    'seconds_text',
     'start_grace_s',
     'train_subtype_model',
 ]
@@ -73,6 +75,17 @@ PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
 FAMILIES = ('script', 'hands')
 #: Seconds after a labelled gesture's end during which its START still counts.
 SYMBOLIC_GRACE_S = 1.0
+
+
+def percent_text(value: float | None) -> str:
+    """A fraction (0..1) as a report's percentage, ``'n/a'`` for None."""
+    return 'n/a' if value is None else f'{100 * value:5.1f} %'
+
+
+def seconds_text(value: float | None) -> str:
+    """A duration (s) as a report's seconds, ``'n/a'`` for None."""
+    return 'n/a' if value is None else f'{value:.2f} s'
+
 
 
 def start_grace_s(gesture) -> float:

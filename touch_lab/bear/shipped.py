@@ -28,6 +28,7 @@ from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import GestureLibrary
+from touch_lab.bear.evaluate import percent_text, seconds_text
 from touch_sim.bear.people import PERFORMANCES, split_label
 
 from .evaluate import SYMBOLIC_GRACE_S, start_grace_s
@@ -143,16 +144,16 @@ def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map
 
 def format_scores(result: dict, synthetic: bool) -> str:
     """The text report of :func:`score_model` (with the ``method`` line the command adds)."""
-    from .cli import _pct, _sec
     m, r, sym = result['model'], result['rule'], result['symbolic']
     data = 'SYNTHETIC: simulated people' if synthetic else 'recorded sessions'
     lines = [f"Sensate Bear on {len(result['people'])} people ({data})", f"method: {result['method']}",
              f"{'':44s} {'subtype model':>14s} {'paper rule':>12s}",
-             f"{'subtype accuracy (over all trials)':44s} {_pct(m['accuracy']):>14s} {_pct(r['accuracy']):>12s}",
+             f"{'subtype accuracy (over all trials)':44s} {percent_text(m['accuracy']):>14s} "
+             f"{percent_text(r['accuracy']):>12s}",
              f"{'trials':44s} {m['trials']:>14d} {r['trials']:>12d}",
-             f"{'median detection latency (over all trials)':44s} {_sec(m['median_latency_s']):>14s} "
-             f"{_sec(r['median_latency_s']):>12s}",
-             '', 'per person (subtype model): ' + ', '.join(f'{p} {_pct(a).strip()}'
+             f"{'median detection latency (over all trials)':44s} {seconds_text(m['median_latency_s']):>14s} "
+             f"{seconds_text(r['median_latency_s']):>12s}",
+             '', 'per person (subtype model): ' + ', '.join(f'{p} {percent_text(a).strip()}'
                                                           for p, a in result['per_person'].items()),
              '', 'subtype confusion (model; rows true, columns predicted)',
              '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *SUBTYPES])]
@@ -160,8 +161,8 @@ def format_scores(result: dict, synthetic: bool) -> str:
         if row.sum():
             lines.append('  ' + f'{name[:6]:>6s} ' + ' '.join(f'{int(v):6d}' for v in row))
     lines += ['', f"symbolic gestures ({result.get('gestures', '')}): detected {sym['detected']} / {sym['trials']} "
-              f"({_pct(sym['detected_fraction']).strip()}), false starts {sym['false_starts']}, median latency "
-              f"{_sec(sym['median_latency_s'])} (over all detected trials)",
+              f"({percent_text(sym['detected_fraction']).strip()}), false starts {sym['false_starts']}, median latency "
+              f"{seconds_text(sym['median_latency_s'])} (over all detected trials)",
               f"  {'gesture':13s} {'detected':>10s} {'false starts':>13s} {'(other gesture / subtype / outside)':>36s} "
               f"{'latency':>8s}"]
     for name, g in sym['per_gesture'].items():
@@ -170,5 +171,5 @@ def format_scores(result: dict, synthetic: bool) -> str:
         c = g['false_starts_by_cause']
         lines.append(f"  {name:13s} {g['detected']:>4d} / {g['trials']:<3d} {g['false_starts']:>13d} "
                      f"{c['other_gesture']:>17d} / {c['subtype_trial']:>3d} / {c['outside_trials']:>3d}      "
-                     f"{_sec(g['median_latency_s']):>8s}")
+                     f"{seconds_text(g['median_latency_s']):>8s}")
     return '\n'.join(lines)

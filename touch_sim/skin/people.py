@@ -32,8 +32,9 @@ from typing import Any
 import numpy as np
 
 from touch_gestures.skin.gesture import ACTIVE_MM
+from touch_sim.skin.stimuli import LineStroke, StaticPress, Timeline
 from touch_sim.skin.synthetic import SHAPES, random_touches, synthetic_traces
-from touch_sim.skin.traces import TraceSample
+from touch_sim.skin.traces import TraceSample, TraceStimulus, clock_tick, traced_strokes
 
 __all__ = ['KINDS', 'SceneEvent', 'SkinScene', 'people_scene', 'traced_scene']
 
@@ -115,7 +116,6 @@ class SkinScene:
 def _trace_part(sample: TraceSample, at_s: float, kind: str, person: str, force_n: float = _FORCE_N
                 ) -> tuple[Any, SceneEvent]:
     """A trace sample in mm (x, y on the skin, t_ms) traced from ``at_s``, strokes as in the sample."""
-    from touch_sim.skin.traces import TraceStimulus, clock_tick, traced_strokes
 
     t = at_s + (sample.t_ms - float(sample.t_ms.min())) / 1000.0
     strokes = traced_strokes(t, sample.x, sample.y, sample.stroke,
@@ -130,7 +130,6 @@ _RANDOM_NAMES = ('scribble', 'zigzag', 'dab')   # random_touches draws these in 
 
 def _press_part(rng: np.random.Generator, at_s: float, for_s: float, kind: str = 'press'
                 ) -> tuple[Any, SceneEvent]:
-    from touch_sim.skin.stimuli import StaticPress
 
     x, y = rng.uniform(8.0, ACTIVE_MM - 8.0, 2)
     press = StaticPress(float(x), float(y), float(rng.uniform(0.8, 3.0)), at_s=at_s, for_s=for_s, ramp_s=_RAMP_S)
@@ -140,7 +139,6 @@ def _press_part(rng: np.random.Generator, at_s: float, for_s: float, kind: str =
 
 def _two_finger_part(rng: np.random.Generator, at_s: float) -> tuple[Any, SceneEvent]:
     """Two fingertips 20 mm apart stroking 25 mm side by side (a line traced with two fingers)."""
-    from touch_sim.skin.stimuli import LineStroke, Timeline
 
     for_s = float(rng.uniform(0.5, 1.2))
     start = float(rng.uniform(6.0, ACTIVE_MM - 31.0))   # along the stroke, mm

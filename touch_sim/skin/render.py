@@ -41,11 +41,12 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.skin.protocol import FRAME_RATE_HZ
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import GRID, TouchGesture, ideal_frame
 from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_sim.harness import DeviceRun, stamp_ns, wire_frames_before
-from touch_sim.skin.traces import TraceSample
+from touch_sim.skin.traces import TraceSample, TraceStimulus, clock_tick, traced_strokes
 
 __all__ = ['RenderSettings', 'RenderedSample', 'TimedGesture', 'default_cache_dir', 'graph_gestures', 'render_sample',
            'render_samples']
@@ -98,7 +99,6 @@ class RenderedSample:
 
 
 def _stimulus(sample: TraceSample, settings: RenderSettings):
-    from touch_sim.skin.traces import TraceStimulus, clock_tick, traced_strokes
 
     if settings.placement == 'fit':
         return TraceStimulus.from_points(sample.x, sample.y, sample.t_ms, sample.stroke, force_n=settings.force_n,
@@ -160,7 +160,6 @@ def graph_gestures(stimulus: Any, duration_s: float | None = None, seed: int = 0
 def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings(), seed: int | None = None
                   ) -> list[TouchGesture]:
     """The gestures the segmenter cuts from one sample traced across the skin (module doc)."""
-    from touch_driver.skin.protocol import FRAME_RATE_HZ
 
     stim = _stimulus(sample, settings)
     if settings.mode == 'direct':

@@ -39,7 +39,9 @@ from typing import Any
 import numpy as np
 
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, typed
+from touch_sim.scenes import generated_stimulus
 from touch_sim.skin.contact import Contact, SkinStimulus
+from touch_sim.skin.traces import TraceStimulus
 
 __all__ = ['SCENE_FORMAT_VERSION', 'LineStroke', 'NoTouch', 'StaticPress', 'Timeline', 'envelope', 'load_scene',
            'scene_from_mapping']
@@ -202,7 +204,6 @@ def _event(node: Any, where: Any, index: int) -> SkinStimulus:
             return StaticPress(**kw)
         if kind == 'line':
             return LineStroke(_pair(params, 'from_mm', what), _pair(params, 'to_mm', what), **kw)
-        from touch_sim.skin.traces import TraceStimulus  # traces imports this module
         points = np.asarray(params['points'], dtype=np.float64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f'points must be a list of [x, y, t_ms]; got shape {points.shape}')
@@ -230,7 +231,6 @@ def scene_from_mapping(doc: Any) -> SkinStimulus:
         scripted = [k for k in ('events', 'duration_s') if k in doc]
         if scripted:
             raise doc.error(f"a scene has a generator or events, not both: remove '{scripted[0]}'", scripted[0])
-        from touch_sim.scenes import generated_stimulus  # one rule for every sensor's scenes
         return generated_stimulus(doc, 'skin scene', lambda s: callable(getattr(s, 'contacts', None)),
                                   'skin_people')
     if 'options' in doc:

@@ -22,7 +22,7 @@ read by :func:`touch_lab.skin.datasets.read_traces`, or synthetic, :mod:`~touch_
   :mod:`touch_lab.skin.logged_times`, docs/skin-multistroke.md). :func:`spread_stamps` spreads each
   such run evenly over its tick, so the finger passes every point.
 
-:func:`render_frames` (from :mod:`~touch_sim.skin.device`) turns the stimulus into raw frames
+:func:`~touch_sim.skin.device.render_frames` turns the stimulus into raw frames
 with the same device model as the ``skinsim://`` URL handler, without a serial port::
 
     stim = TraceStimulus.from_points(x, y, t_ms)
@@ -40,9 +40,8 @@ import numpy as np
 
 from touch_driver.skin.protocol import ACTIVE_SIDE_MM, TAXEL_PITCH_MM
 from touch_sim.skin.contact import Contact
-from touch_sim.skin.device import render_frames
 
-__all__ = ['TraceSample', 'TraceStimulus', 'clock_tick', 'render_frames', 'spread_stamps', 'spread_strokes',
+__all__ = ['TraceSample', 'TraceStimulus', 'clock_tick', 'spread_stamps', 'spread_strokes',
            'traced_strokes']
 
 

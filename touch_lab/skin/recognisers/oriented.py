@@ -65,7 +65,7 @@ def oriented_cloud(points: np.ndarray, stroke: np.ndarray | None, n_points: int 
     """(m, 2) points with (m,) stroke ids -> (n_points, 4) float64: x, y, cos 2 theta, sin 2 theta per point.
 
     Resampled along the ink, centred on the mean, divided by the larger side of the box (as
-    :func:`~touch_gestures.skin.clouds.cloud_features`). theta is the direction of the ink through the point, from its
+    :func:`~touch_gestures.skin.features.cloud_features`). theta is the direction of the ink through the point, from its
     neighbours of the same stroke (one neighbour at a stroke's end; none: no orientation, 0, 0).
 
     >>> c = oriented_cloud(np.array([[0.0, 0], [4, 0], [0, 4], [0, 8]]), np.array([0, 0, 1, 1]), 4)
