@@ -49,6 +49,8 @@ NOT_COUNTED = ('/rosout', '/parameter_events')
 #: Wall seconds for every node process to come up, and for the counter to match every publisher.
 START_TIMEOUT_S = 120.0
 MATCH_TIMEOUT_S = 60.0
+#: Wall seconds the counter spins after matching, before the window (messages that arrived while it matched).
+SETTLE_S = 1.0
 #: The start of a node process's report lines on its stdout.
 REPORT = 'scene-report '
 
@@ -224,6 +226,9 @@ def run_scene(backend: str, duration: float) -> dict:
                     f'{topic} {counter.count_publishers(topic)} of {n}' for topic, n in publishers.items()))
             executor.spin_once(timeout_sec=0.05)
         ready_s = time.monotonic() - started
+        settled = time.monotonic() + SETTLE_S
+        while time.monotonic() < settled:  # take what arrived while matching, before the window
+            executor.spin_once(timeout_sec=0.05)
         # The window: the same wall seconds for the counter and the node processes' counters.
         for proc in procs:
             proc.tell('mark')
