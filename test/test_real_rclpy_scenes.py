@@ -1,14 +1,14 @@
 """Every node of the shipped scenes on both backends: our runtime, and real rclpy (ROS 2 Jazzy).
 
 test/ros2_scene.py runs the demo scene with the example behaviour node, the web view and the
-Foxglove server (twelve nodes) on one backend and counts the messages of
-every topic its nodes publish. On our runtime it runs in every suite; on real rclpy where
-ROS 2 is here (.ci/ros2-jazzy), and then its counts are compared with our runtime's, topic by
-topic. Both run on the wall clock for the same time, so the counts agree within the slack of two
-schedules on a loaded machine, not to the message. Also here: ``touch_graph.compat`` beside PyPI's
-rclpy, with and without the colcon-built social_touch_msgs.
+Foxglove server (twelve nodes) on one backend, as a robot deploys it: each node in a process of
+its own, and the counter in another, meeting on the DDS domain. It counts the messages of every
+topic the nodes publish over the same wall seconds, and the drivers count what they published
+in that window. On our runtime it runs in every suite; on real rclpy where ROS 2 is here
+(.ci/ros2-jazzy), and then its counts are compared with our runtime's, topic by topic (see
+:func:`close` for how closely). Also here: ``touch_graph.compat`` beside PyPI's rclpy, with and
+without the colcon-built social_touch_msgs.
 """
-
 import json
 import os
 import subprocess
@@ -29,8 +29,11 @@ STEADY = ['/bear/bear_driver/status', '/bear/frame', '/diagnostics', '/patch/fra
           '/patch/patch_driver/status', '/patch/posteriors', '/skin/frame', '/skin/skin_driver/status', '/tf_static',
           '/touch/sensor_level', '/touch/state']
 
-#: Topics of 150 Hz skin frames, which one rclpy executor for the whole scene receives only in part.
-FALLS_BEHIND = ('/skin/frame', '/skin/contact')
+#: Topics whose messages are events of the touches (gestures, commands, what the behaviour does; touch_state
+#: publishes on a change); every other topic goes at the rate of a device or a timer.
+EVENTS = ('/behaviour/action', '/behaviour/look_at', '/behaviour/mood', '/behaviour/say', '/skin/candidate',
+          '/skin/collision', '/touch/gesture', '/touch/haptic_command', '/touch/state', '/touch/subtype',
+          '/touch/symbolic')
 
 _runs: dict[str, dict] = {}
 
@@ -44,14 +47,21 @@ def scene_counts(backend: str, tmp_path_factory: pytest.TempPathFactory) -> dict
             env = ros2_env(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                            ROS_PYTHON_CHECK_FIELDS='1')
             run = subprocess.run([sys.executable, str(SCRIPT), '--backend', backend, '--duration', str(DURATION_S),
-                                  '--out', str(out)], capture_output=True, text=True, timeout=300, env=env, cwd=ROOT)
+                                  '--out', str(out)], capture_output=True, text=True, timeout=600, env=env, cwd=ROOT)
         assert run.returncode == 0, f'the scene on {backend} failed:\n{run.stderr[-4000:]}'
         _runs[backend] = json.loads(out.read_text(encoding='utf-8'))
     return _runs[backend]
 
 
 def close(a: int, b: int) -> bool:
-    """Counts of one topic over the same wall time on two schedules: within a third, or 3 messages."""
+    """Counts of one topic over the same wall seconds on two schedules: within a third, or 3 messages.
+
+    The two runs are not one schedule replayed: on a loaded machine (the CI's 2 cores, or ours
+    with a dozen runnable processes) a node process can get a tenth of a core, so the edges of
+    its window (its ``mark``, its callbacks catching up) move by up to a second or two of the
+    8 s: that bounds a rate-driven topic's difference to about a third. A node that misses its
+    inputs, or a topic that goes silent, is far outside it.
+    """
     return abs(a - b) <= max(3, 0.34 * max(a, b))
 
 
@@ -71,15 +81,18 @@ def test_every_scene_node_runs_and_publishes_what_it_does_on_our_runtime(backend
     ours = scene_counts('ours', tmp_path_factory)['counts']
     print(json.dumps({topic: [ours.get(topic), counts.get(topic)] for topic in sorted({*ours, *counts})}))
     assert sorted(counts) == sorted(ours)
-    # What the drivers published (their own counters) agrees; of the skin's 150 Hz frames, the counting
-    # subscription and haptic_commands (which publishes /skin/contact per frame it gets) receive only a
-    # part on rclpy: twelve nodes and the counter share one rclpy executor thread here, which falls behind.
+    # What the drivers published in the window (their own counters) agrees, and so does what every topic carried.
     drivers = {name: (driver['frames'], report['drivers'][name]['frames'])
                for name, driver in scene_counts('ours', tmp_path_factory)['drivers'].items()}
     assert {name: pair for name, pair in drivers.items() if not close(*pair)} == {}, drivers
-    differ = {topic: (ours[topic], counts[topic]) for topic in counts if not close(ours[topic], counts[topic])
-              and not (topic in FALLS_BEHIND and 0 < counts[topic] < ours[topic])}
+    differ = {topic: (ours[topic], counts[topic]) for topic in counts
+              if topic not in EVENTS and not close(ours[topic], counts[topic])}
     assert differ == {}, f'(ours, rclpy) counts that differ: {differ}'
+    # Which events fall in the window depends on where it falls in the simulated devices' scripts, which
+    # start with each driver's process (seconds apart between runs, more under load): one topic's events
+    # move in or out of it. All events together say whether the recognisers and the behaviour keep up.
+    events = (sum(ours.get(topic, 0) for topic in EVENTS), sum(counts.get(topic, 0) for topic in EVENTS))
+    assert events[0] > 0 and close(*events), f'(ours, rclpy) events in the window: {events}'
 
 
 def _compat_probe(code: str, env: dict) -> subprocess.CompletedProcess:

@@ -4,7 +4,8 @@
 
 The launcher (:mod:`.processes`) starts one of these per node that runs alone. It builds the
 node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
-:class:`~.runner.LaunchRunner` of one node, on the DDS domain), spins it until SIGINT or
+:class:`~.runner.LaunchRunner` of one node, on the DDS domain; on real rclpy when
+``touch_graph.compat`` uses it, i.e. ROS 2 is sourced and ``SOCIAL_TOUCH_SHIM`` is unset), spins it until SIGINT or
 SIGTERM, and exits with 0 after a clean stop or 1 when the node cannot start (the error on
 stderr). It also dies with the launcher: Linux sends it SIGTERM when the launcher's process
 ends, however that happens (``prctl(PR_SET_PDEATHSIG)``), so no node outlives its launch.
@@ -50,7 +51,12 @@ def main(argv: list[str] | None = None) -> int:
     from .runner import LaunchRunner
     from .specs import spec_from_json
     spec = spec_from_json(argv[0])
-    runner = LaunchRunner([spec], network=True, strict_params=strict)
+    from .. import compat
+    if compat.USING_ROS:  # a sourced ROS 2 and no SOCIAL_TOUCH_SHIM: the node is an rclpy node
+        from .runner import rclpy_runtime
+        runner = LaunchRunner([spec], runtime=rclpy_runtime(), strict_params=strict)
+    else:
+        runner = LaunchRunner([spec], network=True, strict_params=strict)
     # Handlers from the first line on: the launcher may stop us while the node is still starting
     # (a SIGINT then must still end in a clean shutdown and exit code 0, not a KeyboardInterrupt).
     with StopSignals(wake=runner.request_stop):

@@ -40,6 +40,7 @@ import inspect
 import math
 import signal
 import threading
+import time
 import types
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
@@ -54,8 +55,8 @@ from ..errors import LaunchError, SocialTouchError
 from ..yamlconf import did_you_mean
 from .specs import NodeSpec
 
-__all__ = ['ENTRY_POINT_GROUP', 'SLICE_S', 'LaunchRunner', 'entry_point_registry', 'resolve_node_class',
-           'source_tree_nodes']
+__all__ = ['ENTRY_POINT_GROUP', 'SLICE_S', 'LaunchRunner', 'entry_point_registry', 'rclpy_runtime',
+           'resolve_node_class', 'source_tree_nodes']
 
 #: Entry-point group mapping executable names to node classes (``module:Class``).
 ENTRY_POINT_GROUP = 'social_touch.nodes'
@@ -137,6 +138,19 @@ def resolve_node_class(spec: NodeSpec, registry: Registry, node_base: type | Non
             raise where.error(f'cannot load {spec.pkg}/{spec.exec} ({getattr(registry[key], "value", target)}): '
                               f'{type(err).__name__}: {err}') from err
     return _check_node_class(spec, target, node_base)
+
+
+def rclpy_runtime() -> types.SimpleNamespace:
+    """What :class:`LaunchRunner` needs of a runtime, from real rclpy (when ``touch_graph.compat`` uses it).
+
+    The context is rclpy's default one, which a node with rclpy's plain ``__init__(self)`` joins.
+    """
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+    from rclpy.utilities import get_default_context
+    return types.SimpleNamespace(Context=get_default_context, SingleThreadedExecutor=SingleThreadedExecutor,
+                                 Node=Node, Parameter=Parameter, ExternalShutdownException=ExternalShutdownException)
 
 
 def _check_node_class(spec: NodeSpec, target: Any, node_base: type | None) -> type:
@@ -315,6 +329,9 @@ class LaunchRunner:
         external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())
         previous = self._install_signal_handlers() if handle_signals else {}
         try:
+            if not hasattr(self.executor, 'spin_until_time'):  # real rclpy's executor: slices of wall time
+                self._spin_wall(duration, every_slice)
+                return
             end = None if duration is None else self.context.now_ns() + round(duration * 1e9)
             while not self._stop.is_set() and self.context.ok():
                 now = self.context.now_ns()
@@ -330,6 +347,13 @@ class LaunchRunner:
         finally:
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
+
+    def _spin_wall(self, duration: float | None, every_slice: Callable[[], None] | None) -> None:
+        end = None if duration is None else time.monotonic() + duration
+        while not self._stop.is_set() and self.context.ok() and (end is None or time.monotonic() < end):
+            self.executor.spin_once(timeout_sec=SLICE_S)
+            if every_slice is not None:
+                every_slice()
 
     def _install_signal_handlers(self) -> dict[int, Any]:
         if threading.current_thread() is not threading.main_thread():
