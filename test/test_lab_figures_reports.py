@@ -94,5 +94,5 @@ def test_report_skin_writes_and_shows_its_figures(tmp_path, monkeypatch):
     monkeypatch.setattr(skin_report, 'bench_recognition', _smaller(skin_report.bench_recognition, repeats=1,
                                                                    queries=4, templates_per_gesture=3))
     out = tmp_path / 'docs' / 'skin-evaluation.md'
-    skin_report.run(argparse.Namespace(traces=str(traces), out=str(out), quick=True))
+    skin_report.run(argparse.Namespace(traces=str(traces), output=str(out), quick=True))
     assert_figures_referenced(out, {'skin-confusion.png', 'skin-speed-error.png', 'skin-traces.png'})
