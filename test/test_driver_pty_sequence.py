@@ -23,7 +23,7 @@ def test_a_replayed_frame_is_published_once() -> None:
     one = frames([4711])[0]
     _, statuses, diagnostics, published = run_skin(paced([one] * 733, RATE_HZ))
     assert published == 1 and statuses[-1].frames == 1               # 732 replays: published 0 extra times
-    assert value_of(diagnostics[-1], 'repeated_frames') == '732'
+    assert value_of(diagnostics[-1], 'repeated_frames') == '732' and statuses[-1].repeated_frames == 732
     assert (statuses[-1].frames_missed, statuses[-1].sequence_gaps) == (0, 0)
     assert any('resent with the last sequence number' in d.message and level_of(d) >= WARN for d in diagnostics)
 
@@ -32,7 +32,7 @@ def test_a_reboot_is_reported_once_and_nothing_is_lost() -> None:
     wire = frames(range(300)) + frames(range(300))                   # the sensor restarted at 0
     _, statuses, diagnostics, published = run_skin(paced(wire, RATE_HZ))
     assert published == 600
-    assert value_of(diagnostics[-1], 'sequence_resets') == '1'
+    assert value_of(diagnostics[-1], 'sequence_resets') == '1' and statuses[-1].sequence_resets == 1
     assert (statuses[-1].frames_missed, statuses[-1].sequence_gaps) == (0, 0)
     assert all(s.error_fraction == 0.0 for s in statuses)             # not "99.8 % bad or lost"
     told = [d for d in diagnostics if 'jumped back' in d.message]

@@ -76,7 +76,7 @@ _BAD_FRAME_COUNTERS = ('frames_missed', 'checksum_errors', 'decode_errors', 'len
 _DIAGNOSTIC_KEYS = ('frames', 'dropped_bytes', 'header_errors', 'version_errors', 'length_errors', 'checksum_errors',
                     'decode_errors', 'sequence_gaps', 'frames_missed', 'handle_errors', 'subscriber_drops',
                     'repeated_frames', 'sequence_resets', 'reconnects', 'error_fraction', 'rate_hz')
-#: Decoder counters /diagnostics carries beyond DriverStatus's fields.
+#: Counters of frames that are not new data (resent, or a counter that restarted): WARN in their period.
 _SEQUENCE_COUNTERS = ('repeated_frames', 'sequence_resets')
 
 
@@ -307,6 +307,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
                 'version_errors': stats.version_errors, 'length_errors': stats.length_errors,
                 'checksum_errors': stats.checksum_errors, 'decode_errors': self.driver.decoder.corrupt_frames,
                 'sequence_gaps': stats.sequence_gaps, 'frames_missed': stats.frames_missed,
+                'repeated_frames': stats.repeated_frames, 'sequence_resets': stats.sequence_resets,
                 'handle_errors': self.handle_errors, 'reconnects': self.reconnects}
 
     def status(self) -> Any:
@@ -318,10 +319,6 @@ class SerialDriverNode(Node, Generic[ScanT]):
         return DriverStatus(header=self.header(), port=self.port, connected=self.driver.is_open, **counts,
                             error_fraction=fraction, rate_hz=published / self._status_period,
                             last_error=self.last_error)
-
-    def _sequence_counts(self) -> dict[str, int]:
-        """Repeated frames and sequence resets since the driver started."""
-        return {key: getattr(self.driver.stats, key) for key in _SEQUENCE_COUNTERS}
 
     def _level(self, status: Any, new: dict[str, int] | None = None) -> tuple[int, str]:
         """Diagnostic level and message of one status (thresholds are parameters); ``new`` holds the
@@ -370,7 +367,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
         return sum(dropped_by_topic(self).values())
 
     def _publish_status(self) -> None:
-        sequence = self._sequence_counts()
+        sequence = {key: getattr(self.driver.stats, key) for key in _SEQUENCE_COUNTERS}
         new = {key: sequence[key] - self._sequence_at_status[key] for key in _SEQUENCE_COUNTERS}
         self._sequence_at_status = sequence
         if new['sequence_resets']:
@@ -383,7 +380,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self._bad_at_status = sum(counts[key] for key in _BAD_FRAME_COUNTERS)
         self.status_pub.publish(status)
         level, text = self._level(status, new)
-        extra = {'subscriber_drops': self.subscriber_drops(), **sequence}
+        extra = {'subscriber_drops': self.subscriber_drops()}
         values = [KeyValue(key=key, value=str(extra[key] if key in extra else getattr(status, key)))
                   for key in _DIAGNOSTIC_KEYS]
         self.diagnostics_pub.publish(DiagnosticArray(header=status.header, status=[DiagnosticStatus(
