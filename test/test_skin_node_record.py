@@ -54,6 +54,7 @@ def test_simulate_writes_a_loadable_synthetic_codebook_the_same_every_time(tmp_p
     assert list(model.classes_) == ['line_left', 'line_right', 'one'] and model.name == 'trace'
     assert np.bincount(model.template_labels_).tolist() == [3, 3, 3]
     assert model.description_.startswith('SYNTHETIC: 2 simulated performers')
+    assert sorted(set(model.template_people_)) == ['synthetic0', 'synthetic1']   # who drew each template
     assert f'wrote {out}: 9 templates of 3 gestures (trace)' in capsys.readouterr().err
     again = tmp_path / 'again.npz'
     assert record_cli.run(parse(*argv[:-1], str(again))) == 0
@@ -280,7 +281,8 @@ RIGHT, LEFT = ((6, 23), (41, 23)), ((41, 25), (6, 24))
 def test_live_recording_with_an_undo_writes_the_codebook(tmp_path, dds_domain):
     out = tmp_path / 'live.npz'
     live = LiveGraph(strokes(RIGHT, RIGHT, RIGHT, LEFT, LEFT),
-                     ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out)], dds_domain)
+                     ['--gestures', 'line_right,line_left', '-m', '2', '-o', str(out), '--person', 'ana'],
+                     dds_domain)
     try:
         live.wait_for("trace 'line_right' (1/2)")
         live.start_driver()
@@ -298,6 +300,7 @@ def test_live_recording_with_an_undo_writes_the_codebook(tmp_path, dds_domain):
     model = load_codebook(out)
     assert list(model.classes_) == ['line_left', 'line_right'] and len(model.templates_) == 4
     assert model.description_.startswith('recorded on the skin (/skin/frame)')
+    assert list(model.template_people_) == ['ana'] * 4
 
 
 def test_live_recording_stopped_by_ctrl_c_saves_what_was_recorded(tmp_path, dds_domain):

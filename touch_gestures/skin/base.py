@@ -123,27 +123,32 @@ class TemplateRecogniser(BaseEstimator):
         """Precompute per-template quantities after ``templates_`` is set (norms, ...)."""
 
     # ----------------------------------------------------------------- estimator API
-    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> TemplateRecogniser:
+    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any],
+            people: Sequence[str] | None = None) -> TemplateRecogniser:
         """Build the codebook: one template per usable gesture.
 
         Args:
             gestures: the recorded repetitions (n gestures x m repetitions, any order).
             labels: the gesture name of each, same length.
+            people: who drew each, same length (kept as ``template_people_``, so a codebook can be
+                judged leave-one-person-out); None: not known.
 
         Raises:
             ValueError: lengths differ, no usable gesture, or bad rejection parameters.
         """
         self._check_params()
-        if len(gestures) != len(labels):
-            raise ValueError(f'fit needs one label per gesture; got {len(gestures)} gestures, {len(labels)} labels')
-        feats, names, strokes, contacts, paths, dropped = [], [], [], [], [], 0
-        for gesture, label in zip(gestures, labels, strict=True):
+        if len(gestures) != len(labels) or (people is not None and len(people) != len(labels)):
+            raise ValueError(f'fit needs one label (and person, if given) per gesture; got {len(gestures)} gestures, '
+                             f'{len(labels)} labels{"" if people is None else f", {len(people)} people"}')
+        feats, names, who, strokes, contacts, paths, dropped = [], [], [], [], [], [], 0
+        for i, (gesture, label) in enumerate(zip(gestures, labels, strict=True)):
             f = self.features(gesture)
             if f is None:
                 dropped += 1
                 continue
             feats.append(f)
             names.append(str(label))
+            who.append('' if people is None else str(people[i]))
             strokes.append(int(getattr(gesture, 'strokes', 1)))
             contacts.append(float(getattr(gesture, 'contact_s', np.nan)))
             if not self.direction_aware:
@@ -153,7 +158,8 @@ class TemplateRecogniser(BaseEstimator):
             raise ValueError(f'none of the {len(gestures)} gestures gives a usable template (empty maps or '
                              'trajectories?); record the codebook again')
         self.set_codebook(np.stack(feats), names, template_strokes=strokes, template_contact_s=contacts,
-                          template_paths=np.stack(paths) if paths else None)
+                          template_paths=np.stack(paths) if paths else None,
+                          template_people=None if people is None else who)
         self.n_dropped_ = dropped
         # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
         self.max_strokes_ = max(int(getattr(g, 'strokes', 1)) for g in gestures)
@@ -162,14 +168,16 @@ class TemplateRecogniser(BaseEstimator):
     def set_codebook(self, templates: np.ndarray, labels: Sequence[str],
                      class_thresholds: np.ndarray | None = None, template_strokes: Sequence[int] | None = None,
                      template_contact_s: Sequence[float] | None = None,
-                     template_paths: np.ndarray | None = None) -> None:
+                     template_paths: np.ndarray | None = None,
+                     template_people: Sequence[str] | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
         ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
         ``template_strokes`` (T,) and ``template_contact_s`` (T,) s give each template's strokes and
         time in contact (``template_strokes_``, ``template_contact_s_``, else None; :mod:`.evidence`);
         ``template_paths`` (T, n, 2), NaN for templates of several strokes, each template's path
         (:func:`~.order_evidence.one_stroke_path`; ``template_paths_`` and ``order_evidence_`` for an
-        order-free recogniser with distance limits, else None: no order check)."""
+        order-free recogniser with distance limits, else None: no order check); ``template_people``
+        (T,), who drew each template ('' unknown: ``template_people_``, else None)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -199,6 +207,13 @@ class TemplateRecogniser(BaseEstimator):
                 raise ValueError(f'template_contact_s must give each of the {len(labels)} templates a time; '
                                  f'got {contacts.shape}')
             self.template_contact_s_ = contacts[order]
+        self.template_people_ = None
+        if template_people is not None:
+            people = np.asarray([str(p) for p in template_people])
+            if people.shape != labels.shape:
+                raise ValueError(f'template_people must name who drew each of the {len(labels)} templates; '
+                                 f'got {people.shape}')
+            self.template_people_ = people[order]
         self.codebook_evidence_ = CodebookEvidence(self.template_labels_, len(classes), self.template_strokes_,
                                           self.template_contact_s_)
         self.template_paths_ = self.order_evidence_ = None

@@ -22,6 +22,8 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
                                               the pauses, which is not read: no duration check for them)
     template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for the others
                                               (an order-free recogniser's rejection, :mod:`.order_evidence`)
+    template_people     (T,)        str       optional: who drew each template ('' not known), so a
+                                              codebook is judged leave-one-person-out
 
 A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
 ``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
@@ -113,7 +115,9 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
         **({} if getattr(recogniser, 'template_contact_s_', None) is None
            else {'template_contact_s': np.asarray(recogniser.template_contact_s_, dtype=np.float64)}),
         **({} if getattr(recogniser, 'template_paths_', None) is None
-           else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}))
+           else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}),
+        **({} if getattr(recogniser, 'template_people_', None) is None
+           else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}))
     return path
 
 
@@ -185,7 +189,8 @@ def load_codebook(path: str | Path, recogniser: str | None = None,
         model.set_codebook(templates, classes[codes], class_thresholds=thresholds,
                            template_strokes=data.get('template_strokes'),
                            template_contact_s=data.get('template_contact_s'),
-                           template_paths=data.get('template_paths'))
+                           template_paths=data.get('template_paths'),
+                           template_people=data.get('template_people'))
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None
@@ -216,6 +221,8 @@ class CodebookRecorder:
     two fingers, a touch that never ended, too few points or smaller than ``min_extent_mm``
     (:func:`~.screening.screen_gesture`, the same rule as the skin node's). :meth:`undo` drops
     the last kept repetition, :meth:`skip` leaves the current gesture out of the codebook.
+    ``person`` names who traces now (set it when another person takes over): ``people`` keeps it
+    for each repetition, and the codebook keeps it for each template ('' when not known).
 
     >>> rec = CodebookRecorder(['line_right'], repetitions=1)
     >>> rec.current
@@ -233,6 +240,8 @@ class CodebookRecorder:
     labels: list[str] = field(default_factory=list)
     min_extent_mm: float = MIN_EXTENT_MM
     skipped: list[str] = field(default_factory=list)
+    person: str = ''
+    people: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.gestures = list(self.gestures)
@@ -244,9 +253,12 @@ class CodebookRecorder:
             raise ValueError(f'need min_extent_mm >= 0 (mm) and min_points >= 1; got {self.min_extent_mm}, '
                              f'{self.min_points}')
         unknown = sorted({*self.labels, *self.skipped} - set(self.gestures))
-        if unknown or len(self.labels) != len(self.samples):
-            raise ValueError(f'samples and labels must pair up, with labels and skipped among the gestures; got '
-                             f'{len(self.samples)} samples, {len(self.labels)} labels, unknown names {unknown}')
+        if not self.people:
+            self.people = [''] * len(self.labels)     # a recording of before people were kept
+        if unknown or not (len(self.labels) == len(self.samples) == len(self.people)):
+            raise ValueError(f'samples, labels and people must pair up, with labels and skipped among the gestures; '
+                             f'got {len(self.samples)} samples, {len(self.labels)} labels, {len(self.people)} people, '
+                             f'unknown names {unknown}')
 
     def count(self, name: str) -> int:
         """Repetitions of ``name`` kept so far."""
@@ -281,6 +293,7 @@ class CodebookRecorder:
                            f'least {self.min_extent_mm:.0f} mm of the skin')
         self.samples.append(gesture)
         self.labels.append(name)
+        self.people.append(self.person)
         return True, f'{name} {self.count(name)}/{self.repetitions}'
 
     def undo(self) -> str | None:
@@ -288,6 +301,7 @@ class CodebookRecorder:
         if not self.samples:
             return None
         self.samples.pop()
+        self.people.pop()
         return self.labels.pop()
 
     def skip(self) -> str | None:
@@ -299,13 +313,15 @@ class CodebookRecorder:
         keep = [i for i, label in enumerate(self.labels) if label != name]
         self.samples = [self.samples[i] for i in keep]
         self.labels = [self.labels[i] for i in keep]
+        self.people = [self.people[i] for i in keep]
         return name
 
     def fit(self, recogniser: TemplateRecogniser) -> TemplateRecogniser:
-        """Fit ``recogniser`` on what was collected (every gesture not skipped needs at least one sample)."""
+        """Fit ``recogniser`` on what was collected (every gesture not skipped needs at least one sample),
+        with who drew each repetition."""
         missing = [g for g in self.gestures if g not in self.labels and g not in self.skipped]
         if missing:
             raise ValueError(f'no repetition recorded yet for: {", ".join(missing)}')
         if not self.samples:
             raise ValueError('nothing was recorded: every gesture was skipped')
-        return recogniser.fit(self.samples, self.labels)
+        return recogniser.fit(self.samples, self.labels, people=self.people)

@@ -195,7 +195,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
         for name, make in factories.items():
             res = results[name]
             start = time.perf_counter()
-            recogniser = make().fit(gestures, names)
+            recogniser = make().fit(gestures, names, [r.subject for r in codebook])
             sizes[name].append(len(recogniser.templates_))
             if hasattr(recogniser, 'choice_'):
                 res.choices[recogniser.choice_] = res.choices.get(recogniser.choice_, 0) + 1

@@ -84,6 +84,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gap', type=float, metavar='S',
                         help='lift (s) that ends a gesture, while recording and in the file (default 0.15 s, gestures '
                         'of one stroke; about 1 s for symbols of several strokes)')
+    parser.add_argument('--person', default='', metavar='NAME',
+                        help='who traces (kept with each template, so the lab can choose the recogniser '
+                        'leave-one-person-out; record each person with their own name, resuming the same file)')
     parser.add_argument('--simulate', type=int, metavar='PERFORMERS',
                         help='record synthetic performers on a virtual skin instead of the live skin')
     parser.add_argument('--seed', type=int, default=0, help='with --simulate: performers and sensor noise')
@@ -166,6 +169,7 @@ def record_simulated(gestures: Sequence[str], repetitions: int, performers: int,
         if len(gestures_of_trace) != 1:
             counts['split'] += 1
             continue
+        rec.person = event.person
         kept, line = rec.add(gestures_of_trace[0])
         counts['kept' if kept else 'refused'] += 1
         if not kept:
@@ -308,6 +312,7 @@ def run(args: argparse.Namespace) -> int:
                  f'{", ".join(recorder.gestures)} kept ({recorder.repetitions} each wanted)')
         else:
             recorder = CodebookRecorder(_gesture_names(args), repetitions=args.repetitions)
+        recorder.person = args.person.strip()
         if args.simulate is not None:
             recorder, counts = record_simulated(recorder.gestures, recorder.repetitions, args.simulate, args.seed,
                                                 recorder=recorder)
@@ -337,7 +342,8 @@ def run(args: argparse.Namespace) -> int:
         people = f'{args.simulate} simulated performers (seed {args.seed})' if args.simulate is not None else None
         attach_card(path, make_card('skin_codebook', data={
             'synthetic': args.simulate is not None, 'source': description, 'recogniser': args.recogniser,
-            **({'people': args.simulate} if args.simulate is not None else {}),
+            **({'people': args.simulate} if args.simulate is not None
+               else {'people': len(set(recorder.people) - {''})} if any(recorder.people) else {}),
             'trials_per_class': dict(sorted(Counter(recorder.labels).items())), 'templates': len(model.templates_)},
             notes=f'people: {people}' if people else ''))
     except (SocialTouchError, ValueError) as err:

@@ -13,6 +13,7 @@ is an ``.npz`` read with ``allow_pickle=False``::
     min_extent_mm   ()          float64   the recorder's size rule
     skipped         (k,)        str       gestures left out
     labels          (G,)        str       gesture of each kept repetition, in recording order
+    people          (G,)        str       who traced each ('' not known; optional: older files lack it)
     lengths         (G,)        int64     trajectory points of each
     trajectory      (sum, 2)    float32   contact points, mm, all gestures one after the other
     times, stroke   (sum,)      float64 s, int16
@@ -49,6 +50,7 @@ def save_recording(path: str | Path, recorder: CodebookRecorder) -> Path:
         'gestures': np.array(recorder.gestures, dtype=str), 'repetitions': np.array(recorder.repetitions),
         'min_extent_mm': np.array(float(recorder.min_extent_mm)),
         'skipped': np.array(recorder.skipped, dtype=str).reshape(-1), 'labels': np.array(recorder.labels, dtype=str),
+        'people': np.array(recorder.people, dtype=str).reshape(-1),
         'lengths': np.array([len(x.trajectory) for x in g], dtype=np.int64),
         'trajectory': np.concatenate([x.trajectory for x in g] or [np.zeros((0, 2), np.float32)]),
         'times': np.concatenate([x.times for x in g] or [np.zeros(0)]),
@@ -101,6 +103,7 @@ def load_recording(path: str | Path) -> CodebookRecorder:
                 **{k: (t(d[k][i]).item() if t is not bool else bool(d[k][i])) for k, t in _SCALARS.items()}))
         return CodebookRecorder([str(x) for x in d['gestures']], repetitions=int(d['repetitions']),
                                 samples=samples, labels=[str(x) for x in d['labels']],
+                                people=[str(x) for x in d.get('people', [''] * n)],
                                 min_extent_mm=float(d['min_extent_mm']), skipped=[str(x) for x in d['skipped']])
     except (KeyError, ValueError) as err:
         raise CodebookError(f'a damaged recording: {err}', where) from err

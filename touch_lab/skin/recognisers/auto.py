@@ -6,7 +6,18 @@ order and direction (an X, an H, a star: leave-one-person-out on the Mixed Multi
 Gestures it is right where the time-ordered trace is not, docs/skin-evaluation.md); a
 direction-aware trace (:class:`~touch_gestures.skin.proposed.TraceRecogniser`) is needed where the direction is
 the meaning (the skin's ``line_left`` and ``line_right`` are one cloud). Which one a
-vocabulary needs follows from its codebook, so the rule is measured there, not fixed per file:
+vocabulary needs follows from its codebook, so the rule is measured there, not fixed per file.
+
+**When the codebook says who drew each template** (two people or more: ``social-touch codebook record
+--person``, or a trace file's subjects), the choice is made the way the codebook will be used, on
+people it has not seen: leave one person out, the others' templates recognise that person's gestures
+(rejection as configured), for each candidate in turn. The candidate with the higher mean per-class
+accuracy is kept; within ``tie`` of each other, the one with fewer wrong commands, then the ordered
+one (it is cheaper). Direction needs no rule of its own there: a vocabulary whose meaning is the
+direction costs the order-free recogniser its accuracy on held-out people too.
+
+**Otherwise** (people not known, or one person), the rule below reads templates' nearest neighbours,
+which are mostly the same person's repetitions:
 
     **the rule**: both recognise every template of the codebook from the others (leave one
     template out, nearest neighbour, at most ``per_class`` templates per class), giving
@@ -39,7 +50,7 @@ The measurement uses the codebook alone, so it holds for any vocabulary and any 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -50,7 +61,7 @@ from touch_gestures.skin.registry import DEFAULT_RECOGNISER, MULTISTROKE_RECOGNI
 
 from .registry import CANDIDATES
 
-__all__ = ['AutoRecogniser', 'codebook_accuracy']
+__all__ = ['AutoRecogniser', 'codebook_accuracy', 'person_out_accuracy']
 
 
 def codebook_accuracy(recogniser: TemplateRecogniser, per_class: int = 20) -> np.ndarray:
@@ -74,6 +85,45 @@ def codebook_accuracy(recogniser: TemplateRecogniser, per_class: int = 20) -> np
     return out
 
 
+def person_out_accuracy(make: Callable[[], TemplateRecogniser], gestures: Sequence[TouchGesture],
+                        labels: Sequence[Any], people: Sequence[str]) -> tuple[np.ndarray, np.ndarray, float]:
+    """Leave-one-person-out: each person's gestures recognised by a codebook of everyone else's.
+
+    Args:
+        make: a new, unfitted recogniser (with its rejection).
+        gestures, labels, people: the codebook's gestures, their names and who drew each.
+
+    Returns:
+        classes (n,) sorted; per-class accuracy (n,), right answers over the class's held-out gestures (NaN
+        for a class only one person drew: nothing to hold out); wrong commands (accepted and not the
+        gesture drawn) over all held-out gestures.
+    """
+    labels = np.asarray([str(x) for x in labels])
+    people = np.asarray([str(p) for p in people])
+    classes = np.unique(labels)
+    right = np.zeros(len(classes))
+    tried = np.zeros(len(classes))
+    wrong = 0
+    for person in np.unique(people):
+        held = people == person
+        others = ~held
+        known = set(labels[others])
+        if not others.any():
+            continue
+        model = make().fit([g for g, o in zip(gestures, others, strict=True) if o], labels[others])
+        for gesture, label in zip((g for g, h in zip(gestures, held, strict=True) if h), labels[held], strict=True):
+            if label not in known:
+                continue                            # only this person drew it
+            c = int(np.searchsorted(classes, label))
+            answer = model.predict(gesture).label
+            tried[c] += 1
+            right[c] += answer == label
+            wrong += answer is not None and answer != label
+    with np.errstate(invalid='ignore', divide='ignore'):
+        accuracy = np.where(tried > 0, right / np.maximum(tried, 1), np.nan)
+    return classes, accuracy, wrong / max(tried.sum(), 1.0)
+
+
 class AutoRecogniser(TemplateRecogniser):
     """Fits the ordered and the order-free recogniser and keeps the one the rule picks (module doc).
 
@@ -87,7 +137,9 @@ class AutoRecogniser(TemplateRecogniser):
 
     Attributes (after fit):
         chosen_: the fitted recogniser in use; ``choice_`` its name; ``reason_``: which rule
-        decided; ``evidence_``: per candidate the per-class codebook accuracies (class -> accuracy).
+        decided; ``method_``: ``'leave-one-person-out'`` or ``'leave-one-template-out'``;
+        ``evidence_``: per candidate the per-class accuracies (class -> accuracy) the method measured,
+        and ``wrong_``: per candidate its wrong commands on held-out people (leave-one-person-out only).
     """
 
     name = 'auto'
@@ -108,11 +160,35 @@ class AutoRecogniser(TemplateRecogniser):
         self.auto_quantile = auto_quantile
         self.min_margin = min_margin
 
-    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any]) -> AutoRecogniser:
+    def fit(self, gestures: Sequence[TouchGesture], labels: Sequence[Any],
+            people: Sequence[str] | None = None) -> AutoRecogniser:
+        """Fit both candidates and keep one (module doc); ``people``: who drew each gesture, '' not known."""
         self._check_params()
         rejection = {k: getattr(self, k) for k in ('max_distance', 'auto_scale', 'auto_quantile', 'min_margin')}
-        ordered = recogniser_from(CANDIDATES, self.ordered, rejection).fit(gestures, labels)
-        free = recogniser_from(CANDIDATES, self.order_free, rejection).fit(gestures, labels)
+        makers = {name: (lambda name=name: recogniser_from(CANDIDATES, name, rejection))
+                  for name in (self.ordered, self.order_free)}
+        ordered = makers[self.ordered]().fit(gestures, labels, people)
+        free = makers[self.order_free]().fit(gestures, labels, people)
+        known = [] if people is None else [str(p) for p in people]
+        self.wrong_ = {}
+        if len({p for p in known if p}) >= 2 and all(known):
+            self.method_ = 'leave-one-person-out'
+            measured = {name: person_out_accuracy(make, gestures, labels, known) for name, make in makers.items()}
+            self.evidence_ = {name: dict(zip(m[0].tolist(), m[1].tolist(), strict=True))
+                              for name, m in measured.items()}
+            self.wrong_ = {name: m[2] for name, m in measured.items()}
+            mean = {name: float(np.nanmean(m[1])) if np.isfinite(m[1]).any() else 0.0
+                    for name, m in measured.items()}
+            o, f = self.ordered, self.order_free
+            if mean[f] > mean[o] + self.tie or (mean[f] >= mean[o] - self.tie and self.wrong_[f] < self.wrong_[o]):
+                best = free
+            else:
+                best = ordered
+            reason = (f'leave-one-person-out over {len(set(known))} people: {o} {mean[o]:.3f} right, '
+                      f'{self.wrong_[o]:.3f} wrong; {f} {mean[f]:.3f} right, {self.wrong_[f]:.3f} wrong')
+            self._keep(best, reason)
+            return self
+        self.method_ = 'leave-one-template-out'
         acc_o, acc_f = codebook_accuracy(ordered, self.per_class), codebook_accuracy(free, self.per_class)
         with np.errstate(invalid='ignore'):
             confused = (acc_f < self.confused) & (acc_o >= acc_f + self.separated)
@@ -125,15 +201,20 @@ class AutoRecogniser(TemplateRecogniser):
             mean_f = float(np.nanmean(acc_f)) if np.isfinite(acc_f).any() else 0.0
             best = free if mean_f > mean_o + self.tie else ordered
             reason = 'single-stroke vocabulary, codebook accuracy'
-        self.chosen_, self.choice_, self.reason_ = best, best.name, reason
         self.evidence_ = {m.name: dict(zip(map(str, m.classes_), acc.tolist(), strict=True))
                           for m, acc in ((ordered, acc_o), (free, acc_f))}
+        self._keep(best, reason)
+        return self
+
+    def _keep(self, best: TemplateRecogniser, reason: str) -> None:
+        """Use ``best``: its codebook becomes this recogniser's."""
+        self.chosen_, self.choice_, self.reason_ = best, best.name, reason
         for attr in ('classes_', 'templates_', 'template_labels_', 'class_starts_', 'n_features_in_',
                      'class_thresholds_', 'n_dropped_', 'max_strokes_', 'template_strokes_',
-                     'template_contact_s_', 'codebook_evidence_', 'template_paths_', 'order_evidence_'):
+                     'template_contact_s_', 'codebook_evidence_', 'template_paths_', 'order_evidence_',
+                     'template_people_'):
             setattr(self, attr, getattr(best, attr))
         self.direction_aware = best.direction_aware
-        return self
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         return self.chosen_.features(gesture)
