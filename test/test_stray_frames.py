@@ -150,7 +150,8 @@ def test_a_real_process_flooding_the_skin_frames_blinds_nothing(dds_domain):
     assert result['ok']
 
 
-def test_the_flood_under_the_drivers_frame_id_is_a_handled_case(dds_domain):
+def test_the_flood_under_the_drivers_frame_id_is_a_handled_case():
+    """The report's case: it takes a domain of its own (the suite's lock files), stray frames under 'skin_link'."""
     [(area, case, fn)] = [c for c in stray_cases() if "as 'skin_link'" in c[1]]
     outcome = run_case(area, case, fn)
     assert outcome.result == HANDLED and 'stamp_back' in outcome.detail, outcome.detail

@@ -20,12 +20,16 @@ decides how many stray frames arrive, which the case reports but does not requir
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
+import random
 import subprocess
 import sys
 import textwrap
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 __all__ = ['STRAY_PUBLISHER', 'skin_flood', 'stray_cases']
@@ -271,15 +275,42 @@ def _skin_nothing_usable() -> Any:
         ctx.try_shutdown()
 
 
-def _flood_case(frame_id: str) -> Callable[[], Any]:
-    """:func:`skin_flood` on a domain of its own: ``ROS_DOMAIN_ID`` when set (a test's), else one from the pid."""
-    def run() -> Any:
-        keys = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')
-        saved = {k: os.environ.get(k) for k in keys}
-        os.environ.setdefault('ROS_DOMAIN_ID', str(190 + os.getpid() % 40))
-        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+#: Domain ids the test suite takes, each held by an flock in LOCK_DIR (test/dds_testing.py): the flood takes one
+#: the same way, so it never floods a domain a test, or a robot on the default domain, is using.
+TEST_DOMAINS = range(100, 233)
+LOCK_DIR = Path('/tmp/social_touch_test_domains')
+
+
+@contextlib.contextmanager
+def _domain_of_its_own() -> Iterator[int]:
+    LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
+    for domain in random.sample(TEST_DOMAINS, len(TEST_DOMAINS)):
+        fd = os.open(LOCK_DIR / f'{domain}.lock', os.O_CREAT | os.O_RDWR, 0o600)
         try:
-            r = skin_flood(frame_id=frame_id)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            continue
+        try:
+            yield domain
+        finally:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+            os.close(fd)
+        return
+    raise RuntimeError(f'every domain id in {TEST_DOMAINS} is held by another process: no domain to flood')
+
+
+def _flood_case(frame_id: str) -> Callable[[], Any]:
+    """:func:`skin_flood` on a domain of its own (LOCALHOST discovery), whatever ``ROS_DOMAIN_ID`` says."""
+    def run() -> Any:
+        keys = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'CYCLONEDDS_URI')
+        saved = {k: os.environ.get(k) for k in keys}
+        try:
+            with _domain_of_its_own() as domain:
+                os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+                os.environ.pop('ROS_STATIC_PEERS', None)
+                os.environ.pop('CYCLONEDDS_URI', None)
+                r = skin_flood(frame_id=frame_id)
         finally:
             for k, v in saved.items():
                 if v is None:
