@@ -12,7 +12,11 @@ Faulty channels (``faults != 0``) and channels the frame says are unfitted read 
 frame with NaN levels or levels outside [0, 1], wrong array sizes or a stamp not after the previous one is counted in
 :attr:`BearGesturesNode.skipped` and skipped. When time jumps back (a looped bag) or no frame
 arrives for ``max_gap_s``, the node ends what is under way (END for started gestures, 'none' for
-sensors with a subtype) and starts afresh.
+sensors with a subtype) and starts afresh. Frames of another publisher on ``frame`` (another
+frame_id, stamped before the frame in use, a sequence out of step) are screened out first and
+reported on ``/diagnostics`` (:class:`~touch_graph.frame_screen.FrameScreen`,
+:attr:`BearGesturesNode.screen`): one stale frame ends nothing; a looped bag is followed, and
+time jumps back, after three frames of its own.
 
 "Model only what a scene needs": with ``publish_symbolic: false`` the gesture file is not read and
 no symbolic work is done; with ``publish_subtypes: false`` as well, or when no configured gesture

@@ -30,6 +30,12 @@ Bad input never stops the node: frames whose activation does not have the model'
 cols`` cells are counted in :attr:`PatchGesturesNode.skipped` and skipped; NaN or infinite
 cells are read as 0 (no contact), as the features do, and counted in ``nonfinite_cells``;
 a stamp earlier than the previous frame's (a looped bag, a restarted driver) starts afresh.
+Frames of another publisher on ``frame`` (another frame_id, stamped before the frame in use, a
+sequence out of step) are screened out first and reported on ``/diagnostics``
+(:class:`~touch_graph.frame_screen.FrameScreen`, :attr:`PatchGesturesNode.screen`); a looped bag
+or restarted driver is followed after three frames of its own. ``threshold`` and ``dwell_s`` carry
+descriptor ranges (:attr:`PatchGesturesNode.SAFETY_RANGES`); every change after start is logged at
+WARN and counted (:class:`~touch_graph.node_health.NodeHealth`).
 """
 
 from __future__ import annotations
