@@ -169,8 +169,11 @@ def test_time_going_back_ends_what_is_under_way_and_starts_afresh(graph) -> None
     g.update(frame(i, dict.fromkeys(hug, 1.0)) for i in range(12))
     assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START)]
     before = len(g.got['subtype'])
-    g.update([frame(3)])                                            # a looped bag: time jumps back 2.6 s
+    g.update([frame(3)])                                            # one stale frame: screened out, nothing ends
+    assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START)] and g.node.screen.screened == {'stamp_back': 1}
+    g.update([frame(4), frame(5)])                                  # a looped bag: time jumps back 2.6 s and goes on
     assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START), ('hug', END)]
+    assert g.node.screen.source_changes == 1 and not g.node.screen.screened
     end = g.got['symbolic'][-1]
     assert end.header.stamp == frame(11).header.stamp and end.duration_s == pytest.approx(11 / RATE, abs=1e-5)
     released = g.got['subtype'][before:]

@@ -227,8 +227,9 @@ def test_rejection_parameters_default_to_the_codebook_and_recompute_its_threshol
     tolerance = 2 * stored.auto_scale * float32_distance_disagreement(stored)
     disagreement = np.abs(wider.node.recogniser.class_thresholds_ - 2 * stored.class_thresholds_)
     assert (disagreement <= tolerance).all(), (disagreement, tolerance)
-    none = harness(max_distance=float('inf'))
-    assert np.isinf(none.node.recogniser.class_thresholds_).all()
+    for off in (float('inf'), 1e6):   # no rejection at all: refused, naming the bound
+        with pytest.raises(ParameterError, match=r'max_distance out of range Min: -1.0, Max: 0\.\d+, value'):
+            harness(max_distance=off)
 
 
 def test_the_shipped_codebook_knows_every_command_and_says_it_is_synthetic():
@@ -251,9 +252,12 @@ def small_codebook(tmp_path, recogniser='trace'):
                                    'relative paths start at']),
     ({'recogniser': 'centroid'}, ["made for recogniser 'trace', not 'centroid'"]),
     ({'max_duration_s': -1.0}, ['segmentation parameters of /skin/haptic_commands', 'max_duration_s must be > 0']),
-    ({'max_distance': -2.0}, ["parameter 'max_distance'", '-1 (per-class, from the codebook)']),
-    ({'auto_quantile': 1.5}, ['rejection parameters', 'auto_quantile must be in [0, 1]']),
-    ({'min_extent_mm': -1.0}, ["parameter 'min_extent_mm'", 'a size >= 0 mm']),
+    ({'max_distance': -0.5}, ["parameter 'max_distance'", '-1 (per-class, from the codebook)']),
+    ({'max_distance': -2.0}, ['Parameter max_distance out of range Min: -1.0']),
+    ({'auto_quantile': 1.5}, ["parameter 'auto_quantile' of /skin/haptic_commands must be in [0.5, 1.0]"]),
+    ({'min_margin': 0.0}, ['Parameter min_margin out of range Min: 0.02, Max: 2.0, value: 0.0']),
+    ({'min_extent_mm': -1.0}, ["parameter 'min_extent_mm' of /skin/haptic_commands must be in [0.0, 47.0]"]),
+    ({'collision_force_n': float('inf')}, ['Parameter collision_force_n out of range']),
     ({'max_gap_s': 0.0}, ['max_gap_s must be a positive number']),
 ])
 def test_parameter_errors_say_what_and_how(params, fragments):

@@ -7,6 +7,16 @@ callback raised in the period, WARN when a subscription dropped messages (and a 
 through :class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise. A node with a
 ``health_counters()`` method (name -> int) adds its own counters to the status's values, so what
 became of its inputs is visible where the monitors look (rqt_robot_monitor, `topic echo /diagnostics`).
+
+Two more things a node's health covers, for a graph other processes can reach (docs/network.md):
+
+- its input screens (:meth:`NodeHealth.screen`, a :class:`~touch_graph.frame_screen.FrameScreen` per
+  input topic): WARN naming the causes and counts when frames were screened out or unusable, ERROR
+  when nothing usable arrived in the period;
+- every change of a parameter after it was declared (a ``param set`` through the parameter services,
+  from any process in the domain) is logged at WARN with the old and new value and counted
+  (``parameter_changes``, ``last_parameter_change``); the period in which one happened is WARN. It is
+  seen through rclpy's ``add_post_set_parameters_callback``, so it holds on both runtimes.
 """
 
 from __future__ import annotations
@@ -14,11 +24,13 @@ from __future__ import annotations
 from typing import Any
 
 from .compat import USING_ROS, get_message
+from .frame_screen import FrameScreen
 from .subscriber_drops import DropReporter, dropped_by_topic
 
 __all__ = ['NodeHealth']
 
 _OK, _WARN, _ERROR = 0, 1, 2
+_UNSET = object()
 
 
 class NodeHealth:
@@ -29,25 +41,64 @@ class NodeHealth:
         self.drops = DropReporter(node, period_s)
         self._errors_seen = 0
         self._drops_seen = 0
+        self.screens: list[FrameScreen] = []
+        self.parameter_changes = 0
+        self.last_parameter_change = ''
+        self._changes_seen = 0
+        self._values = {name: p.value for name, p in node.get_parameters_by_prefix('').items()}
+        node.add_post_set_parameters_callback(self._on_parameters_set)
         self._pub = node.create_publisher(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics', 10)
         node.create_timer(period_s, self.publish)
 
-    def status(self) -> tuple[int, str, dict[str, int]]:
+    def screen(self, topic: str, **kwargs: Any) -> FrameScreen:
+        """A :class:`~touch_graph.frame_screen.FrameScreen` for ``topic`` whose findings this health reports."""
+        screen = FrameScreen(topic, logger=self.node.get_logger(), **kwargs)
+        self.screens.append(screen)
+        return screen
+
+    def _on_parameters_set(self, params: list[Any]) -> None:
+        """Log and count every change of a declared parameter (a declaration is no change)."""
+        for param in params:
+            old = self._values.get(param.name, _UNSET)
+            self._values[param.name] = param.value
+            if old is _UNSET or old == param.value:
+                continue
+            self.parameter_changes += 1
+            self.last_parameter_change = f'{param.name}: {old!r} -> {param.value!r}'
+            self.node.get_logger().warning(
+                f'parameter {param.name} changed: {old!r} -> {param.value!r} (set from outside the node; '
+                f'{self.parameter_changes} changes since start)')
+
+    def status(self) -> tuple[int, str, dict[str, Any]]:
         """(level, message, counters) for the period since the last call."""
         errors = int(getattr(self.node, 'callback_errors', 0))
         drops = sum(dropped_by_topic(self.node).values())
         new_errors, new_drops = errors - self._errors_seen, drops - self._drops_seen
         self._errors_seen, self._drops_seen = errors, drops
-        counters = {'callback_errors': errors, 'subscriber_drops': drops}
+        counters: dict[str, Any] = {'callback_errors': errors, 'subscriber_drops': drops}
         own = getattr(self.node, 'health_counters', None)
         if own is not None:
             counters.update({str(k): int(v) for k, v in own().items()})
+        for screen in self.screens:
+            counters.update(screen.counters())
+        counters['parameter_changes'] = self.parameter_changes
+        if self.last_parameter_change:
+            counters['last_parameter_change'] = self.last_parameter_change
+        findings: list[tuple[int, str]] = []
         if new_errors:
             last = getattr(self.node, 'last_callback_error', '') or 'see the node log'
-            return _ERROR, f'{new_errors} callbacks raised in the last period: {last}', counters
+            findings.append((_ERROR, f'{new_errors} callbacks raised in the last period: {last}'))
+        findings += [found for found in (s.status() for s in self.screens) if found is not None]
         if new_drops:
-            return _WARN, f'{new_drops} messages dropped by full subscription queues (the node falls behind)', counters
-        return _OK, 'running', counters
+            findings.append((_WARN, f'{new_drops} messages dropped by full subscription queues (the node falls '
+                                    'behind)'))
+        new_changes, self._changes_seen = self.parameter_changes - self._changes_seen, self.parameter_changes
+        if new_changes:
+            findings.append((_WARN, f'{new_changes} parameter changes from outside the node (last: '
+                                    f'{self.last_parameter_change})'))
+        if not findings:
+            return _OK, 'running', counters
+        return max(level for level, _ in findings), '; '.join(text for _, text in findings), counters
 
     def publish(self) -> None:
         level, text, counters = self.status()

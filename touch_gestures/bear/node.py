@@ -12,7 +12,11 @@ Faulty channels (``faults != 0``) and channels the frame says are unfitted read 
 frame with NaN levels or levels outside [0, 1], wrong array sizes or a stamp not after the previous one is counted in
 :attr:`BearGesturesNode.skipped` and skipped. When time jumps back (a looped bag) or no frame
 arrives for ``max_gap_s``, the node ends what is under way (END for started gestures, 'none' for
-sensors with a subtype) and starts afresh.
+sensors with a subtype) and starts afresh. Frames of another publisher on ``frame`` (another
+frame_id, stamped before the frame in use, a sequence out of step) are screened out first and
+reported on ``/diagnostics`` (:class:`~touch_graph.frame_screen.FrameScreen`,
+:attr:`BearGesturesNode.screen`): one stale frame ends nothing; a looped bag is followed, and
+time jumps back, after three frames of its own.
 
 "Model only what a scene needs": with ``publish_symbolic: false`` the gesture file is not read and
 no symbolic work is done; with ``publish_subtypes: false`` as well, or when no configured gesture
@@ -122,6 +126,7 @@ class BearGesturesNode(Node):
         # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
         self.health = NodeHealth(self)
         self.drops = self.health.drops
+        self.screen = self.health.screen(self.resolve_topic_name('frame'))
         self.create_timer(p['max_gap_s'] / 2, self._watchdog)   # ends things within 1.5 max_gap_s
         outputs = (('subtypes', self.publish_subtypes), ('symbolic gestures', self.publish_symbolic))
         what = [name for name, on in outputs if on]
@@ -133,6 +138,7 @@ class BearGesturesNode(Node):
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name: str, default: Any, description: str) -> Any:
+        # Read-only: no process in the domain can change them after start (docs/network.md).
         return self.declare_parameter(name, default, ParameterDescriptor(description=description,
                                                                          read_only=True)).value
 
@@ -251,6 +257,8 @@ class BearGesturesNode(Node):
     # ------------------------------------------------------------------ frames
     def _skip(self, reason: str, detail: str) -> None:
         self.skipped[reason] += 1
+        if reason != 'repeated_stamp':   # a repeat passed the screen: it is the driver's
+            self.screen.malformed(reason)
         self.get_logger().warning(f'skipped a frame: {detail} ({sum(self.skipped.values())} skipped so far)',
                                   throttle_duration_sec=5.0)
 
@@ -272,6 +280,13 @@ class BearGesturesNode(Node):
             self._skip('out_of_range', f'{int(((levels < 0) | (levels > 1)).sum())} levels outside [0, 1] '
                                        f'(max {float(levels.max()):.3g}; a calibrated level is in [0, 1])')
             return
+        for frame in self.screen.admit(msg):   # another publisher's frames on the topic are screened out
+            self._on_own_frame(frame)
+
+    def _on_own_frame(self, msg: Any) -> None:
+        levels = np.asarray(msg.level, dtype=np.float32)
+        faults = np.asarray(msg.faults)
+        fitted = np.asarray(msg.fitted, dtype=bool)
         stamp_ns = msg.header.stamp.sec * _NS + msg.header.stamp.nanosec
         if self._last_ns is not None:
             if stamp_ns == self._last_ns:

@@ -30,6 +30,12 @@ Bad input never stops the node: frames whose activation does not have the model'
 cols`` cells are counted in :attr:`PatchGesturesNode.skipped` and skipped; NaN or infinite
 cells are read as 0 (no contact), as the features do, and counted in ``nonfinite_cells``;
 a stamp earlier than the previous frame's (a looped bag, a restarted driver) starts afresh.
+Frames of another publisher on ``frame`` (another frame_id, stamped before the frame in use, a
+sequence out of step) are screened out first and reported on ``/diagnostics``
+(:class:`~touch_graph.frame_screen.FrameScreen`, :attr:`PatchGesturesNode.screen`); a looped bag
+or restarted driver is followed after three frames of its own. ``threshold`` and ``dwell_s`` carry
+descriptor ranges (:attr:`PatchGesturesNode.SAFETY_RANGES`); every change after start is logged at
+WARN and counted (:class:`~touch_graph.node_health.NodeHealth`).
 """
 
 from __future__ import annotations
@@ -41,7 +47,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from touch_graph.compat import Node, Parameter, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
+from touch_graph.compat import (
+    FloatingPointRange,
+    Node,
+    Parameter,
+    ParameterDescriptor,
+    SetParametersResult,
+    get_message,
+    sensor_data_qos,
+)
 from touch_graph.errors import ParameterError
 from touch_graph.node_health import NodeHealth
 
@@ -106,6 +120,7 @@ class PatchGesturesNode(Node):
         # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
         self.health = NodeHealth(self)
         self.drops = self.health.drops
+        self.screen = self.health.screen(self.resolve_topic_name('frame'))
         det = self.detector
         meta = self.model.metadata
         origin = ('SYNTHETIC data (simulated people)' if self.model.synthetic else
@@ -123,9 +138,20 @@ class PatchGesturesNode(Node):
     #: files written before the rename still work; a value given for it is used, with a WARN.
     RENAMED_PARAMETERS: ClassVar[dict[str, str]] = {'hold_s': 'dwell_s'}
 
+    #: (low, high, why) of the parameters that switch event detection off when pushed far enough: their
+    #: descriptors' ranges, refused outside as rclpy refuses (at start and on ``param set``).
+    SAFETY_RANGES: ClassVar[dict[str, tuple[float, float, str]]] = {
+        'threshold': (0.5, 1.0, 'below 0.5 two classes can pass at once; the paper uses 0.99'),
+        'dwell_s': (0.0, 3.0, 'a longer dwell outlasts the 3 s window of sympartner2018 6.2'),
+    }
+
     def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(
-            description=description, read_only=name not in self.LIVE_PARAMETERS)).value
+        descriptor = ParameterDescriptor(description=description, read_only=name not in self.LIVE_PARAMETERS)
+        if name in self.SAFETY_RANGES:
+            low, high, why = self.SAFETY_RANGES[name]
+            descriptor.additional_constraints = f'in [{low}, {high}]: {why}'
+            descriptor.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+        return self.declare_parameter(name, default, descriptor).value
 
     def _bad(self, name: str, value: Any, expected: str) -> ParameterError:
         return ParameterError(f"parameter '{name}' of {self.get_fully_qualified_name()} must be {expected}; "
@@ -240,7 +266,13 @@ class PatchGesturesNode(Node):
             rows, cols = self.model.grid
             self._skip('wrong_size', f'activation has {len(activation)} cells; the model is for {rows}x{cols} = '
                                      f'{self._n_cells} (is the driver configured for another sensor?)')
+            self.screen.malformed('wrong_size')
             return
+        for frame in self.screen.admit(msg):   # another publisher's frames on the topic are screened out
+            self._on_own_frame(frame)
+
+    def _on_own_frame(self, msg: Any) -> None:
+        activation = msg.activation
         stamp_ns = msg.header.stamp.sec * _NS + msg.header.stamp.nanosec
         last = self._last_ns
         if last is not None:

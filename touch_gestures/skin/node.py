@@ -26,6 +26,12 @@ Everything else (screened out, rejected, a codebook gesture without a command) i
 debug level and counted in :attr:`HapticCommandsNode.outcomes`; nothing is published. Bad
 frames (wrong size, NaN) are counted in ``stream.skipped`` and skipped.
 
+Frames of another publisher on ``frame`` (stamped 0 or stale, another frame_id, a sequence
+counter out of step with the driver's) are screened out before segmentation
+(:class:`~touch_graph.frame_screen.FrameScreen`, in :attr:`HapticCommandsNode.screen`) and
+reported on ``/diagnostics`` (WARN naming the cause and counts, ERROR when nothing usable
+arrives); the driver's own frames are still recognised.
+
 Parameters (read once at start, except rejection and screening: ``max_distance``, ``auto_scale``,
 ``auto_quantile``, ``min_margin`` and ``min_extent_mm`` apply from the next gesture when set):
 
@@ -41,7 +47,14 @@ Parameters (read once at start, except rejection and screening: ``max_distance``
 - screening: ``min_extent_mm``;
 - rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds,
   ``auto_scale`` x the ``auto_quantile`` quantile of the codebook's own spread; a number >= 0:
-  one threshold for all; ``.inf``: none), ``auto_scale``, ``auto_quantile``, ``min_margin``.
+  one threshold for all), ``auto_scale``, ``auto_quantile``, ``min_margin``.
+
+Rejection, screening and collision parameters switch off a check when pushed far enough, and any
+process in the DDS domain can set them: their descriptors carry ranges that keep each check
+meaningful (:data:`SAFETY_RANGES`; ``max_distance`` at most the codebook's largest distance between
+a template and the nearest template of another class), refused out of range as rclpy refuses
+(at start and on ``param set``). Every change after start is logged at WARN and counted on
+``/diagnostics`` (:class:`~touch_graph.node_health.NodeHealth`).
 """
 
 from __future__ import annotations
@@ -56,7 +69,15 @@ from typing import Any
 
 import numpy as np
 
-from touch_graph.compat import Node, ParameterDescriptor, SetParametersResult, get_message, sensor_data_qos
+from touch_graph.compat import (
+    FloatingPointRange,
+    IntegerRange,
+    Node,
+    ParameterDescriptor,
+    SetParametersResult,
+    get_message,
+    sensor_data_qos,
+)
 from touch_graph.errors import ConfigError, ParameterError
 from touch_graph.node_health import NodeHealth
 
@@ -68,7 +89,7 @@ from .commands import COMMAND_TOPIC, CommandMap, haptic_command, load_command_ma
 from .early import PrefixMatcher
 from .ending import GestureEnd, vocabulary_ending
 from .frames import SkinFrameStream
-from .gesture import TouchGesture
+from .gesture import GRID, TouchGesture
 from .screening import MIN_EXTENT_MM, gesture_extent_mm, screen_gesture
 from .segmentation import GestureSegmenter
 
@@ -107,6 +128,17 @@ _SEGMENTER_DEFAULTS = {name: p.default for name, p in inspect.signature(GestureS
                        if name in _SEGMENTER_DOC}
 #: Rejection parameters every TemplateRecogniser has (touch_gestures.skin.base).
 _REJECTION = ('max_distance', 'auto_scale', 'auto_quantile', 'min_margin')
+#: (low, high) of the parameters that can switch a safety check off, and why the bound: a value outside
+#: makes the check a formality. ``max_distance``'s upper bound is the codebook's (:func:`max_distance_bound`).
+SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
+    'auto_scale': (0.5, 5.0, 'more than 5 x the spread of a class accepts shapes of other classes'),
+    'auto_quantile': (0.5, 1.0, 'the thresholds rest on the typical spread of a class, not its tightest pairs'),
+    'min_margin': (0.02, 2.0, 'below 2 % a near tie between two gestures gives a command'),
+    'min_extent_mm': (0.0, 47.0, 'the skin is 47 mm across'),
+    'collision_force_n': (0.5, 30.0, 'above 30 N an impact is never a collision'),
+    'collision_rate_n_s': (10.0, 1000.0, 'above 1000 N/s no impact rises fast enough to be one'),
+    'rate_frames': (1, 30, 'the rise rate is measured within 0.2 s at 150 Hz'),
+}
 
 
 def default_codebook_path() -> Path:
@@ -117,6 +149,26 @@ def default_codebook_path() -> Path:
 def default_commands_path() -> Path:
     from touch_graph.paths import share_file
     return share_file(*DEFAULT_COMMANDS)
+
+
+def max_distance_bound(model: TemplateRecogniser) -> float:
+    """Largest meaningful ``max_distance``: the largest distance from a codebook template to the nearest
+    template of another class (a threshold beyond it accepts a shape as far from its class as the codebook's
+    gestures are from each other); for a one-class codebook, 10 x the largest distance within it."""
+    within, between = model._loo_distances()
+    for distances, scale in ((between, 1.0), (within, 10.0)):
+        finite = distances[np.isfinite(distances)]
+        if finite.size:
+            return float(scale * finite.max())
+    return 1.0
+
+
+def _bad_frame(msg: Any) -> str | None:
+    """Why ``msg`` cannot be a skin frame (the stream's reasons: ``'wrong_size'``, ``'non_finite'``), or None."""
+    pressure = np.asarray(msg.pressure, dtype=np.float32)
+    if pressure.size != GRID * GRID:
+        return 'wrong_size'
+    return None if np.isfinite(pressure).all() else 'non_finite'
 
 
 def _time_msg(ns: int) -> Any:
@@ -160,6 +212,7 @@ class HapticCommandsNode(Node):
         self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(FRAME_QUEUE))
         self.health = NodeHealth(self)   # a callback that raises: ERROR on /diagnostics; dropped frames: WARN
         self.drops = self.health.drops
+        self.screen = self.health.screen(self.resolve_topic_name('frame'))   # another publisher's frames
         self.add_on_set_parameters_callback(self._on_set_parameters)
         classes = [str(c) for c in self.recogniser.classes_]
         unmapped = [c for c in classes if c not in self.commands.commands]
@@ -176,9 +229,19 @@ class HapticCommandsNode(Node):
     #: Parameters applied at once when set: rejection and screening. The others are read at start (read-only).
     LIVE_PARAMETERS = (*_REJECTION, 'min_extent_mm')
 
-    def _param(self, name: str, default: Any, description: str) -> Any:
-        return self.declare_parameter(name, default, ParameterDescriptor(
-            description=description, read_only=name not in self.LIVE_PARAMETERS)).value
+    def _param(self, name: str, default: Any, description: str, bounds: tuple[Any, Any, str] | None = None) -> Any:
+        """Declare ``name``; ``bounds`` (low, high, why) become the descriptor's range (default: SAFETY_RANGES)."""
+        bounds = bounds or SAFETY_RANGES.get(name)
+        descriptor = ParameterDescriptor(description=description, read_only=name not in self.LIVE_PARAMETERS)
+        if bounds is not None:
+            low, high, why = bounds
+            descriptor.additional_constraints = f'in [{low}, {high}]: {why}'
+            if isinstance(default, int):
+                descriptor.integer_range = [IntegerRange(from_value=low, to_value=high, step=1)]
+            else:
+                descriptor.floating_point_range = [FloatingPointRange(from_value=float(low), to_value=float(high),
+                                                                      step=0.0)]
+        return self.declare_parameter(name, default, descriptor).value
 
     def _bad(self, name: str, value: Any, expected: str) -> ParameterError:
         return ParameterError(f"parameter '{name}' of {self._fqn} must be {expected}; got {value!r}")
@@ -218,10 +281,14 @@ class HapticCommandsNode(Node):
         stored = self.recogniser.get_params()
         md = stored['max_distance']
         stored_md = -1.0 if md == 'auto' else math.inf if md is None else float(md)
+        bound = max_distance_bound(self.recogniser)
         given = {
             'max_distance': self._param('max_distance', stored_md,
                                         'rejection distance: -1 = per class from the codebook (auto_scale x the '
-                                        'auto_quantile quantile of its own spread), >= 0 = one for all, .inf = none'),
+                                        'auto_quantile quantile of its own spread), >= 0 = one for all',
+                                        (-1.0, math.ceil(bound * 1e4) / 1e4,
+                                         "at most the codebook's largest distance between a template and the "
+                                         'nearest template of another class')),
             'auto_scale': self._param('auto_scale', float(stored['auto_scale']), 'see max_distance'),
             'auto_quantile': self._param('auto_quantile', float(stored['auto_quantile']), 'see max_distance'),
             'min_margin': self._param('min_margin', float(stored['min_margin']),
@@ -302,6 +369,15 @@ class HapticCommandsNode(Node):
                 **{f'segmenter_{k}': v for k, v in stats.items()}}
 
     def _on_frame(self, msg: Any) -> None:
+        bad = _bad_frame(msg)
+        if bad is not None:   # counted by the stream as before, and by the screen for /diagnostics
+            self.screen.malformed(bad)
+            self._on_own_frame(msg)
+            return
+        for frame in self.screen.admit(msg):
+            self._on_own_frame(frame)
+
+    def _on_own_frame(self, msg: Any) -> None:
         stream = self.stream
         skipped, restarts = sum(stream.skipped.values()), stream.restarts
         gestures = stream.update(msg)

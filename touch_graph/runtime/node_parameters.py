@@ -87,6 +87,7 @@ class NodeParameters:
             descriptor.type = int(declared_type)
             self._parameters[name] = param
             self._descriptors[name] = descriptor
+            self._call_post_set([param])
         self._publish_parameter_event(new=[param])
         return param
 
@@ -158,6 +159,24 @@ class NodeParameters:
     def remove_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], SetParametersResult]) -> None:
         self._set_callbacks.remove(callback)
 
+    def add_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], None]) -> None:
+        """As rclpy: ``callback(parameters)`` after parameters were set (a declaration too), newest first."""
+        if not callable(callback):
+            raise TypeError(f'Callback must be callable, got {type(callback)}')
+        self._post_set_callbacks().insert(0, callback)
+
+    def remove_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], None]) -> None:
+        self._post_set_callbacks().remove(callback)
+
+    def _post_set_callbacks(self) -> list[Callable[[list[Parameter]], None]]:
+        if '_post_set' not in self.__dict__:
+            self._post_set: list[Callable[[list[Parameter]], None]] = []
+        return self._post_set
+
+    def _call_post_set(self, parameter_list: list[Parameter]) -> None:
+        for callback in list(self._post_set_callbacks()):
+            callback(parameter_list)
+
     def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
         """Set each parameter on its own (rclpy semantics); results say why one was refused."""
         return [self._set_atomically([p]) for p in parameter_list]
@@ -223,6 +242,7 @@ class NodeParameters:
                     self._descriptors[param.name] = ParameterDescriptor(name=param.name, type=int(param.type_))
                 (new if old is None or old.type_ == ParameterType.NOT_SET else changed).append(param)
                 self._parameters[param.name] = param
+            self._call_post_set(checked)
         self._publish_parameter_event(new=new, changed=changed, deleted=deleted)
         return SetParametersResult(True, '')
 

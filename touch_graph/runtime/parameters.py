@@ -227,16 +227,37 @@ def coerce_to_type(name: str, value: Any, expected: ParameterType, node: str, so
                          f'got {type_name(got)} {value!r}')
 
 
+#: rclpy's relative tolerance for range edges and steps (rclpy.node.Node.PARAM_REL_TOL).
+PARAM_REL_TOL = 1e-6
+
+
 def check_ranges(name: str, value: Any, descriptor: ParameterDescriptor, node: str) -> str | None:
-    """Why ``value`` is outside the descriptor's ranges, or None."""
-    for rng in descriptor.floating_point_range:
-        if isinstance(value, (int, float)) and not rng.from_value <= value <= rng.to_value:
-            return f"parameter '{name}' of {node} must be in [{rng.from_value}, {rng.to_value}]; got {value!r}"
-        if isinstance(value, float) and math.isnan(value):
-            return f"parameter '{name}' of {node} must be a number, got NaN"
-    for rng in descriptor.integer_range:
-        if isinstance(value, int) and not rng.from_value <= value <= rng.to_value:
-            return f"parameter '{name}' of {node} must be in [{rng.from_value}, {rng.to_value}]; got {value!r}"
+    """Why ``value`` is outside the descriptor's range, or None: rclpy's rule and text (its first range
+    only; edges within PARAM_REL_TOL pass; NaN is out of any range; a step is checked from the lower
+    end), followed by ours naming the node."""
+    if descriptor.floating_point_range and isinstance(value, float):
+        rng = descriptor.floating_point_range[0]
+        low, high = min(rng.from_value, rng.to_value), max(rng.from_value, rng.to_value)
+        ours = f"parameter '{name}' of {node} must be in [{low}, {high}]; got {value!r}"
+        if math.isclose(value, low, rel_tol=PARAM_REL_TOL) or math.isclose(value, high, rel_tol=PARAM_REL_TOL):
+            return None
+        if not low < value < high:
+            return f'Parameter {name} out of range Min: {low}, Max: {high}, value: {value} ({ours})'
+        if rng.step != 0.0 and not math.isclose(low + round((value - low) / rng.step) * rng.step, value,
+                                                 rel_tol=PARAM_REL_TOL):
+            return (f'The parameter value for {name} is not close enough to a valid step. Min: {low}, max: {high}, '
+                    f'value: {value}, step: {rng.step} ({node})')
+    if descriptor.integer_range and isinstance(value, int) and not isinstance(value, bool):
+        rng = descriptor.integer_range[0]
+        low, high = min(rng.from_value, rng.to_value), max(rng.from_value, rng.to_value)
+        if value in (low, high):
+            return None
+        if not low < value < high:
+            return (f'Parameter {name} out of range. Min: {low}, Max: {high}, value: {value} '
+                    f"(parameter '{name}' of {node} must be in [{low}, {high}]; got {value!r})")
+        if rng.step != 0 and (value - low) % rng.step != 0:
+            return (f'The parameter value for {name} is not a valid step. Min: {low}, max: {high}, value: {value}, '
+                    f'step: {rng.step} ({node})')
     return None
 
 

@@ -30,6 +30,8 @@ import numpy as np
 
 from touch_graph.errors import SocialTouchError
 
+from .cases_stray import stray_cases
+
 __all__ = ['Outcome', 'all_cases', 'run_case', 'run_cli']
 
 CLEAR, HANDLED, TRACEBACK, CRASH, WRONG = 'clear error', 'handled', 'traceback', 'crash', 'wrong'
@@ -278,4 +280,5 @@ def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
         cases.append(('driver faults (real pty)', f'skin_driver: {kind}', _skin_pty(kind)))
     for level in (3e38, 1.0001, -0.5):
         cases.append(('recogniser input', f'bear_gestures level {level:g} for 2 s', _bear_level(level)))
+    cases += stray_cases()
     return cases
