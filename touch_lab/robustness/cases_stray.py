@@ -115,10 +115,12 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
         forget_stimuli()
 
 
-def skin_flood(hz: float = 300.0, rate: float = 5.0, frame_id: str = '', screening: bool = True,
+def skin_flood(hz: float = 300.0, rate: float = 1.0, frame_id: str = '', screening: bool = True,
                max_flood_s: float = 600.0) -> dict[str, Any]:
     """The people scene undisturbed, then under a stray process's flood at ``hz`` (sim time at ``rate`` x real
-    time, so the scene lasts a known wall time and the flood overlaps all of it; its frames carry ``frame_id``:
+    time, so the scene lasts a known wall time and the flood overlaps all of it; real time by default, as on a
+    robot: at a faster clock a scheduling stall of a busy machine becomes a burst of driver frames beyond the
+    recogniser's queue, which loses gestures for a reason that is not the flood; its frames carry ``frame_id``:
     ``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Needs a DDS domain of its own
     (``ROS_DOMAIN_ID``; the caller sets it). Returns both runs' results, ``'ok'`` saying whether the flooded run
     recognised within one command of the undisturbed one and its /diagnostics named the cause."""
