@@ -6,9 +6,11 @@ is a :class:`DeviceModel` (``touch_sim/<sensor>/device.py``) that turns the stim
 of a scene into wire frames; this module supplies the pyserial plumbing shared by the
 three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_loop``):
 
-- **time**: by default the device runs on the wall clock from the moment it is opened.
-  ``port.attach_clock(fn)`` (``fn() -> seconds``) puts it on another clock, such as a graph's
-  simulated clock, so a scene runs faster than real time and deterministically.
+- **time**: by default the device runs on the wall clock from the moment it is opened, or, with
+  ``SOCIAL_TOUCH_SIM_EPOCH=T`` in the environment (a Unix time, s), from ``T`` on: devices in
+  several processes then play their scenes in step, and one opened before ``T`` sends nothing
+  until then. ``port.attach_clock(fn)`` (``fn() -> seconds``) puts it on another clock, such as a
+  graph's simulated clock, so a scene runs faster than real time and deterministically.
 - **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of
   random bytes before it), ``corrupt=P`` (of one flipped byte in it), ``drop=P`` (of losing
   it), ``unplug_at=S&replug_at=S`` (device seconds between which the device is gone: reads
@@ -23,6 +25,8 @@ reach it: ``device_state('demo').unplug()``.
 
 from __future__ import annotations
 
+import math
+import os
 import random
 import threading
 import time
@@ -83,6 +87,8 @@ class DeviceState:
 
 _registry: dict[str, DeviceState] = {}
 _registry_lock = threading.Lock()
+#: The environment variable with the wall-clock devices' common time zero (a Unix time, s).
+EPOCH_ENV = 'SOCIAL_TOUCH_SIM_EPOCH'
 _FAULT_OPTIONS = ('garbage', 'corrupt', 'drop', 'unplug_at', 'replug_at', 'buffer_s', 'seed')
 
 
@@ -200,7 +206,7 @@ class VirtualSerial(SerialBase):
         state = self._state
         key = getattr(clock, '__self__', clock)  # bound methods of one object count as one clock
         if state.epoch is None or state.epoch_clock is not key:
-            state.epoch = clock() if clock is not None else time.monotonic()
+            state.epoch = clock() if clock is not None else _wall_epoch()
             state.epoch_clock = key
         self._t0 = state.epoch
         self._start_index = int(max(0.0, self._device_time()) / state.model.frame_period)
@@ -220,7 +226,7 @@ class VirtualSerial(SerialBase):
                                   '(device disconnected or multiple access on port?)')
         model = state.model
         period = model.frame_period
-        due = int(t / period) + 1  # frames 0..due-1 are due
+        due = math.floor(t / period) + 1  # frames 0..due-1 are due (none before device time 0)
         if self._fresh:
             # Nothing was sent to a closed or unplugged port: start from the frame due at opening.
             self._fresh = False
@@ -300,6 +306,20 @@ class VirtualSerial(SerialBase):
         if self._state is None:
             raise PortNotOpenError()
         return self._state
+
+
+def _wall_epoch() -> float:
+    """Device time zero on the wall clock, in ``time.monotonic()`` seconds: now, or ``$SOCIAL_TOUCH_SIM_EPOCH``."""
+    text = os.environ.get(EPOCH_ENV, '').strip()
+    if not text:
+        return time.monotonic()
+    try:
+        epoch = float(text)
+    except ValueError:
+        epoch = math.nan
+    if not math.isfinite(epoch):
+        raise PortOptionError(f'{EPOCH_ENV}={text!r} must be a Unix time in seconds (e.g. from time.time())')
+    return time.monotonic() - (time.time() - epoch)
 
 
 def _float_option(options: dict[str, str], key: str) -> float:
