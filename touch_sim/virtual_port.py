@@ -9,8 +9,9 @@ three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_
 - **time**: by default the device runs on the wall clock from the moment it is opened, or, with
   ``SOCIAL_TOUCH_SIM_EPOCH=T`` in the environment (a Unix time, s), from ``T`` on: devices in
   several processes then play their scenes in step, and one opened before ``T`` sends nothing
-  until then. ``port.attach_clock(fn)`` (``fn() -> seconds``) puts it on another clock, such as a
-  graph's simulated clock, so a scene runs faster than real time and deterministically.
+  until then (:func:`set_wall_epoch` moves it). ``port.attach_clock(fn)`` (``fn() -> seconds``)
+  puts it on another clock, such as a graph's simulated clock, so a scene runs faster than real
+  time and deterministically.
 - **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of
   random bytes before it), ``corrupt=P`` (of one flipped byte in it), ``drop=P`` (of losing
   it), ``unplug_at=S&replug_at=S`` (device seconds between which the device is gone: reads
@@ -37,8 +38,8 @@ from typing import Any, Protocol
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
-__all__ = ['DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state', 'forget_device',
-           'forget_devices', 'parse_url']
+__all__ = ['EPOCH_ENV', 'DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state',
+           'forget_device', 'forget_devices', 'parse_url', 'set_wall_epoch']
 
 
 class DeviceModel(Protocol):
@@ -145,7 +146,6 @@ class VirtualSerial(SerialBase):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._state: DeviceState | None = None
         self._clock: Callable[[], float] | None = None
-        self._t0 = 0.0
         self._out = bytearray()
         self._fresh = True
         self._start_index = 0
@@ -208,12 +208,11 @@ class VirtualSerial(SerialBase):
         if state.epoch is None or state.epoch_clock is not key:
             state.epoch = clock() if clock is not None else _wall_epoch()
             state.epoch_clock = key
-        self._t0 = state.epoch
         self._start_index = int(max(0.0, self._device_time()) / state.model.frame_period)
 
     def _device_time(self) -> float:
         now = self._clock() if self._clock is not None else time.monotonic()
-        return now - self._t0
+        return now - self._state.epoch  # the device's, which set_wall_epoch may move
 
     def _pump(self) -> None:
         """Append the frames due by now to the output buffer."""
@@ -306,6 +305,17 @@ class VirtualSerial(SerialBase):
         if self._state is None:
             raise PortNotOpenError()
         return self._state
+
+
+def set_wall_epoch(epoch: float) -> None:
+    """Make Unix time ``epoch`` (s) the time zero of every wall-clock device of this process, those open
+    now and those opened later: a scene's devices held back by a ``SOCIAL_TOUCH_SIM_EPOCH`` far ahead
+    start together once every process of the scene is up."""
+    os.environ[EPOCH_ENV] = repr(epoch)
+    with _registry_lock:
+        for state in _registry.values():
+            if state.epoch_clock is None:
+                state.epoch = _wall_epoch()
 
 
 def _wall_epoch() -> float:
