@@ -14,8 +14,8 @@
   user's Cyclone configuration still applies.
 
 :func:`cyclone_config` builds the same XML fragment rmw_cyclonedds' ``check_create_domain``
-builds for these settings, and announces the participant to its peers every second instead of
-Cyclone's 30 s, so a Fast DDS node started after it finds it at once.
+builds for these settings, and announces the participant to its peers every second, far more often
+than Cyclone's default, so a Fast DDS node started after it finds it at once.
 
 >>> read_discovery({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '10.0.0.2;host-b'})
 DiscoveryOptions(range='LOCALHOST', static_peers=('10.0.0.2', 'host-b'))
@@ -109,7 +109,7 @@ def cyclone_config(options: DiscoveryOptions, environ: Mapping[str, str] | None 
         else:
             # Peers hear our participant again every SPDP_INTERVAL: a Fast DDS node (rclpy's default) on
             # LOCALHOST announces itself by multicast only, so it learns of a participant that started
-            # before it only from that participant's next announcement (Cyclone's default: every 30 s).
+            # before it only from that participant's next announcement (Cyclone's default interval is long).
             config += '<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>32' \
                       f'</MaxAutoParticipantIndex><SPDPInterval>{SPDP_INTERVAL}</SPDPInterval>'
         peers = (['localhost'] if localhost else []) + (list(options.static_peers) if add_peers else [])
