@@ -17,6 +17,17 @@ topic the nodes publish (with each publisher's reliability and durability), wait
 subscription has matched all of that topic's publishers, then counts for ``--duration`` wall
 seconds; the node processes mark the same window on their own counters (frames published...).
 
+The virtual devices play their scripted people in step: the node processes start with
+``SOCIAL_TOUCH_SIM_EPOCH`` far ahead (the devices send nothing), and once every node is up and
+matched the counter sends them one device time zero (``epoch T`` on their stdin,
+:func:`touch_sim.virtual_port.set_wall_epoch`) ``EPOCH_LEAD_S`` ahead; the window starts
+``WINDOW_AFTER_EPOCH_S`` after it. So two runs count the same stretch of every scene from its
+start, and their events compare topic by topic.
+
+``--drivers BACKEND`` runs the three drivers on another backend than the rest (a mixed graph),
+and ``--graph-checks N`` runs ``social-touch node list``, ``topic list`` and ``topic info -v
+/skin/frame`` N times each after the window and counts the runs that show every rclpy node.
+
 Prints (``--out``: writes) one JSON object: the backend, the nodes, the messages per topic in the
 window (a latched topic: every message received), each driver's counters over the window, and the
 callbacks that raised (our runtime counts them and goes on; real rclpy's spin ends at the first,
@@ -31,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import json
 import os
 import queue
@@ -49,8 +61,12 @@ NOT_COUNTED = ('/rosout', '/parameter_events')
 #: Wall seconds for every node process to come up, and for the counter to match every publisher.
 START_TIMEOUT_S = 120.0
 MATCH_TIMEOUT_S = 60.0
-#: Wall seconds the counter spins after matching, before the window (messages that arrived while it matched).
-SETTLE_S = 1.0
+#: Wall seconds from the counter's ``epoch`` line to the devices' time zero (every node process reads it).
+EPOCH_LEAD_S = 1.0
+#: The devices' time zero until the counter sends one: far ahead (they send nothing).
+HELD_S = 1e6
+#: Wall seconds from the devices' time zero to the window (the first frames reach every node).
+WINDOW_AFTER_EPOCH_S = 0.5
 #: The start of a node process's report lines on its stdout.
 REPORT = 'scene-report '
 
@@ -74,10 +90,13 @@ def _type_name(cls: type) -> str:
 
 # ---------------------------------------------------------------------------------------------- one node
 def _stdin_commands(marks: list[threading.Event], stop: threading.Event) -> None:
-    """Read ``mark`` and ``stop`` lines from the counter process (end of input: stop)."""
+    """Read ``epoch T``, ``mark`` and ``stop`` lines from the counter process (end of input: stop)."""
+    from touch_sim.virtual_port import set_wall_epoch
     for line in sys.stdin:
         command = line.strip()
-        if command == 'mark':
+        if command.startswith('epoch '):
+            set_wall_epoch(float(command.split()[1]))
+        elif command == 'mark':
             next(event for event in marks if not event.is_set()).set()
         elif command == 'stop':
             break
@@ -143,13 +162,23 @@ class _Counter:
         self.counts[self.topic] += 1
 
 
+def backend_env(backend: str, **extra: str) -> dict[str, str]:
+    """This process's environment for a process on ``backend`` (SOCIAL_TOUCH_SHIM=1 for ours), plus ``extra``."""
+    env = {k: v for k, v in os.environ.items() if k != 'SOCIAL_TOUCH_SHIM'}
+    if backend == 'ours':
+        env['SOCIAL_TOUCH_SHIM'] = '1'
+    env.update(extra)
+    return env
+
+
 class _NodeProcess:
     """A node process and the report lines it writes (its other output, the monitor's, goes to stderr)."""
 
     def __init__(self, backend: str, index: int) -> None:
-        self.index = index
+        self.index, self.backend = index, backend
         self.proc = subprocess.Popen([sys.executable, __file__, '--backend', backend, '--node', str(index)],
-                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT,
+                                     env=backend_env(backend, SOCIAL_TOUCH_SIM_EPOCH=repr(time.time() + HELD_S)))
         self.reports: queue.Queue[str] = queue.Queue()
         threading.Thread(target=self._relay, daemon=True).start()
 
@@ -178,13 +207,20 @@ class _NodeProcess:
         return json.loads(line)
 
 
-def run_scene(backend: str, duration: float) -> dict:
-    """Start every node of the scene in its own process on ``backend``, count ``duration`` wall seconds."""
+def is_driver(spec: object) -> bool:
+    return spec.exec.endswith('_driver')
+
+
+def run_scene(backend: str, duration: float, drivers: str | None = None, graph_checks: int = 0) -> dict:
+    """Start every node of the scene in its own process on ``backend`` (the drivers on ``drivers``, default the
+    same), count ``duration`` wall seconds from the devices' common time zero."""
     _check_backend(backend)
     from touch_graph import compat
     specs = _plan_nodes()
+    drivers = drivers or backend
     started = time.monotonic()
-    procs = [_NodeProcess(backend, index) for index in range(len(specs))]
+    procs = [_NodeProcess(drivers if is_driver(spec) else backend, index) for index, spec in enumerate(specs)]
+    checks: dict[str, list[int]] = {}
     counts: dict[str, int] = {}
     latched: set[str] = set()
     ups: list[dict] = []
@@ -218,7 +254,8 @@ def run_scene(backend: str, duration: float) -> dict:
                     latched.add(topic)
                 qos = compat.QoSProfile(depth=1000, reliability=type(policies.reliability)[reliability],
                                         durability=type(policies.durability)[durability])
-                counter.create_subscription(compat.get_message(typename), topic, _Counter(counts, topic), qos)
+                # Raw: counted, not decoded (a Python executor decoding 150 Hz frames falls behind on a busy machine).
+                counter.create_subscription(compat.get_message(typename), topic, _Counter(counts, topic), qos, raw=True)
         deadline = time.monotonic() + MATCH_TIMEOUT_S
         while any(counter.count_publishers(topic) < n for topic, n in publishers.items()):
             if time.monotonic() > deadline:
@@ -226,9 +263,12 @@ def run_scene(backend: str, duration: float) -> dict:
                     f'{topic} {counter.count_publishers(topic)} of {n}' for topic, n in publishers.items()))
             executor.spin_once(timeout_sec=0.05)
         ready_s = time.monotonic() - started
-        settled = time.monotonic() + SETTLE_S
-        while time.monotonic() < settled:  # take what arrived while matching, before the window
-            executor.spin_once(timeout_sec=0.05)
+        epoch = time.time() + EPOCH_LEAD_S
+        for proc in procs:
+            proc.tell(f'epoch {epoch!r}')
+        window_at = epoch + WINDOW_AFTER_EPOCH_S
+        while time.time() < window_at:  # take what arrived while matching, before the window
+            executor.spin_once(timeout_sec=min(0.05, max(0.0, window_at - time.time())))
         # The window: the same wall seconds for the counter and the node processes' counters.
         for proc in procs:
             proc.tell('mark')
@@ -239,7 +279,12 @@ def run_scene(backend: str, duration: float) -> dict:
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
         for proc in procs:
-            proc.tell('mark', 'stop')
+            proc.tell('mark')
+        rclpy_nodes = sorted(up['node'] for proc, up in zip(procs, ups, strict=True) if proc.backend == 'rclpy')
+        if graph_checks:
+            checks = graph_tool_checks(rclpy_nodes, graph_checks)
+        for proc in procs:
+            proc.tell('stop')
         counter.destroy_node()
         if context is None:
             rclpy.shutdown()
@@ -267,7 +312,44 @@ def run_scene(backend: str, duration: float) -> dict:
     error = error or next((report['error'] for report in reports if report['error']), None)
     return {'backend': backend, 'duration_s': duration, 'start_s': None if ready_s is None else round(ready_s, 2),
             'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers,
-            'callback_errors': None if None in errors else sum(errors), 'error': error}
+            'callback_errors': None if None in errors else sum(errors), 'graph_checks': checks, 'error': error}
+
+
+#: The graph tools checked (``--graph-checks``), as ``social-touch`` argument lists.
+GRAPH_TOOLS = (('node', 'list'), ('topic', 'list'), ('topic', 'info', '-v', '/skin/frame'))
+
+
+def graph_tool_checks(rclpy_nodes: list[str], tries: int) -> dict[str, list[int]]:
+    """Each of :data:`GRAPH_TOOLS` run ``tries`` times on our runtime: ``[runs that showed every rclpy node's
+    part, runs]`` per tool (node list: the nodes; topic list: every topic; topic info -v: the rclpy nodes
+    among /skin/frame's endpoints, by name and namespace)."""
+    env = backend_env('ours')
+    out = {}
+    for argv in GRAPH_TOOLS:
+        good = 0
+        for _ in range(tries):
+            run = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', *argv], capture_output=True, text=True,
+                                 timeout=120, env=env, cwd=ROOT)
+            good += run.returncode == 0 and _shows(argv, run.stdout, rclpy_nodes)
+        out[' '.join(argv)] = [good, tries]
+    return out
+
+
+_SKIN_FRAME_ENDPOINTS = ('/skin/skin_driver', '/skin/haptic_commands', '/touch_view', '/foxglove_server')
+
+
+def _shows(argv: tuple[str, ...], stdout: str, rclpy_nodes: list[str]) -> bool:
+    words = stdout.split()
+    if argv[:2] == ('node', 'list'):
+        return all(node in words for node in rclpy_nodes)
+    if argv[:2] == ('topic', 'list'):
+        return all(topic in words for topic in ('/skin/frame', '/touch/state', '/diagnostics', '/tf_static'))
+    # topic info -v: 'Node name: X' and 'Node namespace: /ns' per endpoint.
+    lines = [line.strip() for line in stdout.splitlines()]
+    shown = {f"{ns.split(': ', 1)[1].rstrip('/')}/{name.split(': ', 1)[1]}"
+             for name, ns in itertools.pairwise(lines)
+             if name.startswith('Node name: ') and ns.startswith('Node namespace: ')}
+    return all(node in shown for node in rclpy_nodes if node in _SKIN_FRAME_ENDPOINTS)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -276,6 +358,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--duration', type=float, default=8.0, help='wall seconds to count (default 8)')
     parser.add_argument('--out', help='write the JSON report to this file (the monitor prints to stdout too)')
     parser.add_argument('--node', type=int, help='run only the N-th node of the scene (the script starts these)')
+    parser.add_argument('--drivers', choices=('ours', 'rclpy'), help='the drivers\' backend (default: --backend)')
+    parser.add_argument('--graph-checks', type=int, default=0, metavar='N',
+                        help='run node list, topic list and topic info -v N times each after the window')
     args = parser.parse_args(argv)
     if args.backend == 'ours':
         os.environ['SOCIAL_TOUCH_SHIM'] = '1'
@@ -284,7 +369,8 @@ def main(argv: list[str] | None = None) -> int:
     sys.path[:0] = [str(ROOT), str(ROOT / 'examples' / 'touch_behaviour')]
     if args.node is not None:
         return run_node(args.backend, args.node)
-    text = json.dumps(run_scene(args.backend, args.duration), indent=1)
+    text = json.dumps(run_scene(args.backend, args.duration, args.drivers, args.graph_checks),
+                      indent=1)
     if args.out:
         Path(args.out).write_text(text + '\n', encoding='utf-8')
     else:

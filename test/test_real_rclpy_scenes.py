@@ -6,7 +6,11 @@ its own, and the counter in another, meeting on the DDS domain. It counts the me
 topic the nodes publish over the same wall seconds, and the drivers count what they published
 in that window. On our runtime it runs in every suite; on real rclpy where ROS 2 is here
 (.ci/ros2-jazzy), and then its counts are compared with our runtime's, topic by topic (see
-:func:`close` for how closely). Also here: ``touch_graph.compat`` beside PyPI's rclpy, with and
+:func:`close` for how closely). The virtual devices of every run start
+their scripted people together, just before the window (ros2_scene.py), so each run counts the
+same stretch of the scenes. So do the mixed graphs: the drivers on our runtime and the rest on
+real rclpy, and the reverse; there ``social-touch node list``, ``topic list`` and ``topic info -v``
+must show every rclpy node in every try. Also here: ``touch_graph.compat`` beside PyPI's rclpy, with and
 without the colcon-built social_touch_msgs.
 """
 import json
@@ -19,7 +23,12 @@ from dds_testing import allocate_domain
 from ros2_testing import ROOT, require_ros2, ros2_env
 
 SCRIPT = ROOT / 'test' / 'ros2_scene.py'
-DURATION_S = 8.0
+DURATION_S = 12.0
+#: The backends of the runs: (the counter's and every node's but the drivers', the drivers').
+RUNS = {'ours': ('ours', 'ours'), 'rclpy': ('rclpy', 'rclpy'), 'rclpy-drivers-ours': ('rclpy', 'ours'),
+        'ours-drivers-rclpy': ('ours', 'rclpy')}
+#: Tries of each graph tool in a mixed graph.
+GRAPH_CHECKS = 5
 #: The node classes of the shipped scenes (launch/*.yaml) and the example; each must start.
 NODES = ['/bear/bear_driver', '/bear/bear_gestures', '/bear/bear_sensor_frames', '/foxglove_server',
          '/patch/patch_driver', '/patch/patch_gestures', '/skin/haptic_commands', '/skin/skin_driver',
@@ -38,19 +47,22 @@ EVENTS = ('/behaviour/action', '/behaviour/look_at', '/behaviour/mood', '/behavi
 _runs: dict[str, dict] = {}
 
 
-def scene_counts(backend: str, tmp_path_factory: pytest.TempPathFactory) -> dict:
-    """The scene's JSON report on ``backend`` (one run per test session)."""
-    if backend not in _runs:
-        out = tmp_path_factory.mktemp('scene') / f'{backend}.json'
+def scene_counts(run: str, tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """The scene's JSON report of ``run`` (one of :data:`RUNS`; one run per test session)."""
+    backend, drivers = RUNS[run]
+    if run not in _runs:
+        out = tmp_path_factory.mktemp('scene') / f'{run}.json'
+        mixed = ['--drivers', drivers, '--graph-checks', str(GRAPH_CHECKS)] if drivers != backend else []
         with allocate_domain() as domain:
             # rclpy's field checks on: a wrong field type is an AssertionError naming the field, not an abort.
             env = ros2_env(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                            ROS_PYTHON_CHECK_FIELDS='1')
-            run = subprocess.run([sys.executable, str(SCRIPT), '--backend', backend, '--duration', str(DURATION_S),
-                                  '--out', str(out)], capture_output=True, text=True, timeout=600, env=env, cwd=ROOT)
-        assert run.returncode == 0, f'the scene on {backend} failed:\n{run.stderr[-4000:]}'
-        _runs[backend] = json.loads(out.read_text(encoding='utf-8'))
-    return _runs[backend]
+            done = subprocess.run([sys.executable, str(SCRIPT), '--backend', backend, '--duration', str(DURATION_S),
+                                   '--out', str(out), *mixed], capture_output=True, text=True, timeout=900, env=env,
+                                  cwd=ROOT)
+        assert done.returncode == 0, f'the scene {run} failed:\n{done.stderr[-4000:]}'
+        _runs[run] = json.loads(out.read_text(encoding='utf-8'))
+    return _runs[run]
 
 
 def close(a: int, b: int) -> bool:
@@ -59,25 +71,28 @@ def close(a: int, b: int) -> bool:
     The two runs are not one schedule replayed: on a loaded machine (the CI's 2 cores, or ours
     with a dozen runnable processes) a node process can get a tenth of a core, so the edges of
     its window (its ``mark``, its callbacks catching up) move by up to a second or two of the
-    8 s: that bounds a rate-driven topic's difference to about a third. A node that misses its
+    12 s: that bounds a rate-driven topic's difference to about a third. A node that misses its
     inputs, or a topic that goes silent, is far outside it.
     """
     return abs(a - b) <= max(3, 0.34 * max(a, b))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('backend', ['ours', pytest.param('rclpy', marks=pytest.mark.ros2)])
-def test_every_scene_node_runs_and_publishes_what_it_does_on_our_runtime(backend, tmp_path_factory):
-    if backend == 'rclpy':
+@pytest.mark.parametrize('run', ['ours', *(pytest.param(run, marks=pytest.mark.ros2) for run in RUNS if run != 'ours')])
+def test_every_scene_node_runs_and_publishes_what_it_does_on_our_runtime(run, tmp_path_factory):
+    if run != 'ours':
         require_ros2()
-    report = scene_counts(backend, tmp_path_factory)
+    report = scene_counts(run, tmp_path_factory)
     assert report['error'] is None, report['error']
     assert report['nodes'] == NODES
     counts = report['counts']
     assert report['callback_errors'] in (0, None)
     assert [topic for topic in STEADY if not counts.get(topic)] == [], counts
-    if backend == 'ours':
+    if run == 'ours':
         return
+    if RUNS[run][0] != RUNS[run][1]:  # a mixed graph: our tools see every rclpy node, every time
+        assert report['graph_checks'] and all(good == tries for good, tries in report['graph_checks'].values()), \
+            report['graph_checks']
     ours = scene_counts('ours', tmp_path_factory)['counts']
     print(json.dumps({topic: [ours.get(topic), counts.get(topic)] for topic in sorted({*ours, *counts})}))
     assert sorted(counts) == sorted(ours)
@@ -87,12 +102,13 @@ def test_every_scene_node_runs_and_publishes_what_it_does_on_our_runtime(backend
     assert {name: pair for name, pair in drivers.items() if not close(*pair)} == {}, drivers
     differ = {topic: (ours[topic], counts[topic]) for topic in counts
               if topic not in EVENTS and not close(ours[topic], counts[topic])}
-    assert differ == {}, f'(ours, rclpy) counts that differ: {differ}'
-    # Which events fall in the window depends on where it falls in the simulated devices' scripts, which
-    # start with each driver's process (seconds apart between runs, more under load): one topic's events
-    # move in or out of it. All events together say whether the recognisers and the behaviour keep up.
+    assert differ == {}, f'(ours, {run}) counts that differ: {differ}'
+    # All events together say whether the recognisers and the behaviour keep up. The devices play in step, so
+    # topic by topic they should agree but for an event at each edge of the window; on a busy two-core machine
+    # they do not yet on real rclpy (printed above; open in issue 23).
     events = (sum(ours.get(topic, 0) for topic in EVENTS), sum(counts.get(topic, 0) for topic in EVENTS))
-    assert events[0] > 0 and close(*events), f'(ours, rclpy) events in the window: {events}'
+    assert events[0] > 0 and close(*events), f'(ours, {run}) events in the window: {events}'
+
 
 
 def _compat_probe(code: str, env: dict) -> subprocess.CompletedProcess:

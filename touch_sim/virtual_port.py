@@ -6,9 +6,12 @@ is a :class:`DeviceModel` (``touch_sim/<sensor>/device.py``) that turns the stim
 of a scene into wire frames; this module supplies the pyserial plumbing shared by the
 three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_loop``):
 
-- **time**: by default the device runs on the wall clock from the moment it is opened.
-  ``port.attach_clock(fn)`` (``fn() -> seconds``) puts it on another clock, such as a graph's
-  simulated clock, so a scene runs faster than real time and deterministically.
+- **time**: by default the device runs on the wall clock from the moment it is opened, or, with
+  ``SOCIAL_TOUCH_SIM_EPOCH=T`` in the environment (a Unix time, s), from ``T`` on: devices in
+  several processes then play their scenes in step, and one opened before ``T`` sends nothing
+  until then (:func:`set_wall_epoch` moves it). ``port.attach_clock(fn)`` (``fn() -> seconds``)
+  puts it on another clock, such as a graph's simulated clock, so a scene runs faster than real
+  time and deterministically.
 - **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of
   random bytes before it), ``corrupt=P`` (of one flipped byte in it), ``drop=P`` (of losing
   it), ``unplug_at=S&replug_at=S`` (device seconds between which the device is gone: reads
@@ -23,6 +26,8 @@ reach it: ``device_state('demo').unplug()``.
 
 from __future__ import annotations
 
+import math
+import os
 import random
 import threading
 import time
@@ -33,8 +38,8 @@ from typing import Any, Protocol
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
-__all__ = ['DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state', 'forget_device',
-           'forget_devices', 'parse_url']
+__all__ = ['EPOCH_ENV', 'DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state',
+           'forget_device', 'forget_devices', 'parse_url', 'set_wall_epoch']
 
 
 class DeviceModel(Protocol):
@@ -83,6 +88,8 @@ class DeviceState:
 
 _registry: dict[str, DeviceState] = {}
 _registry_lock = threading.Lock()
+#: The environment variable with the wall-clock devices' common time zero (a Unix time, s).
+EPOCH_ENV = 'SOCIAL_TOUCH_SIM_EPOCH'
 _FAULT_OPTIONS = ('garbage', 'corrupt', 'drop', 'unplug_at', 'replug_at', 'buffer_s', 'seed')
 
 
@@ -139,7 +146,6 @@ class VirtualSerial(SerialBase):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._state: DeviceState | None = None
         self._clock: Callable[[], float] | None = None
-        self._t0 = 0.0
         self._out = bytearray()
         self._fresh = True
         self._start_index = 0
@@ -200,14 +206,13 @@ class VirtualSerial(SerialBase):
         state = self._state
         key = getattr(clock, '__self__', clock)  # bound methods of one object count as one clock
         if state.epoch is None or state.epoch_clock is not key:
-            state.epoch = clock() if clock is not None else time.monotonic()
+            state.epoch = clock() if clock is not None else _wall_epoch()
             state.epoch_clock = key
-        self._t0 = state.epoch
         self._start_index = int(max(0.0, self._device_time()) / state.model.frame_period)
 
     def _device_time(self) -> float:
         now = self._clock() if self._clock is not None else time.monotonic()
-        return now - self._t0
+        return now - self._state.epoch  # the device's, which set_wall_epoch may move
 
     def _pump(self) -> None:
         """Append the frames due by now to the output buffer."""
@@ -220,7 +225,7 @@ class VirtualSerial(SerialBase):
                                   '(device disconnected or multiple access on port?)')
         model = state.model
         period = model.frame_period
-        due = int(t / period) + 1  # frames 0..due-1 are due
+        due = math.floor(t / period) + 1  # frames 0..due-1 are due (none before device time 0)
         if self._fresh:
             # Nothing was sent to a closed or unplugged port: start from the frame due at opening.
             self._fresh = False
@@ -300,6 +305,31 @@ class VirtualSerial(SerialBase):
         if self._state is None:
             raise PortNotOpenError()
         return self._state
+
+
+def set_wall_epoch(epoch: float) -> None:
+    """Make Unix time ``epoch`` (s) the time zero of every wall-clock device of this process, those open
+    now and those opened later: a scene's devices held back by a ``SOCIAL_TOUCH_SIM_EPOCH`` far ahead
+    start together once every process of the scene is up."""
+    os.environ[EPOCH_ENV] = repr(epoch)
+    with _registry_lock:
+        for state in _registry.values():
+            if state.epoch_clock is None:
+                state.epoch = _wall_epoch()
+
+
+def _wall_epoch() -> float:
+    """Device time zero on the wall clock, in ``time.monotonic()`` seconds: now, or ``$SOCIAL_TOUCH_SIM_EPOCH``."""
+    text = os.environ.get(EPOCH_ENV, '').strip()
+    if not text:
+        return time.monotonic()
+    try:
+        epoch = float(text)
+    except ValueError:
+        epoch = math.nan
+    if not math.isfinite(epoch):
+        raise PortOptionError(f'{EPOCH_ENV}={text!r} must be a Unix time in seconds (e.g. from time.time())')
+    return time.monotonic() - (time.time() - epoch)
 
 
 def _float_option(options: dict[str, str], key: str) -> float:

@@ -3,16 +3,25 @@
 Three processes, as a user starts them: the skin scene (``launch/skin.launch.yaml``: the skin's
 virtual device playing the package's scene of simulated people, SYNTHETIC data; its driver
 publishes ``/skin/frame`` best effort at 150 Hz, wall clock), ``social-touch view`` and
-``social-touch foxglove``. After ``warmup_s``, ``repeats`` windows of ``window_s`` each:
+``social-touch foxglove``, in two orders:
+
+- ``view-first``: the view and Foxglove are serving before the scene starts (their subscriptions
+  are made before any publisher of the frames exists, and must follow what the driver offers);
+- ``scene-first``: the scene runs for ``warmup_s`` before the view and Foxglove start.
+
+Each process runs on the backend ``touch_graph.compat`` picks in this environment (real rclpy
+where ROS 2 is sourced, our runtime with ``SOCIAL_TOUCH_SHIM=1``), or on the one named by
+``scene_backend`` / ``view_backend`` ('ours' or 'rclpy'). After ``warmup_s``, ``repeats`` windows
+of ``window_s`` each:
 
 - the driver's rate: frames it published in the window, from the frames' sequence numbers as a
   Foxglove client receives them (``sequence`` counts every frame the driver sends);
 - Foxglove: frames a client subscribed to ``/skin/frame`` received, per second;
 - the view: frames its node received (``sensors.skin.frames`` of ``/state.json``), per second.
 
-Medians over the windows, side by side in one run::
+Medians over the windows, per order, side by side in one run::
 
-    social-touch bench view-live --json      # about 40 s
+    social-touch bench view-live --json      # about 80 s
 """
 
 from __future__ import annotations
@@ -105,46 +114,105 @@ def _measure(fox: _FoxgloveCounter, view_port: int, warmup_s: float, windows: in
     return rates
 
 
-def bench_live(repeats: int = 5, warmup_s: float = 8.0, window_s: float = 4.0, domain: int | None = None) -> dict:
-    """Median skin frames per second over ``repeats`` windows: published by the driver, received by the view
-    and by Foxglove (in DDS domain ``domain``; default one of 90-98 from the pid)."""
-    windows = repeats
-    domain = domain if domain is not None else 90 + os.getpid() % 9
+#: The orders in which the processes start (see the module's doc).
+ORDERS = ('view-first', 'scene-first')
+#: SOCIAL_TOUCH_SHIM for a process on each backend (None: the variable is removed).
+_SHIM = {'ours': '1', 'rclpy': None}
+
+
+def _backend_env(env: dict[str, str], backend: str | None) -> dict[str, str]:
+    """``env`` for a process on ``backend`` ('ours', 'rclpy'; None: as ``env`` says)."""
+    if backend is None:
+        return env
+    if backend not in _SHIM:
+        raise ValueError(f"backend must be 'ours' or 'rclpy', got {backend!r}")
+    out = {k: v for k, v in env.items() if k != 'SOCIAL_TOUCH_SHIM'}
+    if _SHIM[backend] is not None:
+        out['SOCIAL_TOUCH_SHIM'] = _SHIM[backend]
+    return out
+
+
+def _wait_serving(view_port: int, fox_port: int, timeout_s: float) -> None:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            _view_frames(view_port)
+            socket.create_connection(('127.0.0.1', fox_port), timeout=5).close()
+            return
+        except OSError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+
+
+def _stop(procs: list[subprocess.Popen]) -> None:
+    for proc in procs:
+        proc.terminate()
+    for proc in procs:
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def run_order(order: str, *, repeats: int, warmup_s: float, window_s: float, domain: int,
+              scene_backend: str | None = None, view_backend: str | None = None) -> dict[str, list[float]]:
+    """Skin frames per second in each window (driver_published, foxglove_received, view_received) with the
+    processes started in ``order`` ('view-first' or 'scene-first')."""
+    if order not in ORDERS:
+        raise ValueError(f'order must be one of {", ".join(ORDERS)}, got {order!r}')
     env = {k: v for k, v in os.environ.items() if k not in ('SOCIAL_TOUCH_NETWORK', 'ROS_STATIC_PEERS',
                                                              'CYCLONEDDS_URI')}
     env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     view_port, fox_port = _free_port(), _free_port()
-    total_s = warmup_s + windows * window_s + 20
-    procs = [_cli('launch', str(share_file('launch', 'skin.launch.yaml')), 'monitor:=false', '--duration',
-                  str(total_s), env=env),
-             _cli('view', '--port', str(view_port), env=env),
-             _cli('foxglove', '--port', str(fox_port), env=env)]
+    total_s = 2 * warmup_s + repeats * window_s + 60
+
+    def scene() -> subprocess.Popen:
+        return _cli('launch', str(share_file('launch', 'skin.launch.yaml')), 'monitor:=false', '--duration',
+                    str(total_s), env=_backend_env(env, scene_backend))
+
+    def viewers() -> list[subprocess.Popen]:
+        view_env = _backend_env(env, view_backend)
+        return [_cli('view', '--port', str(view_port), env=view_env),
+                _cli('foxglove', '--port', str(fox_port), env=view_env)]
+
+    procs: list[subprocess.Popen] = []
     try:
-        deadline = time.monotonic() + 30
-        while True:
-            try:
-                _view_frames(view_port)
-                socket.create_connection(('127.0.0.1', fox_port), timeout=5).close()
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.2)
+        if order == 'view-first':
+            procs += viewers()
+            _wait_serving(view_port, fox_port, 60)
+            procs.append(scene())
+        else:
+            procs.append(scene())
+            time.sleep(warmup_s)
+            procs += viewers()
+            _wait_serving(view_port, fox_port, 60)
         with connect(f'ws://127.0.0.1:{fox_port}', subprotocols=['foxglove.websocket.v1'], open_timeout=20) as ws:
-            rates = _measure(_FoxgloveCounter(ws), view_port, warmup_s, windows, window_s)
+            return _measure(_FoxgloveCounter(ws), view_port, warmup_s, repeats, window_s)
+    except RuntimeError as err:
+        err.add_note(f'order {order}, scene on {scene_backend or "the environment"}, view and foxglove on '
+                     f'{view_backend or "the environment"}')
+        raise
     finally:
-        for proc in procs:
-            proc.terminate()
-        for proc in procs:
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        _stop(procs)
+
+
+def bench_live(repeats: int = 5, warmup_s: float = 8.0, window_s: float = 4.0, domain: int | None = None,
+               orders: tuple[str, ...] = ORDERS, scene_backend: str | None = None,
+               view_backend: str | None = None) -> dict:
+    """Median skin frames per second over ``repeats`` windows, per order of start: published by the driver,
+    received by the view and by Foxglove (in DDS domain ``domain``; default one of 90-98 from the pid)."""
+    domain = domain if domain is not None else 90 + os.getpid() % 9
     out: dict[str, Any] = {
         'scene': 'launch/skin.launch.yaml (virtual skin, synthetic people), wall clock; view and foxglove in '
-                 'processes of their own', 'windows': windows, 'window_s': window_s,
-        'goal_hz_at_least': 140.0}
-    out.update({f'{name}_hz_median': round(statistics.median(values), 1) for name, values in rates.items()})
-    out['runs_hz'] = {name: [round(v, 1) for v in values] for name, values in rates.items()}
+                 'processes of their own', 'windows': repeats, 'window_s': window_s, 'goal_hz_at_least': 140.0,
+        'backends': {'scene': scene_backend or 'environment', 'view': view_backend or 'environment'}}
+    for order in orders:
+        rates = run_order(order, repeats=repeats, warmup_s=warmup_s, window_s=window_s, domain=domain,
+                          scene_backend=scene_backend, view_backend=view_backend)
+        result: dict[str, Any] = {f'{name}_hz_median': round(statistics.median(values), 1)
+                                  for name, values in rates.items()}
+        result['runs_hz'] = {name: [round(v, 1) for v in values] for name, values in rates.items()}
+        out[order] = result
     return out

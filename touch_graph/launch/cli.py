@@ -200,6 +200,25 @@ def run(args: argparse.Namespace) -> int:
     return _run(args, together, alone)
 
 
+def _in_process_runner(args: argparse.Namespace, specs: list, network: bool) -> LaunchRunner:
+    """The runner of the nodes that run in this process: on real rclpy when ``touch_graph.compat`` uses it (a
+    sourced ROS 2 without SOCIAL_TOUCH_SHIM=1: the node classes are rclpy nodes), else on our runtime."""
+    from .. import compat
+    if not compat.USING_ROS:
+        return LaunchRunner(specs, sim_time=args.sim_time, rate=args.rate, network=network,
+                            strict_params=args.strict_params)
+    if args.sim_time:
+        raise LaunchError("--sim-time runs our runtime's simulated clock, and these nodes run on real rclpy (ROS 2 "
+                          'is sourced): publish /clock and set use_sim_time:=true instead, or run with '
+                          'SOCIAL_TOUCH_SHIM=1')
+    if not network:
+        raise LaunchError('--no-network: real rclpy always joins the DDS domain (ROS 2 is sourced); set '
+                          'ROS_AUTOMATIC_DISCOVERY_RANGE=OFF to keep it on this machine, or run with '
+                          'SOCIAL_TOUCH_SHIM=1')
+    from .runner import rclpy_runtime
+    return LaunchRunner(specs, runtime=rclpy_runtime(), strict_params=args.strict_params)
+
+
 def _run(args: argparse.Namespace, together: list, alone: list) -> int:
     """Start the in-process nodes, then the node processes; spin and watch until the end; stop everything."""
     from ..node_main import StopSignals
@@ -207,8 +226,7 @@ def _run(args: argparse.Namespace, together: list, alone: list) -> int:
     supervisor = ProcessSupervisor(alone, strict_params=args.strict_params) if alone else None
     runner = None
     if together:
-        runner = LaunchRunner(together, sim_time=args.sim_time, rate=args.rate,
-                              network=True if alone else not args.no_network, strict_params=args.strict_params)
+        runner = _in_process_runner(args, together, network=True if alone else not args.no_network)
     try:
         if runner is not None:
             runner.start()

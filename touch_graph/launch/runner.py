@@ -33,6 +33,8 @@ them in file order.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import importlib
 import importlib.metadata
 import importlib.util
@@ -42,7 +44,7 @@ import signal
 import threading
 import time
 import types
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -150,7 +152,34 @@ def rclpy_runtime() -> types.SimpleNamespace:
     from rclpy.parameter import Parameter
     from rclpy.utilities import get_default_context
     return types.SimpleNamespace(Context=get_default_context, SingleThreadedExecutor=SingleThreadedExecutor,
-                                 Node=Node, Parameter=Parameter, ExternalShutdownException=ExternalShutdownException)
+                                 Node=Node, Parameter=Parameter, ExternalShutdownException=ExternalShutdownException,
+                                 node_arguments=functools.partial(rclpy_node_arguments, Node))
+
+
+@contextlib.contextmanager
+def rclpy_node_arguments(node_class: type, **arguments: Any) -> Iterator[dict[str, Any]]:
+    """:func:`touch_graph.runtime.node.node_arguments` for rclpy: the next ``node_class`` (rclpy's Node)
+    this thread constructs without ``context``, ``cli_args`` and ``parameter_overrides`` gets ``arguments``.
+
+    rclpy's plain-constructor node reads its remaps and parameters from the process's ``--ros-args``;
+    several nodes of one launch share this process, so each gets its own this way (rclpy's own keywords).
+    """
+    pending = {'taken': False}
+    thread = threading.get_ident()
+    original = node_class.__init__
+
+    def init(self: Any, node_name: str, *args: Any, **kwargs: Any) -> None:
+        if not pending['taken'] and threading.get_ident() == thread and not any(
+                kwargs.get(key) is not None for key in arguments):
+            pending['taken'] = True  # only the class's own node, not nodes it makes inside
+            kwargs.update(arguments)
+        original(self, node_name, *args, **kwargs)
+
+    node_class.__init__ = init
+    try:
+        yield pending
+    finally:
+        node_class.__init__ = original
 
 
 def _check_node_class(spec: NodeSpec, target: Any, node_base: type | None) -> type:
@@ -255,7 +284,7 @@ class LaunchRunner:
             self.context = self.runtime.Context(clock_mode='sim', rate=self.rate, **kwargs)
         else:
             self.context = self.runtime.Context(**kwargs)
-        self.context.init()
+        self.context.init([])  # not sys.argv: real rclpy would take launch arguments for remap rules
         try:
             for spec, cls in zip(self.specs, classes, strict=True):
                 self.nodes.append(self._create(spec, cls))
@@ -291,7 +320,9 @@ class LaunchRunner:
 
     def _create_plain(self, spec: NodeSpec, cls: type, overrides: list[Any]) -> Any:
         """A node class with rclpy's ``__init__(self)``: its arguments go through ``node_arguments``."""
-        from ..runtime.node import node_arguments
+        node_arguments = getattr(self.runtime, 'node_arguments', None)
+        if node_arguments is None:
+            from ..runtime.node import node_arguments
         with node_arguments(context=self.context, cli_args=spec.cli_args(),
                             parameter_overrides=overrides) as pending:
             node = cls()
