@@ -14,9 +14,8 @@ from __future__ import annotations
 import argparse
 import time
 
-import yaml
-
-from ..errors import GraphError, MessageError
+from ..errors import ConfigError, GraphError, MessageError
+from ..yamlconf import safe_load
 
 __all__ = ['add_arguments', 'positive_number', 'run']
 
@@ -96,9 +95,9 @@ def _call(args: argparse.Namespace) -> int:
     from ..srv_types import get_service
     srv_type = get_service(args.service_type)
     try:
-        values = yaml.safe_load(args.values)
-    except yaml.YAMLError as err:
-        raise GraphError(f'the request values are not YAML ({err}); write them as "{{field: value}}"') from err
+        values = safe_load(args.values, 'the request values')
+    except ConfigError as err:
+        raise GraphError(f'{err}; write them as "{{field: value}}"') from err
     try:
         request = messages.from_dict(srv_type.Request.__msgtype__, values if values is not None else {})
     except MessageError as err:

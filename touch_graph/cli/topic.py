@@ -22,8 +22,8 @@ from typing import Any
 import yaml
 
 from .. import messages
-from ..errors import GraphError, MessageError
-from ..yamlconf import did_you_mean
+from ..errors import ConfigError, GraphError, MessageError
+from ..yamlconf import did_you_mean, safe_load
 
 __all__ = ['HzMonitor', 'abbreviate_arrays', 'add_arguments', 'run', 'select_field']
 
@@ -286,9 +286,9 @@ def _pub(tool: Any, args: argparse.Namespace) -> int:
     from ..node_main import StopSignals
     type_name = messages.normalize_type_name(args.type)
     try:
-        values = yaml.safe_load(args.values)
-    except yaml.YAMLError as err:
-        raise MessageError(f'cannot parse the message values as YAML: {err}') from err
+        values = safe_load(args.values, 'the message values')
+    except ConfigError as err:
+        raise MessageError(f'cannot parse {err}') from err
     msg = messages.from_dict(type_name, values if values is not None else {})
     times = 1 if args.once else args.times
     if times is not None and times < 1:

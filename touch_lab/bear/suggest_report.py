@@ -19,6 +19,7 @@ import yaml
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.errors import ConfigError
+from touch_graph.yamlconf import read_text, safe_load
 
 from . import suggest as sg
 from .sessions import BearTrials
@@ -136,7 +137,7 @@ def write_config(source: str | os.PathLike, out: str | os.PathLike, suggestions:
     if out.resolve() == source.resolve():
         raise ConfigError(f'{out} is the gesture config the suggestion is made from; write the suggestion to '
                           'another file (--suggest-output)')
-    doc = yaml.safe_load(source.read_text())
+    doc = safe_load(read_text(source), str(source))
     changed = 0
     for name, s in suggestions.items():
         spec = doc['gestures'].get(name)
