@@ -16,16 +16,9 @@ import time
 
 from ..errors import ConfigError, GraphError, MessageError
 from ..yamlconf import safe_load
+from .options import rate_hz, seconds
 
-__all__ = ['add_arguments', 'positive_number', 'run']
-
-
-def positive_number(text: str) -> float:
-    """argparse type: a number > 0 (seconds, a rate)."""
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f'expected a number > 0, got {text!r}')
-    return value
+__all__ = ['add_arguments', 'run']
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -47,9 +40,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('service_type', help="e.g. 'std_srvs/srv/SetBool' (or std_srvs/SetBool)")
     p.add_argument('values', nargs='?', default='{}',
                    help="the request's fields in YAML, e.g. '{data: true}' (default: all fields at their defaults)")
-    p.add_argument('-r', '--rate', type=positive_number, metavar='N',
+    p.add_argument('-r', '--rate', type=rate_hz, metavar='N',
                    help='repeat the call N times a second (Ctrl-C stops)')
-    p.add_argument('--timeout', type=positive_number, default=5.0, metavar='S',
+    p.add_argument('--timeout', type=seconds, default=5.0, metavar='S',
                    help='wait at most S seconds for the service to appear, and again for each response (default 5)')
 
 

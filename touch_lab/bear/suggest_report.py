@@ -19,6 +19,7 @@ import yaml
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.errors import ConfigError
+from touch_graph.files import write_text
 from touch_graph.yamlconf import read_text, safe_load
 
 from . import suggest as sg
@@ -147,7 +148,7 @@ def write_config(source: str | os.PathLike, out: str | os.PathLike, suggestions:
         changed += 1
     text = ''.join(f'# {line}\n' if line else '#\n' for line in header.splitlines())
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text + yaml.safe_dump(doc, sort_keys=False, width=110, allow_unicode=True, default_flow_style=None))
+    write_text(out, text + yaml.safe_dump(doc, sort_keys=False, width=110, allow_unicode=True, default_flow_style=None))
     try:
         GestureLibrary.load(out, body_map)
     except ConfigError:

@@ -30,6 +30,9 @@ import numpy as np
 
 from touch_graph.errors import SocialTouchError
 
+from .cases_input import input_cases
+from .cases_web import web_cases
+
 __all__ = ['Outcome', 'all_cases', 'run_case', 'run_cli']
 
 CLEAR, HANDLED, TRACEBACK, CRASH, WRONG = 'clear error', 'handled', 'traceback', 'crash', 'wrong'
@@ -278,4 +281,6 @@ def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
         cases.append(('driver faults (real pty)', f'skin_driver: {kind}', _skin_pty(kind)))
     for level in (3e38, 1.0001, -0.5):
         cases.append(('recogniser input', f'bear_gestures level {level:g} for 2 s', _bear_level(level)))
+    cases += input_cases()
+    cases += web_cases()
     return cases
