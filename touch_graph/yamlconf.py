@@ -43,7 +43,17 @@ MAX_DEPTH = 64
 #: Most values (scalars and collections) in one document once every alias is expanded.
 MAX_VALUES = 200_000
 
-_EXCERPT = reprlib.Repr()
+class _Excerpt(reprlib.Repr):
+    """reprlib's bounded repr, which finds its methods by type name: YAML's collections are lists and dicts."""
+
+    def repr_YamlList(self, obj: list, level: int) -> str:  # reprlib looks methods up by type name
+        return self.repr_list(obj, level)
+
+    def repr_YamlDict(self, obj: dict, level: int) -> str:
+        return self.repr_dict(obj, level)
+
+
+_EXCERPT = _Excerpt()
 _EXCERPT.maxlevel, _EXCERPT.maxdict, _EXCERPT.maxlist, _EXCERPT.maxtuple = 3, 6, 6, 6
 _EXCERPT.maxstring, _EXCERPT.maxother, _EXCERPT.maxlong = 60, 60, 40
 
@@ -53,6 +63,8 @@ def excerpt(value: Any, limit: int = 120) -> str:
 
     >>> excerpt(list(range(10**6)))
     '[0, 1, 2, 3, 4, 5, ...]'
+    >>> excerpt(loads_yaml('[' + ','.join(['1'] * 1000) + ']'))
+    '[1, 1, 1, 1, 1, 1, ...]'
     >>> len(excerpt('x' * 10**6)) <= 120
     True
     """

@@ -9,7 +9,7 @@ Server-Sent Events give over plain HTTP, and browsers reconnect by themselves. R
 - ``/state.json``: one snapshot, for scripts and curl;
 - ``/events``: the live stream; ``event: state`` frames of snapshot JSON at up to ``rate_hz``.
 
-GET only; a request whose Host is not this machine (DNS rebinding) or whose Origin is a page of
+GET only (any other method: 405); a request whose Host is not this machine (DNS rebinding) or whose Origin is a page of
 another site is refused with 403 (:mod:`touch_view.origins`), so another site open in the same
 browser cannot read what the robot senses.
 
@@ -209,6 +209,20 @@ class _Handler(BaseHTTPRequestHandler):
                 self._send(view.state_json(), 'application/json')
             else:
                 self._send(b'not found: try /\n', 'text/plain; charset=utf-8', HTTPStatus.NOT_FOUND)
+
+    def _read_only(self) -> None:
+        """Any method but GET: the view changes nothing, for any page."""
+        self.close_connection = True  # a body it sent is not read
+        with contextlib.suppress(BrokenPipeError, ConnectionResetError, TimeoutError):
+            self.send_response(HTTPStatus.METHOD_NOT_ALLOWED)
+            body = b'the touch view is read-only: GET only\n'
+            self.send_header('Allow', 'GET')
+            self.send_header('Content-Type', 'text/plain; charset=utf-8')
+            self.send_header('Content-Length', str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+    do_POST = do_PUT = do_DELETE = do_PATCH = do_OPTIONS = _read_only
 
     def _events(self) -> None:
         registry = self.view.clients

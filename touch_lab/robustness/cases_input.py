@@ -44,35 +44,31 @@ YAML_TEXTS = {
 
 
 def _loader(kind: str) -> Callable[[Path], Any]:
-    def gestures(path: Path) -> Any:
+    """The function that reads a ``kind`` of file, its module imported (so a timing counts only the read)."""
+    if kind == 'gestures:=':
         from touch_gestures.bear.symbolic import GestureLibrary
-        return GestureLibrary.load(path)
-
-    def launch(path: Path) -> Any:
+        return GestureLibrary.load
+    if kind == 'launch file':
         from touch_graph.launch.parser import parse_launch_file
-        return parse_launch_file(path)
-
-    def body_map(path: Path) -> Any:
+        return parse_launch_file
+    if kind == 'body map':
         from touch_driver.bear.body_map import BodyMap
-        return BodyMap.load(path)
-
-    def commands(path: Path) -> Any:
+        return BodyMap.load
+    if kind == 'skin commands':
         from touch_gestures.skin.commands import load_command_map
-        return load_command_map(path)
-
-    def parameters(path: Path) -> Any:
+        return load_command_map
+    if kind == 'parameter file':
         from touch_graph.runtime.param_yaml import ParameterOverrides
-        return ParameterOverrides.from_file(path)
+        return ParameterOverrides.from_file
+    from touch_graph.bag.player import bag_info
 
     def bag(path: Path) -> Any:
-        from touch_graph.bag.player import bag_info
         bag_dir = path.parent / 'bag'
         bag_dir.mkdir()
         (bag_dir / 'bag.mcap').write_bytes(b'\x89MCAP0\r\n')
         path.replace(bag_dir / 'metadata.yaml')
         return bag_info(bag_dir)
-    return {'gestures:=': gestures, 'launch file': launch, 'body map': body_map, 'skin commands': commands,
-            'parameter file': parameters, "a bag's metadata.yaml": bag}[kind]
+    return bag
 
 
 def _yaml_file(kind: str, text: str) -> Callable[[], Any]:
@@ -80,9 +76,10 @@ def _yaml_file(kind: str, text: str) -> Callable[[], Any]:
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'input.yaml'
             path.write_bytes(text.encode('utf-8', 'surrogateescape'))
+            read = _loader(kind)
             start = time.perf_counter()
             try:
-                _loader(kind)(path)
+                read(path)
             except Exception:
                 if time.perf_counter() - start >= YAML_REFUSAL_S:
                     return False  # refused, but only after the expansion it must not do
@@ -94,7 +91,7 @@ def _yaml_file(kind: str, text: str) -> Callable[[], Any]:
 def _typed_check_excerpt() -> Any:
     """A million-item value where a mapping is expected: the error quotes an excerpt, not the value."""
     from touch_gestures.bear.symbolic import GestureLibrary
-    text = 'gestures: [' + ','.join(['1'] * 100_000) + ']\nformat: [' + ','.join(['1'] * 100_000) + ']\n'
+    text = 'gestures: [' + ','.join(['1'] * 50_000) + ']\nformat: [' + ','.join(['1'] * 50_000) + ']\n'
     try:
         GestureLibrary.loads(text, source='big.yaml')
     except ValueError as err:
@@ -265,7 +262,7 @@ def input_cases() -> list[tuple[str, str, Any]]:
             cases.append(('YAML a user writes', f'{kind}: {name}', _yaml_file(kind, text)))
     cases.append(('YAML a user writes', 'topic pub values: anchors and aliases',
                   ['topic', 'pub', '/x', 'std_msgs/msg/String', _laughs('data')]))
-    cases.append(('YAML a user writes', 'a 100000-item list where a number is expected', _typed_check_excerpt))
+    cases.append(('YAML a user writes', 'a 50000-item list where a number is expected', _typed_check_excerpt))
     for argv in NUMBER_ARGVS:
         cases.append(('numbers on the command line', 'social-touch ' + ' '.join(argv), argv))
     cases += [
