@@ -35,7 +35,7 @@ from typing import Any
 
 from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
-from touch_graph.cli.options import non_negative_int, positive_int, seconds, seed
+from touch_graph.cli.options import non_negative_int, non_negative_seconds, positive_int, seconds, seed
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
@@ -83,7 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--gap', type=seconds, default=None,
                         help=f"segmenter's gap, s: a lift this long ends a whole gesture (default: {ENDING_GAP_S} s "
                              f'if the file has multi-stroke samples, else {SINGLE_STROKE_GAP_S} s)')
-    parser.add_argument('--wait', type=seconds, default=None,
+    parser.add_argument('--wait', type=non_negative_seconds, default=None,
                         help='longest lift, s, that continues strokes the codebook calls the beginning of a longer '
                              f'gesture (default: {ENDING_WAIT_S} s for multi-stroke files; 0: none, every gesture '
                              'ends at --gap)')

@@ -18,7 +18,7 @@ import json
 import sys
 
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S
-from touch_graph.cli.options import positive_int, seconds
+from touch_graph.cli.options import non_negative_seconds, positive_int, seconds
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.ending_eval import CAUSES, DEFAULT_RULE, PIECE_GAP_S, RULES, ending_causes, ending_table
@@ -37,8 +37,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--traces', required=True, help='trace CSV (.csv or .csv.gz) with multi-stroke samples')
     parser.add_argument('--gap', type=seconds, default=ENDING_GAP_S, help=f'lift that ends a whole gesture, s '
                         f'(default {ENDING_GAP_S})')
-    parser.add_argument('--wait', type=seconds, default=ENDING_WAIT_S, help='longest lift that continues a prefix, s '
-                        f'(default {ENDING_WAIT_S}; 0: a fixed gap)')
+    parser.add_argument('--wait', type=non_negative_seconds, default=ENDING_WAIT_S,
+                        help=f'longest lift that continues a prefix, s (default {ENDING_WAIT_S}; 0: a fixed gap)')
     parser.add_argument('--rule', choices=tuple(RULES), default=DEFAULT_RULE,
                         help=f'the rule of the causes table (default {DEFAULT_RULE}: touch_gestures.skin.ending; '
                              'touch_lab.skin.ending_eval.RULES)')

@@ -52,7 +52,7 @@ from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import RECOGNISERS as RUNTIME_RECOGNISERS
 from touch_gestures.skin.segmentation import GestureSegmenter
-from touch_graph.cli.options import non_negative_seconds, positive_int, seconds, seed
+from touch_graph.cli.options import non_negative_seconds, positive_int, seed
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.recognisers import (
     DEFAULT_RECOGNISER,
@@ -82,7 +82,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f'recogniser the codebook is for: {", ".join(RECOGNISERS)} (default {DEFAULT_RECOGNISER})')
     parser.add_argument('--vocabulary', default='commands',
                         help='name of the vocabulary the codebook holds (default commands)')
-    parser.add_argument('--gap', type=seconds, metavar='S',
+    parser.add_argument('--gap', type=non_negative_seconds, metavar='S',
                         help='lift (s) that ends a gesture, while recording and in the file (default 0.15 s, gestures '
                         'of one stroke; about 1 s for symbols of several strokes)')
     parser.add_argument('--simulate', type=positive_int, metavar='PERFORMERS',
