@@ -7,8 +7,8 @@ import importlib
 import pytest
 from doctest_testing import check_doctests
 
-MODULES = ['touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters', 'touch_graph.yamlconf',
-           'social_touch_msgs.msg', 'touch_graph.srv_types',
+MODULES = ['touch_graph.files', 'touch_graph.runtime.param_yaml', 'touch_graph.runtime.parameters',
+           'touch_graph.yamlconf', 'social_touch_msgs.msg', 'touch_graph.srv_types',
            'touch_graph.runtime.parameter_service', 'touch_graph.dds.services']
 
 

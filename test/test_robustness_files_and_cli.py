@@ -91,7 +91,7 @@ def test_cli_arguments_that_can_never_work_are_usage_errors(tmp_path: Path, argv
     run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
                           *argv], capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert run.returncode == 2, run.stderr
-    assert 'expected a number > 0' in run.stderr and 'Traceback' not in run.stderr
+    assert 'expected a number' in run.stderr and 'Traceback' not in run.stderr
     assert not any(tmp_path.iterdir())            # nothing recorded, no empty bag left behind
 
 

@@ -49,7 +49,7 @@ def get(view, path):
 def read_events(view, n, timeout_s=10.0):
     """The first ``n`` state events a well-behaved page receives."""
     sock = socket.create_connection(('127.0.0.1', view.port), timeout=timeout_s)
-    sock.sendall(b'GET /events HTTP/1.1\r\nHost: x\r\n\r\n')
+    sock.sendall(b'GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
     buffer, states = b'', []
     end = time.monotonic() + timeout_s
     while len(states) < n and time.monotonic() < end:
@@ -96,7 +96,7 @@ def test_no_snapshot_is_built_while_no_page_is_connected(server):
 def test_a_paused_page_loses_frames_alone_and_is_dropped_the_others_go_on(server):
     paused = socket.create_connection(('127.0.0.1', server.port))
     paused.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    paused.sendall(b'GET /events HTTP/1.1\r\nHost: x\r\n\r\n')   # then never reads
+    paused.sendall(b'GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')   # then never reads
     assert wait_for(lambda: len(server.clients) == 1)
     client = server.clients.snapshot()[0]
     # 50 frames a second of 20 kB fill the socket: the paused page's queue drops, the broadcaster never waits.
@@ -134,7 +134,7 @@ def test_more_pages_than_max_clients_are_refused_clearly(server):
     socks = []
     for _ in range(12):
         s = socket.create_connection(('127.0.0.1', server.port))
-        s.sendall(b'GET /events HTTP/1.1\r\nHost: x\r\n\r\n')
+        s.sendall(b'GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
         socks.append(s)
     assert wait_for(lambda: len(server.clients) == 12)
     status, _, body = get(server, '/events')

@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 
+from touch_graph.files import replacing
+
 __all__ = ['CARD_KEY', 'KINDS', 'attach_card', 'card_line', 'card_log_line', 'file_kind', 'format_card', 'make_card',
            'read_card', 'this_command']
 
@@ -79,9 +81,8 @@ def attach_card(path: str | os.PathLike, card: dict[str, Any]) -> None:
     path = Path(path)
     arrays = _load_arrays(path)
     arrays[CARD_KEY] = np.array(json.dumps(card, sort_keys=True))
-    tmp = path.with_name(path.name + '.tmp.npz')
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)
+    with replacing(path) as tmp:
+        np.savez_compressed(tmp, **arrays)
 
 
 def read_card(path: str | os.PathLike) -> dict[str, Any] | None:

@@ -6,6 +6,11 @@ back as :class:`YamlDict` and :class:`YamlList`, plain ``dict`` and ``list`` sub
 that also remember the file and the line of each key or item, so a checker can say
 ``config/bear_body.yaml:12: sensor 'hed2' ...`` instead of just the value.
 
+Every document is bounded before anything walks or prints it (:func:`check_bounds`): its size in
+bytes, how deep collections nest, and how many values it holds once every alias is expanded, so a
+few hundred bytes of anchors and aliases (a "billion laughs") is refused at once instead of eating
+the memory of whoever prints it. Errors quote a bounded excerpt of a value (:func:`excerpt`).
+
 >>> doc = loads_yaml('a: 1\\nb:\\n  - x\\n', source='inline.yaml')
 >>> doc['b'], doc.line_of('b'), doc['b'].line_of(0)
 (['x'], 2, 3)
@@ -19,6 +24,7 @@ touch_graph.errors.ConfigError: inline.yaml:2: unknown key 'b' in example; expec
 from __future__ import annotations
 
 import difflib
+import reprlib
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -27,7 +33,43 @@ import yaml
 
 from .errors import ConfigError
 
-__all__ = ['YamlDict', 'YamlList', 'check_keys', 'did_you_mean', 'load_yaml', 'loads_yaml', 'typed']
+__all__ = ['MAX_BYTES', 'MAX_DEPTH', 'MAX_VALUES', 'YamlBoundsError', 'YamlDict', 'YamlList', 'check_bounds',
+           'check_keys', 'did_you_mean', 'excerpt', 'load_yaml', 'loads_yaml', 'read_text', 'safe_load', 'typed']
+
+#: Largest YAML document read, in bytes (the project's own configs are a few kB).
+MAX_BYTES = 2 * 1024 * 1024
+#: Deepest nesting of collections, aliases expanded.
+MAX_DEPTH = 64
+#: Most values (scalars and collections) in one document once every alias is expanded.
+MAX_VALUES = 200_000
+
+class _Excerpt(reprlib.Repr):
+    """reprlib's bounded repr, which finds its methods by type name: YAML's collections are lists and dicts."""
+
+    def repr_YamlList(self, obj: list, level: int) -> str:  # reprlib looks methods up by type name
+        return self.repr_list(obj, level)
+
+    def repr_YamlDict(self, obj: dict, level: int) -> str:
+        return self.repr_dict(obj, level)
+
+
+_EXCERPT = _Excerpt()
+_EXCERPT.maxlevel, _EXCERPT.maxdict, _EXCERPT.maxlist, _EXCERPT.maxtuple = 3, 6, 6, 6
+_EXCERPT.maxstring, _EXCERPT.maxother, _EXCERPT.maxlong = 60, 60, 40
+
+
+def excerpt(value: Any, limit: int = 120) -> str:
+    """A repr of ``value`` of at most ``limit`` characters that never walks all of a large value.
+
+    >>> excerpt(list(range(10**6)))
+    '[0, 1, 2, 3, 4, 5, ...]'
+    >>> excerpt(loads_yaml('[' + ','.join(['1'] * 1000) + ']'))
+    '[1, 1, 1, 1, 1, 1, ...]'
+    >>> len(excerpt('x' * 10**6)) <= 120
+    True
+    """
+    text = _EXCERPT.repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + '...'
 
 
 class YamlDict(dict):
@@ -81,11 +123,11 @@ def _make_loader(source: str) -> type[yaml.SafeLoader]:
             try:
                 hash(key)
             except TypeError as err:
-                raise ConfigError(f'unhashable mapping key {key!r}', source,
+                raise ConfigError(f'unhashable mapping key {excerpt(key)}', source,
                                   key_node.start_mark.line + 1) from err
             if key in out:
                 raise ConfigError(
-                    f'duplicate key {key!r} (first on line {out.key_lines[key]}); YAML would keep '
+                    f'duplicate key {excerpt(key, 60)} (first on line {out.key_lines[key]}); YAML would keep '
                     'only the last one, so remove or rename one of them', source, key_node.start_mark.line + 1)
             out[key] = loader.construct_object(value_node, deep=True)
             out.key_lines[key] = key_node.start_mark.line + 1
@@ -102,29 +144,151 @@ def _make_loader(source: str) -> type[yaml.SafeLoader]:
     return _Loader
 
 
-def loads_yaml(text: str, source: str = '<string>') -> Any:
-    """Parse YAML text; syntax errors become :class:`ConfigError` with the line."""
+def _text_excerpt(text: str, line: int | None) -> str:
+    """The start of line ``line`` (1-based) of ``text``, at most 60 characters."""
+    if line is None:
+        return ''
+    lines = text.splitlines()
+    return f': {lines[line - 1][:60]!r}' if 0 < line <= len(lines) else ''
+
+
+def check_bounds(text: str, source: str = '<string>', *, max_bytes: int = MAX_BYTES, max_depth: int = MAX_DEPTH,
+                 max_values: int = MAX_VALUES) -> None:
+    """Refuse YAML ``text`` that is too large, too deep or expands too far, before it is built.
+
+    One pass over the parser's events: nothing is constructed, so an alias costs what its
+    anchor's count says, and a document of 9 anchors of 9 aliases each (9**9 values) is refused
+    after reading a few hundred bytes. An alias inside its own anchor (a cycle) is refused too.
+
+    Raises:
+        ConfigError: naming the file, the line and the limit, with a bounded excerpt of the line.
+
+    >>> check_bounds('a: &a [1, 2]\\nb: [*a, *a]\\n')
+    >>> laughs = 'a: &a [1,1,1,1,1,1,1,1,1]\\n' + ''.join(
+    ...     f'{n}: &{n} [{",".join(["*" + p] * 9)}]\\n' for p, n in zip('abcdefgh', 'bcdefghi'))
+    >>> check_bounds(laughs, 'laughs.yaml')
+    Traceback (most recent call last):
+    ...
+    touch_graph.yamlconf.YamlBoundsError: laughs.yaml:6: more than 200000 values once aliases are expanded ...
+    """
+    size = len(text.encode('utf-8', 'surrogatepass')) if len(text) * 4 > max_bytes else len(text)
+    if size > max_bytes:
+        raise YamlBoundsError(f'{size} bytes of YAML; a config is at most {max_bytes} bytes', source)
+    sizes: dict[str, tuple[int, int]] = {}  # anchor -> (values, depth) of what it names, aliases expanded
+    open_anchors: set[str] = set()
+    stack: list[list] = []  # [anchor, values, depth below] of each open collection
+    total = 0
+
+    def add(values: int, depth: int, mark: Any) -> None:
+        nonlocal total
+        total += values
+        if total > max_values:
+            raise _bound_error(f'more than {max_values} values once aliases are expanded (anchors and *aliases '
+                               'repeat what they name; a config needs far fewer)', source, text, mark)
+        if len(stack) + depth > max_depth:
+            raise _bound_error(f'collections nest deeper than {max_depth} levels', source, text, mark)
+        if stack:
+            stack[-1][1] += values
+            stack[-1][2] = max(stack[-1][2], depth)
+
     try:
-        return yaml.load(text, Loader=_make_loader(source))  # a SafeLoader subclass
-    except yaml.MarkedYAMLError as err:
+        for event in yaml.parse(text, Loader=_PARSER):
+            if isinstance(event, yaml.AliasEvent):
+                if event.anchor in open_anchors:
+                    raise _bound_error(f'alias *{event.anchor} is inside its own anchor &{event.anchor}: '
+                                       'the value would contain itself', source, text, event.start_mark)
+                values, depth = sizes.get(event.anchor, (1, 0))
+                add(values, depth, event.start_mark)
+            elif isinstance(event, yaml.ScalarEvent):
+                add(1, 0, event.start_mark)
+                if event.anchor is not None:
+                    sizes[event.anchor] = (1, 0)
+            elif isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                if len(stack) + 1 > max_depth:
+                    raise _bound_error(f'collections nest deeper than {max_depth} levels', source, text,
+                                       event.start_mark)
+                stack.append([event.anchor, 1, 0])
+                if event.anchor is not None:
+                    open_anchors.add(event.anchor)
+            elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                anchor, values, depth = stack.pop()
+                total -= values - 1  # add() below counts them again, as one collection
+                if anchor is not None:
+                    open_anchors.discard(anchor)
+                    sizes[anchor] = (values, depth + 1)
+                add(values, depth + 1, event.start_mark)
+    except yaml.YAMLError as err:
+        raise _syntax_error(err, source) from err
+
+
+class YamlBoundsError(ConfigError):
+    """YAML refused for its size, depth or alias expansion (not for its syntax)."""
+
+
+def _bound_error(message: str, source: str, text: str, mark: Any) -> ConfigError:
+    line = mark.line + 1 if mark is not None else None
+    return YamlBoundsError(message + _text_excerpt(text, line), source, line)
+
+
+def _syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
+    if isinstance(err, yaml.MarkedYAMLError):
         mark = err.problem_mark or err.context_mark
         line = mark.line + 1 if mark is not None else None
         problem = err.problem or err.context or str(err)
-        raise ConfigError(f'YAML syntax error: {problem}', source, line) from err
+        return ConfigError(f'YAML syntax error: {problem}', source, line)
+    return ConfigError(f'YAML error: {str(err)[:200]}', source)
+
+
+_PARSER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+
+
+def loads_yaml(text: str, source: str = '<string>') -> Any:
+    """Parse YAML text, bounded (:func:`check_bounds`); syntax errors become :class:`ConfigError` with the line."""
+    check_bounds(text, source)
+    try:
+        return yaml.load(text, Loader=_make_loader(source))  # a SafeLoader subclass
     except yaml.YAMLError as err:
-        raise ConfigError(f'YAML error: {err}', source) from err
+        raise _syntax_error(err, source) from err
+
+
+def safe_load(text: str, source: str = '<string>') -> Any:
+    """``yaml.safe_load`` of ``text`` (plain dicts and lists), bounded as :func:`loads_yaml` is.
+
+    For YAML that is not a config file: values typed on a command line, a bag's metadata.
+    """
+    check_bounds(text, source)
+    try:
+        return yaml.load(text, Loader=_PARSER)
+    except yaml.YAMLError as err:
+        raise _syntax_error(err, source) from err
+
+
+def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:
+    """The text of ``path``, refused above ``max_bytes`` before it is read whole.
+
+    Raises:
+        ConfigError: a missing, unreadable, non-UTF-8 or too large file.
+    """
+    path = Path(path)
+    try:
+        with open(path, 'rb') as f:
+            data = f.read(max_bytes + 1)
+    except FileNotFoundError as err:
+        raise ConfigError('file not found', str(path)) from err
+    except OSError as err:
+        raise ConfigError(f'cannot read file: {err}', str(path)) from err
+    if len(data) > max_bytes:
+        raise YamlBoundsError(f'more than {max_bytes} bytes; a YAML config is at most {max_bytes} bytes '
+                          '(is this the right file?)', str(path))
+    try:
+        return data.decode('utf-8')
+    except UnicodeDecodeError as err:
+        raise ConfigError(f'cannot read file: not UTF-8 text ({err.reason} at byte {err.start})', str(path)) from err
 
 
 def load_yaml(path: str | Path) -> Any:
-    """Read a YAML file; a missing file or bad syntax raises :class:`ConfigError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding='utf-8')
-    except FileNotFoundError as err:
-        raise ConfigError('file not found', str(path)) from err
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(f'cannot read file: {err}', str(path)) from err
-    return loads_yaml(text, source=str(path))
+    """Read a YAML file, bounded; a missing, too large file or bad syntax raises :class:`ConfigError`."""
+    return loads_yaml(read_text(path), source=str(path))
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
@@ -143,11 +307,11 @@ def check_keys(mapping: Any, required: Iterable[str] = (), optional: Iterable[st
     required, optional = tuple(required), tuple(optional)
     if not isinstance(mapping, dict):
         raise _error_at(mapping, f'{what} must be a mapping with keys {", ".join(required + optional)}; '
-                        f'got {type(mapping).__name__} {mapping!r}')
+                        f'got {type(mapping).__name__} {excerpt(mapping)}')
     allowed = required + optional
     for key in mapping:
         if key not in allowed:
-            raise _error_at(mapping, f"unknown key '{key}' in {what}; expected one of: "
+            raise _error_at(mapping, f"unknown key {excerpt(key, 60)} in {what}; expected one of: "
                             f'{", ".join(allowed)}{did_you_mean(key, allowed)}', key)
     for key in required:
         if key not in mapping:
@@ -174,7 +338,7 @@ def typed(mapping: dict, key: str, types: type | tuple[type, ...], what: str, de
         ok = isinstance(value, types)
     if not ok:
         names = ' or '.join(t.__name__ for t in types)
-        raise _error_at(mapping, f"'{key}' in {what} must be {names}; got {type(value).__name__} {value!r}", key)
+        raise _error_at(mapping, f"'{key}' in {what} must be {names}; got {type(value).__name__} {excerpt(value)}", key)
     return value
 
 

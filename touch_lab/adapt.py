@@ -28,6 +28,8 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
+from touch_graph.cli.options import non_negative_float, positive_float
+
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
 
@@ -111,8 +113,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--bags', nargs='+', required=True, metavar='BAG',
                         help="the person's session bags (social-touch collect SENSOR --repetitions 3)")
     parser.add_argument('--output', '-o', required=True, help='the adapted file to write')
-    parser.add_argument('--relevance', type=float, default=16.0, help='patch: MAP relevance factor, frames (16)')
-    parser.add_argument('--lam', type=float, default=1.0, help='bear: pull towards the deployed weights (1)')
+    parser.add_argument('--relevance', type=positive_float, default=16.0,
+                        help='patch: MAP relevance factor, frames (16)')
+    parser.add_argument('--lam', type=non_negative_float, default=1.0,
+                        help='bear: pull towards the deployed weights (1)')
 
 
 def run(args: argparse.Namespace) -> int:

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from touch_graph.cli.options import positive_int, seed
 from touch_lab.collect.protocol import DEFAULT_GESTURES, Protocol
 from touch_lab.collect.session_bag import read_session
 from touch_lab.collect.simulate import simulate_session
@@ -162,9 +163,9 @@ def measure(sensor: str, people: int = 4, new_people: int = 3, seed: int = 0, pr
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval adapt``."""
     parser.add_argument('sensor', choices=('bear', 'patch', 'skin'))
-    parser.add_argument('--people', type=int, default=4, help='simulated people of the base model (4)')
-    parser.add_argument('--new-people', type=int, default=3, help='other simulated people adapted to (3)')
-    parser.add_argument('--seed', type=int, default=0, help='population seed; the new people use seed + 500 (0)')
+    parser.add_argument('--people', type=positive_int, default=4, help='simulated people of the base model (4)')
+    parser.add_argument('--new-people', type=positive_int, default=3, help='other simulated people adapted to (3)')
+    parser.add_argument('--seed', type=seed, default=0, help='population seed; the new people use seed + 500 (0)')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
 
 

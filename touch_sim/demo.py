@@ -17,6 +17,7 @@ import argparse
 import math
 import sys
 
+from touch_graph.cli.options import clock_rate, port, seconds
 from touch_graph.errors import LaunchError
 from touch_graph.launch import LaunchRunner, evaluate_launch
 from touch_graph.paths import share_file
@@ -24,19 +25,19 @@ from touch_graph.paths import share_file
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')
-    parser.add_argument('--duration', type=float, default=45.0, metavar='SECONDS',
+    parser.add_argument('--duration', type=seconds, default=45.0, metavar='SECONDS',
                         help='simulated seconds to run (default 45: the whole scene)')
     speed = parser.add_mutually_exclusive_group()
-    speed.add_argument('--rate', type=float, default=1.5, metavar='R',
+    speed.add_argument('--rate', type=clock_rate, default=1.5, metavar='R',
                        help='how many times faster than real time (default 1.5)')
     speed.add_argument('--fast', action='store_true', help='as fast as the machine can (deterministic)')
     parser.add_argument('--view', action='store_true',
                         help='serve the live web view of the scene (social-touch view); its address is logged')
-    parser.add_argument('--view-port', type=int, default=8080, metavar='PORT',
+    parser.add_argument('--view-port', type=port, default=8080, metavar='PORT',
                         help='port of the web view (default 8080; 0: any free port)')
     parser.add_argument('--foxglove', action='store_true',
                         help='serve every topic over the Foxglove WebSocket protocol (social-touch foxglove)')
-    parser.add_argument('--foxglove-port', type=int, default=8765, metavar='PORT',
+    parser.add_argument('--foxglove-port', type=port, default=8765, metavar='PORT',
                         help='port of the Foxglove server (default 8765; 0: any free port)')
     parser.add_argument('arguments', nargs='*', metavar='name:=value',
                         help='launch arguments of demo.launch.yaml (see social-touch launch --show-args)')

@@ -30,7 +30,7 @@ __all__ = ['bench_view']
 _PAGE = textwrap.dedent('''
     import socket, sys
     sock = socket.create_connection(('127.0.0.1', int(sys.argv[1])))
-    sock.sendall(b'GET /events HTTP/1.1\\r\\nHost: bench\\r\\n\\r\\n')
+    sock.sendall(b'GET /events HTTP/1.1\\r\\nHost: 127.0.0.1\\r\\n\\r\\n')
     while sock.recv(1 << 16):
         pass
 ''')

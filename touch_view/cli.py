@@ -11,6 +11,11 @@ from __future__ import annotations
 
 import argparse
 
+from touch_graph.cli.options import number, port, seconds
+
+#: The view's display rate: ViewServer takes (0, 60] snapshots per second.
+view_rate_hz = number(low=0, high=60, low_open=True, unit='Hz')
+
 __all__ = ['add_arguments', 'run']
 
 
@@ -18,10 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')
     parser.add_argument('--host', default='127.0.0.1',
                         help='address to listen on (default 127.0.0.1, this machine only; 0.0.0.0: every interface)')
-    parser.add_argument('--port', type=int, default=8080, help='port to listen on (default 8080; 0: any free port)')
-    parser.add_argument('--rate', type=float, default=20.0, metavar='HZ',
+    parser.add_argument('--port', type=port, default=8080, help='port to listen on (default 8080; 0: any free port)')
+    parser.add_argument('--rate', type=view_rate_hz, default=20.0, metavar='HZ',
                         help='snapshots per second sent to each page, at most (default 20)')
-    parser.add_argument('--stale-after', type=float, default=1.0, metavar='SECONDS',
+    parser.add_argument('--stale-after', type=seconds, default=1.0, metavar='SECONDS',
                         help='a sensor with no frame for this long is shown as SILENT (default 1.0)')
 
 

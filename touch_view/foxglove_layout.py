@@ -18,6 +18,8 @@ import argparse
 import json
 import sys
 
+from touch_graph.files import write_text
+
 __all__ = ['POSTERIOR_CLASSES', 'add_arguments', 'build_layout', 'run']
 
 #: The classes of the shipped patch model, in its order (``/patch/posteriors.classes``).
@@ -62,8 +64,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     text = json.dumps(build_layout(), indent=2) + '\n'
     if args.output:
-        with open(args.output, 'w', encoding='utf-8') as out:
-            out.write(text)
+        write_text(args.output, text)
     else:
         sys.stdout.write(text)
     return 0

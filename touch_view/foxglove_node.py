@@ -21,7 +21,10 @@ client subscribes to a channel; the server's per-client queue (``message_backlog
 the oldest message for a client that does not keep up, so the graph never waits for it.
 
 Parameters: ``host`` ('127.0.0.1'), ``port`` (8765; 0: any free port), ``image_rate_hz`` (20),
-``discovery_period_s`` (1.0), ``backlog`` (messages per client, 1024).
+``discovery_period_s`` (1.0), ``backlog`` (messages per client, 1024), ``allowed_origins`` (web
+pages allowed to connect besides the Foxglove app, comma-separated; ''). A page of another site
+open in the user's browser is refused (:mod:`touch_view.origins`); the server offers no request
+that changes the graph (no client publishing, services or parameters).
 """
 
 from __future__ import annotations
@@ -76,6 +79,9 @@ class FoxgloveServerNode(Node):
         image_rate_hz = self._param('image_rate_hz', 20.0, 'images per second per map, at most')
         discovery_period_s = self._param('discovery_period_s', 1.0, 'how often to look for new topics, s')
         backlog = self._param('backlog', 1024, 'messages queued per client before its oldest are dropped')
+        allowed_origins = tuple(o.strip() for o in str(self._param(
+            'allowed_origins', '', 'web pages allowed to connect besides the Foxglove app, comma-separated '
+            '(e.g. https://lichtblick.example)')).split(',') if o.strip())
         if not image_rate_hz > 0 or not discovery_period_s > 0 or backlog < 1:
             raise ValueError(f'{self.get_fully_qualified_name()}: image_rate_hz and discovery_period_s must be > 0 '
                              f'and backlog >= 1; got {image_rate_hz}, {discovery_period_s}, {backlog}')
@@ -97,7 +103,7 @@ class FoxgloveServerNode(Node):
             raise bind_error('the Foxglove server', _LOOPBACK, 0, OSError(int(found.group(1)), str(err)),
                              '--port') from err
         try:
-            self.front = SubprotocolFront(host, port, self.server.port)
+            self.front = SubprotocolFront(host, port, self.server.port, allowed_origins)
         except OSError as err:
             self.server.stop()
             raise bind_error('the Foxglove server', host, port, err, '--port') from err

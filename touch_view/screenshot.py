@@ -17,6 +17,7 @@ import io
 import sys
 import time
 
+from touch_graph.cli.options import non_negative_seconds, positive_float
 from touch_graph.paths import share_file
 
 from .browser import headless_chromium
@@ -51,8 +52,9 @@ def take_screenshot(path: str, *, at_s: float = 17.0, rate: float = 2.0, size: t
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('output', help='PNG file to write, e.g. docs/touch-view.png')
-    parser.add_argument('--at', type=float, default=17.0, metavar='SECONDS', help='scene time of the screenshot')
-    parser.add_argument('--rate', type=float, default=2.0, help='simulated seconds per wall second')
+    parser.add_argument('--at', type=non_negative_seconds, default=17.0, metavar='SECONDS',
+                        help='scene time of the screenshot')
+    parser.add_argument('--rate', type=positive_float, default=2.0, help='simulated seconds per wall second')
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,6 +9,10 @@ Server-Sent Events give over plain HTTP, and browsers reconnect by themselves. R
 - ``/state.json``: one snapshot, for scripts and curl;
 - ``/events``: the live stream; ``event: state`` frames of snapshot JSON at up to ``rate_hz``.
 
+GET only (any other method: 405); a request whose Host is not this machine (DNS rebinding) or whose Origin is a page of
+another site is refused with 403 (:mod:`touch_view.origins`), so another site open in the same
+browser cannot read what the robot senses.
+
 Threads: ``serve_forever`` in one thread, one thread per connected page, and a broadcaster that
 builds one snapshot per display tick (only while a page is connected) and offers it to every
 page's bounded queue (:mod:`touch_view.clients`). Nothing here ever runs in, or waits for, the
@@ -21,7 +25,7 @@ import contextlib
 import json
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
@@ -29,6 +33,7 @@ from typing import Any
 
 from .clients import ClientQueue, ClientRegistry
 from .errors import ViewError, bind_error
+from .origins import OriginPolicy
 
 __all__ = ['ViewServer']
 
@@ -63,6 +68,7 @@ class ViewServer:
         queue_frames: frames queued per page before its oldest are dropped.
         write_timeout_s: a page that accepts no data for this long is disconnected.
         on_error: ``on_error(text)`` for a broadcaster failure (logged by the node).
+        allowed_origins: pages of other origins allowed to read the view (e.g. ``http://robot.local:8080``).
 
     Raises:
         ViewError: when the port cannot be listened on (it names the flag to change it).
@@ -72,7 +78,7 @@ class ViewServer:
                  tick: Callable[[], None] | None = None, host: str = '127.0.0.1', port: int = 8080,
                  rate_hz: float = 20.0, max_clients: int = 32, queue_frames: int = 4,
                  write_timeout_s: float = 10.0, keepalive_s: float = 5.0, flag: str = '--port',
-                 on_error: Callable[[str], None] | None = None) -> None:
+                 on_error: Callable[[str], None] | None = None, allowed_origins: Iterable[str] = ()) -> None:
         if not 0 < rate_hz <= 60:
             raise ValueError(f'rate_hz must be in (0, 60] snapshots per second, got {rate_hz}')
         if not 0 <= port <= 65535:
@@ -85,6 +91,7 @@ class ViewServer:
         self.broadcast_errors = 0
         self.frames_built = 0
         self._on_error = on_error or (lambda text: None)
+        self.origins = OriginPolicy(host, allowed_origins)
         self._stop = threading.Event()
         self._files = _static_files()
         self._config = json.dumps(config, separators=(',', ':')).encode()
@@ -126,7 +133,7 @@ class ViewServer:
     def state_json(self) -> bytes:
         data = self._snapshot()
         data['server'] = {**self.clients.stats(), 'rate_hz': self.rate_hz, 'frames_built': self.frames_built,
-                          'broadcast_errors': self.broadcast_errors}
+                          'broadcast_errors': self.broadcast_errors, 'refused_requests': self.origins.refused}
         return json.dumps(data, separators=(',', ':'), allow_nan=False).encode()
 
     def _broadcast_loop(self) -> None:
@@ -185,7 +192,12 @@ class _Handler(BaseHTTPRequestHandler):
         path = self.path.split('?', 1)[0]
         view = self.view
         with contextlib.suppress(BrokenPipeError, ConnectionResetError, TimeoutError):
-            if path == '/events':
+            refusal = view.origins.refusal(self.headers.get_all('Host', []), self.headers.get_all('Origin', []),
+                                           self.headers.get('Sec-Fetch-Site'))
+            if refusal is not None:
+                self._send(f'refused: {refusal}; open the view at {view.url}\n'.encode(),
+                           'text/plain; charset=utf-8', HTTPStatus.FORBIDDEN)
+            elif path == '/events':
                 self._events()
             elif path in ('/', '/index.html'):
                 self._send(*view._files['index.html'])
@@ -197,6 +209,20 @@ class _Handler(BaseHTTPRequestHandler):
                 self._send(view.state_json(), 'application/json')
             else:
                 self._send(b'not found: try /\n', 'text/plain; charset=utf-8', HTTPStatus.NOT_FOUND)
+
+    def _read_only(self) -> None:
+        """Any method but GET: the view changes nothing, for any page."""
+        self.close_connection = True  # a body it sent is not read
+        with contextlib.suppress(BrokenPipeError, ConnectionResetError, TimeoutError):
+            self.send_response(HTTPStatus.METHOD_NOT_ALLOWED)
+            body = b'the touch view is read-only: GET only\n'
+            self.send_header('Allow', 'GET')
+            self.send_header('Content-Type', 'text/plain; charset=utf-8')
+            self.send_header('Content-Length', str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+    do_POST = do_PUT = do_DELETE = do_PATCH = do_OPTIONS = _read_only
 
     def _events(self) -> None:
         registry = self.view.clients

@@ -10,6 +10,10 @@ the server's answer names the protocol the client asked for. After the handshake
 bytes through unchanged in both directions (the frames do not depend on the subprotocol's name), so
 the server's per-client queue still sees a slow client as slow. A client that asks for
 ``foxglove.sdk.v1`` is passed through untouched.
+
+Before anything reaches the server, the front refuses with 403 a handshake from a page of another
+site (its ``Origin``) or sent to a name that is not this machine (its ``Host``: DNS rebinding), as
+:class:`~touch_view.origins.OriginPolicy` decides; foxglove-sdk's own server checks neither.
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ import socket
 import threading
 from contextlib import suppress
 
-__all__ = ['NEW_SUBPROTOCOL', 'OLD_SUBPROTOCOL', 'SubprotocolFront', 'rewrite_request', 'rewrite_response']
+from .origins import FOXGLOVE_ORIGINS, OriginPolicy
+
+__all__ = ['NEW_SUBPROTOCOL', 'OLD_SUBPROTOCOL', 'SubprotocolFront', 'header', 'rewrite_request', 'rewrite_response']
 
 OLD_SUBPROTOCOL = 'foxglove.websocket.v1'
 NEW_SUBPROTOCOL = 'foxglove.sdk.v1'
@@ -42,6 +48,23 @@ def rewrite_request(head: bytes) -> tuple[bytes, bool]:
     if NEW_SUBPROTOCOL in offered or OLD_SUBPROTOCOL not in offered:
         return head, False
     return _PROTOCOL_LINE.sub(f'Sec-WebSocket-Protocol: {NEW_SUBPROTOCOL}\r'.encode(), head, count=1), True
+
+
+def header(head: bytes, name: str) -> list[str]:
+    """Every value of the header ``name`` in an HTTP head (normally none or one).
+
+    >>> header(b'GET / HTTP/1.1\\r\\nHost: 127.0.0.1:8765\\r\\norigin: https://a.b\\r\\n\\r\\n', 'Origin')
+    ['https://a.b']
+    """
+    found = re.findall(rb'^' + re.escape(name.encode()) + rb':[ \t]*(.*?)[ \t]*\r?$', head,
+                       re.IGNORECASE | re.MULTILINE)
+    return [value.decode('latin-1') for value in found]
+
+
+def _forbidden(reason: str) -> bytes:
+    body = f'refused: {reason}\n'.encode()
+    return (b'HTTP/1.1 403 Forbidden\r\nContent-Type: text/plain; charset=utf-8\r\nConnection: close\r\n'
+            b'Content-Length: ' + str(len(body)).encode() + b'\r\n\r\n' + body)
 
 
 def rewrite_response(head: bytes) -> bytes:
@@ -83,11 +106,13 @@ class SubprotocolFront:
     Attributes:
         port: the port it listens on (the one given, or the free one picked for 0).
         renamed: connections whose handshake asked for ``foxglove.websocket.v1`` only.
+        policy: the Host and Origin checks; ``policy.refused`` counts the handshakes refused.
     """
 
-    def __init__(self, host: str, port: int, backend_port: int) -> None:
+    def __init__(self, host: str, port: int, backend_port: int, allowed_origins: tuple[str, ...] = ()) -> None:
         self.backend_port = backend_port
         self.renamed = 0
+        self.policy = OriginPolicy(host, allowed_origins, FOXGLOVE_ORIGINS)
         self._listener = socket.create_server((host, port), reuse_port=False)
         self.port = self._listener.getsockname()[1]
         self._connections: set[socket.socket] = set()
@@ -116,6 +141,10 @@ class SubprotocolFront:
         try:
             client.settimeout(HANDSHAKE_TIMEOUT_S)
             head, rest = _read_head(client)
+            refusal = self.policy.refusal(header(head, 'Host'), header(head, 'Origin'))
+            if refusal is not None:
+                client.sendall(_forbidden(refusal))
+                return
             head, rename = rewrite_request(head)
             server = socket.create_connection(('127.0.0.1', self.backend_port), timeout=HANDSHAKE_TIMEOUT_S)
             if not self._track(client, server):

@@ -32,6 +32,8 @@ import numpy as np
 from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.exceptions import NotFittedError
 
+from touch_graph.files import replacing
+
 from .features import FEATURE_NAMES
 from .subtype import check_feature_table
 from .subtype_labels import SUBTYPES, subtype_index
@@ -159,10 +161,12 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         self._check_fitted()
         trained_at = np.array([np.nan if rate_hz is None else float(rate_hz),
                                np.nan if buffer_len is None else float(buffer_len)])
-        np.savez(path, format=np.int64(MODEL_FORMAT), feature_names=np.array(FEATURE_NAMES), classes=self.classes_,
-                 design_names=np.array(design_names(self.relative)),
-                 mean=self.mean_, scale=self.scale_, coef=self.coef_, intercept=self.intercept_,
-                 params=np.array([float(self.C), float(self.max_iter)]), trained_at=trained_at)
+        path = Path(path) if str(path).endswith('.npz') else Path(f'{path}.npz')  # where np.savez would write
+        with replacing(path) as tmp:  # whole or not at all: a full disk keeps the previous model
+            np.savez(tmp, format=np.int64(MODEL_FORMAT), feature_names=np.array(FEATURE_NAMES), classes=self.classes_,
+                     design_names=np.array(design_names(self.relative)),
+                     mean=self.mean_, scale=self.scale_, coef=self.coef_, intercept=self.intercept_,
+                     params=np.array([float(self.C), float(self.max_iter)]), trained_at=trained_at)
 
     @classmethod
     def load(cls, path: str | Path) -> SubtypeClassifier:

@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 
 from touch_graph.errors import ConfigError
+from touch_graph.files import replacing
 
 from .classifier import EventDetector, GaussianMixtureParams, PatchGestureClassifier, precision_cholesky
 from .features import FEATURE_NAMES, WindowFeatures
@@ -132,10 +133,8 @@ def save_model(path: str | os.PathLike, model: PatchModel) -> None:
     }
     if model.metadata:
         arrays['metadata'] = np.array(_metadata_json(model.metadata))
-    path = Path(path)
-    tmp = path.with_name(path.name + '.tmp.npz')
-    np.savez(tmp, **arrays)
-    os.replace(tmp, path)
+    with replacing(Path(path)) as tmp:
+        np.savez(tmp, **arrays)
 
 
 def _metadata_json(metadata: dict) -> str:

@@ -57,6 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
+from touch_graph.files import replacing
 from touch_graph.yamlconf import did_you_mean
 
 from .base import TemplateRecogniser
@@ -101,23 +102,24 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
     if path.suffix != '.npz':
         path = path.with_name(path.name + '.npz')
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(
-        path, format=np.array(FORMAT), format_version=np.array(FORMAT_VERSION, dtype=np.int64),
-        recogniser=np.array(recogniser.name), params=np.array(json.dumps(recogniser.get_params(), sort_keys=True)),
-        classes=np.asarray(recogniser.classes_, dtype=str), templates=recogniser.templates_.astype(np.float32),
-        template_labels=recogniser.template_labels_.astype(np.int64),
-        class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64),
-        vocabulary=np.array(str(vocabulary)), gap_s=np.array(gap_s, dtype=np.float64),
-        max_strokes=np.array(max_strokes, dtype=np.int64),
-        **({} if description is None else {'description': np.array(str(description))}),
-        **({} if getattr(recogniser, 'template_strokes_', None) is None
-           else {'template_strokes': np.asarray(recogniser.template_strokes_, dtype=np.int64)}),
-        **({} if getattr(recogniser, 'template_contact_s_', None) is None
-           else {'template_contact_s': np.asarray(recogniser.template_contact_s_, dtype=np.float64)}),
-        **({} if getattr(recogniser, 'template_paths_', None) is None
-           else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}),
-        **({} if getattr(recogniser, 'template_people_', None) is None
-           else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}))
+    with replacing(path) as tmp:  # whole or not at all: a full disk keeps the previous codebook
+        np.savez_compressed(
+            tmp, format=np.array(FORMAT), format_version=np.array(FORMAT_VERSION, dtype=np.int64),
+            recogniser=np.array(recogniser.name), params=np.array(json.dumps(recogniser.get_params(), sort_keys=True)),
+            classes=np.asarray(recogniser.classes_, dtype=str), templates=recogniser.templates_.astype(np.float32),
+            template_labels=recogniser.template_labels_.astype(np.int64),
+            class_thresholds=np.asarray(recogniser.class_thresholds_, dtype=np.float64),
+            vocabulary=np.array(str(vocabulary)), gap_s=np.array(gap_s, dtype=np.float64),
+            max_strokes=np.array(max_strokes, dtype=np.int64),
+            **({} if description is None else {'description': np.array(str(description))}),
+            **({} if getattr(recogniser, 'template_strokes_', None) is None
+               else {'template_strokes': np.asarray(recogniser.template_strokes_, dtype=np.int64)}),
+            **({} if getattr(recogniser, 'template_contact_s_', None) is None
+               else {'template_contact_s': np.asarray(recogniser.template_contact_s_, dtype=np.float64)}),
+            **({} if getattr(recogniser, 'template_paths_', None) is None
+               else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}),
+            **({} if getattr(recogniser, 'template_people_', None) is None
+               else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}))
     return path
 
 

@@ -146,8 +146,12 @@ def bag_metadata(files: list[FileRecord], topics: list[TopicRecord],
 def write_metadata(bag: Path, info: dict) -> None:
     """Write ``bag/metadata.yaml`` atomically (a temporary file renamed over it) and fsync it."""
     tmp = bag / 'metadata.yaml.tmp'
-    with tmp.open('w', encoding='utf-8') as f:
-        yaml.safe_dump(info, f, sort_keys=False)
-        f.flush()
-        os.fsync(f.fileno())
+    try:
+        with tmp.open('w', encoding='utf-8') as f:
+            yaml.safe_dump(info, f, sort_keys=False)
+            f.flush()
+            os.fsync(f.fileno())
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # a half-written copy on a full disk helps nobody
+        raise
     tmp.replace(bag / 'metadata.yaml')

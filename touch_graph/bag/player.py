@@ -19,8 +19,8 @@ from typing import Any
 
 from rosbags.rosbag2 import Reader, ReaderError
 
-from ..errors import BagError
-from ..yamlconf import did_you_mean
+from ..errors import BagError, ConfigError
+from ..yamlconf import YamlBoundsError, check_bounds, did_you_mean, read_text
 from .definitions import DefinitionCheck, check_definition
 
 __all__ = ['BagPlayer', 'BagTopic', 'bag_info', 'open_reader']
@@ -48,6 +48,14 @@ def open_reader(path: str | os.PathLike) -> Reader:
     path = Path(path)
     if not path.exists():
         raise BagError(f'bag {path} does not exist')
+    metadata = path / 'metadata.yaml'
+    if metadata.is_file():
+        try:  # bounded before rosbags parses it: a few bytes of aliases must not expand in its reader
+            check_bounds(read_text(metadata), str(metadata))
+        except YamlBoundsError as err:
+            raise BagError(f'cannot read bag {path}: {err}') from err
+        except ConfigError:
+            pass  # rosbags reports a syntax error in its own words below
     try:
         reader = Reader(path)
         reader.open()

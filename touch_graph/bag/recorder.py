@@ -16,11 +16,17 @@ closes. A background thread closes the pending chunk (the writer's public ``flus
 fsyncs the file every ``flush_period_s`` (default 1 s), so a recorder killed with SIGKILL loses
 at most about that much; :func:`touch_graph.bag.reindex.reindex` then rebuilds the summary and
 ``metadata.yaml``. :meth:`BagRecorder.close` writes both.
+
+A full disk (ENOSPC, or a quota: EDQUOT) stops the recording at once and for good: the file keeps
+what reached the disk, nothing more is written to it (a half-written chunk is never followed by
+more bytes), every later message is refused and counted in ``dropped``, and the error names the
+messages kept and the command that makes the bag readable again.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import threading
 from dataclasses import dataclass
@@ -65,6 +71,9 @@ class BagRecorder:
     Attributes:
         counts, sizes: messages and CDR bytes written per topic.
         flushes: chunk flushes done (closing included).
+        flushed_messages: messages on disk as of the last flush (those a reindex surely recovers).
+        full: the error of a full disk, once the disk ran out of space (None until then).
+        dropped: messages refused after the disk was full.
     """
 
     def __init__(self, path: str | os.PathLike, *, flush_period_s: float | None = 1.0,
@@ -76,6 +85,9 @@ class BagRecorder:
         self.counts: dict[str, int] = {}
         self.sizes: dict[str, int] = {}
         self.flushes = 0
+        self.flushed_messages = 0
+        self.full: OSError | None = None
+        self.dropped = 0
         self._custom = dict(custom_data or {})
         self._lock = threading.Lock()  # writer state
         self._io_lock = threading.Lock()  # fsync vs close, so fsync runs outside the writer lock
@@ -119,6 +131,8 @@ class BagRecorder:
             self._thread.join(timeout=10.0)
         with self._io_lock, self._lock:
             writer, self._writer = self._writer, None
+            if self.full is not None:
+                raise BagError(self._full_message())
             if writer is not None:
                 try:
                     info = self._metadata()
@@ -129,6 +143,9 @@ class BagRecorder:
                     self._file.close()
                     write_metadata(self.path, info)
                 except OSError as err:
+                    if _no_space(err):
+                        self._disk_full(err)
+                        raise BagError(self._full_message()) from err
                     raise BagError(f'cannot close bag {self.path}: {err}; run social-touch bag reindex '
                                    f'{self.path} to recover what was flushed') from err
             self.flushes += 1
@@ -195,6 +212,9 @@ class BagRecorder:
             raise BagError(f"message on '{topic}' has a negative stamp {stamp_ns} ns")
         sent = int(stamp_ns if publish_ns is None or publish_ns < 0 else publish_ns)
         with self._lock:
+            if self.full is not None:
+                self.dropped += 1
+                raise BagError(self._full_message())
             if self._writer is None:
                 raise BagError(f'bag {self.path} is closed; message on {topic!r} not recorded')
             channel = self._connection(topic, type_name, qos)
@@ -203,6 +223,10 @@ class BagRecorder:
                 self._writer.add_message(channel.id, log_time=stamp, data=bytes(data), publish_time=sent,
                                          sequence=self.counts[topic])
             except OSError as err:
+                if _no_space(err):
+                    self._disk_full(err)
+                    self.dropped += 1
+                    raise BagError(self._full_message()) from err
                 raise BagError(f'cannot write to bag {self.path}: {err}') from err
             self._span = [min(self._span[0], stamp), max(self._span[1], stamp)] if self._span else [stamp, stamp]
             channel.topic.message_count += 1
@@ -220,13 +244,18 @@ class BagRecorder:
         with self._io_lock:
             with self._lock:
                 writer = self._writer
-                if writer is None or not self._dirty:
+                if writer is None or not self._dirty or self.full is not None:
                     return False
                 try:
                     writer.flush()   # the chunk in progress, with its CRC and message indexes
+                    self._file.flush()
                 except OSError as err:
+                    if _no_space(err):
+                        self._disk_full(err)
+                        raise BagError(self._full_message()) from err
                     raise BagError(f'cannot flush bag {self.path}: {err}') from err
                 self._dirty = False
+                self.flushed_messages = self.message_count
                 fd = self._file.fileno()
             # fsync outside the writer lock: a slow disk must not stall the graph's callbacks.
             with contextlib.suppress(OSError):
@@ -241,10 +270,45 @@ class BagRecorder:
             except BagError as err:  # keep trying: the disk may come back; close() reports for good
                 import sys
                 sys.stderr.write(f'[bag recorder] {err}\n')
+            if self.full is not None:
+                return  # said once by flush or write; nothing more will reach this file
+
+    def _disk_full(self, err: OSError) -> None:
+        """Stop writing for good after ``err`` (no space): what is in the file stays as it is.
+
+        The file's buffer may hold the rest of a chunk the disk refused; its descriptor is pointed
+        at /dev/null (atomically, so no other file can take its number), so closing it writes
+        nothing more, and a reindex finds the whole chunks before the torn one.
+        """
+        self.full = err
+        self._writer = None
+        if self._file is not None:
+            fd = self._file.fileno()
+            with contextlib.suppress(OSError):
+                os.fsync(fd)
+            null = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(null, fd)
+            finally:
+                os.close(null)
+            with contextlib.suppress(OSError):
+                self._file.close()
+
+    def _full_message(self) -> str:
+        name = errno.errorcode.get(self.full.errno, 'ENOSPC') if self.full is not None else 'ENOSPC'
+        return (f'{name}: no space left on the disk of bag {self.path}; recording stopped. Kept: the messages '
+                f'that reached the disk (at least the {self.flushed_messages} flushed, of {self.message_count} '
+                f'received; {self.dropped} refused since). To read the bag: free some space and run social-touch '
+                f'bag reindex {self.path}, or rebuild it on another disk with social-touch bag reindex {self.path} '
+                f'-o OTHER_DIR/{self.path.name}')
 
     def topics(self) -> list[str]:
         with self._lock:
             return list(self._channels)
+
+
+def _no_space(err: OSError) -> bool:
+    return err.errno in (errno.ENOSPC, errno.EDQUOT)
 
 
 def _yaml(data: Any) -> str:

@@ -102,7 +102,10 @@ class RecorderNode(Node):
                 bag.write(name, type_name, now_ns(), data, publish_ns=message_info['source_timestamp'])
             except BagError as err:
                 self.write_errors += 1
-                self.get_logger().error(str(err), throttle_duration_sec=1.0)
+                if bag.full is not None:  # the disk is full: the recording has ended; say it once
+                    self.get_logger().error(str(err), once=True)
+                else:
+                    self.get_logger().error(str(err), throttle_duration_sec=1.0)
         return write
 
     def _close_bag(self) -> None:

@@ -9,11 +9,18 @@ what survived (schemas, channels and the messages of every whole chunk whose CRC
 corrupted chunk is dropped and counted), which gives it its summary, indexes and footer, and
 writes ``metadata.yaml``. A complete file whose chunks all check is left as it is and only
 gets its ``metadata.yaml`` regenerated. Running it twice is safe.
+
+A rewrite needs room for one more copy of the file beside it. On a full disk (the recorder stopped
+for lack of space) it is refused before anything is written, the original left as it was, and
+``output`` (``social-touch bag reindex BAG -o OTHER``) rebuilds the bag on another disk instead;
+a disk that fills during the rewrite removes the partial copy and says the same.
 """
 
 from __future__ import annotations
 
+import errno
 import os
+import shutil
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -169,10 +176,35 @@ def scan_mcap(path: str | os.PathLike) -> McapScan:
     return scan
 
 
-def _rewrite(path: Path, scan: McapScan, info: dict) -> None:
-    """Write ``path`` again from its whole, checked records, with summary and footer (atomically)."""
+#: Room asked for beyond the files' sizes, for their summaries and metadata.yaml, bytes.
+SUMMARY_ROOM = 64 * 1024
+
+
+def _space_error(bag: Path, err: OSError | None, need: int, free: int) -> BagError:
+    """The error of a rewrite that has no room: what is kept, what to do."""
+    cause = f'{errno.errorcode.get(err.errno, "OSError")}: {err.strerror}' if err is not None else \
+        f'ENOSPC: {free / 1e6:.1f} MB free, about {need / 1e6:.1f} MB needed'
+    return BagError(f'cannot reindex {bag} ({cause}): reindex writes a new copy of each damaged file beside it '
+                    'before replacing it. Nothing of the bag was changed: every message recorded is still in its '
+                    f'.mcap file. Free some space on that disk, or rebuild the bag on another disk with: '
+                    f'social-touch bag reindex {bag} -o OTHER_DIR/{bag.name}')
+
+
+def _rewrite(path: Path, scan: McapScan, info: dict, dest: Path | None = None) -> None:
+    """Write ``path`` again (to ``dest``, default ``path`` itself) from its whole, checked records, with
+    summary and footer, atomically: a temporary file renamed over the target; removed on failure."""
+    dest = dest or path
+    tmp = dest.with_name(dest.name + '.reindex')
+    try:
+        _write_copy(path, scan, info, tmp)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    tmp.replace(dest)
+
+
+def _write_copy(path: Path, scan: McapScan, info: dict, tmp: Path) -> None:
     import yaml
-    tmp = path.with_name(path.name + '.reindex')
     with tmp.open('wb') as out:
         writer = Writer(out, compression=CompressionType.NONE)
         writer.start(profile=scan.profile or 'ros2', library='social_touch reindex')
@@ -192,7 +224,6 @@ def _rewrite(path: Path, scan: McapScan, info: dict) -> None:
         writer.finish()
         out.flush()
         os.fsync(out.fileno())
-    tmp.replace(path)
 
 
 @dataclass
@@ -230,11 +261,17 @@ def _file_record(scan: McapScan) -> FileRecord:
     return FileRecord(scan.path.name, scan.start_time if scan.message_count else 0, scan.end_time, scan.message_count)
 
 
-def reindex(bag: str | os.PathLike) -> ReindexReport:
+def reindex(bag: str | os.PathLike, output: str | os.PathLike | None = None) -> ReindexReport:
     """Make ``bag`` (a rosbag2 directory of MCAP files) readable again; see the module docstring.
 
+    Args:
+        bag: the bag directory.
+        output: a new directory to write the rebuilt bag to (the original is then only read), e.g. on
+            another disk when the bag's own is full; None: repair ``bag`` in place.
+
     Raises:
-        BagError: no MCAP file in the directory, or a file that is not MCAP at all.
+        BagError: no MCAP file in the directory, a file that is not MCAP at all, an ``output`` that
+            exists, or no room for the rewrite (ENOSPC; nothing of the bag changed).
     """
     bag = Path(bag)
     if not bag.is_dir():
@@ -245,15 +282,33 @@ def reindex(bag: str | os.PathLike) -> ReindexReport:
     scans = [scan_mcap(path) for path in files]
     custom = {'social_touch.reindexed': 'true'}
     info = bag_metadata([_file_record(s) for s in scans], _topics(scans), custom)
+    target = bag if output is None else Path(output)
+    damaged = [s for s in scans if not (s.complete and not s.corrupt_chunks)]
+    if output is not None:
+        if target.exists():
+            raise BagError(f'{target} exists already; give reindex -o a new directory')
+        target.mkdir(parents=True)
+    need = sum(s.keep_end for s in (scans if output is not None else damaged)) + SUMMARY_ROOM
+    free = shutil.disk_usage(target).free
+    if free < need:
+        raise _space_error(bag, None, need, free)
     repaired, dropped = [], 0
-    for scan in scans:
-        if scan.complete and not scan.corrupt_chunks:
-            continue
-        file_info = bag_metadata([_file_record(scan)], _topics([scan]), custom)
-        dropped += scan.size - scan.keep_end
-        _rewrite(scan.path, scan, file_info)
-        repaired.append(scan.path.name)
-    write_metadata(bag, info)
+    try:
+        for scan in scans:
+            if scan.complete and not scan.corrupt_chunks:
+                if output is not None:
+                    shutil.copyfile(scan.path, target / scan.path.name)
+                continue
+            file_info = bag_metadata([_file_record(scan)], _topics([scan]), custom)
+            dropped += scan.size - scan.keep_end
+            _rewrite(scan.path, scan, file_info, target / scan.path.name)
+            repaired.append(scan.path.name)
+        write_metadata(target, info)
+    except OSError as err:
+        if err.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise _space_error(bag, err, need, shutil.disk_usage(target).free) from err
+        raise BagError(f'cannot reindex {bag}: {err}; the original files are unchanged') from err
+    bag = target
     topics = {t['topic_metadata']['name']: t['message_count']
               for t in info['rosbag2_bagfile_information']['topics_with_message_count']}
     return ReindexReport(bag, [p.name for p in files], repaired, sum(s.message_count for s in scans), topics, dropped,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from .options import add_output
 from .record import format_size
 
 __all__ = ['add_arguments', 'format_stamp', 'run']
@@ -20,13 +21,16 @@ def format_stamp(ns: int) -> str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest='action', required=True, metavar='ACTION')
     sub.add_parser('info', help='files, duration, topics and message counts').add_argument('bag')
-    sub.add_parser('reindex', help='rebuild metadata.yaml and the MCAP summary after a crash').add_argument('bag')
+    reindex = sub.add_parser('reindex', help='rebuild metadata.yaml and the MCAP summary after a crash')
+    reindex.add_argument('bag')
+    add_output(reindex, 'write the rebuilt bag to this new directory (e.g. on another disk when the bag\'s is '
+                        'full) instead of repairing it in place')
 
 
 def run(args: argparse.Namespace) -> int:
     if args.action == 'reindex':
         from ..bag.reindex import reindex
-        report = reindex(args.bag)
+        report = reindex(args.bag, args.output)
         what = f'repaired {", ".join(report.repaired)}' if report.repaired else 'the MCAP files were complete'
         print(f'reindexed {report.bag}: {what}; {report.message_count} messages'
               + (f', {report.bytes_dropped} torn bytes cut off' if report.bytes_dropped else ''))

@@ -9,11 +9,13 @@ carry and services use on the wire.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..files import disk_full_error, is_disk_full
 from ..messages import msg_files
 from ..paths import INTERFACE_PACKAGE
 from ..srv_types import srv_files
@@ -79,17 +81,28 @@ def export_interfaces(out_dir: Path, version: str = '0.1.0', force: bool = False
     files = msg_files()
     services = srv_files()
     deps = message_dependencies(files + services)
-    for kind, paths in (('msg', files), ('srv', services)):
-        if paths:
-            (package_dir / kind).mkdir(parents=True, exist_ok=True)
-        for path in paths:
-            shutil.copyfile(path, package_dir / kind / path.name)
-    (package_dir / 'package.xml').write_text(PACKAGE_XML.format(
-        name=INTERFACE_PACKAGE, version=version, depends=''.join(f'  <depend>{d}</depend>\n' for d in deps)))
-    (package_dir / 'CMakeLists.txt').write_text(CMAKELISTS.format(
-        name=INTERFACE_PACKAGE, find_packages=''.join(f'find_package({d} REQUIRED)\n' for d in deps),
-        files='\n'.join([*(f'  "msg/{p.name}"' for p in files), *(f'  "srv/{p.name}"' for p in services)]),
-        dependencies=' '.join(deps)))
+    # Written whole beside the target, then renamed over it: a full disk leaves no half package.
+    staging = package_dir.with_name(f'.{INTERFACE_PACKAGE}.{os.getpid()}.tmp')
+    try:
+        for kind, paths in (('msg', files), ('srv', services)):
+            if paths:
+                (staging / kind).mkdir(parents=True, exist_ok=True)
+            for path in paths:
+                shutil.copyfile(path, staging / kind / path.name)
+        (staging / 'package.xml').write_text(PACKAGE_XML.format(
+            name=INTERFACE_PACKAGE, version=version, depends=''.join(f'  <depend>{d}</depend>\n' for d in deps)))
+        (staging / 'CMakeLists.txt').write_text(CMAKELISTS.format(
+            name=INTERFACE_PACKAGE, find_packages=''.join(f'find_package({d} REQUIRED)\n' for d in deps),
+            files='\n'.join([*(f'  "msg/{p.name}"' for p in files), *(f'  "srv/{p.name}"' for p in services)]),
+            dependencies=' '.join(deps)))
+    except OSError as err:
+        shutil.rmtree(staging, ignore_errors=True)
+        if is_disk_full(err):
+            raise disk_full_error(package_dir, err, f'{package_dir} is as it was') from err
+        raise
+    if package_dir.exists():
+        shutil.rmtree(package_dir)
+    staging.rename(package_dir)
     return package_dir
 
 

@@ -13,7 +13,9 @@ simulation or the lab.
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
 import sys
 from typing import Any, NamedTuple
 
@@ -95,6 +97,15 @@ def main(argv: list[str] | None = None, commands: dict[str, Command] | None = No
         return int(module.run(args) or 0)
     except SocialTouchError as err:
         print(f'social-touch {name}: error: {err}', file=sys.stderr)
+        return 1
+    except OSError as err:  # a writer without its own DiskFullError: still one clear line
+        from ..files import is_disk_full
+        if not is_disk_full(err):
+            raise
+        print(f'social-touch {name}: error: {os.strerror(err.errno)} ({errno.errorcode[err.errno]}) writing '
+              f'{err.filename or "its output"}; files finished before are complete, the one being written may be '
+              'partial: free some space or write to another disk (-o/--output), and run the command again',
+              file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130

@@ -23,7 +23,7 @@ from typing import Any
 import yaml
 
 from ..errors import ConfigError, GraphError, ParameterError
-from .service import positive_number
+from .options import seconds
 
 __all__ = ['add_arguments', 'run']
 
@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         p = sub.add_parser(name, help=text, description=text[0].upper() + text[1:] + '.')
         p.add_argument('node_name', nargs='?' if node_optional else None, help='the node, e.g. /bear/bear_gestures')
         p.add_argument('--include-hidden-nodes', action='store_true', help='consider hidden nodes as well')
-        p.add_argument('--timeout', type=positive_number, default=5.0, metavar='S',
+        p.add_argument('--timeout', type=seconds, default=5.0, metavar='S',
                        help='wait at most S seconds for the parameter services, and again for each answer (default 5)')
         return p
 

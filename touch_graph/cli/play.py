@@ -15,7 +15,7 @@ import argparse
 import sys
 
 from ..runtime import Parameter
-from .service import positive_number
+from .options import non_negative_seconds, speed_factor
 
 __all__ = ['add_arguments', 'run']
 
@@ -24,12 +24,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split('\n\n')[1].replace('\n', ' ')
     parser.add_argument('bag', help='bag directory (or a .mcap / .db3 file)')
     speed = parser.add_mutually_exclusive_group()
-    speed.add_argument('-r', '--rate', type=positive_number, default=1.0, help='speed factor, > 0 (default 1.0)')
+    speed.add_argument('-r', '--rate', type=speed_factor, default=1.0, help='speed factor, > 0 (default 1.0)')
     speed.add_argument('--fast', action='store_true', help='do not wait between messages')
     parser.add_argument('-l', '--loop', action='store_true', help='play again and again until Ctrl-C')
     parser.add_argument('--topics', nargs='+', help='play only these topics')
-    parser.add_argument('--start-offset', type=float, default=0.0, help='skip the first SECONDS of the bag')
-    parser.add_argument('--wait', type=float, default=2.0,
+    parser.add_argument('--start-offset', type=non_negative_seconds, default=0.0,
+                        help='skip the first SECONDS of the bag')
+    parser.add_argument('--wait', type=non_negative_seconds, default=2.0,
                         help='seconds to wait for the subscribers of the graph (default 2)')
     parser.add_argument('--no-check', action='store_true',
                         help='play topics even if their recorded definition differs from ours (not advised)')

@@ -15,12 +15,13 @@ instead, ``social-touch bag reindex BAG`` recovers all but the last second. Prog
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from typing import Any
 
-from ..errors import GraphError, SocialTouchError
-from .service import positive_number
+from ..errors import BagError, GraphError, SocialTouchError
+from .options import seconds
 
 __all__ = ['add_arguments', 'format_size', 'run']
 
@@ -43,9 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('topics', nargs='*', help='topics to record')
     parser.add_argument('-a', '--all', action='store_true', help='record every published topic, also later ones')
     parser.add_argument('-o', '--output', help='bag directory to create (default rosbag2_<date>)')
-    parser.add_argument('--duration', type=positive_number, metavar='SECONDS',
+    parser.add_argument('--duration', type=seconds, metavar='SECONDS',
                         help='stop after SECONDS (wall time, > 0)')
-    parser.add_argument('--flush-period', type=positive_number, default=1.0, metavar='SECONDS',
+    parser.add_argument('--flush-period', type=seconds, default=1.0, metavar='SECONDS',
                         help='seconds between flushes to disk (default 1; what a kill -9 can lose)')
     parser.add_argument('--quiet', action='store_true', help='no progress lines on stderr')
 
@@ -69,12 +70,19 @@ def run(args: argparse.Namespace) -> int:
             recorder = _TopicRecorder(tool, bag, args.topics or None, quiet=args.quiet)
             with StopSignals(tool.executor.wake) as stop:
                 recorder.update()
-                tool.spin_until(lambda: False, args.duration, stop=stop, every=recorder.tick, every_s=0.2)
+                tool.spin_until(lambda: bag.full is not None, args.duration, stop=stop, every=recorder.tick,
+                                every_s=0.2)
                 # What arrived before the stop is still in the executor's inbox: record it too.
                 for _ in range(20):
                     tool.executor.spin_once(0)
         finally:
-            bag.close()
+            if bag.full is None:
+                bag.close()
+            else:  # said once by the writer; close() would only say it again
+                with contextlib.suppress(BagError):
+                    bag.close()
+        if bag.full is not None:
+            return 1
         total = sum(bag.sizes.values())
         print(f'social-touch record: wrote {bag.message_count} messages ({format_size(total)}) to {bag.path}'
               + ''.join(f'\n  {t}: {n}' for t, n in sorted(bag.counts.items())), file=sys.stderr)
@@ -125,8 +133,13 @@ class _TopicRecorder:
         bag = self.bag
 
         def write(data: bytes, message_info: dict) -> None:
-            bag.write(topic, type_name, message_info['received_timestamp'], data,
-                      publish_ns=message_info['source_timestamp'])
+            try:
+                bag.write(topic, type_name, message_info['received_timestamp'], data,
+                          publish_ns=message_info['source_timestamp'])
+            except BagError as err:
+                if bag.full is None:
+                    raise
+                self._warn_once('', f'error: {err}')  # the disk is full: once, then the recording ends
         return write
 
     def tick(self) -> None:

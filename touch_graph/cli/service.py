@@ -14,19 +14,11 @@ from __future__ import annotations
 import argparse
 import time
 
-import yaml
+from ..errors import ConfigError, GraphError, MessageError
+from ..yamlconf import safe_load
+from .options import rate_hz, seconds
 
-from ..errors import GraphError, MessageError
-
-__all__ = ['add_arguments', 'positive_number', 'run']
-
-
-def positive_number(text: str) -> float:
-    """argparse type: a number > 0 (seconds, a rate)."""
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f'expected a number > 0, got {text!r}')
-    return value
+__all__ = ['add_arguments', 'run']
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -48,9 +40,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('service_type', help="e.g. 'std_srvs/srv/SetBool' (or std_srvs/SetBool)")
     p.add_argument('values', nargs='?', default='{}',
                    help="the request's fields in YAML, e.g. '{data: true}' (default: all fields at their defaults)")
-    p.add_argument('-r', '--rate', type=positive_number, metavar='N',
+    p.add_argument('-r', '--rate', type=rate_hz, metavar='N',
                    help='repeat the call N times a second (Ctrl-C stops)')
-    p.add_argument('--timeout', type=positive_number, default=5.0, metavar='S',
+    p.add_argument('--timeout', type=seconds, default=5.0, metavar='S',
                    help='wait at most S seconds for the service to appear, and again for each response (default 5)')
 
 
@@ -96,9 +88,9 @@ def _call(args: argparse.Namespace) -> int:
     from ..srv_types import get_service
     srv_type = get_service(args.service_type)
     try:
-        values = yaml.safe_load(args.values)
-    except yaml.YAMLError as err:
-        raise GraphError(f'the request values are not YAML ({err}); write them as "{{field: value}}"') from err
+        values = safe_load(args.values, 'the request values')
+    except ConfigError as err:
+        raise GraphError(f'{err}; write them as "{{field: value}}"') from err
     try:
         request = messages.from_dict(srv_type.Request.__msgtype__, values if values is not None else {})
     except MessageError as err:

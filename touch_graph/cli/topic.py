@@ -22,8 +22,9 @@ from typing import Any
 import yaml
 
 from .. import messages
-from ..errors import GraphError, MessageError
-from ..yamlconf import did_you_mean
+from ..errors import ConfigError, GraphError, MessageError
+from ..yamlconf import did_you_mean, safe_load
+from .options import non_negative_seconds, positive_int, rate_hz, seconds
 
 __all__ = ['HzMonitor', 'abbreviate_arrays', 'add_arguments', 'run', 'select_field']
 
@@ -133,15 +134,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('topic')
     p.add_argument('type', nargs='?', help='message type, to wait for a topic that is not published yet')
     p.add_argument('--once', action='store_true', help='print one message and exit')
-    p.add_argument('-n', '--count', type=int, help='print N messages and exit')
+    p.add_argument('-n', '--count', type=positive_int, help='print N messages and exit')
     p.add_argument('--no-arr', action='store_true', help='print array fields as their type and length')
     p.add_argument('--field', help='print only this field, e.g. header.stamp')
-    p.add_argument('--timeout', type=float, metavar='S', help='exit with code 1 after S seconds without a message')
+    p.add_argument('--timeout', type=seconds, metavar='S', help='exit with code 1 after S seconds without a message')
     p = sub.add_parser('hz', help='print the rate of a topic')
     p.add_argument('topic')
-    p.add_argument('-w', '--window', type=int, default=10_000, help='messages to compute over (default 10000)')
+    p.add_argument('-w', '--window', type=positive_int, default=10_000, help='messages to compute over (default 10000)')
     p.add_argument('--wall-time', action='store_true', help="rate in arrival wall time, not the graph's ROS time")
-    p.add_argument('--duration', type=float, help='exit after SECONDS')
+    p.add_argument('--duration', type=seconds, help='exit after SECONDS')
     p = sub.add_parser('info', help='type and endpoints of a topic')
     p.add_argument('topic')
     p.add_argument('-v', '--verbose', action='store_true',
@@ -151,10 +152,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('type', help='e.g. std_msgs/msg/String or social_touch_msgs/msg/HapticCommand')
     p.add_argument('values', nargs='?', default='{}', help="YAML, e.g. \"{data: hello}\" (default: all defaults)")
     rate = p.add_mutually_exclusive_group()
-    rate.add_argument('-r', '--rate', type=float, default=1.0, help='messages per second (default 1)')
+    rate.add_argument('-r', '--rate', type=rate_hz, default=1.0, help='messages per second (default 1)')
     rate.add_argument('-1', '--once', action='store_true', help='publish one message and exit')
-    p.add_argument('-t', '--times', type=int, help='publish N messages and exit')
-    p.add_argument('-w', '--wait', type=float, default=2.0,
+    p.add_argument('-t', '--times', type=positive_int, help='publish N messages and exit')
+    p.add_argument('-w', '--wait', type=non_negative_seconds, default=2.0,
                    help='seconds to wait for the subscribers of the graph before the first message (default 2)')
 
 
@@ -286,9 +287,9 @@ def _pub(tool: Any, args: argparse.Namespace) -> int:
     from ..node_main import StopSignals
     type_name = messages.normalize_type_name(args.type)
     try:
-        values = yaml.safe_load(args.values)
-    except yaml.YAMLError as err:
-        raise MessageError(f'cannot parse the message values as YAML: {err}') from err
+        values = safe_load(args.values, 'the message values')
+    except ConfigError as err:
+        raise MessageError(f'cannot parse {err}') from err
     msg = messages.from_dict(type_name, values if values is not None else {})
     times = 1 if args.once else args.times
     if times is not None and times < 1:

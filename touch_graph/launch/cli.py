@@ -36,11 +36,11 @@ Examples::
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
 
+from ..cli.options import clock_rate, non_negative_seconds
 from ..errors import ConfigError, LaunchError
 from ..paths import launch_share, prefer_checkout
 from ..yamlconf import did_you_mean
@@ -52,20 +52,6 @@ from .specs import DeclaredArgument
 __all__ = ['add_arguments', 'find_launch_file', 'parse_launch_arguments', 'run']
 
 
-def _non_negative(text: str) -> float:
-    value = float(text)
-    if not value >= 0 or math.isinf(value):
-        raise argparse.ArgumentTypeError(f'expected a finite number of seconds >= 0, got {text!r}')
-    return value
-
-
-def _positive_rate(text: str) -> float:
-    value = float(text)  # 'inf' is allowed: as fast as possible
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f'expected a rate > 0 (or inf), got {text!r}')
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``social-touch launch``."""
     parser.add_argument('words', nargs='+', metavar='FILE | PKG FILE',
@@ -75,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='list the launch arguments (description, default, choices) and exit')
     parser.add_argument('-p', '--print-description', action='store_true',
                         help='print the resolved nodes (names, namespaces, parameters, remaps) without starting them')
-    parser.add_argument('--duration', type=_non_negative, metavar='SECONDS',
+    parser.add_argument('--duration', type=non_negative_seconds, metavar='SECONDS',
                         help='stop after this many seconds of ROS time (default: until Ctrl-C / SIGTERM)')
     parser.add_argument('--sim-time', action='store_true', help='run the graph on a simulated clock')
     parser.add_argument('--no-network', action='store_true',
@@ -89,7 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--processes', action='store_true',
                         help='run every node in a process of its own (connected over DDS), as ros2 launch does; by '
                              'default only nodes with a process attribute (respawn...) do')
-    parser.add_argument('--rate', type=_positive_rate, metavar='R',
+    parser.add_argument('--rate', type=clock_rate, metavar='R',
                         help='with --sim-time: simulated seconds per wall-clock second (default: inf, as fast '
                              'as possible)')
 

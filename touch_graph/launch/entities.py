@@ -18,11 +18,9 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from ..errors import LaunchError
+from ..errors import ConfigError, LaunchError
 from ..paths import launch_share
-from ..yamlconf import did_you_mean
+from ..yamlconf import YamlBoundsError, did_you_mean, safe_load
 from .parser import (
     Action,
     ArgAction,
@@ -322,8 +320,10 @@ def _from_yaml(text: str) -> Any:
     if not text:
         return ''
     try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError:
+        return safe_load(text, 'a parameter value')
+    except YamlBoundsError:
+        raise  # too large or too deep to be a parameter value, as YAML or as text
+    except ConfigError:
         return text
 
 

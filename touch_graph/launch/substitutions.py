@@ -49,11 +49,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
-
 from ..errors import ConfigError, LaunchError
 from ..paths import package_share
-from ..yamlconf import did_you_mean
+from ..yamlconf import YamlBoundsError, did_you_mean, safe_load
 from .safe_eval import EvalError, safe_eval
 
 __all__ = [
@@ -297,8 +295,10 @@ def to_bool(text: str, what: str, where: Location) -> bool:
     if stripped in ('1', '0'):
         return stripped == '1'
     try:
-        value = yaml.safe_load(stripped) if stripped else None
-    except yaml.YAMLError:
+        value = safe_load(stripped, what) if stripped else None
+    except YamlBoundsError:
+        raise
+    except ConfigError:
         value = None
     if isinstance(value, bool):
         return value

@@ -9,35 +9,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
-from touch_graph.cli.options import deprecated_alias
+from touch_graph.cli.options import deprecated_alias, positive_float, positive_int, seed
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, percent_text, seconds_text, stderr_progress
 
 __all__ = ['add_arguments', 'format_text', 'run']
 
-
-
-def positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f'expected a positive number, got {text!r}')
-    return value
-
-
-def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'expected an integer >= 1, got {text!r}')
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--people', type=positive_int, default=6, help='simulated people in the test scene (6)')
     parser.add_argument('--train-people', type=positive_int, default=8,
                         help='other simulated people the subtype model is trained on (8)')
-    parser.add_argument('--seed', type=int, default=0, help='scene seed; the training scene uses seed + 1000 (0)')
+    parser.add_argument('--seed', type=seed, default=0, help='scene seed; the training scene uses seed + 1000 (0)')
     parser.add_argument('--rate', type=positive_float, default=3.4,
                         help='scan rate, Hz: 3.4 is the real bear (knight2009 VI.B), 25 the ideal (3.4)')
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20, V.A)')

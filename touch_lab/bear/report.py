@@ -22,7 +22,8 @@ from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import GestureLibrary
-from touch_graph.cli.options import add_output
+from touch_graph.cli.options import add_output, seed
+from touch_graph.files import write_text
 from touch_graph.paths import share_file
 from touch_lab.bear.bench import bench_cycle
 from touch_lab.bear.evaluate import (
@@ -430,7 +431,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch report bear``."""
     add_output(parser, 'where to write the two .md files (default: docs/ of the source tree)', directory=True)
     parser.add_argument('--quick', action='store_true', help='fewer people and configurations (a preview)')
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seed', type=seed, default=0)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -463,10 +464,9 @@ def run(args: argparse.Namespace) -> int:
     from touch_lab.figures.bear import bear_figures  # matplotlib: loaded only to write the report
 
     figures = bear_figures(out_dir, main_result, sweep, models, say)
-    (out_dir / 'bear-evaluation.md').write_text(evaluation_md(main_result, bench, sweep, models, gaps, command,
-                                                              figures, populations_md(cross, 'shipped model')),
-                                                encoding='utf-8')
-    (out_dir / 'bear-rates.md').write_text(rates_md(sweep, aliases, command), encoding='utf-8')
+    write_text(out_dir / 'bear-evaluation.md', evaluation_md(main_result, bench, sweep, models, gaps, command,
+                                                            figures, populations_md(cross, 'shipped model')))
+    write_text(out_dir / 'bear-rates.md', rates_md(sweep, aliases, command), encoding='utf-8')
     say(f'wrote {out_dir / "bear-evaluation.md"} and {out_dir / "bear-rates.md"}')
     return 0
 

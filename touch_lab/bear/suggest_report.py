@@ -19,6 +19,8 @@ import yaml
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.errors import ConfigError
+from touch_graph.files import write_text
+from touch_graph.yamlconf import read_text, safe_load
 
 from . import suggest as sg
 from .sessions import BearTrials
@@ -136,7 +138,7 @@ def write_config(source: str | os.PathLike, out: str | os.PathLike, suggestions:
     if out.resolve() == source.resolve():
         raise ConfigError(f'{out} is the gesture config the suggestion is made from; write the suggestion to '
                           'another file (--suggest-output)')
-    doc = yaml.safe_load(source.read_text())
+    doc = safe_load(read_text(source), str(source))
     changed = 0
     for name, s in suggestions.items():
         spec = doc['gestures'].get(name)
@@ -146,7 +148,7 @@ def write_config(source: str | os.PathLike, out: str | os.PathLike, suggestions:
         changed += 1
     text = ''.join(f'# {line}\n' if line else '#\n' for line in header.splitlines())
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text + yaml.safe_dump(doc, sort_keys=False, width=110, allow_unicode=True, default_flow_style=None))
+    write_text(out, text + yaml.safe_dump(doc, sort_keys=False, width=110, allow_unicode=True, default_flow_style=None))
     try:
         GestureLibrary.load(out, body_map)
     except ConfigError:

@@ -20,11 +20,11 @@ from pathlib import Path
 
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 from touch_gestures.model_card import attach_card, make_card
-from touch_graph.cli.options import add_output, deprecated_alias
+from touch_graph.cli.options import add_output, deprecated_alias, positive_float, positive_int, seed
 from touch_lab.cards import session_data
 from touch_lab.collect.session_bag import SessionError
 
-from .cli import positive_float, positive_int, train_families
+from .cli import train_families
 from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
 
 #: What each family of simulated people is, for the model card.
@@ -41,7 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--rate', type=positive_float, default=3.4, help='scan rate, Hz (3.4)')
     parser.add_argument('--buffer', type=positive_int, default=20, help='cycles per sensor buffer (20)')
     parser.add_argument('--people', type=positive_int, default=8, help='simulated people to train on (8)')
-    parser.add_argument('--seed', type=int, default=0, help='training scene seed is seed + 1000 (0)')
+    parser.add_argument('--seed', type=seed, default=0, help='training scene seed is seed + 1000 (0)')
     parser.add_argument('--family', choices=(*FAMILIES, 'both'), default='both',
                         help='families of simulated people to train on, --people of each: script '
                         '(touch_sim/bear/people.py), hands (touch_sim/bear/hand_people.py) or both (both)')

@@ -24,7 +24,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from touch_graph.cli.options import positive_int
 from touch_graph.errors import ConfigError
+from touch_graph.files import write_text
 
 __all__ = ['SECTIONS', 'add_arguments', 'render', 'run']
 
@@ -170,7 +172,7 @@ def render(figures: dict[str, Any]) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('sections', nargs='*', help=f'what to measure, of {", ".join(SECTIONS)} (default: all)')
-    parser.add_argument('--repeats', type=int, default=5, help='rounds to take the median of (default 5)')
+    parser.add_argument('--repeats', type=positive_int, default=5, help='rounds to take the median of (default 5)')
     parser.add_argument('--render-only', action='store_true', help='rewrite the .md from the .json')
 
 
@@ -182,7 +184,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.render_only:
         for name in args.sections or list(SECTIONS):
             figures[name] = SECTIONS[name][0](args.repeats)
-        FIGURES.write_text(json.dumps(figures, indent=1, sort_keys=True) + '\n')
-    REPORT.write_text(render(_load()))  # as read back (keys sorted), so the report is its file's rendering
+        write_text(FIGURES, json.dumps(figures, indent=1, sort_keys=True) + '\n')
+    write_text(REPORT, render(_load()))  # as read back (keys sorted), so the report is its file's rendering
     print(REPORT)
     return 0

@@ -12,6 +12,7 @@ import json
 import platform
 
 from touch_graph.cli.main import Command, load
+from touch_graph.cli.options import positive_int
 
 __all__ = ['BENCHES', 'add_arguments', 'run']
 
@@ -43,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('target', choices=list(BENCHES), metavar='TARGET',
                         help='what to measure: ' + '; '.join(f'{name} ({b.help})' for name, b in BENCHES.items()))
     parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--repeats', type=int, default=5, help='runs to take the median of (default 5)')
+    parser.add_argument('--repeats', type=positive_int, default=5, help='runs to take the median of (default 5)')
 
 
 def run(args: argparse.Namespace) -> int:

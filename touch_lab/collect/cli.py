@@ -29,8 +29,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from touch_graph.cli.options import add_output
-from touch_lab.bear.cli import positive_int
+from touch_graph.cli.options import add_output, non_negative_seconds, positive_int, rate_hz, seed
 
 from .protocol import DEFAULT_GESTURES, SENSORS, Protocol
 
@@ -61,15 +60,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='comma-separated ways of performing each, e.g. gentle,normal,rough as in CoST '
                         '(default normal)')
     parser.add_argument('--repetitions', type=positive_int, default=3, help='trials per gesture and variant (3)')
-    parser.add_argument('--pause-s', type=float, default=4.0, help='pause between trials, s (4)')
-    parser.add_argument('--seed', type=int, default=0, help='order of the trials and the simulated people (0)')
+    parser.add_argument('--pause-s', type=non_negative_seconds, default=4.0, help='pause between trials, s (4)')
+    parser.add_argument('--seed', type=seed, default=0, help='order of the trials and the simulated people (0)')
     parser.add_argument('--person', help='the name of the person performing (live sessions; required there)')
     parser.add_argument('--overwrite', action='store_true', help='replace an existing bag --out (live sessions)')
     parser.add_argument('--synthetic', action='store_true',
                         help='mark the live bag synthetic: the running scene plays a virtual device, not a person')
-    parser.add_argument('--wait', type=float, default=5.0, metavar='SECONDS',
+    parser.add_argument('--wait', type=non_negative_seconds, default=5.0, metavar='SECONDS',
                         help="how long a live session waits for the sensor's publisher and first frame (5)")
-    parser.add_argument('--rate', type=float, help='bear scan rate of the virtual bear, Hz (--simulate; 3.4)')
+    parser.add_argument('--rate', type=rate_hz, help='bear scan rate of the virtual bear, Hz (--simulate; 3.4)')
 
 
 def run(args: argparse.Namespace) -> int:

@@ -23,6 +23,7 @@ import numpy as np
 from touch_graph import messages
 from touch_graph.bag import BagRecorder
 from touch_graph.errors import ConfigError
+from touch_graph.yamlconf import read_text, safe_load
 
 __all__ = ['LABEL_TOPIC', 'LABEL_TYPE', 'SENSOR_TOPICS', 'LabelRow', 'SessionError', 'SessionRecording',
            'SessionWriter', 'read_session', 'read_sessions']
@@ -239,11 +240,10 @@ def read_session(path: str | os.PathLike, sensor: str) -> SessionRecording:
 
 def _custom_data(path: Path) -> dict[str, str]:
     """``custom_data`` of the bag's metadata.yaml (empty when absent or unreadable: it only informs)."""
-    import yaml
     try:
-        doc = yaml.safe_load((path / 'metadata.yaml').read_text(encoding='utf-8'))
+        doc = safe_load(read_text(path / 'metadata.yaml'), str(path / 'metadata.yaml'))
         return {str(k): str(v) for k, v in (doc['rosbag2_bagfile_information'].get('custom_data') or {}).items()}
-    except (OSError, yaml.YAMLError, KeyError, TypeError, AttributeError):
+    except (ConfigError, KeyError, TypeError, AttributeError):
         return {}
 
 

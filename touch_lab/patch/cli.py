@@ -23,6 +23,15 @@ import sys
 import numpy as np
 
 from touch_gestures.model_card import attach_card, make_card
+from touch_graph.cli.options import (
+    non_negative_seconds,
+    positive_float,
+    positive_int,
+    probability,
+    rate_hz,
+    seconds,
+    seed,
+)
 from touch_lab.cards import session_data
 from touch_lab.cli.targets import Target
 from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv, render_session
@@ -51,16 +60,22 @@ class _Renamed(argparse.Action):
 
 def _floats(text: str) -> list[float]:
     try:
-        return [float(v) for v in text.split(',') if v.strip()]
+        values = [float(v) for v in text.split(',') if v.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f'expected comma-separated numbers such as 0.9,0.99; got {text!r}') from None
+        values = []
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise argparse.ArgumentTypeError(f'expected comma-separated numbers >= 0 such as 0.9,0.99; got {text!r}')
+    return values
 
 
 def _ints(text: str) -> list[int]:
     try:
-        return [int(v) for v in text.split(',') if v.strip()]
+        values = [int(v) for v in text.split(',') if v.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f'expected comma-separated integers such as 3,5,7; got {text!r}') from None
+        values = []
+    if not values or not all(1 <= v <= 1000 for v in values):
+        raise argparse.ArgumentTypeError(f'expected comma-separated integers in [1, 1000] such as 3,5,7; got {text!r}')
+    return values
 
 
 def _grid(text: str) -> tuple[int, int]:
@@ -76,21 +91,22 @@ def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
     src.add_argument('--bags', metavar='BAG', nargs='+',
                      help='session bags (social-touch collect patch: labels on /touch/label), or one YAML manifest '
                      'of single-gesture recordings of /patch/frame')
-    src.add_argument('--simulate', metavar='PEOPLE', type=int, help='simulated people (SYNTHETIC data)')
+    src.add_argument('--simulate', metavar='PEOPLE', type=positive_int, help='simulated people (SYNTHETIC data)')
     parser.add_argument('--grid', type=_grid, help='activation map ROWSxCOLS (CSV: required, e.g. 8x8 for CoST; '
                         'bags: 16x16)')
-    parser.add_argument('--rate', type=float, help='frame rate of the CSV, Hz (CoST: 135)')
+    parser.add_argument('--rate', type=rate_hz, help='frame rate of the CSV, Hz (CoST: 135)')
     parser.add_argument('--values', choices=('raw', 'activation'), default='raw',
                         help='CSV values: raw counts (converted by eq. 1-2) or activations (default raw)')
-    parser.add_argument('--gain', type=float, help='eq. (2) gain per count for raw CSV values (default 1/1023)')
-    parser.add_argument('--events', type=int, default=6, help='simulated gestures per session (default 6)')
-    parser.add_argument('--seed', type=int, default=0, help='seed of the simulated people and of EM (default 0)')
-    parser.add_argument('--window-s', type=float, default=3.0, help='window length, s (paper: 3 s)')
+    parser.add_argument('--gain', type=positive_float,
+                        help='eq. (2) gain per count for raw CSV values (default 1/1023)')
+    parser.add_argument('--events', type=positive_int, default=6, help='simulated gestures per session (default 6)')
+    parser.add_argument('--seed', type=seed, default=0, help='seed of the simulated people and of EM (default 0)')
+    parser.add_argument('--window-s', type=seconds, default=3.0, help='window length, s (paper: 3 s)')
     parser.add_argument('--covariance', choices=('full', 'diag', 'tied', 'spherical'), default='full',
                         help='mixture covariance type (default full)')
-    parser.add_argument('--reg-covar', type=float, default=1e-3,
+    parser.add_argument('--reg-covar', type=positive_float, default=1e-3,
                         help='added to covariance diagonals, standardised units (default 1e-3)')
-    parser.add_argument('--release', type=float, default=0.9, help='event rule release posterior (default 0.9)')
+    parser.add_argument('--release', type=probability, default=0.9, help='event rule release posterior (default 0.9)')
     parser.add_argument('--quiet', action='store_true', help='no progress on stderr')
 
 
@@ -125,15 +141,17 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``social-touch train patch``."""
     _add_source_arguments(parser)
     parser.add_argument('--output', '-o', required=True, help='model file to write (.npz)')
-    parser.add_argument('--components', type=int, default=5, help='mixture components per class (paper: 5)')
-    parser.add_argument('--threshold', type=float, default=0.99, help='posterior threshold for events (paper: 0.99)')
+    parser.add_argument('--components', type=positive_int, default=5,
+                        help='mixture components per class (paper: 5)')
+    parser.add_argument('--threshold', type=probability, default=0.99,
+                        help='posterior threshold for events (paper: 0.99)')
     parser.add_argument('--evaluate', action='store_true',
                         help="also evaluate leave-one-person-out with these settings and record the figures in "
                         "the model's card")
-    parser.add_argument('--dwell-s', type=float, default=0.4,
+    parser.add_argument('--dwell-s', type=non_negative_seconds, default=0.4,
                         help='time a class must stay above the threshold before an event, s (default 0.4; '
                         'one frame is the paper rule)')
-    parser.add_argument('--hold-s', dest='dwell_s', type=float, action=_Renamed, new='--dwell-s',
+    parser.add_argument('--hold-s', dest='dwell_s', type=non_negative_seconds, action=_Renamed, new='--dwell-s',
                         help=argparse.SUPPRESS)
 
 

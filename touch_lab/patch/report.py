@@ -20,7 +20,8 @@ import platform
 import sys
 from pathlib import Path
 
-from touch_graph.cli.options import add_output
+from touch_graph.cli.options import add_output, positive_int, seed
+from touch_graph.files import write_text
 from touch_lab.patch.bench import bench_frame
 from touch_lab.patch.cli import _matrix
 from touch_lab.patch.datasets import render_session
@@ -155,7 +156,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
         f'us, {bench["speedup"]:.0f} times the direct evaluation.',
         '',
     ]
-    Path(path).write_text('\n'.join(lines), encoding='utf-8')
+    write_text(Path(path), '\n'.join(lines), encoding='utf-8')
     return {'best': best, 'table': [(w, n, d['event_correct_rate'], d['false_detection_rate'],
                                      d['median_detection_latency_s'], us) for w, n, d, us in rows], 'bench': bench}
 
@@ -163,9 +164,9 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch report patch``."""
     add_output(parser, 'Markdown file to write', default='docs/patch-evaluation.md')
-    parser.add_argument('--people', type=int, default=8, help='simulated people (default 8, as the paper)')
-    parser.add_argument('--events', type=int, default=6, help='events per session (default 6)')
-    parser.add_argument('--seed', type=int, default=2026, help='seed of the simulated people (default 2026)')
+    parser.add_argument('--people', type=positive_int, default=8, help='simulated people (default 8, as the paper)')
+    parser.add_argument('--events', type=positive_int, default=6, help='events per session (default 6)')
+    parser.add_argument('--seed', type=seed, default=2026, help='seed of the simulated people (default 2026)')
     parser.add_argument('--quick', action='store_true', help='fewer people and settings')
 
 

@@ -30,7 +30,9 @@ import numpy as np
 
 from touch_graph.errors import SocialTouchError
 
+from .cases_input import input_cases
 from .cases_stray import stray_cases
+from .cases_web import web_cases
 
 __all__ = ['Outcome', 'all_cases', 'run_case', 'run_cli']
 
@@ -281,4 +283,6 @@ def all_cases() -> list[tuple[str, str, Callable[[], Any] | list[str]]]:
     for level in (3e38, 1.0001, -0.5):
         cases.append(('recogniser input', f'bear_gestures level {level:g} for 2 s', _bear_level(level)))
     cases += stray_cases()
+    cases += input_cases()
+    cases += web_cases()
     return cases

@@ -16,7 +16,8 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from touch_graph.cli.options import add_output
+from touch_graph.cli.options import add_output, positive_float
+from touch_graph.files import write_text
 
 from .cases import CLEAR, CRASH, HANDLED, TRACEBACK, WRONG, Outcome, all_cases, run_case, run_cli
 from .dds_injection import dds_injection
@@ -151,13 +152,13 @@ def write_report(path: str | Path = 'docs/robustness.md', say=print, megabytes: 
     lines += ['', 'The same behaviours are checked case by case in `test/test_robustness_*.py` (CI), with '
               'hypothesis where it fits, and the framing by `test/test_driver_framing.py`.', '']
     path = Path(path)
-    path.write_text('\n'.join(lines))
+    write_text(path, '\n'.join(lines))
     return path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_output(parser, 'where to write (default docs/robustness.md)', default='docs/robustness.md')
-    parser.add_argument('--megabytes', type=float, default=4.0, help='MB per flood (default 4)')
+    parser.add_argument('--megabytes', type=positive_float, default=4.0, help='MB per flood (default 4)')
 
 
 def run(args: argparse.Namespace) -> int:

@@ -35,6 +35,7 @@ from typing import Any
 
 from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
+from touch_graph.cli.options import non_negative_int, non_negative_seconds, positive_int, seconds, seed
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
@@ -65,24 +66,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--json', action='store_true', help='print one JSON object instead of text')
     parser.add_argument('--recognisers', default=','.join(RECOGNISERS),
                         help=f'comma-separated names (default: all: {",".join(RECOGNISERS)})')
-    parser.add_argument('--limit', type=int, default=None, help='use only the first N samples of the file')
-    parser.add_argument('--templates-per-gesture', type=int, default=0,
+    parser.add_argument('--limit', type=positive_int, default=None, help='use only the first N samples of the file')
+    parser.add_argument('--templates-per-gesture', type=non_negative_int, default=0,
                         help='codebook size per gesture per fold, spread over the training subjects '
                              '(default 0: every training sample; 30 is the m of cirillo2017 3.3)')
     parser.add_argument('--mode', choices=('sensor', 'direct', 'both'), default='sensor',
                         help='through the virtual skin (default), before it (true finger path, perfect map), or both')
-    parser.add_argument('--random-touches', type=int, default=150,
+    parser.add_argument('--random-touches', type=non_negative_int, default=150,
                         help='synthetic touches that are no gesture, for the random-touch acceptance (0: none)')
-    parser.add_argument('--seed', type=int, default=0, help='noise and codebook-choice seed')
-    parser.add_argument('--early', type=int, default=0, metavar='EVERY',
+    parser.add_argument('--seed', type=seed, default=0, help='noise and codebook-choice seed')
+    parser.add_argument('--early', type=non_negative_int, default=0, metavar='EVERY',
                         help='also measure early decisions of the default recogniser (auto) on one held-out '
                              'gesture in EVERY (0: no; touch_lab.skin.early_eval)')
     parser.add_argument('--vocabulary', default=None,
                         help="the vocabulary's name in the report (default: the file's name without extensions)")
-    parser.add_argument('--gap', type=float, default=None,
+    parser.add_argument('--gap', type=seconds, default=None,
                         help=f"segmenter's gap, s: a lift this long ends a whole gesture (default: {ENDING_GAP_S} s "
                              f'if the file has multi-stroke samples, else {SINGLE_STROKE_GAP_S} s)')
-    parser.add_argument('--wait', type=float, default=None,
+    parser.add_argument('--wait', type=non_negative_seconds, default=None,
                         help='longest lift, s, that continues strokes the codebook calls the beginning of a longer '
                              f'gesture (default: {ENDING_WAIT_S} s for multi-stroke files; 0: none, every gesture '
                              'ends at --gap)')

@@ -31,6 +31,7 @@ from touch_driver.skin.calibration import calibrate_frames
 from touch_gestures.skin.collisions import COLLISION_FORCE_N, COLLISION_RATE_N_S, CollisionDetector
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import GestureSegmenter
+from touch_graph.cli.options import positive_float, positive_int, seed
 from touch_sim.skin.device import render_frames
 from touch_sim.skin.stimuli import LineStroke, StaticPress
 
@@ -105,10 +106,13 @@ def evaluate_collisions(per_kind: int = 40, seed: int = 0, force_n: float = COLL
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval skin-collisions``."""
-    parser.add_argument('--per-kind', type=int, default=40, help='simulated contacts of each kind (default 40)')
-    parser.add_argument('--seed', type=int, default=0, help='seed of the contacts and the sensor noise')
-    parser.add_argument('--force', type=float, default=COLLISION_FORCE_N, help='collision force threshold, N')
-    parser.add_argument('--rate', type=float, default=COLLISION_RATE_N_S, help='collision force-rate threshold, N/s')
+    parser.add_argument('--per-kind', type=positive_int, default=40,
+                        help='simulated contacts of each kind (default 40)')
+    parser.add_argument('--seed', type=seed, default=0, help='seed of the contacts and the sensor noise')
+    parser.add_argument('--force', type=positive_float, default=COLLISION_FORCE_N,
+                        help='collision force threshold, N')
+    parser.add_argument('--rate', type=positive_float, default=COLLISION_RATE_N_S,
+                        help='collision force-rate threshold, N/s')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
 
 

@@ -18,6 +18,7 @@ import json
 import sys
 
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S
+from touch_graph.cli.options import non_negative_seconds, positive_int, seconds
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.ending_eval import CAUSES, DEFAULT_RULE, PIECE_GAP_S, RULES, ending_causes, ending_table
@@ -34,14 +35,14 @@ _SHORT = {'ended as whole': 'as whole', 'pause over the bound': '>bound', 'pause
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval skin-ending``."""
     parser.add_argument('--traces', required=True, help='trace CSV (.csv or .csv.gz) with multi-stroke samples')
-    parser.add_argument('--gap', type=float, default=ENDING_GAP_S, help=f'lift that ends a whole gesture, s '
+    parser.add_argument('--gap', type=seconds, default=ENDING_GAP_S, help=f'lift that ends a whole gesture, s '
                         f'(default {ENDING_GAP_S})')
-    parser.add_argument('--wait', type=float, default=ENDING_WAIT_S, help='longest lift that continues a prefix, s '
-                        f'(default {ENDING_WAIT_S}; 0: a fixed gap)')
+    parser.add_argument('--wait', type=non_negative_seconds, default=ENDING_WAIT_S,
+                        help=f'longest lift that continues a prefix, s (default {ENDING_WAIT_S}; 0: a fixed gap)')
     parser.add_argument('--rule', choices=tuple(RULES), default=DEFAULT_RULE,
                         help=f'the rule of the causes table (default {DEFAULT_RULE}: touch_gestures.skin.ending; '
                              'touch_lab.skin.ending_eval.RULES)')
-    parser.add_argument('--limit', type=int, default=None, help='use only the first N samples of the file')
+    parser.add_argument('--limit', type=positive_int, default=None, help='use only the first N samples of the file')
     parser.add_argument('--no-table', action='store_true', help='skip the end-of-gesture table (the rules compared)')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
 

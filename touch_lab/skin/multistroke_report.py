@@ -16,7 +16,8 @@ import time
 from pathlib import Path
 
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
-from touch_graph.cli.options import add_output
+from touch_graph.cli.options import add_output, non_negative_int, positive_int
+from touch_graph.files import write_text
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import DEFAULT, evaluate_file
 from touch_lab.skin.collision_eval import evaluate_collisions
@@ -202,7 +203,7 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
               f"99th percentile {t['processing_ms_p99']:.2f} ms."]
     lines += ['', f'(This run took {(time.perf_counter() - started) / 60:.0f} minutes.)', '']
     out = Path(out)
-    out.write_text('\n'.join(lines), encoding='utf-8')
+    write_text(out, '\n'.join(lines), encoding='utf-8')
     return out
 
 
@@ -212,8 +213,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='a trace file per vocabulary (repeat the option), e.g. '
                              '../shared/data/multistroke_dev.csv.gz')
     add_output(parser, 'the Markdown file to write', default='docs/skin-multistroke.md')
-    parser.add_argument('--early', type=int, default=8, help='early decisions on one held-out gesture in EARLY')
-    parser.add_argument('--per-kind', type=int, default=40, help='simulated contacts of each kind for collisions')
+    parser.add_argument('--early', type=non_negative_int, default=8,
+                        help='early decisions on one held-out gesture in EARLY')
+    parser.add_argument('--per-kind', type=positive_int, default=40,
+                        help='simulated contacts of each kind for collisions')
 
 
 def run(args: argparse.Namespace) -> int:

@@ -52,6 +52,7 @@ from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.registry import RECOGNISERS as RUNTIME_RECOGNISERS
 from touch_gestures.skin.segmentation import GestureSegmenter
+from touch_graph.cli.options import non_negative_seconds, positive_int, seed
 from touch_graph.errors import SocialTouchError
 from touch_lab.skin.recognisers import (
     DEFAULT_RECOGNISER,
@@ -75,24 +76,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         'of the command map)')
     parser.add_argument('--commands', help="command map whose gestures to record (default: the package's "
                         'config/skin_commands.yaml)')
-    parser.add_argument('--repetitions', '-m', type=int, default=10,
+    parser.add_argument('--repetitions', '-m', type=positive_int, default=10,
                         help='repetitions per gesture, m of cirillo2017 3.2 (default 10)')
     parser.add_argument('--recogniser', default=DEFAULT_RECOGNISER,
                         help=f'recogniser the codebook is for: {", ".join(RECOGNISERS)} (default {DEFAULT_RECOGNISER})')
     parser.add_argument('--vocabulary', default='commands',
                         help='name of the vocabulary the codebook holds (default commands)')
-    parser.add_argument('--gap', type=float, metavar='S',
+    parser.add_argument('--gap', type=non_negative_seconds, metavar='S',
                         help='lift (s) that ends a gesture, while recording and in the file (default 0.15 s, gestures '
                         'of one stroke; about 1 s for symbols of several strokes)')
     parser.add_argument('--person', default='', metavar='NAME',
                         help='who traces (kept with each template, so the lab can choose the recogniser '
                         'leave-one-person-out; record each person with their own name, resuming the same file)')
-    parser.add_argument('--simulate', type=int, metavar='PERFORMERS',
+    parser.add_argument('--simulate', type=positive_int, metavar='PERFORMERS',
                         help='record synthetic performers on a virtual skin instead of the live skin')
-    parser.add_argument('--seed', type=int, default=0, help='with --simulate: performers and sensor noise')
+    parser.add_argument('--seed', type=seed, default=0, help='with --simulate: performers and sensor noise')
     parser.add_argument('--resume', metavar='FILE', help='go on with a recording stopped early (FILE.partial.npz)')
     parser.add_argument('--topic', default='/skin/frame', help='live: the skin frames topic (default /skin/frame)')
-    parser.add_argument('--wait', type=float, default=5.0, help='live: seconds to wait for the topic (default 5)')
+    parser.add_argument('--wait', type=non_negative_seconds, default=5.0,
+                        help='live: seconds to wait for the topic (default 5)')
 
 
 def _say(line: str) -> None:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from touch_gestures.skin.base import TemplateRecogniser
 from touch_graph.cli.options import add_output
+from touch_graph.files import write_text
 from touch_lab.skin.bench import bench_recognition
 from touch_lab.skin.cli import evaluate_file
 from touch_lab.skin.datasets import read_traces
@@ -220,7 +221,7 @@ def write_report(traces: str, out: str | Path = 'docs/skin-evaluation.md', quick
     ]
     path = Path(out)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text('\n'.join(lines) + '\n', encoding='utf-8')
+    write_text(path, '\n'.join(lines) + '\n', encoding='utf-8')
     _say(f'wrote {path} in {time.perf_counter() - t0:.0f} s')
     return path
 
