@@ -28,6 +28,9 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
+from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.patch.training import PatchGestureClassifier
+
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
 
@@ -37,7 +40,6 @@ def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):
     from dataclasses import replace
 
     from touch_gestures.patch.classifier import precision_cholesky
-    from touch_lab.patch.training import PatchGestureClassifier
     if not relevance > 0:
         raise ValueError(f'relevance must be > 0 frames; got {relevance}')
     p = clf.params_
@@ -71,7 +73,6 @@ def adapt_bear(model, X: np.ndarray, y: np.ndarray, lam: float = 1.0, max_iter: 
     """
     from touch_gestures.bear.subtype_labels import SUBTYPES
     from touch_gestures.bear.subtype_model import _transform
-    from touch_lab.bear.subtype_training import SubtypeClassifier
     if not lam > 0:
         raise ValueError(f'lam must be > 0; got {lam}')
     names = list(model.classes_)
