@@ -12,11 +12,11 @@ import touch_gestures.bear.gate
 import touch_gestures.bear.node as node_module
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import END, START, SymbolicRecogniser
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.bear.subtype_training import SubtypeClassifier
 
 BearFrame = get_message('BearFrame')
 Header = get_message('std_msgs/msg/Header')

@@ -114,7 +114,7 @@ def test_two_gestures_at_once_end_to_end() -> None:
 
 @pytest.mark.parametrize('rate', [3.4, 25.0])
 def test_trained_classifier_plugs_in(rate: float) -> None:
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    from touch_lab.bear.subtype_training import SubtypeClassifier
 
     rng = np.random.default_rng(0)
     X = rng.random((200, 12)).astype(np.float32)

@@ -5,12 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from sklearn.base import clone
-from sklearn.exceptions import NotFittedError
 
 from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.subtype import PaperRuleClassifier, SubtypeTracker
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import RELATIVE_FEATURES, SubtypeClassifier
+from touch_gestures.bear.subtype_model import RELATIVE_FEATURES
+from touch_gestures.estimator import NotFittedError
+from touch_lab.bear.subtype_training import SubtypeClassifier
 
 F = len(FEATURE_NAMES)
 

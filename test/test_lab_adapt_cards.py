@@ -12,7 +12,7 @@ from touch_lab.cli.main import main as cli_main
 
 
 def test_a_card_survives_the_file_and_the_loader_ignores_it(tmp_path):
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     rng = np.random.default_rng(0)
     from touch_gestures.bear.features import FEATURE_NAMES
     X = rng.random((200, len(FEATURE_NAMES))).astype(np.float32)
@@ -36,7 +36,7 @@ def test_a_card_survives_the_file_and_the_loader_ignores_it(tmp_path):
 
 def test_model_info_and_card_commands(tmp_path, capsys):
     from touch_gestures.bear.features import FEATURE_NAMES
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     X = np.random.default_rng(1).random((100, len(FEATURE_NAMES))).astype(np.float32)
     path = tmp_path / 'm.npz'
     SubtypeClassifier().fit(X, np.where(X[:, 1] > 0.5, 'pet', 'tap')).save(path, rate_hz=3.4, buffer_len=20)
@@ -80,8 +80,8 @@ def test_codebook_remove_and_merge_write_new_files_with_cards(tmp_path, capsys):
 
 
 def test_patch_adaptation_moves_the_means_towards_the_new_person_by_the_evidence():
-    from touch_gestures.patch.classifier import PatchGestureClassifier
     from touch_lab.adapt import adapt_patch
+    from touch_lab.patch.training import PatchGestureClassifier
     rng = np.random.default_rng(3)
     X = np.concatenate([rng.normal(0, 1, (400, 3)), rng.normal(4, 1, (400, 3))])
     y = np.array(['push'] * 400 + ['slap'] * 400)
@@ -100,8 +100,8 @@ def test_patch_adaptation_moves_the_means_towards_the_new_person_by_the_evidence
 def test_bear_adaptation_learns_the_new_rows_and_stays_near_the_model_with_a_strong_prior():
     from touch_gestures.bear.features import FEATURE_NAMES
     from touch_gestures.bear.subtype_labels import subtype_index
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
     from touch_lab.adapt import adapt_bear
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     rng = np.random.default_rng(4)
     X = rng.random((600, len(FEATURE_NAMES))).astype(np.float32)
     y = np.where(X[:, 0] > 0.5, 'hold', 'pet')

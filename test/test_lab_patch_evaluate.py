@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from doctest_testing import check_doctests
 
-from touch_gestures.patch.classifier import NOT_RECOGNISED, Detection, PatchGestureClassifier
+from touch_gestures.patch.classifier import NOT_RECOGNISED, Detection
 from touch_gestures.patch.features import WindowFeatures, window_features
 from touch_lab.patch import evaluate as evaluate_module
 from touch_lab.patch.datasets import Session, render_session
@@ -18,6 +18,7 @@ from touch_lab.patch.evaluate import (
     score,
     segment_events,
 )
+from touch_lab.patch.training import PatchGestureClassifier
 from touch_sim.patch.people import simulate_people
 
 CLASSES = ('push', 'slap', 'stroke', 'tickle')

@@ -56,7 +56,7 @@ def test_patch_accepts_rates_that_jitter_as_real_drivers_do(sessions):
 
 
 def test_bear_trains_the_subtype_model_and_evaluates_from_session_bags(sessions, tmp_path, capsys):
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     model = tmp_path / 'bear.npz'
     assert cli_main(['train', 'bear', '--bags', *sessions['bear'], '--out', str(model)]) == 0
     loaded = SubtypeClassifier.load(model)

@@ -10,10 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import logsumexp
 from sklearn.base import clone
-from sklearn.exceptions import NotFittedError
 
+from touch_gestures.estimator import NotFittedError
 from touch_gestures.patch import classifier as classifier_module
-from touch_gestures.patch.classifier import NOT_RECOGNISED, EventDetector, PatchGestureClassifier, decide
+from touch_gestures.patch.classifier import NOT_RECOGNISED, EventDetector, decide
+from touch_lab.patch.training import PatchGestureClassifier
 
 
 def blobs(seed=0, n=300, d=12, classes=('push', 'slap', 'stroke', 'tickle')):

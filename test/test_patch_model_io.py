@@ -7,10 +7,10 @@ import pytest
 from doctest_testing import check_doctests
 
 from touch_gestures.patch import model_io
-from touch_gestures.patch.classifier import PatchGestureClassifier
 from touch_gestures.patch.features import FEATURE_NAMES
 from touch_gestures.patch.model_io import ModelFileError, PatchModel, load_model, save_model
 from touch_graph.errors import ConfigError
+from touch_lab.patch.training import PatchGestureClassifier
 
 
 @pytest.fixture(scope='module')

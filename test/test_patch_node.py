@@ -13,12 +13,13 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from touch_driver.patch.calibration import load_outline
-from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
+from touch_gestures.patch.classifier import EventDetector
 from touch_gestures.patch.model_io import PatchModel, load_model, save_model
 from touch_gestures.patch.node import PatchGesturesNode, default_model_path
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.patch.training import PatchGestureClassifier
 from touch_sim.patch.people import make_people, simulate_session
 from touch_sim.patch.render import render_scene
 

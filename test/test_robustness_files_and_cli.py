@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_bear_node import Graph, frame
 
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.skin.codebook import load_codebook
 from touch_gestures.skin.errors import CodebookError
+from touch_lab.bear.subtype_training import SubtypeClassifier
 
 
 def tiny_model(path: Path) -> Path:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from sklearn.base import clone
-from sklearn.exceptions import NotFittedError
 
+from touch_gestures.estimator import NotFittedError
 from touch_gestures.skin import TouchGesture
 from touch_lab.skin.recognisers import RECOGNISERS, make_recogniser
 from touch_sim.skin.synthetic import PAPER_CENTROID_SET, random_touches, synthetic_traces

@@ -29,6 +29,8 @@ from scipy.optimize import minimize
 from scipy.special import logsumexp
 
 from touch_graph.cli.options import non_negative_float, positive_float
+from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.patch.training import PatchGestureClassifier
 
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
@@ -38,7 +40,7 @@ def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):
     """A new ``PatchGestureClassifier`` whose component means are MAP-adapted to ``X`` (n, d) labelled ``y``."""
     from dataclasses import replace
 
-    from touch_gestures.patch.classifier import PatchGestureClassifier, precision_cholesky
+    from touch_gestures.patch.classifier import precision_cholesky
     if not relevance > 0:
         raise ValueError(f'relevance must be > 0 frames; got {relevance}')
     p = clf.params_
@@ -71,7 +73,7 @@ def adapt_bear(model, X: np.ndarray, y: np.ndarray, lam: float = 1.0, max_iter: 
     Classes of ``y`` the model does not know are left out (a few examples cannot found a class).
     """
     from touch_gestures.bear.subtype_labels import SUBTYPES
-    from touch_gestures.bear.subtype_model import SubtypeClassifier, _transform
+    from touch_gestures.bear.subtype_model import _transform
     if not lam > 0:
         raise ValueError(f'lam must be > 0; got {lam}')
     names = list(model.classes_)
@@ -166,8 +168,8 @@ def _adapt_patch(args: argparse.Namespace, say) -> dict:
 
 
 def _adapt_bear(args: argparse.Namespace, say) -> dict:
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
     from touch_lab.bear.sessions import load_runs, train_rows
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     model = SubtypeClassifier.load(args.model)
     runs = load_runs(args.bags, model.trained_rate_hz_ or 3.4, model.trained_buffer_len_ or 20, say)
     X, y = train_rows(runs)

@@ -49,10 +49,11 @@ def _split(labels, k: int) -> tuple[list[int], list[int]]:
 
 
 def _patch(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
-    from touch_gestures.patch.classifier import PatchGestureClassifier, decide
+    from touch_gestures.patch.classifier import decide
     from touch_gestures.patch.features import window_features
     from touch_lab.patch.evaluate import onset_ages, run_detector, score
     from touch_lab.patch.session_bags import trial_sessions
+    from touch_lab.patch.training import PatchGestureClassifier
 
     from .adapt import adapt_patch
     train = trial_sessions([read_session(b, 'patch') for b in base_bags])

@@ -67,7 +67,7 @@ def _describe(path: Path, kind: str | None) -> list[str]:
         return [f'recogniser {book.name}; {len(book.classes_)} gestures, {len(book.templates_)} templates: '
                 f'{", ".join(book.classes_)}']
     if kind == 'bear_subtype_model':
-        from touch_gestures.bear.subtype_model import SubtypeClassifier
+        from touch_lab.bear.subtype_training import SubtypeClassifier
         model = SubtypeClassifier.load(path)
         return [f'classes {", ".join(model.classes_)}; trained at {model.trained_rate_hz_} Hz, buffer '
                 f'{model.trained_buffer_len_} cycles']

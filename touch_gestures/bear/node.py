@@ -45,7 +45,7 @@ from .gate import NoTouchGate
 from .pipeline import BearRecogniser
 from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, N_CHANNELS
 from .subtype import PaperRuleClassifier, SubtypePredictor
-from .subtype_model import SubtypeClassifier  # imports scikit-learn (slow): at class lookup, before nodes start
+from .subtype_model import SubtypeModel
 from .symbolic import END, GestureLibrary
 
 __all__ = ['DEFAULT_MODEL', 'BearGesturesNode', 'main']
@@ -235,7 +235,7 @@ class BearGesturesNode(Node):
             return rule
         fqn = self.get_fully_qualified_name()
         try:
-            model = SubtypeClassifier.load(path)
+            model = SubtypeModel.load(path)
         except (ValueError, OSError) as err:
             raise ParameterError(f"parameter 'subtype_model' of {fqn}: cannot load {path}: {err}") from err
         trained = (model.trained_rate_hz_, model.trained_buffer_len_)

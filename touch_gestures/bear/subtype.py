@@ -56,7 +56,7 @@ def check_feature_table(X, what: str = 'X') -> np.ndarray:
 
 
 class SubtypePredictor(Protocol):
-    """What classifies subtypes: :class:`PaperRuleClassifier`, ``SubtypeClassifier``, ``NoTouchGate``."""
+    """What classifies subtypes: :class:`PaperRuleClassifier`, ``SubtypeModel``, ``NoTouchGate``."""
 
     def predict_codes(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(n_samples, n_features) feature rows -> ((n,) int8 codes into SUBTYPES, (n,) float32 confidence)."""

@@ -1,8 +1,11 @@
-"""A trainable eight-subtype classifier (knight2009 Table I) in the scikit-learn estimator API.
+"""The eight-subtype model (knight2009 Table I): a fitted logistic regression, evaluated with numpy.
 
 Model: multinomial logistic regression on the standardised feature table of :mod:`.features`
 (durations through ``log1p``, since they span 0.1 s to minutes), trained with scikit-learn's
-``LogisticRegression`` and balanced class weights, evaluated here with numpy in the log domain.
+``LogisticRegression`` and balanced class weights in the lab
+(:class:`touch_lab.bear.subtype_training.SubtypeClassifier`, this class with ``fit``), evaluated
+here with numpy in the log domain (:class:`SubtypeModel`), so the node's process never loads
+scikit-learn.
 
 With ``relative=True`` (the default) the model also sees :data:`RELATIVE_FEATURES`: the level
 features divided by the buffer's own peak, so they describe the *shape* of a touch rather than how
@@ -15,12 +18,12 @@ are): it leads on balanced accuracy (the rare subtypes) and one prediction for 5
 small fraction of the per-cycle budget that the tree ensembles alone would exceed. Its file is a
 few small arrays (.npz, no pickle).
 
->>> rng = np.random.default_rng(0)
->>> X = rng.random((60, len(FEATURE_NAMES)), dtype=np.float32)
->>> y = np.where(X[:, 0] < 0.5, 'none', 'hold')
->>> model = SubtypeClassifier().fit(X, y)
->>> float(np.mean(model.predict(X) == y)) > 0.9
-True
+>>> from touch_graph.paths import share_file
+>>> model = SubtypeModel.load(share_file('config', 'bear_subtype_model.npz'))   # the shipped model
+>>> model.classes_.tolist()
+['none', 'pet', 'poke', 'tickle', 'pat', 'hold', 'tap', 'shake', 'rub']
+>>> model.predict_proba(np.zeros((3, len(FEATURE_NAMES)), dtype=np.float32)).shape   # 3 sensors' buffers
+(3, 9)
 """
 
 from __future__ import annotations
@@ -29,18 +32,17 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.exceptions import NotFittedError
 
 from touch_graph.files import replacing
 
+from ..estimator import NotFittedError
 from .features import FEATURE_NAMES
 from .subtype import check_feature_table
 from .subtype_labels import SUBTYPES, subtype_index
 
-__all__ = ['MODEL_FORMAT', 'RELATIVE_FEATURES', 'SubtypeClassifier']
+__all__ = ['MODEL_FORMAT', 'RELATIVE_FEATURES', 'SubtypeModel', 'design_names']
 
-#: Version of the .npz model file written by :meth:`SubtypeClassifier.save`.
+#: Version of the .npz model file written by :meth:`SubtypeModel.save`.
 MODEL_FORMAT = 2
 _LOG_COLUMNS = [FEATURE_NAMES.index('duration_s'), FEATURE_NAMES.index('since_active_s')]
 #: Level features the model also sees divided by the buffer's peak (``relative=True``), named ``<feature>/peak``.
@@ -64,8 +66,11 @@ def _transform(X: np.ndarray, relative: bool) -> np.ndarray:
     return np.hstack([out, (X[:, _RELATIVE_COLUMNS] / peak).astype(np.float32)])
 
 
-class SubtypeClassifier(ClassifierMixin, BaseEstimator):
-    """Multinomial logistic regression over the buffer features, one row per sensor and cycle.
+class SubtypeModel:
+    """Multinomial logistic regression over the buffer features, one row per sensor and cycle, fitted.
+
+    Made by :meth:`load` (or by the lab's ``SubtypeClassifier.fit``); the arguments say how it is
+    (or was) trained.
 
     Args:
         C: inverse L2 regularisation strength (scikit-learn's ``LogisticRegression.C``).
@@ -84,33 +89,6 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
         self.max_iter = max_iter
         self.relative = relative
 
-    def fit(self, X, y) -> SubtypeClassifier:
-        """Train on ``X`` ((n, len(FEATURE_NAMES)) feature rows) and ``y`` (subtype names or codes)."""
-        from sklearn.linear_model import LogisticRegression
-
-        X = check_feature_table(X)
-        y = np.asarray(y)
-        if y.shape != (X.shape[0],):
-            raise ValueError(f'y must have shape ({X.shape[0]},); got {y.shape}')
-        names = np.array([SUBTYPES[int(v)] if not isinstance(v, str) else SUBTYPES[subtype_index(v)] for v in y])
-        classes = [s for s in SUBTYPES if s in set(names)]
-        if len(classes) < 2:
-            raise ValueError(f'need at least two subtypes to train; got only {classes}')
-        Z = _transform(X, self.relative)
-        mean = Z.mean(axis=0)
-        scale = Z.std(axis=0)
-        scale = np.where(scale > 1e-6, scale, 1.0)   # a constant feature: leave it unscaled, not divided by 0
-        lr = LogisticRegression(C=self.C, class_weight=self.class_weight, max_iter=self.max_iter)
-        lr.fit((Z - mean) / scale, names)
-        coef, intercept = lr.coef_, lr.intercept_
-        if len(classes) == 2:   # scikit-learn stores one row for two classes: the logit of the second
-            coef = np.stack([-0.5 * coef[0], 0.5 * coef[0]])
-            intercept = np.array([-0.5 * intercept[0], 0.5 * intercept[0]])
-        order = [list(lr.classes_).index(c) for c in classes]
-        coef, intercept = coef[order], intercept[order]
-        self._set(classes, mean, scale, coef, intercept)
-        return self
-
     def _set(self, classes, mean, scale, coef, intercept) -> None:
         self.classes_ = np.array(classes)
         self.mean_ = np.asarray(mean, dtype=np.float32)
@@ -125,7 +103,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
 
     def _check_fitted(self) -> None:
         if not hasattr(self, 'coef_'):
-            raise NotFittedError('this SubtypeClassifier is not fitted yet; call fit(X, y) or load(path) first')
+            raise NotFittedError(f'this {type(self).__name__} is not fitted yet; call fit(X, y) or load(path) first')
 
     def decision_function(self, X) -> np.ndarray:
         """(n_samples, n_classes) float32 class scores (logits)."""
@@ -169,7 +147,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
                      params=np.array([float(self.C), float(self.max_iter)]), trained_at=trained_at)
 
     @classmethod
-    def load(cls, path: str | Path) -> SubtypeClassifier:
+    def load(cls, path: str | Path) -> SubtypeModel:
         """Read a model written by :meth:`save`; ValueError when the format, features or classes do not match."""
         try:
             archive = np.load(path, allow_pickle=False)
@@ -188,7 +166,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator):
                 design = tuple(str(s) for s in data['design_names']) if 'design_names' in data else FEATURE_NAMES
             except KeyError as err:
                 raise ValueError(f'{path}: not a bear subtype model (missing {err}); write one with '
-                                 'SubtypeClassifier.save') from None
+                                 'SubtypeModel.save') from None
         if version not in (1, MODEL_FORMAT):
             raise ValueError(f'{path}: model format {version}, this code reads formats 1 and {MODEL_FORMAT}; '
                              'retrain it')

@@ -1,6 +1,7 @@
 """Textile patch gestures (sympartner2018 6.2): sliding-window features, one Gaussian mixture per
-class, the event rule, model files and the ``patch_gestures`` node. Simulated people are in
-:mod:`touch_sim.patch`; training and leave-one-subject-out evaluation in :mod:`touch_lab.patch`.
+class (evaluated with numpy), the event rule, model files and the ``patch_gestures`` node. Simulated
+people are in :mod:`touch_sim.patch`; training (scikit-learn's EM) and leave-one-subject-out
+evaluation in :mod:`touch_lab.patch`.
 
 Per frame::
 
@@ -10,9 +11,9 @@ Per frame::
     event = detector.update(model.classifier.log_posterior(x), features.onset_age)
 """
 
-from .classifier import NOT_RECOGNISED, Detection, EventDetector, PatchGestureClassifier
+from .classifier import NOT_RECOGNISED, Detection, EventDetector, GestureMixtures
 from .features import FEATURE_NAMES, WindowFeatures, window_features
 from .model_io import ModelFileError, PatchModel, load_model, save_model
 
-__all__ = ['FEATURE_NAMES', 'NOT_RECOGNISED', 'Detection', 'EventDetector', 'ModelFileError', 'PatchGestureClassifier',
+__all__ = ['FEATURE_NAMES', 'NOT_RECOGNISED', 'Detection', 'EventDetector', 'GestureMixtures', 'ModelFileError',
            'PatchModel', 'WindowFeatures', 'load_model', 'save_model', 'window_features']

@@ -1,37 +1,27 @@
 """Maximum-likelihood patch gesture classifier: one Gaussian mixture per class (sympartner2018 6.2).
 
-For each gesture class ``c`` a mixture ``p(f | c) = sum_k w_k N(f | mu_k, Sigma_k)`` is fitted
-by EM (scikit-learn ``GaussianMixture``, 5 components in the paper) to the window features
-of every frame of that class's sessions, silences included. With a uniform prior the
-posterior is ``p(c | f) = p(f | c) / sum_c' p(f | c')``, computed in the log domain.
+For each gesture class ``c`` a mixture ``p(f | c) = sum_k w_k N(f | mu_k, Sigma_k)`` of the
+window features; with a uniform prior the posterior is ``p(c | f) = p(f | c) / sum_c' p(f | c')``,
+computed in the log domain. The mixtures are fitted by EM (scikit-learn's ``GaussianMixture``)
+in the lab, :class:`touch_lab.patch.training.PatchGestureClassifier`; this module evaluates fitted
+ones with numpy alone (:class:`GestureMixtures`), so the node's process never loads scikit-learn.
 
-Per frame, :meth:`PatchGestureClassifier.log_posterior` evaluates all the classes' mixtures
-with one matrix product on parameters prepared at fit time (precision Cholesky factors,
-with the feature standardisation folded in), so no scikit-learn input validation runs per
-frame; :class:`EventDetector` turns posteriors into gesture events.
-
-Hard cases handled at fit: a class with fewer (distinct) frames than components gets as
-many components as it has distinct frames; constant or collinear features give singular
-covariances, which ``reg_covar`` (added to the diagonal, in standardised units) regularises;
-if EM still fails, ``reg_covar`` is raised tenfold (up to three times) and the effective
-value is kept per class in ``reg_covar_``.
+Per frame, :meth:`GestureMixtures.log_posterior` evaluates all the classes' mixtures with one
+matrix product on parameters prepared once (precision Cholesky factors, with the feature
+standardisation folded in); :class:`EventDetector` turns posteriors into gesture events.
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cholesky, solve_triangular
-from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.exceptions import ConvergenceWarning, NotFittedError
-from sklearn.mixture import GaussianMixture
-from sklearn.utils.validation import check_array, check_is_fitted, check_X_y
 
-__all__ = ['NOT_RECOGNISED', 'Detection', 'EventDetector', 'GaussianMixtureParams', 'PatchGestureClassifier',
-           'decide', 'precision_cholesky']
+from ..estimator import NotFittedError
+
+__all__ = ['NOT_RECOGNISED', 'Detection', 'EventDetector', 'GaussianMixtureParams', 'GestureMixtures', 'decide',
+           'precision_cholesky']
 
 #: Decision index of a sample whose best posterior stays below the threshold.
 NOT_RECOGNISED = -1
@@ -45,12 +35,11 @@ def precision_cholesky(covariances: np.ndarray) -> np.ndarray:
         np.linalg.LinAlgError: when a covariance is not positive definite.
     """
     cov = np.asarray(covariances, dtype=np.float64)
-    out = np.empty_like(cov)
-    eye = np.eye(cov.shape[-1])
-    for i, sigma in enumerate(cov):
-        lower = cholesky(sigma, lower=True)
-        out[i] = solve_triangular(lower, eye, lower=True).T
-    return out
+    if not np.isfinite(cov).all():
+        raise np.linalg.LinAlgError('a covariance has NaN or infinite entries')
+    lower = np.linalg.cholesky(cov)                 # (K, d, d), raises LinAlgError if not positive definite
+    eye = np.broadcast_to(np.eye(cov.shape[-1]), cov.shape)
+    return np.linalg.solve(lower, eye).transpose(0, 2, 1)
 
 
 @dataclass(frozen=True)
@@ -145,119 +134,44 @@ class _Evaluator:
         return ll
 
 
-class PatchGestureClassifier(ClassifierMixin, BaseEstimator):
-    """One Gaussian mixture per gesture class, uniform prior, log-domain posterior.
+class GestureMixtures:
+    """Fitted patch gesture mixtures: one Gaussian mixture per class, uniform prior, log-domain posterior.
+
+    What a node evaluates, with numpy only: made from stored parameters (:meth:`from_params`, as
+    :func:`~.model_io.load_model` does) or fitted by :class:`touch_lab.patch.training.PatchGestureClassifier`
+    (scikit-learn's EM), which is this class with ``fit``.
 
     Args:
-        n_components: mixture components per class (sympartner2018 6.3: best at 5).
         threshold: posterior a class must reach to be recognised (sympartner2018 6.3: 0.99).
-        covariance_type: 'full', 'diag', 'tied' or 'spherical' (GaussianMixture's).
-        reg_covar: added to covariance diagonals, in standardised units (features are scaled
-            to unit variance first, so one value suits features of any scale).
-        max_iter, n_init, tol: EM settings passed to GaussianMixture.
-        random_state: seed for the EM initialisation.
+        covariance_type: what EM fitted ('full', 'diag', 'tied' or 'spherical'); the parameters
+            always hold full covariances, so it only describes the model.
 
-    Attributes (after fit):
+    Attributes (once fitted or loaded):
         classes_: (C,) class names. n_features_in_: 12 for the patch features.
-        n_components_: (C,) components actually fitted per class.
-        reg_covar_: (C,) regularisation actually used per class.
-        mixtures_: the fitted GaussianMixture objects (standardised units), for reference.
+        n_components_: (C,) components per class. reg_covar_: (C,) regularisation used per class
+            (NaN when loaded: the file does not keep it).
         params_: :class:`GaussianMixtureParams`, what a model file stores.
     """
 
-    def __init__(self, n_components: int = 5, threshold: float = 0.99, covariance_type: str = 'full',
-                 reg_covar: float = 1e-3, max_iter: int = 200, n_init: int = 1, tol: float = 1e-3,
-                 random_state: int | None = 0) -> None:
-        self.n_components = n_components
+    def __init__(self, threshold: float = 0.99, covariance_type: str = 'full') -> None:
         self.threshold = threshold
         self.covariance_type = covariance_type
-        self.reg_covar = reg_covar
-        self.max_iter = max_iter
-        self.n_init = n_init
-        self.tol = tol
-        self.random_state = random_state
-
-    # ------------------------------------------------------------------ fitting
-    def fit(self, X: np.ndarray, y: np.ndarray) -> PatchGestureClassifier:
-        """Fit one mixture per class to the frames of that class.
-
-        Args:
-            X: (n, d) float features, finite (NaN is rejected with ValueError).
-            y: (n,) class labels (str or int), at least two classes.
-        """
-        if int(self.n_components) != self.n_components or self.n_components < 1:
-            raise ValueError(f'n_components must be a positive int; got {self.n_components!r}')
-        if not 0.0 < self.threshold <= 1.0:
-            raise ValueError(f'threshold must be a probability in (0, 1]; got {self.threshold!r}')
-        if not self.reg_covar > 0:
-            raise ValueError(f'reg_covar must be > 0 to keep covariances invertible; got {self.reg_covar!r}')
-        X, y = check_X_y(X, y, dtype=np.float64, ensure_min_samples=1)
-        classes = np.unique(y)
-        if len(classes) < 2:
-            raise ValueError(f'need frames of at least two classes to classify; got only {list(classes)}')
-        self.n_features_in_ = X.shape[1]
-        mean = X.mean(axis=0)
-        scale = X.std(axis=0)
-        scale[~(scale > 1e-12 * np.maximum(1.0, np.abs(mean)))] = 1.0  # constant feature: leave unscaled
-        Z = (X - mean) / scale
-        mixtures, n_comp, regs = [], [], []
-        comp_class, weights, means, covs = [], [], [], []
-        for ci, c in enumerate(classes):
-            gm, reg = self._fit_class(Z[y == c])
-            mixtures.append(gm)
-            n_comp.append(gm.n_components)
-            regs.append(reg)
-            comp_class += [ci] * gm.n_components
-            weights.append(gm.weights_)
-            means.append(gm.means_)
-            covs.append(_full_covariances(gm))
-        self.classes_ = classes
-        self.mixtures_ = mixtures
-        self.n_components_ = np.array(n_comp)
-        self.reg_covar_ = np.array(regs)
-        self.params_ = GaussianMixtureParams(
-            classes=tuple(str(c) for c in classes), component_class=np.array(comp_class),
-            weights=np.concatenate(weights), means=np.concatenate(means), covariances=np.concatenate(covs),
-            feature_mean=mean, feature_scale=scale)
-        self._evaluator = _Evaluator(self.params_)
-        return self
-
-    def _fit_class(self, Z: np.ndarray) -> tuple[GaussianMixture, float]:
-        if len(Z) == 1:  # EM needs two rows; a repeated row gives the same one-point Gaussian
-            Z = np.repeat(Z, 2, axis=0)
-        distinct = len(np.unique(Z, axis=0))
-        n = max(1, min(int(self.n_components), distinct))
-        reg = float(self.reg_covar)
-        last_err: Exception | None = None
-        for _ in range(4):
-            gm = GaussianMixture(n_components=n, covariance_type=self.covariance_type, reg_covar=reg,
-                                 max_iter=self.max_iter, n_init=self.n_init, tol=self.tol,
-                                 random_state=self.random_state)
-            try:
-                with warnings.catch_warnings():
-                    # Few distinct points or slow EM: the result is still usable; we report n_components_.
-                    warnings.simplefilter('ignore', ConvergenceWarning)
-                    gm.fit(Z)
-                precision_cholesky(_full_covariances(gm))
-                return gm, reg
-            except (ValueError, np.linalg.LinAlgError) as err:
-                last_err = err
-                reg *= 10.0
-        raise ValueError(f'EM failed for a class of {len(Z)} frames even with reg_covar={reg / 10:g}: {last_err}; '
-                         'use fewer components or a larger reg_covar') from last_err
 
     @classmethod
-    def from_params(cls, params: GaussianMixtureParams, threshold: float = 0.99, **kwargs) -> PatchGestureClassifier:
-        """A fitted classifier from stored parameters (see model_io); ``mixtures_`` is None."""
-        clf = cls(threshold=threshold, **kwargs)
-        clf.classes_ = np.array(params.classes)
-        clf.n_features_in_ = params.means.shape[1]
-        clf.n_components_ = np.bincount(params.component_class, minlength=len(params.classes))
-        clf.reg_covar_ = np.full(len(params.classes), np.nan)
-        clf.mixtures_ = None
-        clf.params_ = params
-        clf._evaluator = _Evaluator(params)
-        return clf
+    def from_params(cls, params: GaussianMixtureParams, threshold: float = 0.99, **kwargs) -> GestureMixtures:
+        """Fitted mixtures from stored parameters (see model_io); ``kwargs`` are ``__init__``'s."""
+        model = cls(threshold=threshold, **kwargs)
+        model._install(params, n_components=np.bincount(params.component_class, minlength=len(params.classes)),
+                       reg_covar=np.full(len(params.classes), np.nan))
+        return model
+
+    def _install(self, params: GaussianMixtureParams, n_components: np.ndarray, reg_covar: np.ndarray) -> None:
+        self.classes_ = np.array(params.classes)
+        self.n_features_in_ = params.means.shape[1]
+        self.n_components_ = np.asarray(n_components)
+        self.reg_covar_ = np.asarray(reg_covar, dtype=np.float64)
+        self.params_ = params
+        self._evaluator = _Evaluator(params)
 
     # ------------------------------------------------------------------ inference
     def log_posterior(self, x: np.ndarray) -> np.ndarray:
@@ -273,13 +187,19 @@ class PatchGestureClassifier(ClassifierMixin, BaseEstimator):
         try:
             evaluator = self._evaluator
         except AttributeError:
-            raise NotFittedError('this PatchGestureClassifier is not fitted yet; call fit(X, y) or load a '
+            raise NotFittedError(f'this {type(self).__name__} is not fitted yet; call fit(X, y) or load a '
                                  'model file first') from None
         return evaluator.log_posterior_one(x)
 
     def _check_batch(self, X: np.ndarray, allow_nan: bool) -> np.ndarray:
-        check_is_fitted(self, 'params_')
-        X = check_array(X, dtype=np.float64, ensure_all_finite=not allow_nan)
+        if not hasattr(self, 'params_'):
+            raise NotFittedError(f'this {type(self).__name__} is not fitted yet; call fit(X, y) or load a '
+                                 'model file first')
+        X = np.asarray(X, dtype=np.float64)
+        if X.ndim != 2:
+            raise ValueError(f'expected a 2D array of feature rows; got shape {X.shape}')
+        if not allow_nan and not np.isfinite(X).all():
+            raise ValueError('Input X contains NaN or infinity')
         if X.shape[1] != self.n_features_in_:
             raise ValueError(f'X has {X.shape[1]} features; this classifier was fitted on {self.n_features_in_}')
         return X
@@ -310,19 +230,6 @@ class PatchGestureClassifier(ClassifierMixin, BaseEstimator):
         X = self._check_batch(X, allow_nan=False)
         ev = self._evaluator
         return ev.class_log_likelihood(X) + ev.log_jacobian
-
-
-def _full_covariances(gm: GaussianMixture) -> np.ndarray:
-    """(K, d, d) covariances of a fitted GaussianMixture of any covariance_type."""
-    cov = gm.covariances_
-    k, d = gm.means_.shape
-    if gm.covariance_type == 'full':
-        return np.array(cov, dtype=np.float64)
-    if gm.covariance_type == 'tied':
-        return np.repeat(cov[None], k, axis=0)
-    if gm.covariance_type == 'diag':
-        return np.einsum('kd,de->kde', cov, np.eye(d))
-    return cov[:, None, None] * np.eye(d)[None]  # spherical
 
 
 def decide(log_posteriors: np.ndarray, threshold: float) -> np.ndarray:

@@ -31,7 +31,7 @@ metadata            () str         optional: a JSON object of strings, numbers a
 ==================  =============  ==================================================
 
 >>> import tempfile, os, numpy as np
->>> from touch_gestures.patch.classifier import PatchGestureClassifier
+>>> from touch_lab.patch.training import PatchGestureClassifier   # training: scikit-learn's EM
 >>> rng = np.random.default_rng(0)
 >>> X = np.concatenate([rng.normal(0, 1, (40, 12)), rng.normal(3, 1, (40, 12))])
 >>> clf = PatchGestureClassifier(n_components=2).fit(X, ['stroke'] * 40 + ['push'] * 40)
@@ -54,7 +54,7 @@ import numpy as np
 from touch_graph.errors import ConfigError
 from touch_graph.files import replacing
 
-from .classifier import EventDetector, GaussianMixtureParams, PatchGestureClassifier, precision_cholesky
+from .classifier import EventDetector, GaussianMixtureParams, GestureMixtures, precision_cholesky
 from .features import FEATURE_NAMES, WindowFeatures
 
 __all__ = ['FORMAT', 'FORMAT_VERSION', 'ModelFileError', 'PatchModel', 'load_model', 'save_model']
@@ -75,7 +75,7 @@ class PatchModel:
     """A fitted classifier with the feature settings it was trained for.
 
     Attributes:
-        classifier: the fitted :class:`PatchGestureClassifier` (threshold included).
+        classifier: the fitted :class:`~.classifier.GestureMixtures` (threshold included).
         window: window length in frames. rate_hz: frame rate, Hz. k: activation floor.
         grid: (rows, cols) of the activation maps.
         feature_names: the features the classifier expects, in order.
@@ -85,7 +85,7 @@ class PatchModel:
             scalars by name, stored in the file's optional ``metadata`` key.
     """
 
-    classifier: PatchGestureClassifier
+    classifier: GestureMixtures
     window: int = 60
     rate_hz: float = 20.0
     k: float = 0.08
@@ -230,8 +230,8 @@ def load_model(path: str | os.PathLike, feature_names: tuple[str, ...] = FEATURE
         raise ModelFileError(f'bad settings: window={window}, rate_hz={rate_hz}, threshold={threshold}, k={k}, '
                              f'release={release}, hold={dwell} (the dwell, frames)', where)
     params = _check_params(data, class_names, len(names), where)
-    clf = PatchGestureClassifier.from_params(params, threshold=threshold,
-                                             covariance_type=str(data['covariance_type']))
+    clf = GestureMixtures.from_params(params, threshold=threshold,
+                                      covariance_type=str(data['covariance_type']))
     return PatchModel(clf, window=int(window), rate_hz=rate_hz, k=k, grid=file_grid, feature_names=names,
                       release=release, dwell=int(dwell), metadata=_read_metadata(data, where))
 

@@ -1,7 +1,8 @@
 """The interface every skin recogniser shares: a codebook of templates and a rejection rule.
 
-A recogniser is a scikit-learn estimator (``__init__`` only stores parameters, ``fit``
-validates and returns ``self``, learned attributes end in ``_``) whose ``fit(gestures,
+A recogniser keeps scikit-learn's estimator conventions without scikit-learn
+(:mod:`touch_gestures.estimator`: ``__init__`` only stores parameters, ``fit`` validates and
+returns ``self``, learned attributes end in ``_``); its ``fit(gestures,
 labels)`` turns n gestures x m repetitions into a codebook of feature vectors
 (cirillo2017 Fig. 5, training branch), and whose ``predict(gesture)`` returns a
 :class:`Match`: the nearest class, its distance and its margin over the runner-up
@@ -56,9 +57,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.base import BaseEstimator
-from sklearn.exceptions import NotFittedError
 
+from ..estimator import NotFittedError, Params
 from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
@@ -93,7 +93,7 @@ class Match:
     rejected: str | None = None
 
 
-class TemplateRecogniser(BaseEstimator):
+class TemplateRecogniser(Params):
     """Base class: nearest-template matching over a codebook, with rejection (see module doc).
 
     Subclass parameters (in their ``__init__``) must include ``max_distance``,

@@ -19,7 +19,7 @@ stroke orders (docs/skin-evaluation.md). The steps:
    cost (gestures of a class lie closer than a cell), so step 3 bounds with exact distances.
 3. **One-to-one matching on the closest** (``exact``): the ``exact`` templates with the
    smallest Chamfer distance are matched point to point with the optimal assignment
-   (Hungarian method, :func:`scipy.optimize.linear_sum_assignment`), which $P's greedy
+   (shortest augmenting paths, :func:`.assignment.min_cost_assignment`), which $P's greedy
    matching approximates. Its mean point distance is the distance; the other templates
    keep their Chamfer bound, raised to the farthest of the closest, so the margin over the
    runner-up class is never overstated. As in $Q, most assignments are never solved: one
@@ -47,10 +47,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import sparse
-from scipy.optimize import linear_sum_assignment
-from scipy.spatial.distance import cdist
 
+from .assignment import min_cost_assignment
 from .base import TemplateRecogniser
 from .features import cloud_features
 from .gesture import TouchGesture
@@ -136,13 +134,12 @@ class CloudRecogniser(TemplateRecogniser):
         # rows. Kept for rasters up to _TABLE_CELLS cells (1024: 4 MiB); larger ones compute the rows per query.
         self._cell_table = (np.sqrt(_squared_distances(self._raster, self._raster)).astype(np.float32)
                             if g * g <= _TABLE_CELLS else None)
-        # (T, g*g) sparse: how many points of each template fall in each cell; the template-to-query
-        # sums are one sparse product with the query's field (a third of gathering T x n cells).
+        # (T, g*g): how many points of each template fall in each cell; the template-to-query sums are
+        # one matrix-vector product with the query's field (cheaper than gathering T x n cells).
         T = len(self._clouds)
-        self._cell_counts = sparse.csr_matrix(
-            (np.ones(T * n, dtype=np.float32), self._template_cells.ravel(), np.arange(0, T * n + 1, n)),
-            shape=(T, g * g))
-        self._cell_counts.sum_duplicates()
+        counts = np.zeros((T, g * g), dtype=np.float32)
+        np.add.at(counts, (np.repeat(np.arange(T), n), self._template_cells.ravel()), 1.0)
+        self._cell_counts = counts
         self._visit_labels = self.template_labels_.tolist()
         # flat start of each (point, template) row of the (n, k, n) point distances to the k closest
         self._row_starts = np.arange(0, n * n * min(self.exact, T), n).reshape(n, min(self.exact, T))
@@ -174,7 +171,7 @@ class CloudRecogniser(TemplateRecogniser):
             return out
         closest = np.argpartition(out, k - 1)[:k] if k < len(out) else np.arange(len(out))
         # (n, k, n) point distances to the closest templates, in one call; float64, as the assignment's.
-        pair = cdist(q, self._clouds[closest].reshape(-1, 2)).reshape(n, k, n)
+        pair = np.sqrt(_squared_distances(q, self._clouds[closest].reshape(-1, 2))).reshape(n, k, n)
         nearest = pair.argmin(axis=2)                        # (n, k) each query point's nearest template point
         # Their distances gathered by flat index: numpy's min along a short last axis is slower.
         rows = pair.reshape(-1)[self._row_starts + nearest]
@@ -213,11 +210,11 @@ class CloudRecogniser(TemplateRecogniser):
     def _match(cost: np.ndarray, nearest: np.ndarray, nearest_mean: float) -> float:
         """Mean point distance of the optimal one-to-one matching, given the (n, n) ``cost`` matrix
         and each row's argmin ``nearest`` (n,) with its mean: when the nearest points already pair
-        one to one, that pairing is optimal and the Hungarian method is not needed."""
+        one to one, that pairing is optimal and the assignment need not be solved."""
         if len(set(nearest.tolist())) == len(nearest):
             return nearest_mean
-        rows, cols = linear_sum_assignment(cost)
-        return float(cost[rows, cols].sum() / len(rows))
+        cols = min_cost_assignment(cost)
+        return float(cost[np.arange(len(cols)), cols].sum() / len(cols))
 
 
 def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:

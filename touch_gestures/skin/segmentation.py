@@ -51,8 +51,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
+from .blobs import count_blobs
 from .gesture import GRID, TouchGesture
 
 __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_GAP_S', 'GestureSegmenter',
@@ -101,7 +101,6 @@ def verdict_of(answer: bool | Verdict) -> Verdict:
     return Verdict.WHOLE if answer else Verdict.PREFIX
 
 
-_EIGHT = np.ones((3, 3), dtype=bool)
 #: Lifts are differences of float64 seconds made from integer-nanosecond stamps (float64's spacing
 #: near today's epoch is a fraction of a microsecond): a lift of exactly gap_s frames could come out a
 #: rounding short and wait one more frame. The tolerance covers that rounding and is far below any
@@ -342,10 +341,7 @@ class GestureSegmenter:
 
     def _count_blobs(self, above: np.ndarray) -> int:
         # Growing each blob by half the allowed gap joins blobs at most merge_gap_taxels apart.
-        grow = (self.merge_gap_taxels + 1) // 2
-        if grow:
-            above = ndimage.binary_dilation(above, structure=_EIGHT, iterations=grow)
-        return int(ndimage.label(above, structure=_EIGHT)[1])
+        return count_blobs(above, grow=(self.merge_gap_taxels + 1) // 2)
 
     def _finish(self, out: list[TouchGesture], truncated: bool) -> None:
         if self._frames < self.min_frames and not truncated:

@@ -19,8 +19,8 @@ import numpy as np
 
 from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_gestures.bear.pipeline import BearRecogniser
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_lab.bear.evaluate import collect_training_rows, run_scene
+from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.people import make_scene
 from touch_sim.bear.render import BearCycles
 

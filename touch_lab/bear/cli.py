@@ -197,7 +197,7 @@ def _run_cross(args: argparse.Namespace) -> int:
 
 def _load_model(args: argparse.Namespace):
     """The ``--model`` file; ValueError when it was trained at another scan rate or buffer length."""
-    from touch_gestures.bear.subtype_model import SubtypeClassifier
+    from touch_lab.bear.subtype_training import SubtypeClassifier
     model = SubtypeClassifier.load(args.model)
     rate, buffer = model.trained_rate_hz_, model.trained_buffer_len_
     if rate is not None and abs(rate / args.rate - 1) > 0.05:

@@ -45,8 +45,8 @@ from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import START, GestureLibrary
+from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.hand_people import PORT_OPTIONS, HandScene, make_hand_scene
 from touch_sim.bear.people import BearScene, make_scene
 from touch_sim.bear.render import BearCycles

@@ -20,7 +20,6 @@ import numpy as np
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.cli.options import add_output, seed
 from touch_graph.files import write_text
@@ -35,6 +34,7 @@ from touch_lab.bear.evaluate import (
     score_symbolic,
     stderr_progress,
 )
+from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.people import BearScene, Contact, make_scene
 
 __all__ = ['add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',

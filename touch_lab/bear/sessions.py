@@ -27,7 +27,7 @@ from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import SubtypeClassifier
+from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
 from touch_sim.bear.people import split_label
 

@@ -21,8 +21,8 @@ import numpy as np
 from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
-from touch_gestures.bear.subtype_model import SubtypeClassifier
 from touch_gestures.bear.symbolic import GestureLibrary, SymbolicRecogniser
+from touch_lab.bear.subtype_training import SubtypeClassifier
 
 from .evaluate import (
     FAMILIES,

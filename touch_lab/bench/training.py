@@ -37,10 +37,10 @@ def _say(msg: str) -> None:
 def _train_patch(bags: list[str]) -> None:
     import numpy as np
 
-    from touch_gestures.patch.classifier import PatchGestureClassifier
     from touch_gestures.patch.features import window_features
     from touch_lab.collect.coverage import read_checked
     from touch_lab.patch.session_bags import trial_sessions
+    from touch_lab.patch.training import PatchGestureClassifier
     sessions = trial_sessions(read_checked(bags, 'patch', lambda _m: None))
     window = round(3.0 * sessions[0].rate_hz)
     X = np.concatenate([window_features(s.activations, window) for s in sessions])

@@ -36,6 +36,8 @@ BENCHES: dict[str, Command] = {
     'patch-node': Command('touch_lab.patch.bench:bench_node', 'the patch recogniser node'),
     'skin': Command('touch_lab.skin.bench:bench_recognition', 'one recognition of the skin'),
     'skin-node': Command('touch_lab.skin.session_eval:bench_node', 'the skin nodes on simulated sessions'),
+    'node-memory': Command('touch_lab.bench.node_memory:bench_node_memory',
+                           'RSS of each node process as launched (--processes) and of its imports'),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
 }
 

@@ -67,6 +67,8 @@ REPORT_TARGETS: dict[str, Command] = {
                                                          'unplug, kill -9; about 3 minutes)'),
     'compiled-code': Command('touch_lab.bench.compiled_code', "regenerate docs/compiled-code.md (each compiled "
                              "twin's saving at the real rates; about 5 minutes)"),
+    'node-memory': Command('touch_lab.bench.node_memory', 'regenerate docs/node-memory.md: RSS of the sensor '
+                           "scenes' node processes (launch --processes; about 3 minutes)"),
     'view-screenshot': Command('touch_view.screenshot', "the README's screenshot of the touch view on the demo "
                                                         "scene (synthetic), in headless Chromium"),
     'foxglove-layout': Command('touch_view.foxglove_layout', "write the package's Foxglove layout "

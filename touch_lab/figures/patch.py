@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-from touch_gestures.patch.classifier import PatchGestureClassifier
 from touch_gestures.patch.features import window_features
 from touch_lab.figures.markdown import figure_md
 from touch_lab.figures.plots import (
@@ -26,6 +25,7 @@ from touch_lab.figures.plots import (
 from touch_lab.figures.png import FigureInputError
 from touch_lab.patch.datasets import Session
 from touch_lab.patch.evaluate import onset_ages, run_detector, session_truth
+from touch_lab.patch.training import PatchGestureClassifier
 
 __all__ = ['SYNTHETIC', 'Timeline', 'patch_figures', 'posterior_timeline']
 

@@ -22,8 +22,9 @@ import time
 
 import numpy as np
 
-from touch_gestures.patch.classifier import EventDetector, PatchGestureClassifier
+from touch_gestures.patch.classifier import EventDetector
 from touch_gestures.patch.features import WindowFeatures, window_features
+from touch_lab.patch.training import PatchGestureClassifier
 from touch_sim.patch.people import demo_scene, simulate_people
 from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
 

@@ -157,9 +157,9 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_train(args: argparse.Namespace) -> int:
     """Fit on every frame of every session and write the model file; returns the exit code."""
-    from touch_gestures.patch.classifier import PatchGestureClassifier
     from touch_gestures.patch.features import window_features
     from touch_gestures.patch.model_io import PatchModel, save_model
+    from touch_lab.patch.training import PatchGestureClassifier
 
     say = _progress(args)
     sessions = load_sessions(args, say)

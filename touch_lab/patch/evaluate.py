@@ -36,10 +36,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from touch_gestures.patch.classifier import NOT_RECOGNISED, EventDetector, PatchGestureClassifier, decide
+from touch_gestures.patch.classifier import NOT_RECOGNISED, EventDetector, decide
 from touch_gestures.patch.features import ACTIVE_MARGIN, WindowFeatures, window_features
 from touch_lab.patch.datasets import Session
 from touch_lab.patch.session_bags import common_rate
+from touch_lab.patch.training import PatchGestureClassifier
 
 __all__ = ['EvaluationResult', 'GridPoint', 'Metrics', 'leave_one_subject_out', 'onset_ages', 'run_detector',
            'score', 'segment_events', 'session_truth']

@@ -120,7 +120,7 @@ def _panels_file(text: str) -> Callable[[], Any]:
 
 def _bear_model(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_gestures.bear.subtype_model import SubtypeClassifier
+        from touch_lab.bear.subtype_training import SubtypeClassifier
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'model.npz'
             rng = np.random.default_rng(0)

@@ -36,11 +36,11 @@ event varies around them. Sessions carry a small hand tremor and force fluctuati
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import lfilter
 
 __all__ = ['GESTURES', 'PatchScene', 'PersonStyle', 'TouchEvent', 'demo_scene', 'make_people', 'people_scene',
            'simulate_people', 'simulate_session', 'trial_scene']
@@ -220,8 +220,12 @@ def _smooth_noise(rng: np.random.Generator, n: int, scale: float, corr_s: float 
     alpha = TRACK_DT / corr_s
     noise = rng.normal(0.0, scale * math.sqrt(2 * alpha), n)
     start = rng.normal(0.0, scale) * (1 - alpha)
-    out, _ = lfilter([1.0], [1.0, -(1.0 - alpha)], noise, zi=[start])  # x[i] = (1-alpha) x[i-1] + e[i]
-    return out
+    keep = 1.0 - alpha
+    if n < 1:
+        return noise
+    # x[0] = e[0] + start, x[i] = (1-alpha) x[i-1] + e[i]: the recursion in plain floats, no scipy in the driver
+    out = itertools.accumulate(noise[1:].tolist(), lambda x, e: e + keep * x, initial=float(noise[0] + start))
+    return np.fromiter(out, dtype=np.float64, count=n)
 
 
 def _envelope(n: int, rise: int, fall: int) -> np.ndarray:
