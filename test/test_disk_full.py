@@ -154,8 +154,8 @@ def test_a_model_or_codebook_on_a_full_disk_keeps_the_previous_one(tmp_path, mon
             from touch_gestures.skin.codebook import load_codebook, save_codebook
             save_codebook(path, load_codebook(path))
         elif writer == 'bear model':
-            from touch_gestures.bear.subtype_model import SubtypeClassifier
-            SubtypeClassifier.load(path).save(path)
+            from touch_gestures.bear.subtype_model import SubtypeModel
+            SubtypeModel.load(path).save(path)
         elif writer == 'patch model':
             from touch_gestures.patch.model_io import load_model, save_model
             save_model(path, load_model(path))

@@ -240,8 +240,8 @@ def _injected(kind: str) -> Callable[[], Any]:
                     with _patched(np.lib.format, 'write_array'):
                         save_codebook(target, recogniser)
                 else:
-                    from touch_gestures.bear.subtype_model import SubtypeClassifier
-                    model = SubtypeClassifier.load(target)
+                    from touch_gestures.bear.subtype_model import SubtypeModel
+                    model = SubtypeModel.load(target)
                     with _patched(np.lib.format, 'write_array'):
                         model.save(target)
             finally:
