@@ -65,7 +65,7 @@ class Harness:
                         contact_x=float(point[0]) if touched else float('nan'),
                         contact_y=float(point[1]) if touched else float('nan'))
         if pressure is not None:
-            msg.pressure = pressure   # assigned after construction: the message class would refuse it
+            msg._f_pressure = pressure   # its slot, past the property that would refuse it: a malformed frame
         if fz_n is not None:          # a normal force on module 14 (near the centre), N
             force = np.zeros(108, np.float32)
             force[14 * 3 + 2] = fz_n
