@@ -44,7 +44,8 @@ def bear_frame(i: int, touched: dict[int, float]) -> object:
         level[channel] = value
     ns = round(i / RATE * 1e9)
     return BearFrame(header=Header(stamp=Time(sec=1000 + ns // 10**9, nanosec=ns % 10**9), frame_id='bear_link'),
-                     sequence=i, level=level, active=level >= 0.3, fitted=FITTED, faults=np.zeros(64, np.uint8))
+                     sequence=i, level=level, active=(level >= 0.3).tolist(), fitted=FITTED,
+                     faults=np.zeros(64, np.uint8))
 
 
 @pytest.fixture
