@@ -117,8 +117,41 @@ def run(name: str) -> dict[str, Any]:
     out['set_parameters_service'] = outcome(lambda: executor.spin_until_future_complete(future, timeout_sec=5.0))
     out['set_parameters_service_client_done'] = future.done()
     node.destroy_node()
+    out.update(qos_matching(rclpy, executors, String))
     rclpy.shutdown()
     return out
+
+
+def qos_matching(rclpy: Any, executors: Any, String: type) -> dict[str, str]:
+    """Which (publisher, subscription) QoS pairs deliver, in one process: 'received' or 'nothing'."""
+    qos = importlib.import_module(rclpy.__name__ + '.qos')
+    Reliability, Durability = qos.ReliabilityPolicy, qos.DurabilityPolicy
+    profiles = {
+        'reliable': qos.QoSProfile(depth=10),
+        'best_effort': qos.QoSProfile(depth=10, reliability=Reliability.BEST_EFFORT),
+        'transient_local': qos.QoSProfile(depth=10, durability=Durability.TRANSIENT_LOCAL),
+    }
+    node = rclpy.create_node('qos_matching')
+    executor = executors.SingleThreadedExecutor()
+    executor.add_node(node)
+    got: dict[str, list] = {}
+    pubs = []
+    for pub_name, pub_qos in profiles.items():
+        for sub_name, sub_qos in profiles.items():
+            key = f'qos {pub_name} publisher -> {sub_name} subscription'
+            topic = f'/qos_{pub_name}_to_{sub_name}'
+            got[key] = []
+            node.create_subscription(String, topic, got[key].append, sub_qos)
+            pubs.append(node.create_publisher(String, topic, pub_qos))
+    for _ in range(10):  # discovery (real DDS); nothing to wait for on ours
+        executor.spin_once(timeout_sec=0.05)
+    for pub in pubs:
+        for k in range(3):
+            pub.publish(String(data=str(k)))
+    for _ in range(40):
+        executor.spin_once(timeout_sec=0.05)
+    node.destroy_node()
+    return {key: 'received' if messages else 'nothing' for key, messages in got.items()}
 
 
 if __name__ == '__main__':

@@ -9,7 +9,7 @@ from touch_driver.bear.node import BearDriverNode
 from touch_driver.patch.node import PatchDriverNode
 from touch_driver.skin.node import SkinDriverNode
 from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
 from touch_sim.scenes import BearScript, BearTouch, PanelTouch, PatchScript, PatchTouch, register_stimulus
 from touch_sim.skin.device import register_stimulus as register_skin_stimulus
 from touch_sim.skin.stimuli import StaticPress
@@ -31,7 +31,8 @@ def spin_driver(node_class, seconds, topics, **params):
     listener = Node('listener', context=ctx)
     got = {topic: [] for topic in topics}
     for topic, type_name in topics.items():
-        listener.create_subscription(get_message(type_name), topic, got[topic].append, 1000)
+        best_effort = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)  # hears any publisher
+        listener.create_subscription(get_message(type_name), topic, got[topic].append, best_effort)
     executor = SingleThreadedExecutor(context=ctx)
     executor.add_node(node)
     executor.add_node(listener)

@@ -34,18 +34,38 @@ EXPECTED = {
     'set_parameters_accepted': [True],
     'set_parameters_service': 'raised ArithmeticError: on-set raised',
     'set_parameters_service_client_done': False,
+    # In one process, as DDS matches QoS: a reliable subscription hears no best-effort publisher, a
+    # transient-local one no volatile publisher.
+    'qos reliable publisher -> reliable subscription': 'received',
+    'qos reliable publisher -> best_effort subscription': 'received',
+    'qos reliable publisher -> transient_local subscription': 'nothing',
+    'qos best_effort publisher -> reliable subscription': 'nothing',
+    'qos best_effort publisher -> best_effort subscription': 'received',
+    'qos best_effort publisher -> transient_local subscription': 'nothing',
+    'qos transient_local publisher -> reliable subscription': 'received',
+    'qos transient_local publisher -> best_effort subscription': 'received',
+    'qos transient_local publisher -> transient_local subscription': 'received',
 }
 
 
-def probe(python: str, backend: str, env: dict[str, str]) -> dict:
+def probe(python: str, backend: str, env: dict[str, str], errors: list | None = None) -> dict:
     result = subprocess.run([python, str(PROBE), backend], env=env, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
+    if errors is not None:
+        errors.append(result.stderr)
     return json.loads(result.stdout.strip().splitlines()[-1])
 
 
-def test_our_runtime_ends_spin_with_a_callbacks_exception_as_rclpy_does():
+def test_our_runtime_ends_spin_and_matches_qos_as_rclpy_does():
     env = {**os.environ, 'SOCIAL_TOUCH_NETWORK': '0', 'SOCIAL_TOUCH_SHIM': '1'}
-    assert probe(sys.executable, 'ours', env) == EXPECTED
+    errors = []
+    assert probe(sys.executable, 'ours', env, errors) == EXPECTED
+    # rclpy's warnings, on the subscription's node and on the publisher's, for each unmatched pair
+    warnings = [line for line in errors[0].splitlines() if 'incompatible QoS' in line]
+    assert len(warnings) == 6 and "New publisher discovered on topic '/qos_best_effort_to_reliable', offering " \
+        'incompatible QoS. No messages will be received from it. Last incompatible policy: RELIABILITY' in errors[0]
+    assert "New subscription discovered on topic '/qos_reliable_to_transient_local', requesting incompatible QoS. " \
+        'No messages will be sent to it. Last incompatible policy: DURABILITY' in errors[0]
 
 
 @pytest.mark.ros2
