@@ -59,7 +59,8 @@ def _array(base: str, length: st.SearchStrategy) -> st.SearchStrategy:
     else:
         lo, hi = _INT[base]
         elements = st.integers(lo, hi)
-    return hnp.arrays(dtype, length, elements=elements)
+    arrays = hnp.arrays(dtype, length, elements=elements)
+    return arrays.map(lambda a: a.tolist()) if base == 'bool' else arrays  # bool[]: a list, as rclpy takes it
 
 
 def _field(desc: tuple, depth: int) -> st.SearchStrategy:

@@ -50,7 +50,7 @@ class Talker(Node):
 
 
 class Crasher(Node):
-    """A node whose callback raises on every message: recording must go on."""
+    """A node whose callback raises on every message: it dies, and recording must go on."""
 
     def __init__(self, **kwargs):
         super().__init__('crasher', **kwargs)
@@ -76,8 +76,12 @@ def recorded(tmp_path):
     executor = SingleThreadedExecutor(context=ctx)
     for node in (talker, crasher, recorder):
         executor.add_node(node)
-    executor.spin_for(1.0)
-    assert crasher.callback_errors == len(talker.sent['/chatter']) > 0
+    end = ctx.now_ns() + 1_000_000_000
+    with pytest.raises(RuntimeError, match='synthetic failure'):
+        executor.spin_until_time(end)                  # its first message ends the spin, as in rclpy
+    executor.remove_node(crasher)                      # the crasher died (as its process would); the graph goes on
+    executor.spin_until_time(end)
+    assert crasher.callback_errors == 1 and len(talker.sent['/chatter']) == 10
     recorder.destroy_node()
     ctx.shutdown()
     return tmp_path / 'scene', talker.sent

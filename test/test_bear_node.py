@@ -22,7 +22,7 @@ BearFrame = get_message('BearFrame')
 Header = get_message('std_msgs/msg/Header')
 Time = get_message('builtin_interfaces/msg/Time')
 BODY = BodyMap.default()
-FITTED = BODY.fitted_mask().copy()
+FITTED = BODY.fitted_mask().tolist()  # bool[64]: Python bools, as rclpy needs
 EPOCH_S = 1_700_000_000
 RATE = 3.4
 
@@ -42,7 +42,7 @@ def frame(i: int, on: dict[int, float] | None = None, faults: dict[int, int] | N
         level[c] = 0.0                     # a calibrator reads faulty channels as 0
     ns = round(i / rate * 1e9)
     header = Header(stamp=Time(sec=EPOCH_S + ns // 10**9, nanosec=ns % 10**9), frame_id='bear_link')
-    return BearFrame(header=header, sequence=i & 0xFFFF, level=level, active=level >= 0.3, fitted=FITTED,
+    return BearFrame(header=header, sequence=i & 0xFFFF, level=level, active=(level >= 0.3).tolist(), fitted=FITTED,
                      faults=fault)
 
 
@@ -139,9 +139,9 @@ def test_bad_frames_are_counted_and_skipped_and_the_node_goes_on(graph) -> None:
     nan = frame(1)
     nan.level[3] = np.nan
     short = frame(2)
-    short.level = np.zeros(10, np.float32)                     # attribute writes are not checked
+    short._f_level = np.zeros(10, np.float32)                  # its slot, past the checking property: malformed
     no_faults = frame(3)
-    no_faults.faults = np.zeros(0, np.uint8)
+    no_faults._f_faults = np.zeros(0, np.uint8)
     g.update([frame(0), nan, short, no_faults, frame(0), frame(4)])
     assert g.node.skipped == {'non_finite': 1, 'wrong_size': 2, 'repeated_stamp': 1}
     assert g.node.frames == 2 and len(g.got['sensor_level']) == 2 and g.ctx.callback_errors == 0

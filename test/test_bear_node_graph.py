@@ -24,7 +24,7 @@ from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.bear.symbolic import END, START
 from touch_graph.errors import ConfigError
 from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
 from touch_lab.bear import cli
 from touch_sim import virtual_port
 from touch_sim.bear.device import BearDevice
@@ -129,7 +129,8 @@ def test_driver_and_recognisers_in_one_graph_report_a_hug_and_a_head_pat() -> No
     got = {'SymbolicGesture': [], 'TouchSubtype': [], 'SensorLevel': []}
     for kind, topic in (('SymbolicGesture', '/touch/symbolic'), ('TouchSubtype', '/touch/subtype'),
                         ('SensorLevel', '/touch/sensor_level')):
-        listener.create_subscription(get_message(kind), topic, got[kind].append, 1000)
+        best_effort = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)  # hears any publisher
+        listener.create_subscription(get_message(kind), topic, got[kind].append, best_effort)
     executor = SingleThreadedExecutor(context=ctx)
     for node in (gestures, driver, listener):
         executor.add_node(node)

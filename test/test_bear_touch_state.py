@@ -149,7 +149,7 @@ def test_only_the_parts_that_run_appear_and_a_stopped_part_is_forgotten(scene) -
     for node in (patch, skin):
         s.executor.add_node(node)
     gestures.publish(GestureEvent(gesture='stroke', probability=0.97))
-    panels.publish(PanelContact(contact=np.eye(11, dtype=bool)[3], any_contact=True))
+    panels.publish(PanelContact(contact=np.eye(11, dtype=bool)[3].tolist(), any_contact=True))
     frames.publish(SkinFrame(contact=True, contact_point=Point(x=0.02, y=0.03, z=0.0)))
     s.executor.spin_for(0.1)
     state = s.ask().state

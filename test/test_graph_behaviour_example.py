@@ -44,7 +44,8 @@ def bear_frame(i: int, touched: dict[int, float]) -> object:
         level[channel] = value
     ns = round(i / RATE * 1e9)
     return BearFrame(header=Header(stamp=Time(sec=1000 + ns // 10**9, nanosec=ns % 10**9), frame_id='bear_link'),
-                     sequence=i, level=level, active=level >= 0.3, fitted=FITTED, faults=np.zeros(64, np.uint8))
+                     sequence=i, level=level, active=(level >= 0.3).tolist(), fitted=FITTED,
+                     faults=np.zeros(64, np.uint8))
 
 
 @pytest.fixture
@@ -151,7 +152,7 @@ class Buggy(TouchBehaviour):
 """
 
 
-def test_the_example_launches_by_its_package_name_and_a_raising_callback_is_counted_and_the_graph_goes_on(
+def test_the_example_launches_by_its_package_name_and_a_node_whose_callback_raises_dies_the_others_go_on(
         installed_example, tmp_path, capfd):
     from touch_graph.launch import LaunchRunner, evaluate_launch
     (tmp_path / 'buggy_behaviour.py').write_text(BUGGY)
@@ -173,11 +174,14 @@ def test_the_example_launches_by_its_package_name_and_a_raising_callback_is_coun
             commands.publish(HapticCommand(command=command))
         symbolic.publish(get_message('SymbolicGesture')(gesture='hug', state=1))
         runner.spin(0.5)
-        assert buggy.callback_errors == 2 and behaviour.callback_errors == 0
+        # The buggy node died on its first 'explode', as an rclpy node would; the launch says which and why.
+        assert runner.nodes == [behaviour] and buggy.callback_errors == 1 and behaviour.callback_errors == 0
+        assert runner.died == ['/buggy: RuntimeError: a bug in the behaviour']
         texts = [m.data for m in said]
-        assert texts.count('OK: explode.') == 2 and texts.count('OK: stop.') == 2      # the buggy node went on
-        assert texts.count('Hello! Thank you for the hug.') == 2
+        assert texts.count('OK: explode.') == 2 and texts.count('OK: stop.') == 1      # the other node went on
+        assert texts.count('Hello! Thank you for the hug.') == 1
         err = capfd.readouterr().err
-        assert 'callback raised (1 so far); the graph goes on' in err and 'a bug in the behaviour' in err
+        assert '[ERROR] [launch]: node /buggy has died: a callback raised RuntimeError: a bug in the behaviour' in err
+        assert 'Traceback' in err and "raise RuntimeError('a bug in the behaviour')" in err
     finally:
         runner.shutdown()

@@ -6,6 +6,7 @@ values: empty, long and unicode strings, NaN and infinities, empty and long arra
 messages and sequences of them.
 """
 
+import array
 import struct
 from copy import deepcopy
 
@@ -24,7 +25,7 @@ from touch_graph.messages import deserialize, get_message, serialize, typestore
 
 
 def _rosbags_bytes(msg) -> bytes:
-    return bytes(typestore.serialize_cdr(msg, msg.__msgtype__, little_endian=True))
+    return bytes(typestore.serialize_cdr(messages.for_rosbags(msg), msg.__msgtype__, little_endian=True))
 
 
 def _rosbags_message(data: bytes, typename: str):
@@ -42,6 +43,8 @@ def _same(a, b) -> None:
         x, y = getattr(a, name), getattr(b, name)
         if isinstance(x, np.ndarray):
             assert x.dtype == y.dtype, name
+        if isinstance(x, array.array):
+            assert type(y) is array.array and x.typecode == y.typecode, name
 
 
 def _check_against_rosbags(msg) -> None:
@@ -87,7 +90,7 @@ def test_a_scalar_byte_is_an_unsigned_octet_as_in_ros2():
 
 def test_big_endian_payloads_decode_through_rosbags():
     msg = get_message('GestureEvent')(gesture='pat', classes=['a', 'b'], posteriors=[0.25, 0.75], latency_s=0.5)
-    data = bytes(typestore.serialize_cdr(msg, msg.__msgtype__, little_endian=False))
+    data = bytes(typestore.serialize_cdr(messages.for_rosbags(msg), msg.__msgtype__, little_endian=False))
     assert data[:2] == b'\x00\x00'
     assert deserialize(data, 'GestureEvent') == msg
 
@@ -102,20 +105,32 @@ def test_any_bytes_like_decodes_and_arrays_are_read_only_views():
 
 
 @pytest.mark.parametrize(('field', 'value'), [
-    ('raw', [1, 2, 3]),                           # a list where an array belongs
-    ('raw', np.zeros(64, np.int64)),              # another dtype
+    ('raw', [1, 2, 3]),                           # another length
     ('raw', np.zeros(63, np.uint16)),             # another length
+    ('raw', np.full(64, -1)),                     # out of uint16
     ('level', np.zeros((8, 8), np.float32)),      # not 1-D
-    ('level', np.zeros(64, '>f4')),               # another byte order
+    ('active', np.zeros(64, bool)),               # numpy bools where rclpy needs Python bools
+    ('active', [np.True_] * 64),                  # the same, item by item
     ('sequence', 70000),                          # out of uint16
     ('sequence', 1.5),                            # not an int
     ('header', None),                             # not a message
 ])
 def test_a_field_assigned_a_wrong_value_after_construction_gives_message_error(field, value):
     frame = get_message('BearFrame')()
+    with pytest.raises(MessageError, match=f"field '{field}' of social_touch_msgs/msg/BearFrame expects"):
+        setattr(frame, field, value)  # the property converts or refuses, as rclpy's (ROS_PYTHON_CHECK_FIELDS=1)
+
+
+@pytest.mark.parametrize(('field', 'value', 'expected'), [
+    ('raw', np.arange(64, dtype=np.int64), 'uint16'),   # another dtype: converted, as rclpy does
+    ('raw', list(range(64)), 'uint16'),                  # a list where an array belongs
+    ('level', np.zeros(64, '>f4'), 'float32'),           # another byte order
+])
+def test_a_field_assigned_a_convertible_value_after_construction_holds_the_fields_type(field, value, expected):
+    frame = get_message('BearFrame')()
     setattr(frame, field, value)
-    with pytest.raises(MessageError, match='cannot serialise social_touch_msgs/msg/BearFrame'):
-        serialize(frame)
+    assert getattr(frame, field).dtype == np.dtype(expected)
+    assert deserialize(serialize(frame), 'BearFrame') == frame
 
 
 def test_strings_that_are_not_utf8_encodable_give_message_error():
@@ -241,7 +256,7 @@ for _name, _text in _RUNS_TYPES.items():
 
 def _runs(s: str = '', words: tuple = (), maybe: tuple = ()):
     return get_message('codec_test_msgs/msg/Runs')(
-        s=s, a=np.array([0, 128, 255], np.uint8), d=np.array([np.nan, -np.inf]), f=np.array([1, 0, 1, 1, 0], bool),
+        s=s, a=np.array([0, 128, 255], np.uint8), d=np.array([np.nan, -np.inf]), f=[True, False, True, True, False],
         i=np.array([-32768], np.int16), words=list(words), tail=np.array([np.nan, 1.5, -0.0], np.float32),
         maybe=np.array(maybe, np.float64), last=np.array([0, 65535], np.uint16))
 
@@ -251,9 +266,11 @@ def test_runs_of_fixed_arrays_after_a_string_decode_as_rosbags_does(length):
     msg = _runs('x' * length, words=['', 'ab', 'abc', 'abcd'][:length % 5], maybe=[np.nan] * (length % 3))
     _check_against_rosbags(msg)
     back = deserialize(serialize(msg), 'codec_test_msgs/msg/Runs')
-    for name in ('a', 'd', 'f', 'i', 'tail', 'maybe', 'last'):
+    for name in ('a', 'd', 'i', 'tail', 'last'):   # fixed-size numeric arrays: read-only views
         value = getattr(back, name)
         assert value.dtype is getattr(msg, name).dtype and not value.flags.writeable, name
+    assert back.f == [True, False, True, True, False]                                  # bool[5]: a list
+    assert type(back.maybe) is array.array and back.maybe.typecode == 'd'             # float64[]: array.array
     assert np.isnan(back.d[0]) and np.signbit(back.tail[2])
 
 

@@ -125,15 +125,19 @@ def test_set_atomically_is_all_or_nothing(graph):
     assert not result.successful and target.get_parameter('threshold').value == 0.3
 
 
-def test_a_node_callback_decides_and_a_raising_one_refuses_without_harm(graph, capsys):
-    target = graph[3]
+def test_a_node_callback_decides_and_a_raising_ones_exception_goes_to_the_caller_as_in_rclpy(graph):
+    _, executor, watcher, target, _, _ = graph
     target.add_on_set_parameters_callback(lambda params: SetParametersResult(False, 'not while touching'))
     result = target.set_parameters([Parameter('threshold', value=0.4)])[0]
     assert (result.successful, result.reason) == (False, 'not while touching')
     target.add_on_set_parameters_callback(lambda params: 1 / 0)
-    result = target.set_parameters([Parameter('threshold', value=0.4)])[0]
-    assert not result.successful and 'ZeroDivisionError' in result.reason
-    assert 'on-set-parameters callback raised ZeroDivisionError' in capsys.readouterr().err
+    with pytest.raises(ZeroDivisionError):
+        target.set_parameters([Parameter('threshold', value=0.4)])
+    assert target.get_parameter('threshold').value == 0.3
+    # Through the service, the exception ends the spin of the target's executor (rclpy's too).
+    request = srv['SetParameters'].Request(parameters=[parameter_msg(Parameter('threshold', value=0.4))])
+    with pytest.raises(ZeroDivisionError):
+        call(executor, watcher, '/robot/target/set_parameters', request)
     assert target.get_parameter('threshold').value == 0.3
 
 

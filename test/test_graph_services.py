@@ -111,7 +111,7 @@ def test_call_from_a_callback_of_its_own_executor_is_an_error_not_a_deadlock(gra
     assert 'would never return' in errors[0] and 'call_async' in errors[0]
 
 
-def test_a_raising_server_is_logged_and_counted_the_client_gets_nothing_and_the_node_lives(graph, capsys):
+def test_a_raising_server_ends_the_spin_as_in_rclpy_the_client_gets_nothing_and_the_next_spin_serves(graph):
     context, executor = graph
     calls = []
 
@@ -125,22 +125,27 @@ def test_a_raising_server_is_logged_and_counted_the_client_gets_nothing_and_the_
     caller = Node('caller', context=context)
     executor.add_node(caller)
     client = caller.create_client(SetBool, 'switch')
-    assert client.call(SetBool.Request(data=False), timeout_sec=0.3) is None
-    assert "service '/switch' callback raised (1 so far)" in capsys.readouterr().err
+    future = client.call_async(SetBool.Request(data=False))
+    with pytest.raises(RuntimeError, match='boom') as raised:
+        executor.spin_until_future_complete(future, timeout_sec=5)
+    assert "the service '/switch' callback of node /server" in str(raised.value.__notes__)
+    assert not future.done() and executor.last_failure == (server, "service '/switch'")
     assert (service.errors, server.callback_errors, client.late) == (1, 1, 0)
-    assert not client._pending  # the timed-out request was removed
-    assert client.call(SetBool.Request(data=True), timeout_sec=5).success is True  # still serving
+    # A node that spins again (rclpy.spin_once in a loop that catches) serves the next request.
+    assert client.call(SetBool.Request(data=True), timeout_sec=5).success is True
+    assert calls == [False, True]
 
 
-def test_a_callback_returning_no_response_is_an_error_the_client_gets_nothing(graph, capsys):
+def test_a_callback_returning_no_response_ends_the_spin_with_a_type_error_the_client_gets_nothing(graph):
     context, executor = graph
     _, service, _ = _server(context, executor, lambda request, response: None)
     caller = Node('caller', context=context)
     executor.add_node(caller)
     client = caller.create_client(SetBool, 'switch')
-    assert client.call(SetBool.Request(), timeout_sec=0.3) is None
-    assert service.errors == 1
-    assert 'returned NoneType, not a std_srvs/srv/SetBool Response' in capsys.readouterr().err
+    future = client.call_async(SetBool.Request())
+    with pytest.raises(TypeError, match='returned NoneType, not a std_srvs/srv/SetBool Response'):
+        executor.spin_until_future_complete(future, timeout_sec=5)
+    assert service.errors == 1 and not future.done()
 
 
 def test_a_request_of_the_wrong_type_is_refused_at_the_call(graph):

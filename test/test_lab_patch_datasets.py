@@ -96,7 +96,7 @@ def write_bag(path, frames, topic='/patch/frame', msgtype='social_touch_msgs/msg
             ns = int(i / rate * 1e9) + 1_000_000_000
             msg = PatchFrame(header=Header(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id='patch'),
                              sequence=i, activation=np.asarray(act, np.float32).ravel(),
-                             raw=np.zeros(256, np.uint16), in_outline=np.ones(256, bool))
+                             raw=np.zeros(256, np.uint16), in_outline=[True] * 256)
             writer.write(conn, ns, serialize(msg))
 
 

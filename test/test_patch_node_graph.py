@@ -12,7 +12,7 @@ from touch_driver.patch.node import PatchDriverNode
 from touch_gestures.patch.node import PatchGesturesNode
 from touch_graph.errors import ConfigError
 from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
 from touch_sim.patch.people import PatchScene, people_scene
 from touch_sim.scenes import load_stimulus, register_stimulus, unregister_stimulus
 from touch_sim.virtual_port import forget_devices
@@ -45,7 +45,8 @@ def run_graph(scene, seconds, seed=5):
         got = {'/touch/gesture': [], '/patch/frame': [], '/patch/panels': []}
         for topic, kind in (('/touch/gesture', 'GestureEvent'), ('/patch/frame', 'PatchFrame'),
                             ('/patch/panels', 'PanelContact')):
-            listener.create_subscription(get_message(kind), topic, got[topic].append, 100)
+            best_effort = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)  # hears any publisher
+            listener.create_subscription(get_message(kind), topic, got[topic].append, best_effort)
         driver = PatchDriverNode(context=ctx, namespace='patch', cli_args=quiet, parameter_overrides=[
             Parameter('port', value=f'patchsim://graph?scene=patch-gestures-graph&seed={seed}')])
         start_ns = ctx.now_ns()

@@ -71,7 +71,8 @@ def test_a_bear_hug_shows_its_regions_levels_and_subtypes():
     names = ['chest_left', 'back_upper', 'side_left_upper', 'side_right_lower']
     channels = BODY.channels(names)
     level[channels] = 0.9
-    state.on_bear_frame(BearFrame(header=header(1.0), level=level, active=level > 0.3, fitted=BODY.fitted_mask(),
+    state.on_bear_frame(BearFrame(header=header(1.0), level=level, active=(level > 0.3).tolist(),
+                                  fitted=BODY.fitted_mask().tolist(),
                                   faults=np.where(np.arange(64) == 3, 1, 0).astype(np.uint8)))
     state.on_symbolic(SymbolicGesture(header=header(3.0), gesture='hug', state=1, sensors=names), 1)
     state.on_subtype(TouchSubtype(header=header(3.0), sensor='chest_left', subtype='hold'))
@@ -166,7 +167,7 @@ def test_diagnostics_and_panels_and_the_log_stay_bounded():
     for i in range(500):
         contact = np.zeros(11, bool)
         contact[i % 11] = i % 2 == 0
-        state.on_panels(PanelContact(header=header(i), contact=contact, any_contact=bool(contact.any())))
+        state.on_panels(PanelContact(header=header(i), contact=contact.tolist(), any_contact=bool(contact.any())))
     snap = as_json(state)
     assert len(snap['log']) == LOG_SENT and snap['patch']['panels'].count(True) <= 1
     assert [e['text'] for e in snap['log'][-2:]] == ['someone is handling the robot (panel3)', 'hands off']

@@ -9,14 +9,17 @@ functions, generated once from its field definitions (Python source compiled wit
 - fields whose offsets are known at generation time are packed or unpacked by one
   ``struct.Struct`` per run, padding included (``x`` bytes);
 - arrays of primitives are joined into the output as they are (their buffer, no
-  ``tobytes`` copy first) and decoded as read-only views of the received bytes, as rosbags
-  gives them; the fixed-size arrays of one run become views of one structured record
-  (one ``numpy.ndarray`` call and a field lookup each, about half the cost of one
-  ``numpy.frombuffer`` each);
+  ``tobytes`` copy first); fixed-size numeric arrays are decoded as read-only numpy views
+  of the received bytes, and the fixed-size arrays of one run become views of one
+  structured record (one ``numpy.ndarray`` call and a field lookup each, about half the
+  cost of one ``numpy.frombuffer`` each);
+- the decoded field types are rclpy's: a numeric sequence is an ``array.array`` (a copy of
+  its bytes), ``bool[N]`` and ``bool[]`` are lists of Python bools;
 - a runtime alignment step is emitted only after a field of variable size (a string, a
   sequence), where the offset is no longer known;
-- nested messages are inlined; decoded messages are made without ``__init__`` (what the
-  bytes give has the field's type by construction), bounded strings and sequences checked.
+- nested messages are inlined; decoded messages are made without ``__init__`` and their
+  fields' slots written directly (what the bytes give has the field's type by
+  construction), bounded strings and sequences checked.
 
 Encoding is XCDR1 little endian with the 4-byte encapsulation header; every primitive is
 aligned to its size relative to the end of that header, and the elements of an empty
@@ -32,6 +35,7 @@ bad UTF-8, a bound exceeded, trailing garbage); never another exception.
 
 from __future__ import annotations
 
+import array
 import struct
 from collections.abc import Callable
 from typing import Any
@@ -51,6 +55,9 @@ _FORMATS = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'i
 _SIZES = {name: struct.calcsize(fmt) for name, fmt in _FORMATS.items()}
 _DTYPES = {'bool': np.dtype(np.bool_), 'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8),
            **{name: np.dtype(name) for name in _FORMATS if name not in ('bool', 'byte', 'char')}}
+#: ``array.array`` typecodes of numeric sequences (rclpy's field type for them).
+_TYPECODES = {'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
+              'int64': 'q', 'uint64': 'Q', 'float32': 'f', 'float64': 'd'}
 _ZEROS = tuple(bytes(n) for n in range(16))
 _COUNT = struct.Struct('<I').pack
 #: Minimum bytes of one element of a sequence (guards a huge count in garbage), as rosbags checks it.
@@ -103,7 +110,9 @@ class _Generator:
         self.get_class = get_class
         self.lines: list[str] = []
         self.env: dict[str, Any] = {'_ZEROS': _ZEROS, '_frombuffer': np.frombuffer, '_ndarray': np.ndarray,
-                                    '_new': object.__new__, '_coerce': _coerce, '_bad': _bad}
+                                    '_new': object.__new__, '_coerce': _coerce, '_bad': _bad,
+                                    '_array': array.array, '_bools': _bools, '_to_sequence': _to_sequence,
+                                    '_sequence': _sequence}
         self.indent = 1
         self.off = 0
         self.known = 8
@@ -256,6 +265,19 @@ class _Encoder(_Generator):
         dt = self.const('DT', dtype)
         arr = self.name('a')
         self.emit(f'{arr} = {expr}')
+        if base == 'bool':  # a list of bools: one byte each
+            self.emit(f'{arr} = _bools({arr}, {length}, {field!r})')
+            if length is not None:
+                self.flush()
+                self.emit(f'_a({arr})')
+                self.off += length
+                return
+            self.scalar('uint32', f'len({arr})')
+            self.sync()
+            self.emit(f'_a({arr})')
+            self.emit(f'p += len({arr})')
+            self.known = 1
+            return
         if length is not None:
             self.emit(f'if {arr}.dtype is not {dt} or {arr}.shape != ({length},):')
             self.emit(f'    {arr} = _coerce({arr}, {dt}, {length}, {field!r})')
@@ -264,8 +286,13 @@ class _Encoder(_Generator):
             self.emit(f'_a({arr})')
             self.off += length * size
             return
-        self.emit(f'if {arr}.dtype is not {dt} or {arr}.ndim != 1:')
-        self.emit(f'    {arr} = _coerce({arr}, {dt}, None, {field!r})')
+        if base in _TYPECODES:  # an array.array (rclpy's type), or a numpy array of the same values
+            typecode = _TYPECODES[base]
+            self.emit(f'if type({arr}) is not _array or {arr}.typecode != {typecode!r}:')
+            self.emit(f'    {arr} = _to_sequence({arr}, {typecode!r}, {dt}, {field!r})')
+        else:
+            self.emit(f'if {arr}.dtype is not {dt} or {arr}.ndim != 1:')
+            self.emit(f'    {arr} = _coerce({arr}, {dt}, None, {field!r})')
         self.scalar('uint32', f'len({arr})')
         self.sync()
         self.align_elements(f'len({arr})', size)
@@ -303,10 +330,10 @@ class _Encoder(_Generator):
         for name, desc in self.fielddefs[typename][1]:
             if desc[0] == Nodetype.NAME:  # bound once, its fields read from the local
                 value = self.name('v')
-                self.emit(f'{value} = {expr}.{name}')
+                self.emit(f'{value} = {expr}._f_{name}')  # the field's slot, behind its property
                 self.field(desc, value, name)
             else:
-                self.field(desc, f'{expr}.{name}', name)
+                self.field(desc, f'{expr}._f_{name}', name)
 
     def build(self, typename: str) -> str:
         self.indent = 2
@@ -354,7 +381,8 @@ class _Decoder(_Generator):
         if len(views) == 1:
             target, dtype, length, off = views[0]
             where = f'p + {off}' if off else 'p'
-            self.emit(f'{target} = _frombuffer(data, {self.const("DT", dtype)}, {length}, {where})')
+            listed = '.tolist()' if dtype == np.bool_ else ''  # bool[N]: a list of bools, as rclpy gives it
+            self.emit(f'{target} = _frombuffer(data, {self.const("DT", dtype)}, {length}, {where}){listed}')
         elif views:
             first = views[0][3]
             record = np.dtype({'names': [f'f{i}' for i in range(len(views))],
@@ -362,8 +390,9 @@ class _Decoder(_Generator):
                                'offsets': [off - first for *_, off in views]})
             rec = self.name('r')
             self.emit(f'{rec} = _ndarray((), {self.const("RT", record)}, data, p + {first})')
-            for i, (target, *_rest) in enumerate(views):
-                self.emit(f"{target} = {rec}['f{i}']")
+            for i, (target, dtype, *_rest) in enumerate(views):
+                listed = '.tolist()' if dtype == np.bool_ else ''
+                self.emit(f"{target} = {rec}['f{i}']{listed}")
 
     def runtime_pad(self, align: int) -> None:
         self.sync()
@@ -404,7 +433,7 @@ class _Decoder(_Generator):
             if length:
                 self.run_views.append((target, dtype, length, self.off))
             else:
-                self.emit(f'{target} = _frombuffer(data, {dt}, 0)')
+                self.emit(f'{target} = []' if base == 'bool' else f'{target} = _frombuffer(data, {dt}, 0)')
             self.run_fmt.append(f'{length * size}x')  # the pending run's unpack skips the array
             self.off += length * size
             return
@@ -414,7 +443,11 @@ class _Decoder(_Generator):
             self.emit(f'if {n} > {bound}:')
             self.emit(f'    raise _bad("sequence {field} holds %d values, more than its bound {bound}" % {n})')
         self.align_elements(n, size)
-        self.emit(f'{target} = _frombuffer(data, {dt}, {n}, p)')
+        if base in _TYPECODES:  # rclpy's type for a numeric sequence
+            self.emit(f'{target} = _sequence({_TYPECODES[base]!r}, data, p, {n} * {size})')
+        else:
+            listed = '.tolist()' if base == 'bool' else ''
+            self.emit(f'{target} = _frombuffer(data, {dt}, {n}, p){listed}')
         self.emit(f'p += {n} * {size}')
         self.known = min(4, size)
 
@@ -469,7 +502,7 @@ class _Decoder(_Generator):
         cls = self.const('C', self.get_class(typename))
         self.emit(f'{target} = _new({cls})')
         for name, desc in self.fielddefs[typename][1]:
-            self.field(desc, f'{target}.{name}', name)
+            self.field(desc, f'{target}._f_{name}', name)  # the field's slot, behind its property
 
     def nested(self, typename: str, target: str) -> None:
         value = self.name('o')
@@ -500,6 +533,36 @@ def _coerce(arr: Any, dtype: np.dtype, length: int | None, field: str) -> np.nda
     if length is not None and arr.shape[0] != length:
         raise ValueError(f'field {field} must hold {length} values; got {arr.shape[0]}')
     return arr
+
+
+def _bools(values: Any, length: int | None, field: str) -> bytes:
+    """The bytes of a ``bool[N]``/``bool[]`` field given as a list (or tuple) of bools."""
+    if isinstance(values, np.ndarray):
+        raise ValueError(f'field {field} must be a list of bools; got a numpy array (pass .tolist(): rclpy aborts '
+                         'the process on numpy bools)')
+    data = bytes(values)  # TypeError for an item that is not an int
+    if data.strip(b'\x00\x01'):
+        raise ValueError(f'field {field} must hold bools; got {values!r}'[:200])
+    if length is not None and len(data) != length:
+        raise ValueError(f'field {field} must hold {length} values; got {len(data)}')
+    return data
+
+
+def _to_sequence(values: Any, typecode: str, dtype: np.dtype, field: str) -> array.array:
+    """A numeric sequence given as something other than an ``array.array`` of ``typecode``: a 1-D numpy
+    array of ``dtype`` is accepted (its bytes), anything else is a ValueError."""
+    out = array.array(typecode)
+    out.frombytes(_coerce(values, dtype, None, field).tobytes())
+    return out
+
+
+def _sequence(typecode: str, data: bytes, p: int, size: int) -> array.array:
+    """An ``array.array`` of the ``size`` bytes at ``p`` (a copy, as rclpy makes it)."""
+    if p + size > len(data):
+        raise ValueError(f'a sequence of {size} bytes at offset {p - 4} runs past the end ({len(data) - 4} bytes)')
+    out = array.array(typecode)
+    out.frombytes(memoryview(data)[p:p + size])
+    return out
 
 
 def _string_run(texts: list, memo: list) -> bytes:

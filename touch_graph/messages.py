@@ -12,9 +12,14 @@ big-endian payloads and the types the generator does not handle.
 Type names are those of the interface package ``social_touch-export-interfaces`` writes
 (``social_touch_msgs/msg/SkinFrame``), so bags recorded here open on a ROS 2 machine.
 
-Numeric arrays are numpy arrays of the field's dtype. An array passed with the right
-dtype is kept, not copied: in process, publishers and subscribers share it, as with
-intra-process communication in ROS 2, so do not modify a message after publishing it.
+Field types are rclpy's, on construction, on assignment and on receipt: a fixed-size numeric
+array (``float32[144]``) is a ``numpy.ndarray`` of the field's dtype; a numeric sequence
+(``float64[]``, ``uint8[<=N]``) is an ``array.array`` of the matching typecode; ``bool[N]`` and
+``bool[]`` are lists of Python bools (rclpy aborts the process on numpy bools there, so they are
+refused: pass ``.tolist()``); strings and messages in arrays are lists. As with rclpy's
+generated properties, assigning a field converts or checks the value. A numpy array passed
+with the right dtype is kept, not copied: in process, publishers and subscribers share it, as
+with intra-process communication in ROS 2, so do not modify a message after publishing it.
 
 >>> Header = get_message('std_msgs/msg/Header')
 >>> h = Header(frame_id='bear')
@@ -29,7 +34,9 @@ std_msgs/msg/Header has no field 'frame_idd' (did you mean 'frame_id'?); its fie
 
 from __future__ import annotations
 
+import array
 import math
+import operator
 import struct
 import threading
 from collections.abc import Callable
@@ -64,6 +71,10 @@ _FLOATS = {'float32': np.float32, 'float64': np.float64}
 _DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
            'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8), 'bool': np.dtype(np.bool_),
            **{k: np.dtype(v) for k, v in _FLOATS.items()}}
+
+#: ``array.array`` typecodes of numeric sequences, as rclpy's generated classes use them.
+_TYPECODES = {'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
+              'int64': 'q', 'uint64': 'Q', 'float32': 'f', 'float64': 'd'}
 
 _lock = threading.RLock()
 _classes: dict[str, type[Message]] = {}
@@ -149,7 +160,7 @@ class Message:
 
 def _values_equal(a: Any, b: Any) -> bool:
     # NaN equals NaN here: a round trip through CDR must compare equal.
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+    if isinstance(a, (np.ndarray, array.array)) or isinstance(b, (np.ndarray, array.array)):
         a, b = np.asarray(a), np.asarray(b)
         if a.shape != b.shape:
             return False
@@ -249,6 +260,51 @@ def _numeric_array_converter(owner: str, field: str, base: str, length: int | No
     return conv_array, default
 
 
+def _sequence_converter(owner: str, field: str, base: str, bound: int) -> tuple[Callable, Callable]:
+    """A numeric sequence field: an ``array.array`` (rclpy's type), from any numeric iterable."""
+    typecode = _TYPECODES[base]
+    conv_array, _ = _numeric_array_converter(owner, field, base, None, bound)
+
+    def conv_sequence(v: Any) -> array.array:
+        if type(v) is array.array and v.typecode == typecode:
+            if bound and len(v) > bound:
+                raise _fail(owner, field, f'at most {bound} values', v)
+            return v
+        out = array.array(typecode)
+        out.frombytes(conv_array(v).tobytes())
+        return out
+
+    def default() -> array.array:
+        return array.array(typecode)
+    return conv_sequence, default
+
+
+def _bool_list_converter(owner: str, field: str, length: int | None, bound: int) -> tuple[Callable, Callable]:
+    """A ``bool[N]`` or ``bool[]`` field: a list of Python bools (rclpy aborts on numpy bools there)."""
+    expected = f'a list of {length} bools (bool[{length}])' if length else 'a list of bools (bool[])'
+
+    def conv_bools(v: Any) -> list:
+        if isinstance(v, np.ndarray):
+            raise _fail(owner, field, expected, v, '; pass .tolist(): rclpy aborts the process on numpy bools '
+                        "(Assertion 'PyBool_Check(item)' failed)")
+        if isinstance(v, (str, bytes, dict)) or not hasattr(v, '__iter__'):
+            raise _fail(owner, field, expected, v)
+        out = list(v)
+        for item in out:
+            if type(item) is not bool:
+                raise _fail(owner, field, expected, v, f'; an item is {type(item).__name__} (rclpy aborts the '
+                            'process on anything but Python bools: pass .tolist() or bool(x))')
+        if length is not None and len(out) != length:
+            raise _fail(owner, field, expected, v)
+        if bound and len(out) > bound:
+            raise _fail(owner, field, f'a list of at most {bound} bools', v)
+        return out
+
+    def default() -> list:
+        return [False] * (length or 0)
+    return conv_bools, default
+
+
 def _list_converter(owner: str, field: str, item_conv: Callable, item_default: Callable,
                     length: int | None, bound: int, what: str) -> tuple[Callable, Callable]:
     def conv_list(v: Any) -> list:
@@ -287,6 +343,12 @@ def _field_converter(owner: str, field: str, desc: tuple) -> tuple[Callable, Cal
         length = size if kind == Nodetype.ARRAY else None
         bound = size if kind == Nodetype.SEQUENCE else 0
         suffix = f'[{length}]' if length is not None else (f'[<={bound}]' if bound else '[]')
+        if sub_kind == Nodetype.BASE and sub_detail[0] == 'bool':
+            conv, default = _bool_list_converter(owner, field, length, bound)
+            return conv, default, 'bool' + suffix
+        if sub_kind == Nodetype.BASE and length is None and sub_detail[0] in _TYPECODES:
+            conv, default = _sequence_converter(owner, field, sub_detail[0], bound)
+            return conv, default, sub_detail[0] + suffix
         if sub_kind == Nodetype.BASE and sub_detail[0] != 'string':
             conv, default = _numeric_array_converter(owner, field, sub_detail[0], length, bound)
             return conv, default, sub_detail[0] + suffix
@@ -304,10 +366,12 @@ def _make_class(typename: str) -> type[Message]:
     for name, desc in fields:
         convs[name], defaults[name], type_strs[name] = _field_converter(typename, name, desc)
 
-    # A generated __init__ (as dataclasses do) keeps construction cheap on the hot path.
+    # A generated __init__ (as dataclasses do) keeps construction cheap on the hot path. Each field
+    # is a slot '_f_<name>' behind a property whose setter converts, as rclpy's generated classes do;
+    # the codecs read and write the slots directly.
     params = ', '.join(f'{n}=None' for n in names)
     body = '\n'.join(
-        f'    self.{n} = _d_{n}() if {n} is None else _c_{n}({n})' for n in names) or '    pass'
+        f'    self._f_{n} = _d_{n}() if {n} is None else _c_{n}({n})' for n in names) or '    pass'
     src = f'def __init__(self, {params}{", " if params else ""}**_unknown):\n' \
           f'    if _unknown:\n        _reject(_unknown)\n{body}\n'
     env: dict[str, Any] = {f'_c_{n}': convs[n] for n in names}
@@ -322,12 +386,34 @@ def _make_class(typename: str) -> type[Message]:
 
     pkg, kind, short = typename.split('/')
     attrs: dict[str, Any] = {
-        '__slots__': names, '__msgtype__': typename, '_fields': names, '_field_types': type_strs,
+        '__slots__': tuple(f'_f_{n}' for n in names), '__msgtype__': typename, '_fields': names,
+        '_field_types': type_strs,
         '__init__': env['__init__'], '__module__': f'{pkg}.{kind}', '__qualname__': short,
     }
     for cname, _ctype, cvalue in consts:
         attrs[cname] = cvalue
-    return type(short, (Message,), attrs)
+    cls = type(short, (Message,), attrs)
+    for n in names:
+        slot = cls.__dict__[f'_f_{n}']
+        setattr(cls, n, property(operator.attrgetter(f'_f_{n}'), _setter(slot.__set__, convs[n]),
+                                 doc=f'{type_strs[n]} field'))
+    return cls
+
+
+def _setter(set_slot: Callable[[Any, Any], None], conv: Callable[[Any], Any]) -> Callable[[Any, Any], None]:
+    def fset(self: Any, value: Any) -> None:
+        set_slot(self, conv(value))
+    return fset
+
+
+def _rosbags_builder(cls: type[Message]) -> Callable[..., Message]:
+    """What rosbags calls with a decoded message's values: numpy bool arrays become lists, as ours decode."""
+    def plain(v: Any) -> Any:
+        return v.tolist() if isinstance(v, np.ndarray) and v.dtype == np.bool_ else v
+
+    def build(*values: Any, **fields: Any) -> Message:
+        return cls(*map(plain, values), **{k: plain(v) for k, v in fields.items()})
+    return build
 
 
 def get_message(typename: str) -> type[Message]:
@@ -346,8 +432,8 @@ def get_message(typename: str) -> type[Message]:
             if full in typestore.cache:
                 raise MessageError(f'{full} was serialised before its class was made')  # pragma: no cover
             cls = _make_class(full)
-            # rosbags builds deserialised messages as cls(*values): give it our class.
-            typestore.types[full] = cls
+            # rosbags builds deserialised messages as cls(*values): give it our class's builder.
+            typestore.types[full] = _rosbags_builder(cls)
             _classes[full] = cls
         _classes[typename] = cls
         return cls
@@ -415,9 +501,31 @@ def deserialize(data: bytes | bytearray | memoryview, typename: str) -> Message:
     return decoder(typename)(data if type(data) is bytes else bytes(data))
 
 
+def for_rosbags(message: Message) -> Message:
+    """A copy of ``message`` with its sequences and bool lists as the numpy arrays rosbags' serialiser
+    takes (fields' slots written directly, past the converting properties)."""
+    out = object.__new__(type(message))
+    for name, desc in typestore.fielddefs[message.__msgtype__][1]:
+        value = getattr(message, name)
+        kind, detail = desc
+        if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+            (sub_kind, sub_detail), _size = detail
+            if sub_kind == Nodetype.NAME:
+                value = [for_rosbags(v) for v in value]
+            elif sub_detail[0] == 'bool':
+                value = np.array(value, dtype=np.bool_)
+            elif isinstance(value, array.array):
+                value = np.frombuffer(value, dtype=_DTYPES[sub_detail[0]]) if len(value) else \
+                    np.zeros(0, _DTYPES[sub_detail[0]])
+        elif kind == Nodetype.NAME:
+            value = for_rosbags(value)
+        object.__setattr__(out, f'_f_{name}', value)
+    return out
+
+
 def _rosbags_encode(full: str, message: Message, pad: bool = False) -> bytes:
     try:
-        data = bytes(typestore.serialize_cdr(message, full, little_endian=True))
+        data = bytes(typestore.serialize_cdr(for_rosbags(message), full, little_endian=True))
     except (AttributeError, TypeError, ValueError, SerdeError, OverflowError, struct.error) as err:
         raise MessageError(f'cannot serialise {full}: {err}') from err
     return data + b'\0' * (-len(data) % 4) if pad else data
@@ -456,7 +564,7 @@ def to_dict(message: Message) -> dict[str, Any]:
 def _plain(value: Any) -> Any:
     if isinstance(value, Message):
         return to_dict(value)
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, array.array)):
         return value.tolist()
     if isinstance(value, list):
         return [_plain(v) for v in value]

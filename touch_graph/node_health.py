@@ -1,12 +1,14 @@
 """A recogniser node's health on ``/diagnostics``: callbacks that raised and messages its subscriptions dropped.
 
-The runtime keeps a failing callback from stopping the graph (it logs it and counts it in
-``node.callback_errors``); :class:`NodeHealth` also says so where monitors look: every ``period_s`` one
-``diagnostic_msgs/DiagnosticStatus`` named ``social_touch: <node>``, ERROR with the last error when a
-callback raised in the period, WARN when a subscription dropped messages (and a warning in the log,
-through :class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise. A node with a
-``health_counters()`` method (name -> int) adds its own counters to the status's values, so what
-became of its inputs is visible where the monitors look (rqt_robot_monitor, `topic echo /diagnostics`).
+A callback that raises ends the node's spin, on rclpy and on our runtime alike, so a node that must
+survive bad input wraps its input callbacks in :meth:`NodeHealth.guard`: an exception there is logged
+(its traceback the first time), counted in ``errors`` and the node goes on. :class:`NodeHealth` also
+says so where monitors look: every ``period_s`` one ``diagnostic_msgs/DiagnosticStatus`` named
+``social_touch: <node>``, ERROR with the last error when a guarded callback raised in the period, WARN
+when a subscription dropped messages (and a warning in the log, through
+:class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise. A node with a ``health_counters()``
+method (name -> int) adds its own counters to the status's values, so what became of its inputs is
+visible where the monitors look (rqt_robot_monitor, `topic echo /diagnostics`).
 
 Two more things a node's health covers, for a graph other processes can reach (docs/network.md):
 
@@ -21,6 +23,8 @@ Two more things a node's health covers, for a graph other processes can reach (d
 
 from __future__ import annotations
 
+import traceback
+from collections.abc import Callable
 from typing import Any
 
 from .compat import USING_ROS, get_message
@@ -39,6 +43,8 @@ class NodeHealth:
     def __init__(self, node: Any, period_s: float = 5.0) -> None:
         self.node = node
         self.drops = DropReporter(node, period_s)
+        self.errors = 0            # guarded callbacks that raised
+        self.last_error = ''
         self._errors_seen = 0
         self._drops_seen = 0
         self.screens: list[FrameScreen] = []
@@ -69,9 +75,27 @@ class NodeHealth:
                 f'parameter {param.name} changed: {old!r} -> {param.value!r} (set from outside the node; '
                 f'{self.parameter_changes} changes since start)')
 
+    def guard(self, callback: Callable[..., Any], what: str = 'callback') -> Callable[..., Any]:
+        """``callback`` that logs, counts and swallows an ``Exception`` instead of ending the node's spin."""
+        def guarded(*args: Any) -> Any:
+            try:
+                return callback(*args)
+            except Exception as err:  # bad input or a recogniser fault: reported, the node goes on
+                self.errors += 1
+                self.last_error = f'{what}: {type(err).__name__}: {err}'
+                logger = self.node.get_logger()
+                if self.errors == 1:
+                    detail = ''.join(traceback.format_exception(err)).rstrip()
+                    logger.error(f'{what} raised (1 so far); the node goes on: {detail}')
+                else:
+                    logger.error(f'{what} raised ({self.errors} so far); the node goes on: {type(err).__name__}: {err}',
+                                 throttle_duration_sec=1.0)
+                return None
+        return guarded
+
     def status(self) -> tuple[int, str, dict[str, Any]]:
         """(level, message, counters) for the period since the last call."""
-        errors = int(getattr(self.node, 'callback_errors', 0))
+        errors = self.errors
         drops = sum(dropped_by_topic(self.node).values())
         new_errors, new_drops = errors - self._errors_seen, drops - self._drops_seen
         self._errors_seen, self._drops_seen = errors, drops
@@ -86,7 +110,7 @@ class NodeHealth:
             counters['last_parameter_change'] = self.last_parameter_change
         findings: list[tuple[int, str]] = []
         if new_errors:
-            last = getattr(self.node, 'last_callback_error', '') or 'see the node log'
+            last = self.last_error or 'see the node log'
             findings.append((_ERROR, f'{new_errors} callbacks raised in the last period: {last}'))
         findings += [found for found in (s.status() for s in self.screens) if found is not None]
         if new_drops:

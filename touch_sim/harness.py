@@ -28,7 +28,14 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from touch_graph.messages import get_message
-from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_graph.runtime import (
+    Context,
+    Node,
+    Parameter,
+    QoSProfile,
+    ReliabilityPolicy,
+    SingleThreadedExecutor,
+)
 
 __all__ = ['SCHEMES', 'DeviceRun', 'Harness', 'driver_counters', 'node_class', 'stamp_ns', 'wire_frames_before']
 
@@ -110,7 +117,9 @@ class Harness:
         """Call ``callback`` with every message on ``topic`` (a listener node of the harness subscribes)."""
         if self._listener is None:
             self._listener = self.add_node(_Listener)
-        self._listener.create_subscription(get_message(msg_type), topic, callback, depth)
+        # Best effort hears any publisher (a reliable subscription would not hear a sensor's best-effort frames).
+        best_effort = QoSProfile(depth=depth, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self._listener.create_subscription(get_message(msg_type), topic, callback, best_effort)
 
     def collect(self, topic: str, msg_type: str, depth: int = 1000) -> list[Any]:
         """A list that fills with the messages on ``topic``."""

@@ -307,7 +307,7 @@ class ViewState:
         part: dict[str, Any] = {'panel_names': self._panel_names}
         if msg is not None:
             part['activation'] = encode_map(msg.activation)
-            part['outline'] = encode_map(msg.in_outline.astype(np.float32))
+            part['outline'] = encode_map(np.asarray(msg.in_outline, np.float32))  # bool[256]: a list
         if panels is not None:
             part['panels'] = [bool(c) for c in panels.contact]
             part['any_contact'] = bool(panels.any_contact)

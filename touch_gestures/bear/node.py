@@ -122,9 +122,9 @@ class BearGesturesNode(Node):
         self.subtype_pub = self.create_publisher(TouchSubtype, '/touch/subtype', 50) if self.publish_subtypes else None
         self.symbolic_pub = (self.create_publisher(SymbolicGesture, '/touch/symbolic', 20)
                              if self.publish_symbolic else None)
-        self.create_subscription(BearFrame, 'frame', self._on_frame, sensor_data_qos(10))
         # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
         self.health = NodeHealth(self)
+        self.create_subscription(BearFrame, 'frame', self.health.guard(self._on_frame, 'frame'), sensor_data_qos(10))
         self.drops = self.health.drops
         self.screen = self.health.screen(self.resolve_topic_name('frame'))
         self.create_timer(p['max_gap_s'] / 2, self._watchdog)   # ends things within 1.5 max_gap_s

@@ -116,9 +116,9 @@ class PatchGesturesNode(Node):
         self.skipped: Counter[str] = Counter()
         self.gesture_pub = self.create_publisher(GestureEvent, '/touch/gesture', 20)
         self.posteriors_pub = self.create_publisher(GesturePosteriors, 'posteriors', 20)
-        self.create_subscription(PatchFrame, 'frame', self._on_frame, sensor_data_qos(20))
         # Frames lost when this node falls behind, and callbacks that raised: its log and /diagnostics.
         self.health = NodeHealth(self)
+        self.create_subscription(PatchFrame, 'frame', self.health.guard(self._on_frame, 'frame'), sensor_data_qos(20))
         self.drops = self.health.drops
         self.screen = self.health.screen(self.resolve_topic_name('frame'))
         det = self.detector

@@ -209,8 +209,9 @@ class HapticCommandsNode(Node):
         self._setup_candidates()
         self._setup_collisions()
         self.command_pub = self.create_publisher(HapticCommand, COMMAND_TOPIC, 20)
-        self.create_subscription(SkinFrame, 'frame', self._on_frame, sensor_data_qos(FRAME_QUEUE))
-        self.health = NodeHealth(self)   # a callback that raises: ERROR on /diagnostics; dropped frames: WARN
+        self.health = NodeHealth(self)   # a frame callback that raises: ERROR on /diagnostics; dropped frames: WARN
+        self.create_subscription(SkinFrame, 'frame', self.health.guard(self._on_frame, 'frame'),
+                                 sensor_data_qos(FRAME_QUEUE))
         self.drops = self.health.drops
         self.screen = self.health.screen(self.resolve_topic_name('frame'))   # another publisher's frames
         self.add_on_set_parameters_callback(self._on_set_parameters)

@@ -7,7 +7,9 @@ attribute in the launch file (``respawn``, ``respawn_delay``, ``respawn_max_retr
 ``sigterm_timeout``, ``sigkill_timeout``) always does: those processes and this one meet on
 the DDS domain. A node process that dies is reported with its exit code and, with
 ``respawn: true``, restarted (:mod:`touch_graph.launch.processes`); Ctrl-C stops every
-process and waits for each.
+process and waits for each. A node in this process whose callback raises dies as it would
+under rclpy, and is reported with its exception; the others go on. The launch exits with 1
+when a node died, 0 otherwise.
 
 The graph joins the DDS domain (``ROS_DOMAIN_ID``; ``--no-network`` keeps it in the
 process), also with ``--sim-time``: other processes and ROS 2 machines see its nodes
@@ -238,4 +240,7 @@ def _run(args: argparse.Namespace, together: list, alone: list) -> int:
             if runner is not None:
                 runner.shutdown()
     print('[launch] all nodes stopped', file=sys.stderr)
-    return 1 if supervisor is not None and supervisor.died else 0
+    died = (supervisor.died if supervisor is not None else 0) + (len(runner.died) if runner is not None else 0)
+    if runner is not None and runner.died:
+        print(f'[launch] {len(runner.died)} node(s) of this process died: {"; ".join(runner.died)}', file=sys.stderr)
+    return 1 if died else 0

@@ -6,9 +6,10 @@ The launcher (:mod:`.processes`) starts one of these per node that runs alone. I
 node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
 :class:`~.runner.LaunchRunner` of one node, on the DDS domain; on real rclpy when
 ``touch_graph.compat`` uses it, i.e. ROS 2 is sourced and ``SOCIAL_TOUCH_SHIM`` is unset), spins it until SIGINT or
-SIGTERM, and exits with 0 after a clean stop or 1 when the node cannot start (the error on
-stderr). It also dies with the launcher: Linux sends it SIGTERM when the launcher's process
-ends, however that happens (``prctl(PR_SET_PDEATHSIG)``), so no node outlives its launch.
+SIGTERM, and exits with 0 after a clean stop, or 1 when the node cannot start or a callback of
+it raised (the error on stderr; a raising callback ends an rclpy node too). It also dies with
+the launcher: Linux sends it SIGTERM when the launcher's process ends, however that happens
+(``prctl(PR_SET_PDEATHSIG)``), so no node outlives its launch.
 """
 
 from __future__ import annotations
@@ -71,5 +72,5 @@ def main(argv: list[str] | None = None) -> int:
             pass
         finally:
             runner.shutdown()
-    return 0
+    return 1 if runner.died else 0  # a callback raised: the node died, as under rclpy
 

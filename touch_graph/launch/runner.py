@@ -22,7 +22,11 @@ no keyword arguments) is called with none and receives the same arguments throug
 so the node parses its own parameter files and raises its own parameter errors; those come
 back as a :class:`~touch_graph.errors.LaunchError` naming the launch file and the node's
 line. Every class is resolved before any node starts, and a node that fails to start stops
-the ones already started. The first SIGINT/SIGTERM asks for a clean stop (the executor
+the ones already started. A callback that raises ends its node, as in rclpy (the exception
+ends the spin; the node's process would exit): the runner reports that node as ros2 launch
+reports a dead process (``[ERROR] [launch]: node /x has died: ...``, with the traceback),
+destroys it and spins the others on; :attr:`LaunchRunner.died` names the dead, and the
+launch ends when no node is left. The first SIGINT/SIGTERM asks for a clean stop (the executor
 finishes its current callback, nodes are destroyed in reverse order, the context shuts
 down); a second one raises :class:`KeyboardInterrupt`.
 
@@ -41,8 +45,10 @@ import importlib.util
 import inspect
 import math
 import signal
+import sys
 import threading
 import time
+import traceback
 import types
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
@@ -67,6 +73,11 @@ SLICE_S = 0.1
 
 #: ``(pkg, exec) -> node class`` or something with ``load() -> class`` (an EntryPoint).
 Registry = Mapping[tuple[str, str], Any]
+
+
+def _tuple(exceptions: Any) -> tuple[type[BaseException], ...]:
+    """An ``except`` clause's classes as a tuple (one class, a tuple, or none)."""
+    return exceptions if isinstance(exceptions, tuple) else (exceptions,)
 
 
 def _normalize(name: str) -> str:
@@ -270,6 +281,8 @@ class LaunchRunner:
         self.strict_params = strict_params
         self._stop = threading.Event()
         self._signals = 0
+        #: ``'<node>: <Exception>: <text>'`` for each node a raising callback ended.
+        self.died: list[str] = []
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> list[Any]:
@@ -370,7 +383,13 @@ class LaunchRunner:
                     break
                 # Spin in short slices of ROS time so a stop request is seen between callbacks.
                 slice_end = now + round(SLICE_S * 1e9)
-                self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+                try:
+                    self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+                except (KeyboardInterrupt, SystemExit, *_tuple(external_shutdown)):
+                    raise
+                except Exception as err:
+                    if not self._node_died(err):
+                        break
                 if every_slice is not None:
                     every_slice()
         except external_shutdown:  # another thread shut the context down: a normal end
@@ -381,10 +400,46 @@ class LaunchRunner:
 
     def _spin_wall(self, duration: float | None, every_slice: Callable[[], None] | None) -> None:
         end = None if duration is None else time.monotonic() + duration
+        external_shutdown = _tuple(getattr(self.runtime, 'ExternalShutdownException', ()))
         while not self._stop.is_set() and self.context.ok() and (end is None or time.monotonic() < end):
-            self.executor.spin_once(timeout_sec=SLICE_S)
+            try:
+                self.executor.spin_once(timeout_sec=SLICE_S)
+            except (KeyboardInterrupt, SystemExit, *external_shutdown):
+                raise
+            except Exception as err:
+                if not self._node_died(err):
+                    return
             if every_slice is not None:
                 every_slice()
+
+    def _node_died(self, err: Exception) -> bool:
+        """Report the node whose callback raised ``err`` as dead and destroy it; False when none is left.
+
+        Which node: our executor's ``last_failure``; rclpy's executor does not say, so with several
+        nodes on rclpy the exception ends the whole launch (as it ends rclpy's spin).
+        """
+        failure = getattr(self.executor, 'last_failure', None)
+        node = failure[0] if failure is not None else (self.nodes[0] if len(self.nodes) == 1 else None)
+        if failure is not None:
+            self.executor.last_failure = None  # the next failure is another node's
+        if node is None or node not in self.nodes:
+            raise err
+        name = node.get_fully_qualified_name()
+        trace = ''.join(traceback.format_exception(err)).rstrip()
+        sys.stderr.write(f'[ERROR] [launch]: node {name} has died: a callback raised {type(err).__name__}: {err}'
+                         f' (as under rclpy, an exception in a callback ends the node)\n{trace}\n')
+        sys.stderr.flush()
+        self.died.append(f'{name}: {type(err).__name__}: {err}')
+        self.nodes.remove(node)
+        self.executor.remove_node(node)
+        try:
+            node.destroy_node()
+        except Exception as cleanup:  # keep the first error; mention the second
+            sys.stderr.write(f'[ERROR] [launch]: destroying {name} failed too: {type(cleanup).__name__}: {cleanup}\n')
+        if not self.nodes:
+            sys.stderr.write('[ERROR] [launch]: every node of this process has died\n')
+            return False
+        return True
 
     def _install_signal_handlers(self) -> dict[int, Any]:
         if threading.current_thread() is not threading.main_thread():

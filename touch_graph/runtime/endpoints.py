@@ -1,7 +1,8 @@
 """Publishers, subscriptions and timers of the graph.
 
 Delivery in the process is a direct queue append: ``publish`` walks the topic's
-subscriptions and puts the message on each one's bounded queue (the oldest dropped and
+subscriptions whose QoS it matches (:func:`~.qos.incompatible_policy`, as DDS matches
+them) and puts the message on each one's bounded queue (the oldest dropped and
 counted when full), then tells the subscription's executor it has work. A message
 published from another thread is handed to the executor's thread-safe inbox instead, so
 queues are only ever touched by the thread that spins them. On a networked context each
@@ -25,14 +26,14 @@ from typing import TYPE_CHECKING, Any
 
 from .. import messages
 from ..errors import GraphError
-from .qos import DurabilityPolicy, QoSProfile
+from .qos import DurabilityPolicy, QoSProfile, incompatible_policy
 
 if TYPE_CHECKING:
     from .context import Topic
     from .executors import Executor
     from .node import Node
 
-__all__ = ['Publisher', 'QueuedEntity', 'Subscription', 'Timer']
+__all__ = ['Publisher', 'QueuedEntity', 'Subscription', 'Timer', 'warn_incompatible']
 
 _get_ident = threading.get_ident
 # Timers due at the same instant run in the order they were created (deterministic scenes).
@@ -52,6 +53,8 @@ class Publisher:
             if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
         self._destroyed = False
         self._dds: Any = None  # the DDS writer, on a networked context
+        self._subs_seen: tuple = ()   # the topic's subscriptions when _matched was made
+        self._matched: tuple = ()     # those whose requested QoS this publisher offers
 
     @property
     def topic_name(self) -> str:
@@ -90,7 +93,11 @@ class Publisher:
             if topic.info_subscriptions:
                 now = node.context.now_ns()
                 info = {'source_timestamp': now, 'received_timestamp': now}
-            for sub in topic.subscriptions:
+            subs = topic.subscriptions
+            if subs is not self._subs_seen:  # a subscription came or went: match again (DDS's rule)
+                self._subs_seen, self._matched = subs, tuple(
+                    sub for sub in subs if incompatible_policy(self.qos_profile, sub.qos_profile) is None)
+            for sub in self._matched:
                 if sub.ignore_local_publications and sub.node is node:
                     continue
                 item = raw if sub.raw else msg
@@ -102,7 +109,8 @@ class Publisher:
     def get_subscription_count(self) -> int:
         """Subscriptions matched: the process's own and, on a networked context, remote DDS readers."""
         dds = self._dds
-        return len(self._topic.subscriptions) + (dds.matched() if dds is not None else 0)
+        local = sum(incompatible_policy(self.qos_profile, sub.qos_profile) is None for sub in self._topic.subscriptions)
+        return local + (dds.matched() if dds is not None else 0)
 
     def destroy(self) -> bool:
         return self.node.destroy_publisher(self)
@@ -187,6 +195,18 @@ class Subscription(QueuedEntity):
 
     def destroy(self) -> bool:
         return self.node.destroy_subscription(self)
+
+
+def warn_incompatible(pub: Publisher, sub: Subscription) -> bool:
+    """Log rclpy's warnings on both nodes when ``pub`` and ``sub`` cannot match; True if they cannot."""
+    policy = incompatible_policy(pub.qos_profile, sub.qos_profile)
+    if policy is None:
+        return False
+    sub.node.get_logger().warning(f"New publisher discovered on topic '{sub.topic_name}', offering incompatible QoS. "
+                                  f'No messages will be received from it. Last incompatible policy: {policy}')
+    pub.node.get_logger().warning(f"New subscription discovered on topic '{pub.topic_name}', requesting incompatible "
+                                  f'QoS. No messages will be sent to it. Last incompatible policy: {policy}')
+    return True
 
 
 def _takes_message_info(callback: Callable) -> bool:

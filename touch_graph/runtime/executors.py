@@ -3,19 +3,20 @@
 Each ``spin_once`` runs the inbox (work handed over by other threads), then one due
 timer, or else one ready subscription (round robin), or else waits on the context's
 time source until the next timer or until another thread brings work. A callback that
-raises is logged (with its traceback the first time) and counted on its node and on
-the context; the other callbacks go on. With a fast simulated clock, time only moves
-while there is nothing to do, so a scene gives the same result on every run.
+raises ends the spin call with its exception, as in rclpy (``rclpy.spin``, ``spin_once``
+and every executor's ``spin*`` re-raise it): a node that must survive bad input catches
+its own errors (:class:`~touch_graph.node_health.NodeHealth`). The exception is counted on
+its node and the context, and :attr:`Executor.last_failure` says whose callback it was (the
+launcher reports that node as dead). With a fast simulated clock, time only moves while
+there is nothing to do, so a scene gives the same result on every run.
 """
 
 from __future__ import annotations
 
 import heapq
 import math
-import sys
 import threading
 import time
-import traceback
 from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -50,6 +51,8 @@ class Executor:
         self._spin_lock = threading.RLock()
         self._shutdown = False
         self.callbacks_run = 0
+        #: ``(node or None, what)`` of the last callback that raised out of a spin call (not in rclpy).
+        self.last_failure: tuple[Node | None, str] | None = None
 
     # ------------------------------------------------------------------ nodes
     def add_node(self, node: Node) -> bool:
@@ -266,8 +269,9 @@ class Executor:
                 sub._handler(*item) if sub._packs else sub._handler(item)
             except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
                 raise
-            except Exception as err:  # a failing callback must not stop the graph
-                self._report(err, sub.node, sub._what)
+            except Exception as err:
+                self._failed(err, sub.node, sub._what)
+                raise
             return True
         return False
 
@@ -310,26 +314,20 @@ class Executor:
             fn(*args)
         except (KeyboardInterrupt, SystemExit, ExternalShutdownException):
             raise
-        except Exception as err:  # a failing callback must not stop the graph
-            self._report(err, node, what)
+        except Exception as err:
+            self._failed(err, node, what)
+            raise
 
-    def _report(self, err: Exception, node: Node | None, what: str) -> None:
-        """Count and log a callback's exception (its traceback the first time)."""
+    def _failed(self, err: Exception, node: Node | None, what: str) -> None:
+        """Count a callback's exception and say whose it was, before it ends the spin call (rclpy's rule)."""
         self.context.callback_errors += 1
-        logger = node.get_logger() if node is not None else None
+        self.last_failure = (node, what)
         if node is not None:
             node.callback_errors += 1
-            node.last_callback_error = f'{what}: {type(err).__name__}: {err}'  # for its diagnostics
-            first = node.callback_errors == 1
+            where = f'the {what} callback of node {node.get_fully_qualified_name()}'
         else:
-            first = self.context.callback_errors == 1
-        detail = ''.join(traceback.format_exception(err)) if first else f'{type(err).__name__}: {err}'
-        text = f'{what} callback raised ({node.callback_errors if node else self.context.callback_errors} ' \
-               f'so far); the graph goes on: {detail}'
-        if logger is not None:
-            logger.error(text.rstrip(), throttle_duration_sec=None if first else 1.0)
-        else:
-            sys.stderr.write(text + '\n')
+            where = f'a {what} in executor {type(self).__name__}'
+        err.add_note(f'raised by {where}; as in rclpy, it ends the spin (a node catches the errors it can survive)')
 
 
 class SingleThreadedExecutor(Executor):

@@ -3,7 +3,12 @@
 What ``Node.get_publishers_info_by_topic`` / ``get_subscriptions_info_by_topic`` return, in
 process (the context's endpoints) and on a networked context (DDS discovery, every process
 of the domain), so tools can subscribe with the QoS publishers offer
-(:mod:`touch_graph.offered_qos`) the same way on both backends.
+(:mod:`touch_graph.offered_qos`) the same way on both backends. A discovered endpoint that
+announced no reliability has the DDS default of its kind, as the rmw layers fill it in and
+``ros2 topic info -v`` shows it: a subscription BEST_EFFORT, a publisher RELIABLE.
+
+>>> _profile({}, 'SUBSCRIPTION').reliability.name, _profile({}, 'PUBLISHER').reliability.name
+('BEST_EFFORT', 'RELIABLE')
 """
 
 from __future__ import annotations
@@ -29,14 +34,20 @@ class TopicEndpointInfo:
     topic_type_hash: str = ''
 
 
-def _profile(qos: dict) -> QoSProfile:
-    """A profile from a discovered endpoint's QoS dict (policies it did not announce take the defaults)."""
+#: Reliability of a discovered endpoint that announced none: the DDS/RTPS default of its kind (a reader
+#: BEST_EFFORT, a writer RELIABLE), which the rmw layers fill in and ros2cli therefore shows.
+_UNANNOUNCED_RELIABILITY = {'PUBLISHER': ReliabilityPolicy.RELIABLE, 'SUBSCRIPTION': ReliabilityPolicy.BEST_EFFORT}
+
+
+def _profile(qos: dict, endpoint_type: str = 'PUBLISHER') -> QoSProfile:
+    """A profile from a discovered endpoint's QoS dict; a policy it did not announce takes the DDS
+    default of the endpoint's kind (``endpoint_type``: 'PUBLISHER' or 'SUBSCRIPTION')."""
     history = HistoryPolicy(qos.get('history', HistoryPolicy.KEEP_LAST))
     depth = int(qos.get('depth', 10))
     if history == HistoryPolicy.KEEP_LAST and depth < 1:
         depth = 1
-    return QoSProfile(depth=depth, history=history,
-                      reliability=ReliabilityPolicy(qos.get('reliability', ReliabilityPolicy.RELIABLE)),
+    reliability = qos.get('reliability', _UNANNOUNCED_RELIABILITY[endpoint_type])
+    return QoSProfile(depth=depth, history=history, reliability=ReliabilityPolicy(reliability),
                       durability=DurabilityPolicy(qos.get('durability', DurabilityPolicy.VOLATILE)))
 
 
@@ -51,7 +62,7 @@ def endpoints_info(node: Any, topic_name: str, kind: str) -> list[TopicEndpointI
         for ep in getattr(topic, kind, []):
             namespace, _, base = ep.node.rpartition('/')
             out.append(TopicEndpointInfo(base, namespace or '/', ep.type_name, endpoint_type, list(ep.gid),
-                                         _profile(ep.qos), ep.type_hash))
+                                         _profile(ep.qos, endpoint_type), ep.type_hash))
         return out
     topic = node.context.topics.get(name)
     return [TopicEndpointInfo(ep.node.get_name(), ep.node.get_namespace(), topic.type_name, endpoint_type,

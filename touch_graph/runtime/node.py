@@ -29,7 +29,7 @@ from ..errors import GraphError
 from ..messages import get_message
 from .clock import Clock, ClockType
 from .context import Context, get_default_context
-from .endpoints import Publisher, Subscription, Timer
+from .endpoints import Publisher, Subscription, Timer, warn_incompatible
 from .graph_info import endpoints_info
 from .logging import RcutilsLogger
 from .names import (
@@ -215,6 +215,9 @@ class Node(NodeParameters):
             pub = Publisher(self, topic_obj, qos)
             topic_obj.publishers.append(pub)
             self.publishers.append(pub)
+            subs = topic_obj.subscriptions
+        for sub in subs:
+            warn_incompatible(pub, sub)
         self.context._notify('publisher_added', pub)
         return pub
 
@@ -238,8 +241,11 @@ class Node(NodeParameters):
             self.subscriptions.append(sub)
             if self.executor is not None:
                 sub._executor = self.executor
+        unmatched = {pub for pub in list(topic_obj.publishers) if warn_incompatible(pub, sub)}
         if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
             for pub in topic_obj.publishers:
+                if pub in unmatched:
+                    continue
                 for msg in pub._latched or ():
                     item = messages.serialize(msg, topic_obj.type_name) if raw else msg
                     if sub.with_info:

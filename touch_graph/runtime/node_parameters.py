@@ -7,8 +7,9 @@ registered before a declaration must accept it (``has_parameter`` is still False
 Declaring, setting and undeclaring a parameter publishes an ``rcl_interfaces/ParameterEvent``
 on ``/parameter_events`` (new, changed and deleted parameters, the node's name and the ROS
 time), as rclpy does. Setting runs the node's on-set-parameters callbacks, newest first;
-the first refusal wins and nothing changes (a callback that raises refuses, with the error
-as the reason, and is logged: it never takes the node down). Setting a parameter to
+the first refusal wins and nothing changes. A callback that raises changes nothing either, and
+its exception goes to the caller of ``set_parameters``, as in rclpy: through the parameter
+services it ends the spin of the node's executor (the node dies unless the callback catches). Setting a parameter to
 ``NOT_SET`` undeclares it, which only a dynamically typed one allows (rclcpp's rule).
 """
 
@@ -221,12 +222,7 @@ class NodeParameters:
                     return SetParametersResult(False, why)
                 checked.append(typed)
             for callback in self._set_callbacks:
-                try:
-                    result = callback(checked)
-                except Exception as err:  # a broken callback refuses the change; the node goes on
-                    self.get_logger().error(f'an on-set-parameters callback raised {type(err).__name__}: {err}; '
-                                            'the parameters stay as they were')
-                    return SetParametersResult(False, f'the node could not apply it: {type(err).__name__}: {err}')
+                result = callback(checked)  # an exception goes to the caller, nothing changes (rclpy)
                 if not result.successful:
                     return result
             new, changed, deleted = [], [], []

@@ -15,6 +15,7 @@ reported as ``config/x.yaml:4: parameter 'alpha' of /bear/subtype ...``.
 
 from __future__ import annotations
 
+import array
 import math
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -404,7 +405,7 @@ def value_of(msg: Any) -> Any:
     value = getattr(msg, FIELDS[kind])
     if kind == ParameterType.BYTE_ARRAY:
         return bytes(np.asarray(value, np.uint8))
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, array.array)):  # array.array: rclpy's integer and double arrays
         return value.tolist()
     return list(value) if isinstance(value, list) else value
 

@@ -2,8 +2,12 @@
 
 In process, ``depth`` bounds each subscription's queue (KEEP_LAST: the oldest message
 is dropped and counted when it is full) and TRANSIENT_LOCAL makes a publisher hand
-its last ``depth`` messages to subscriptions that join later. Reliability is recorded
-for bags and for a real ROS 2 graph; in process every delivery is reliable.
+its last ``depth`` messages to subscriptions that join later. A publisher delivers only
+to subscriptions whose requested QoS it can satisfy, in process as DDS does between
+processes (:func:`incompatible_policy`): a RELIABLE subscription gets nothing from a
+BEST_EFFORT publisher, a TRANSIENT_LOCAL one nothing from a VOLATILE publisher; both
+sides log rclpy's "incompatible QoS" warning. Otherwise every delivery in process is
+reliable.
 """
 
 from __future__ import annotations
@@ -13,7 +17,8 @@ from enum import IntEnum
 
 __all__ = [
     'DurabilityPolicy', 'HistoryPolicy', 'QoSDurabilityPolicy', 'QoSHistoryPolicy', 'QoSProfile',
-    'QoSReliabilityPolicy', 'ReliabilityPolicy', 'qos_profile_from', 'qos_profile_parameter_events',
+    'QoSReliabilityPolicy', 'ReliabilityPolicy', 'incompatible_policy', 'qos_profile_from',
+    'qos_profile_parameter_events',
     'qos_profile_rosout_default', 'qos_profile_sensor_data', 'qos_profile_services_default',
     'qos_profile_system_default',
 ]
@@ -74,6 +79,28 @@ qos_profile_parameter_events = QoSProfile(depth=1000)
 #: rcl's ``rcl_qos_profile_rosout_default``: reliable, transient local, keep last 1000 (its
 #: 10 s lifespan is not modelled: late joiners get the last 1000 lines).
 qos_profile_rosout_default = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def incompatible_policy(offered: QoSProfile, requested: QoSProfile) -> str | None:
+    """The policy (rclpy's ``QoSPolicyKind`` name) that keeps a publisher offering ``offered`` from a
+    subscription requesting ``requested``, as DDS matches them; None when they match.
+
+    SYSTEM_DEFAULT is the rmw default: RELIABLE, VOLATILE.
+
+    >>> incompatible_policy(qos_profile_sensor_data, QoSProfile(depth=10))
+    'RELIABILITY'
+    >>> incompatible_policy(QoSProfile(depth=1), QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    'DURABILITY'
+    >>> incompatible_policy(QoSProfile(depth=1), qos_profile_sensor_data) is None
+    True
+    """
+    best_effort = offered.reliability == ReliabilityPolicy.BEST_EFFORT
+    if best_effort and requested.reliability != ReliabilityPolicy.BEST_EFFORT:
+        return 'RELIABILITY'
+    durable = offered.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    if not durable and requested.durability == DurabilityPolicy.TRANSIENT_LOCAL:
+        return 'DURABILITY'
+    return None
 
 
 def qos_profile_from(qos: QoSProfile | int) -> QoSProfile:

@@ -11,9 +11,9 @@ response arrives.
 - **Across processes**: otherwise the request goes over DDS (:mod:`touch_graph.dds.services`)
   with ROS 2's request/reply mapping, so ROS 2 servers and clients are peers.
 
-What never blocks or kills a node: a callback that raises is logged and counted on the
-node and the service (``errors``), and the client gets no response, as with rclpy; a
-callback that returns something other than a ``Response`` likewise. A request nobody can
+A server callback that raises is counted on the service (``errors``) and ends the spin of
+the executor running it, as in rclpy (the node dies unless it catches its own errors); the
+client gets no response. A callback that returns something other than a ``Response`` likewise. A request nobody can
 receive (no server in the graph) fails at once with :class:`~touch_graph.errors.ServiceCallError`;
 a server that vanishes with requests under way fails them (the DDS side notices when the
 server's reader disappears); a server destroyed in the process fails the requests it still
@@ -94,7 +94,7 @@ class Service(QueuedEntity):
             response = self.callback(request, self.srv_type.Response())
         except Exception:
             self.errors += 1
-            raise  # the executor logs it with the node's logger; the client gets nothing (rclpy)
+            raise  # it ends the server's spin, as in rclpy; the client gets nothing
         if type(response) is not self.srv_type.Response:
             self.errors += 1
             raise TypeError(f'the callback of service {self.srv_name} returned {type(response).__name__}, not a '

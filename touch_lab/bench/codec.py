@@ -45,17 +45,19 @@ def _per_call_us(fn: Any, arg: Any, calls: int) -> float:
 def _bench_kind(kind: str, repeats: int, calls: int) -> dict[str, Any]:
     message = sample_message(kind)
     serialisers = _serialisers(KINDS[kind])
+    # rosbags' serialiser takes numpy arrays where rclpy's types are array.array and lists (made once, untimed)
+    given = {'python': message, 'rosbags': messages.for_rosbags(message)}
     data = serialisers['python'][0](message)
-    if serialisers['rosbags'][0](message) != data:
+    if serialisers['rosbags'][0](given['rosbags']) != data:
         raise AssertionError(f'{kind}: our codec and rosbags encode different bytes')  # the tests hold them equal
     times: dict[str, list[float]] = {f'{name}_{op}': [] for name in serialisers for op in ('encode', 'decode')}
-    for encode, decode in serialisers.values():  # warm
-        _per_call_us(encode, message, calls)
+    for name, (encode, decode) in serialisers.items():  # warm
+        _per_call_us(encode, given[name], calls)
         _per_call_us(decode, data, calls)
     with gc_paused():
         for _ in range(repeats):
             for name, (encode, decode) in serialisers.items():  # in turns, so a busy moment hits both
-                times[f'{name}_encode'].append(_per_call_us(encode, message, calls))
+                times[f'{name}_encode'].append(_per_call_us(encode, given[name], calls))
                 times[f'{name}_decode'].append(_per_call_us(decode, data, calls))
     out: dict[str, Any] = {'bytes': len(data)}
     for key, values in times.items():

@@ -21,7 +21,7 @@ def _frame():
     frame_cls = get_message('social_touch_msgs/msg/PatchFrame')
     rng = np.random.default_rng(0)
     return frame_cls(activation=rng.random(256, dtype=np.float32),
-                     raw=rng.integers(0, 1024, 256).astype(np.uint16), in_outline=np.ones(256, bool))
+                     raw=rng.integers(0, 1024, 256).astype(np.uint16), in_outline=[True] * 256)
 
 
 def bench_runtime(messages: int = 20_000, repeats: int = 5) -> dict:

@@ -21,7 +21,7 @@ def feed_levels(level: float, seconds: float = 2.0, channel: int = 5) -> tuple[i
     BearFrame = get_message('BearFrame')
     Header = get_message('std_msgs/msg/Header')
     Time = get_message('builtin_interfaces/msg/Time')
-    fitted = BodyMap.default().fitted_mask().copy()
+    fitted = BodyMap.default().fitted_mask().tolist()  # bool[64]: Python bools, as rclpy needs
     ctx = Context('sim')
     ctx.init()
     try:
@@ -42,8 +42,8 @@ def feed_levels(level: float, seconds: float = 2.0, channel: int = 5) -> tuple[i
                 levels[channel] = level
             ns = round(i / RATE_HZ * 1e9)
             header = Header(stamp=Time(sec=EPOCH_S + ns // 10**9, nanosec=ns % 10**9), frame_id='bear_link')
-            pub.publish(BearFrame(header=header, sequence=i, level=levels, active=levels >= 0.3, fitted=fitted,
-                                  faults=np.zeros(64, np.uint8)))
+            pub.publish(BearFrame(header=header, sequence=i, level=levels, active=(levels >= 0.3).tolist(),
+                                  fitted=fitted, faults=np.zeros(64, np.uint8)))
             executor.spin_for(0.0)
         skipped = sum(node.skipped.values())
         node.destroy_node()
