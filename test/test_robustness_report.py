@@ -39,3 +39,20 @@ def test_another_process_on_our_domain_can_inject_haptic_commands(dds_domain) ->
     result = dds_injection(domain=dds_domain, messages=20)
     assert result['measured'] and result['intruder_exit'] == 0
     assert result['received'] == 20
+
+
+def test_the_outcome_classes_cover_hangs_and_lost_data():
+    from touch_lab.robustness.cases import HANG, LOST, DataLost
+
+    def lose():
+        raise DataLost('2 of 5 flushed messages gone')
+
+    def spin():
+        while True:
+            pass
+
+    assert run_case('t', 'lost', lose).result == LOST
+    hung = run_case('t', 'hang', spin, timeout_s=0.2)
+    assert hung.result == HANG and '0.2 s' in hung.detail
+    assert run_case('t', 'fine', lambda: 'ok').result == HANDLED       # the alarm is off again afterwards
+    assert run_cli('t', 'slow', ['--help'], timeout_s=1e-3).result == HANG

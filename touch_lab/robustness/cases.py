@@ -17,9 +17,11 @@ checks the same behaviours one by one.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -33,10 +35,18 @@ from touch_graph.errors import SocialTouchError
 from .cases_input import input_cases
 from .cases_stray import stray_cases
 from .cases_web import web_cases
+from .outcomes import CASE_TIMEOUT_S, CLEAR, CRASH, HANDLED, HANG, LOST, TRACEBACK, WRONG, DataLost
 
-__all__ = ['Outcome', 'all_cases', 'run_case', 'run_cli']
+__all__ = ['CLEAR', 'CRASH', 'HANDLED', 'HANG', 'LOST', 'TRACEBACK', 'WRONG', 'DataLost', 'Outcome', 'all_cases',
+           'run_case', 'run_cli']
 
-CLEAR, HANDLED, TRACEBACK, CRASH, WRONG = 'clear error', 'handled', 'traceback', 'crash', 'wrong'
+
+class _Hung(BaseException):
+    """A case that ran past its time (a BaseException: the case's own ``except Exception`` lets it pass)."""
+
+
+def _hung(signum: int, frame: Any) -> None:
+    raise _Hung
 
 
 @dataclass
@@ -49,14 +59,28 @@ class Outcome:
     detail: str
 
 
-def run_case(area: str, case: str, fn: Callable[[], Any]) -> Outcome:
-    """Run ``fn``; a return of False is ``wrong``, any other return ``handled``; exceptions are classified."""
+def run_case(area: str, case: str, fn: Callable[[], Any], timeout_s: float = CASE_TIMEOUT_S) -> Outcome:
+    """Run ``fn``; a return of False is ``wrong``, any other return ``handled``; exceptions are classified
+    (:class:`DataLost`: ``data lost``); not done in ``timeout_s``: ``hang`` (timed by SIGALRM in the main
+    thread, where the cases run: some start nodes that install signal handlers, which only it may do)."""
+    timed = threading.current_thread() is threading.main_thread()
+    if timed:
+        previous = signal.signal(signal.SIGALRM, _hung)
+        signal.setitimer(signal.ITIMER_REAL, timeout_s)
     try:
         ok = fn()
+    except _Hung:
+        return Outcome(area, case, HANG, f'not done after {timeout_s:g} s')
+    except DataLost as err:
+        return Outcome(area, case, LOST, str(err).splitlines()[0][:200])
     except (SocialTouchError, ValueError) as err:
         return Outcome(area, case, CLEAR, f'{type(err).__name__}: {err}'.splitlines()[0][:200])
     except Exception as err:  # the point of the report: any other exception is a traceback a user would see
         return Outcome(area, case, TRACEBACK, ''.join(traceback.format_exception_only(err)).strip()[:200])
+    finally:
+        if timed:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
     if ok is False:
         return Outcome(area, case, WRONG, 'returned, but the check on what it did failed')
     return Outcome(area, case, HANDLED, str(ok)[:200] if ok not in (None, True) else 'counted or kept going')
@@ -65,8 +89,11 @@ def run_case(area: str, case: str, fn: Callable[[], Any]) -> Outcome:
 def run_cli(area: str, case: str, argv: list[str], timeout_s: float = 120.0) -> Outcome:
     """``social-touch ARGV`` in a fresh process in an empty directory; classified by exit and stderr."""
     with tempfile.TemporaryDirectory() as cwd:
-        run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
-                              *argv], capture_output=True, text=True, timeout=timeout_s, cwd=cwd)
+        try:
+            run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
+                                  *argv], capture_output=True, text=True, timeout=timeout_s, cwd=cwd)
+        except subprocess.TimeoutExpired:
+            return Outcome(area, case, HANG, f'no exit after {timeout_s:g} s (killed)')
     last = (run.stderr.strip().splitlines() or [''])[-1][:200]
     if run.returncode < 0:
         return Outcome(area, case, CRASH, f'died of signal {-run.returncode}')

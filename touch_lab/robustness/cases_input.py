@@ -3,7 +3,8 @@
 Each case is ``(area, case, callable or CLI argv)`` as in :mod:`touch_lab.robustness.cases`. A YAML
 case raises the stack's error (a clear error), and is ``wrong`` when that took a second or more; a
 full-disk case records on a real 200 KiB filesystem (a tmpfs this process mounts and unmounts:
-needs root) and returns what was kept, or False when something recorded was lost.
+needs root) and returns what was kept; one that lost something already recorded or saved raises
+:class:`~touch_lab.robustness.outcomes.DataLost`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+from .outcomes import DataLost
 
 __all__ = ['input_cases']
 
@@ -164,7 +167,7 @@ def _recorder_on_full_disk() -> Any:
             return False
         report = reindex(disk / 'bag', Path(elsewhere) / 'bag')
         if report.message_count < bag.flushed_messages:
-            return False  # something flushed was lost
+            raise DataLost(f'{bag.flushed_messages} messages flushed, {report.message_count} recovered')
         return (f'{said.split(";")[0]}; {bag.flushed_messages} flushed of {bag.message_count} received, '
                 f'{report.message_count} recovered by reindex -o on another disk')
 
@@ -178,8 +181,10 @@ def _reindex_on_full_disk() -> Any:
         try:
             reindex(disk / 'bag')
         except BagError:
-            if (disk / 'bag' / 'bag.mcap').read_bytes() != before or len(list((disk / 'bag').iterdir())) != 1:
-                return False  # refused, but it changed the bag or left a file behind
+            if (disk / 'bag' / 'bag.mcap').read_bytes() != before:
+                raise DataLost('refused, but the recorded bag changed') from None
+            if len(list((disk / 'bag').iterdir())) != 1:
+                return False  # refused, but it left a partial file behind
             raise
     return False  # it cannot have worked: there is no room
 
@@ -247,8 +252,10 @@ def _injected(kind: str) -> Callable[[], Any]:
             finally:
                 kept = (target.read_bytes() if target.exists() else None) == before
                 left = sorted(p.name for p in tmp.iterdir())
-                if not kept or left != ([target.name] if before is not None else []):
-                    raise AssertionError(f'the previous file was not kept, or something partial was left: {left}')
+                if not kept:
+                    raise DataLost(f'the previous {target.name} was not kept')
+                if left != ([target.name] if before is not None else []):
+                    raise AssertionError(f'something partial was left: {left}')
         return False
     return write
 

@@ -19,13 +19,13 @@ from typing import Any
 from touch_graph.cli.options import add_output, positive_float
 from touch_graph.files import write_text
 
-from .cases import CLEAR, CRASH, HANDLED, TRACEBACK, WRONG, Outcome, all_cases, run_case, run_cli
+from .cases import CLEAR, CRASH, HANDLED, HANG, LOST, TRACEBACK, WRONG, Outcome, all_cases, run_case, run_cli
 from .dds_injection import dds_injection
 from .figures import bag_corruption, flood, recorder_kill, unplug_recovery
 
 __all__ = ['add_arguments', 'run', 'run_all', 'write_report']
 
-RESULTS = (CLEAR, HANDLED, TRACEBACK, CRASH, WRONG)
+RESULTS = (CLEAR, HANDLED, TRACEBACK, HANG, WRONG, LOST, CRASH)
 
 
 def run_all(say=print, megabytes: float = 4.0) -> tuple[list[Outcome], dict[str, Any]]:
@@ -46,8 +46,8 @@ def run_all(say=print, megabytes: float = 4.0) -> tuple[list[Outcome], dict[str,
 
 def _table(outcomes: list[Outcome]) -> list[str]:
     areas = list(dict.fromkeys(o.area for o in outcomes))
-    lines = ['| area | cases | clear errors | handled | tracebacks | crashes | wrong |',
-             '|---|---|---|---|---|---|---|']
+    lines = ['| area | cases | clear errors | handled | tracebacks | hangs | wrong | data lost | crashes |',
+             '|---|---|---|---|---|---|---|---|---|']
     total: Counter = Counter()
     for area in areas:
         counts = Counter(o.result for o in outcomes if o.area == area)
@@ -118,16 +118,19 @@ def write_report(path: str | Path = 'docs/robustness.md', say=print, megabytes: 
         f'(Python {platform.python_version()}); do not edit by hand. Issue 12. All sensor data is **synthetic** '
         '(virtual devices, written frames); the processes, pseudo-terminals and bag files are real.',
         '',
-        f'**{counts[TRACEBACK]} tracebacks, {counts[CRASH]} crashes, {counts[WRONG]} wrong results, '
+        f'**{counts[TRACEBACK]} tracebacks, {counts[HANG]} hangs, {counts[WRONG]} wrong results, {counts[LOST]} '
+        f'with data lost, {counts[CRASH]} crashes, '
         f'{bogus} bogus frames, {dead_healthy} silently healthy dead drivers** in {len(outcomes)} cases and '
         f'{sum(r["megabytes"] for r in figures["flood"].values()):.0f} MB of floods.',
         '',
         'Outcomes: *clear error*: the stack refused the input with one of its errors, naming what is wrong '
         '(and the file and line when it came from a file); a command exited non-zero with a message and no '
-        'traceback. *handled*: accepted and dealt with as it should (counted and skipped, or the reconnect '
-        'loop). *traceback*: any other exception. *crash*: a process killed by a signal it did not ask for. '
-        '*wrong*: it returned, but did the wrong thing (for a driver fault: a driver publishing nothing while '
-        '/diagnostics says OK).',
+        'traceback. *handled*: accepted and dealt with as it should, counted and reported (counted and '
+        'skipped, WARN or ERROR on /diagnostics, or the reconnect loop). *traceback*: any other exception. '
+        '*hang*: no answer within the case\'s time (a command killed after it; an in-process case after '
+        '300 s). *wrong*: it returned, but silently did the wrong thing (for a driver fault: a driver '
+        'publishing nothing while /diagnostics says OK). *data lost*: something already recorded or saved '
+        'was lost. *crash*: a process killed by a signal it did not ask for.',
         '',
         '## Per area',
         '',
