@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import socket
 import statistics
 import struct
@@ -61,15 +62,49 @@ def _view_frames(port: int) -> int:
         return int(json.load(answer)['sensors']['skin']['frames'])
 
 
+#: How many times a refused subscribe is sent again (see :class:`_FoxgloveCounter`).
+MAX_RESUBSCRIBES = 100
+_UNKNOWN_CHANNEL = re.compile(r'Unknown channel ID: (\d+)')
+
+
 class _FoxgloveCounter:
-    """A Foxglove client subscribed to /skin/frame: frames received and the last sequence number seen."""
+    """A Foxglove client subscribed to /skin/frame: frames received and the last sequence number seen.
+
+    foxglove-sdk's server (0.30.3) advertises a new channel to connected clients a moment before it
+    accepts subscriptions to it: a subscribe sent as soon as the advertisement arrives (as this client does)
+    is sometimes answered, on a loaded machine, with the status ``Unknown channel ID: N`` and nothing more.
+    The counter then sends its subscribe again, on each such answer, up to ``MAX_RESUBSCRIBES`` times.
+    """
 
     def __init__(self, ws: Any) -> None:
         self.ws = ws
         self.received = 0
         self.published = 0     # frames the driver sent since the first one received (sequence, unwrapped)
+        self.refused = 0       # subscribes the server answered with 'Unknown channel ID'
+        self.statuses: list[str] = []  # the server's status messages, for the error message
         self._last_seq: int | None = None
-        self._subscribed = False
+        self._channel: int | None = None  # the /skin/frame channel subscribed to
+
+    @property
+    def _subscribed(self) -> bool:
+        return self._channel is not None
+
+    def _subscribe(self) -> None:
+        self.ws.send(json.dumps({'op': 'subscribe', 'subscriptions': [{'id': 1, 'channelId': self._channel}]}))
+
+    def _on_text(self, message: dict) -> None:
+        if message['op'] == 'advertise' and self._channel is None:
+            for channel in message['channels']:
+                if channel['topic'] == '/skin/frame':
+                    self._channel = channel['id']
+                    self._subscribe()
+        elif message['op'] == 'status':
+            self.statuses.append(str(message.get('message')))
+            refused = _UNKNOWN_CHANNEL.search(self.statuses[-1])
+            if refused and int(refused.group(1)) == self._channel and self.received == 0 \
+                    and self.refused < MAX_RESUBSCRIBES:
+                self.refused += 1
+                self._subscribe()
 
     def pump(self, until: float) -> None:
         while time.monotonic() < until:
@@ -78,13 +113,7 @@ class _FoxgloveCounter:
             except TimeoutError:
                 return
             if isinstance(data, str):
-                message = json.loads(data)
-                if message['op'] == 'advertise' and not self._subscribed:
-                    for channel in message['channels']:
-                        if channel['topic'] == '/skin/frame':
-                            self.ws.send(json.dumps({'op': 'subscribe',
-                                                     'subscriptions': [{'id': 1, 'channelId': channel['id']}]}))
-                            self._subscribed = True
+                self._on_text(json.loads(data))
             elif data[0] == 1 and struct.unpack_from('<I', data, 1)[0] == 1:
                 seq = messages.deserialize(bytes(data[13:]), 'social_touch_msgs/msg/SkinFrame').sequence
                 if self._last_seq is not None:
@@ -101,8 +130,9 @@ def _measure(fox: _FoxgloveCounter, view_port: int, warmup_s: float, windows: in
         fox.pump(time.monotonic() + 0.5)  # a loaded machine starts the processes slowly
     if fox.received == 0 or _view_frames(view_port) == 0:
         raise RuntimeError(f'no skin frame reached the Foxglove client ({fox.received}, channel '
-                           f"{'subscribed' if fox._subscribed else 'never advertised'}) or the view "
-                           f'({_view_frames(view_port)}) in {warmup_s + 30:g} s')
+                           f"{'subscribed' if fox._subscribed else 'never advertised'}, {fox.refused} subscribes "
+                           f'refused, server said {fox.statuses[-3:]}) or the view ({_view_frames(view_port)}) '
+                           f'in {warmup_s + 30:g} s')
     rates: dict[str, list[float]] = {'driver_published': [], 'foxglove_received': [], 'view_received': []}
     for _ in range(windows):
         start, view0, fox0, pub0 = time.monotonic(), _view_frames(view_port), fox.received, fox.published

@@ -19,6 +19,9 @@ appears in this process) and subscribes to the new ones with the QoS their publi
 (:mod:`touch_graph.offered_qos`: best effort for the sensors' frames). Nothing is sent to Foxglove before a
 client subscribes to a channel; the server's per-client queue (``message_backlog_size``) drops
 the oldest message for a client that does not keep up, so the graph never waits for it.
+foxglove-sdk advertises a new channel to connected clients a moment before it accepts
+subscriptions to it: a client that subscribes the instant a channel is advertised may be answered
+with the status ``Unknown channel ID: N`` and must subscribe again (the bench's client does).
 
 Parameters: ``host`` ('127.0.0.1'), ``port`` (8765; 0: any free port), ``image_rate_hz`` (20),
 ``discovery_period_s`` (1.0), ``backlog`` (messages per client, 1024), ``allowed_origins`` (web
