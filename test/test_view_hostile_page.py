@@ -186,3 +186,21 @@ def test_a_raw_hostile_handshake_gets_403_before_the_server_sees_it(fox, lines, 
                      b'Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n')
         answer = sock.recv(4096)
     assert answer.startswith(b'HTTP/1.1 403') and words in answer
+
+
+def test_the_view_node_takes_its_allow_list_as_a_parameter():
+    from touch_graph.runtime import Context, Parameter
+    from touch_view.node import TouchViewNode
+    ctx = Context('sim', network=False)
+    ctx.init()
+    try:
+        node = TouchViewNode(context=ctx, parameter_overrides=[
+            Parameter('port', value=0), Parameter('allowed_origins', value='https://dashboard.example, ')])
+        try:
+            host = f'127.0.0.1:{node.server.port}'
+            assert node.server.origins.origin_ok('https://dashboard.example', host)
+            assert not node.server.origins.origin_ok('https://evil.example', host)
+        finally:
+            node.destroy_node()
+    finally:
+        ctx.try_shutdown()

@@ -28,6 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='snapshots per second sent to each page, at most (default 20)')
     parser.add_argument('--stale-after', type=seconds, default=1.0, metavar='SECONDS',
                         help='a sensor with no frame for this long is shown as SILENT (default 1.0)')
+    parser.add_argument('--allow-origin', action='append', default=[], metavar='ORIGIN',
+                        help='a web page of another site allowed to use the view, e.g. https://dashboard.example '
+                             '(repeatable); pages of other sites are refused')
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,4 +39,6 @@ def run(args: argparse.Namespace) -> int:
     from .node import TouchViewNode
     ros_args = ['--ros-args', '-p', f'host:={args.host}', '-p', f'port:={args.port}',
                 '-p', f'rate_hz:={float(args.rate)!r}', '-p', f'stale_after_s:={float(args.stale_after)!r}']
+    if args.allow_origin:
+        ros_args += ['-p', f'allowed_origins:={",".join(args.allow_origin)}']
     return run_node(TouchViewNode, ros_args)

@@ -76,6 +76,9 @@ class TouchViewNode(Node):
         max_clients = self._param('max_clients', 32, 'pages served at once')
         body_path = self._param('body_map', '', "the bear's body map YAML (default: the package's)")
         panels_path = self._param('panels', '', "the patch's panels YAML (default: the package's)")
+        allowed_origins = tuple(o.strip() for o in str(self._param(
+            'allowed_origins', '', 'web pages allowed to open the view besides its own, comma-separated '
+            '(e.g. https://dashboard.example)')).split(',') if o.strip())
         body = BodyMap.load(body_path) if body_path else BodyMap.default()
         sensors = sensor_layout(body)
         panel_names = PanelCalibrator.from_yaml(Path(panels_path) if panels_path else None).names or ()
@@ -87,7 +90,8 @@ class TouchViewNode(Node):
                   'skin': {'grid': [12, 12], 'side_mm': 47.0},
                   'rate_hz': rate_hz, 'stale_after_s': stale_after_s, 'node': self.get_fully_qualified_name()}
         self.server = ViewServer(self.state.snapshot, config, tick=self.state.check_silence, host=host, port=port,
-                                 rate_hz=rate_hz, max_clients=max_clients, on_error=self._on_server_error)
+                                 rate_hz=rate_hz, max_clients=max_clients, on_error=self._on_server_error,
+                                 allowed_origins=allowed_origins)
         self._subscribe()
         self.create_timer(PRESENCE_PERIOD_S, self._poll_presence)
         self._poll_presence()
