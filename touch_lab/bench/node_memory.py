@@ -30,6 +30,9 @@ import time
 from importlib.metadata import entry_points
 from pathlib import Path
 
+from touch_graph.cli.options import add_output, positive_int
+from touch_graph.files import write_text
+
 __all__ = ['HEAVY', 'SCENES', 'SETTLE_S', 'add_arguments', 'bench_node_memory', 'import_rss_mb', 'launched_rss_mb',
            'render', 'run']
 
@@ -200,13 +203,13 @@ def render(figures: dict) -> str:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument('--repeats', type=int, default=3, help='runs to take the median of (default 3)')
-    parser.add_argument('-o', '--output', type=Path, default=REPORT, help=f'report to write (default {REPORT})')
+    parser.add_argument('--repeats', type=positive_int, default=3, help='runs to take the median of (default 3)')
+    add_output(parser, f'report to write (default {REPORT})', default=str(REPORT))
 
 
 def run(args: argparse.Namespace) -> int:
     figures = bench_node_memory(repeats=args.repeats)
     figures['machine'] = {'python': platform.python_version(), 'processor': platform.machine()}
-    args.output.write_text(render(figures), encoding='utf-8')
+    write_text(Path(args.output), render(figures))
     print(f'wrote {args.output}')
     return 0
