@@ -1,5 +1,6 @@
 """ROS 2's wire conventions on DDS: names, type descriptions, byte-identical CDR, QoS, discovery settings."""
 
+import array
 import doctest
 import time
 
@@ -45,9 +46,20 @@ def random_message(type_name, rng):
             else:
                 info = np.iinfo(default.dtype)
                 values[field] = rng.integers(info.min, info.max, n, dtype=default.dtype, endpoint=True)
+        elif isinstance(default, array.array):                 # a numeric sequence, as rclpy gives it
+            n = int(rng.integers(0, 5))
+            if default.typecode in 'fd':
+                values[field] = array.array(default.typecode, rng.normal(size=n).tolist())
+            else:
+                lo, hi = messages._INT_RANGES[type_str.split('[')[0]]
+                values[field] = array.array(default.typecode, rng.integers(max(lo, -2**62), min(hi, 2**62), n,
+                                                                          endpoint=True).tolist())
         elif isinstance(default, list):
             element = type_str.split('[')[0]
-            if element == 'string':
+            if element == 'bool':                                   # bool[N] and bool[]: lists of Python bools
+                n = len(default) if type_str != 'bool[]' else int(rng.integers(0, 5))
+                values[field] = (rng.random(n) < 0.5).tolist()
+            elif element == 'string':
                 values[field] = [f's{i}' for i in range(int(rng.integers(0, 3)))]
             else:
                 values[field] = [random_message(element, rng) for _ in range(int(rng.integers(0, 3)))]
@@ -71,7 +83,7 @@ def to_idl(msg):
         value = getattr(msg, field)
         if isinstance(value, messages.Message):
             value = to_idl(value)
-        elif isinstance(value, np.ndarray):
+        elif isinstance(value, (np.ndarray, array.array)):
             value = value.tolist()
         elif isinstance(value, list):
             value = [to_idl(v) if isinstance(v, messages.Message) else v for v in value]

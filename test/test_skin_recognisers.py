@@ -135,7 +135,7 @@ def test_margin_rule_rejects_ambiguous_touches():
 
 def test_fit_and_parameter_errors(fig8):
     train, _ = fig8
-    with pytest.raises(ValueError, match='one label per gesture'):
+    with pytest.raises(ValueError, match=r'one label \(and person, if given\) per gesture'):
         make_recogniser('trace').fit([train[0][0]], ['a', 'b'])
     empty = TouchGesture(np.zeros((12, 12), bool), np.zeros((12, 12)), np.zeros((0, 2)), np.zeros(0))
     with pytest.raises(ValueError, match='usable template'):

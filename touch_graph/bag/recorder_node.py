@@ -17,11 +17,11 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import BagError
-from ..runtime import Node, ParameterDescriptor, ParameterType, QoSProfile
+from ..offered_qos import OfferedQosSubscriptions
+from ..runtime import Node, ParameterDescriptor, ParameterType
 from .recorder import BagRecorder
 
 __all__ = ['RecorderNode', 'default_bag_name', 'main', 'read_at_start']
-
 
 
 def default_bag_name() -> str:
@@ -56,6 +56,8 @@ class RecorderNode(Node):
                                custom_data={'social_touch.clock': clock}).open()
         self.write_errors = 0
         self._recording: dict[str, Any] = {}
+        # The QoS each topic's publishers offer, as rosbag2 subscribes: a best-effort sensor topic is heard.
+        self.subscriptions_by_offer = OfferedQosSubscriptions(self)
         self.context.add_graph_listener(self._on_graph)
         self.context.on_shutdown(self._close_bag)
         with self.context._lock:
@@ -88,8 +90,8 @@ class RecorderNode(Node):
             return
         qos = topic.publishers[0].qos_profile if topic.publishers else None
         self.bag.add_topic(name, topic.type_name, qos)
-        self._recording[name] = self.create_subscription(
-            topic.msg_type, name, self._writer(name, topic.type_name), QoSProfile(depth=1000), raw=True)
+        self._recording[name] = self.subscriptions_by_offer.create_subscription(
+            topic.msg_type, name, self._writer(name, topic.type_name), 1000, raw=True)
 
     def _writer(self, name: str, type_name: str) -> Callable[[bytes, dict], None]:
         now_ns = self.context.now_ns

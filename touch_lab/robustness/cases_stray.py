@@ -247,7 +247,7 @@ def _bear_stale_same_frame_id() -> Any:
 
     def frame(t: float, seq: int) -> Any:
         return BearFrame(header=_header(t, 'bear_link'), sequence=seq, level=np.zeros(64, np.float32),
-                         active=np.zeros(64, bool), fitted=np.ones(64, bool), faults=np.zeros(64, np.uint8))
+                         active=[False] * 64, fitted=[True] * 64, faults=np.zeros(64, np.uint8))
     try:
         node = BearGesturesNode(context=ctx, cli_args=['--ros-args', '--log-level', 'error'],)
         for i in range(40):

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from touch_gestures.skin.node import SAFETY_RANGES, max_distance_bound
 from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
 from touch_lab.skin.recognisers import MULTISTROKE_RECOGNISER, make_recogniser, save_codebook
 from touch_sim.skin.people import traced_scene
@@ -99,9 +100,10 @@ def bench_latency(repeats: int = 1, n_gestures: int = 16, templates_per_gesture:
         commands = Path(tmp) / 'commands.yaml'   # a command for every gesture, so that each one gives a message
         commands.write_text('format_version: 1\ncommands:\n'
                             + ''.join(f'  {c}: command_{i}\n' for i, c in enumerate(model.classes_)))
-        # Rejection off: every gesture ends in a command to time (a rejected one costs the same, unpublished).
+        # Rejection as loose as the node allows (its safety ranges keep it from being switched off): every
+        # gesture ends in a command to time (a rejected one costs the same, unpublished).
         params = {'codebook': str(codebook), 'commands': str(commands), 'candidate_period_s': 0.0,
-                  'max_distance': float('inf'), 'min_margin': 0.0}
+                  'max_distance': max_distance_bound(model), 'min_margin': SAFETY_RANGES['min_margin'][0]}
         for run in range(repeats):
             samples = synthetic_traces(shapes, performers=1, repetitions=gestures_per_class, seed=seed + 1 + run,
                                        rate_hz=FRAME_RATE_HZ)
