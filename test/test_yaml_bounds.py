@@ -128,3 +128,19 @@ def test_command_line_values_are_bounded():
     with pytest.raises(YamlBoundsError):
         safe_load(laughs(), 'the message values')
     assert safe_load('{data: 1}') == {'data': 1}
+
+
+def test_parameter_files_and_values_are_bounded_too(tmp_path):
+    from touch_graph.runtime.param_yaml import ParameterOverrides, parse_parameter_value
+    deep = tmp_path / 'deep.yaml'
+    deep.write_text('node:\n  ros__parameters:\n    x: ' + '[' * 200 + ']' * 200 + '\n')
+    with pytest.raises(ConfigError, match='deep'):
+        ParameterOverrides.from_file(deep)
+    big = tmp_path / 'big.yaml'
+    big.write_text('node:\n  ros__parameters:\n    x: "' + 'a' * (3 * 1024 * 1024) + '"\n')
+    with pytest.raises(ConfigError, match='bytes'):
+        ParameterOverrides.from_file(big)
+    with pytest.raises(ConfigError, match='deep'):
+        parse_parameter_value('[' * 200 + ']' * 200)
+    with pytest.raises(ConfigError, match='not found'):
+        ParameterOverrides.from_file(tmp_path / 'missing.yaml')

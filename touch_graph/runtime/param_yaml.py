@@ -45,6 +45,7 @@ from typing import Any
 import yaml
 
 from ..errors import ConfigError
+from ..yamlconf import check_bounds, read_text
 
 __all__ = ['ParameterOverrides', 'parse_parameter_value', 'parse_scalar', 'pattern_matches']
 
@@ -283,6 +284,7 @@ def parse_parameter_value(text: str, source: str = '-p') -> Value:
     >>> parse_parameter_value('1e-6'), parse_parameter_value('[1, 2]'), parse_parameter_value("'on'")
     (1e-06, [1, 2], 'on')
     """
+    check_bounds(text, source)
     docs = _tree(_events(text), source)
     if not docs:
         raise ConfigError('no value', source)
@@ -379,12 +381,8 @@ class ParameterOverrides:
         """Read a parameter file; every error names the file and line."""
         source = str(path)
         if text is None:
-            try:
-                text = Path(path).read_text(encoding='utf-8')
-            except FileNotFoundError as err:
-                raise ConfigError('parameter file not found', source) from err
-            except (OSError, UnicodeDecodeError) as err:
-                raise ConfigError(f'cannot read parameter file: {err}', source) from err
+            text = read_text(path)             # bounded size, as every YAML input (touch_graph.yamlconf)
+        check_bounds(text, source)             # and bounded depth, before anything is built
         out = cls()
         for doc in _tree(_events(text), source):
             if isinstance(doc, _Scalar) and doc.text == '' and doc.style is None:
