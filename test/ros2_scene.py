@@ -142,12 +142,14 @@ def run_node(backend: str, index: int) -> int:
                 snapshots.append(node.counters() if hasattr(node, 'counters') else {})
         stop.wait()  # after an error: still answer the counter at its end
         callback_errors = getattr(runner.context, 'callback_errors', None)
+        window = None
+        if len(snapshots) == 2 and hasattr(node, 'counters'):
+            window = {key: snapshots[1][key] - snapshots[0][key] for key in snapshots[0]}
+        # The counts are final here: report before the middleware's teardown, whose time is not the scene's
+        # (a Fast DDS participant's deletion can take long on a busy machine; the counter kills what lingers).
+        print(REPORT + json.dumps({'driver': window, 'callback_errors': callback_errors, 'error': error}), flush=True)
     finally:
         runner.shutdown()
-    window = None
-    if len(snapshots) == 2 and hasattr(node, 'counters'):
-        window = {key: snapshots[1][key] - snapshots[0][key] for key in snapshots[0]}
-    print(REPORT + json.dumps({'driver': window, 'callback_errors': callback_errors, 'error': error}), flush=True)
     return 0
 
 
