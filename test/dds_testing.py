@@ -1,38 +1,12 @@
 """Helpers for tests that put graphs on DDS: a domain of their own, waiting, spinning in a thread."""
 
-import contextlib
-import fcntl
-import os
-import random
 import threading
 import time
-from pathlib import Path
 
-#: Domain ids tests take; 0 (the default a robot uses) and the low ones people pick by hand are left alone.
-TEST_DOMAINS = range(100, 233)
-LOCK_DIR = Path('/tmp/social_touch_test_domains')
+from touch_lab.robustness.cases_stray import hold_test_domain
 
-
-@contextlib.contextmanager
-def allocate_domain():
-    """Hold a domain id no other test process on this machine holds (an flock per id); yields it."""
-    LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
-    candidates = list(TEST_DOMAINS)
-    random.shuffle(candidates)
-    for domain in candidates:
-        fd = os.open(LOCK_DIR / f'{domain}.lock', os.O_CREAT | os.O_RDWR, 0o600)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(fd)
-            continue
-        try:
-            yield domain
-        finally:
-            fcntl.flock(fd, fcntl.LOCK_UN)
-            os.close(fd)
-        return
-    raise RuntimeError(f'every test domain id in {TEST_DOMAINS} is held by another test process')
+#: A domain id no other process of the suite (or the robustness report's floods) holds: one helper serves both.
+allocate_domain = hold_test_domain
 
 
 def wait_until(predicate, timeout_s=20.0, what='condition', every_s=0.02):

@@ -32,7 +32,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ['STRAY_PUBLISHER', 'skin_flood', 'stray_cases']
+__all__ = ['LOCK_DIR', 'STRAY_PUBLISHER', 'TEST_DOMAINS', 'hold_test_domain', 'skin_flood', 'stray_cases']
 
 #: The stray process: joins the domain on our runtime (Cyclone DDS) and publishes ``SkinFrame()`` (144 zero
 #: pressures, stamp 0, sequence 0, frame_id argv[3]) on /skin/frame at argv[1] Hz until killed or argv[2] s.
@@ -277,14 +277,15 @@ def _skin_nothing_usable() -> Any:
         ctx.try_shutdown()
 
 
-#: Domain ids the test suite takes, each held by an flock in LOCK_DIR (test/dds_testing.py): the flood takes one
-#: the same way, so it never floods a domain a test, or a robot on the default domain, is using.
+#: Domain ids the test suite and the floods take, each held by an flock in LOCK_DIR (hold_test_domain): never 0,
+#: the default a robot uses, nor the low ones people pick by hand, nor one a test is using.
 TEST_DOMAINS = range(100, 233)
 LOCK_DIR = Path('/tmp/social_touch_test_domains')
 
 
 @contextlib.contextmanager
-def _domain_of_its_own() -> Iterator[int]:
+def hold_test_domain() -> Iterator[int]:
+    """Hold a domain id no other process of the test suite or the report holds (an flock per id); yields it."""
     LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
     for domain in random.sample(TEST_DOMAINS, len(TEST_DOMAINS)):
         fd = os.open(LOCK_DIR / f'{domain}.lock', os.O_CREAT | os.O_RDWR, 0o600)
@@ -299,7 +300,7 @@ def _domain_of_its_own() -> Iterator[int]:
             fcntl.flock(fd, fcntl.LOCK_UN)
             os.close(fd)
         return
-    raise RuntimeError(f'every domain id in {TEST_DOMAINS} is held by another process: no domain to flood')
+    raise RuntimeError(f'every domain id in {TEST_DOMAINS} is held by another process (the tests or a flood)')
 
 
 def _flood_case(frame_id: str) -> Callable[[], Any]:
@@ -308,7 +309,7 @@ def _flood_case(frame_id: str) -> Callable[[], Any]:
         keys = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'CYCLONEDDS_URI')
         saved = {k: os.environ.get(k) for k in keys}
         try:
-            with _domain_of_its_own() as domain:
+            with hold_test_domain() as domain:
                 os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
                 os.environ.pop('ROS_STATIC_PEERS', None)
                 os.environ.pop('CYCLONEDDS_URI', None)
