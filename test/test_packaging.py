@@ -263,6 +263,9 @@ def test_lines_counts_every_layer(capsys):
     assert main(['lines', '--json']) == 0
     import json
     counts = json.loads(capsys.readouterr().out)
-    assert set(counts['layers']) == {'runtime', 'simulation', 'lab'}
+    assert set(counts['layers']) == {'runtime', 'simulation', 'lab', 'view'}
+    # Every package the distribution ships is counted in some layer.
+    include = tomllib.loads((ROOT / 'pyproject.toml').read_text())['tool']['setuptools']['packages']['find']['include']
+    assert sorted(counts['packages']) == sorted(pattern.rstrip('*') for pattern in include)
     assert counts['tree']['lines'] == sum(c['lines'] for c in counts['layers'].values())
     assert 0 < counts['runtime_share_lines'] < 1 and counts['tests']['files'] > 10

@@ -1,8 +1,9 @@
 """``social-touch lines [--json]``: lines of Python per layer and the runtime's share of the tree.
 
 The layers are the runtime (what a robot runs: ``touch_graph``, ``touch_driver``,
-``touch_gestures``), the simulation (``touch_sim``) and the lab (``touch_lab``); the tests
-(``test/`` of a source checkout) are counted beside them. A line is a physical line of a
+``touch_gestures`` and the interface package ``social_touch_msgs``), the simulation
+(``touch_sim``), the lab (``touch_lab``) and the views (``touch_view``: the web view and the
+Foxglove server); the tests (``test/`` of a source checkout) are counted beside them. A line is a physical line of a
 ``.py`` file (what ``wc -l`` counts); ``code`` leaves out blank lines and lines that hold only
 a comment. docs/DEVELOPING.md quotes this command's output.
 """
@@ -19,9 +20,10 @@ __all__ = ['LAYERS', 'add_arguments', 'count_lines', 'line_counts', 'run']
 
 #: layer -> its top-level packages.
 LAYERS: dict[str, tuple[str, ...]] = {
-    'runtime': ('touch_graph', 'touch_driver', 'touch_gestures'),
+    'runtime': ('touch_graph', 'touch_driver', 'touch_gestures', 'social_touch_msgs'),
     'simulation': ('touch_sim',),
     'lab': ('touch_lab',),
+    'view': ('touch_view',),
 }
 
 
@@ -42,7 +44,7 @@ def _add(total: dict[str, int], part: dict[str, int]) -> dict[str, int]:
 
 
 def line_counts() -> dict:
-    """Counts per package and layer, the tests', and the runtime's share of the three layers."""
+    """Counts per package and layer, the tests', and the runtime's share of all the layers."""
     packages: dict[str, dict[str, int]] = {}
     layers: dict[str, dict[str, int]] = {}
     root = None
@@ -74,18 +76,18 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(counts, indent=2))
         return 0
-    print(f'{"":16s} {"files":>6s} {"lines":>7s} {"code":>7s}')
+    print(f'{"":19s} {"files":>6s} {"lines":>7s} {"code":>7s}')
     for layer, names in LAYERS.items():
         c = counts['layers'][layer]
-        print(f'{layer:16s} {c["files"]:6d} {c["lines"]:7d} {c["code"]:7d}')
+        print(f'{layer:19s} {c["files"]:6d} {c["lines"]:7d} {c["code"]:7d}')
         for name in names:
             p = counts['packages'][name]
-            print(f'  {name:14s} {p["files"]:6d} {p["lines"]:7d} {p["code"]:7d}')
+            print(f'  {name:17s} {p["files"]:6d} {p["lines"]:7d} {p["code"]:7d}')
     t = counts['tree']
-    print(f'{"tree (3 layers)":16s} {t["files"]:6d} {t["lines"]:7d} {t["code"]:7d}')
+    print(f'{"tree (all layers)":19s} {t["files"]:6d} {t["lines"]:7d} {t["code"]:7d}')
     if 'tests' in counts:
         c = counts['tests']
-        print(f'{"tests":16s} {c["files"]:6d} {c["lines"]:7d} {c["code"]:7d}')
+        print(f'{"tests":19s} {c["files"]:6d} {c["lines"]:7d} {c["code"]:7d}')
     print(f'runtime share of the tree: {100 * counts["runtime_share_lines"]:.1f} % of lines, '
           f'{100 * counts["runtime_share_code"]:.1f} % of code lines')
     return 0
