@@ -156,6 +156,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
                           progress: Callable[[str], None] | None = None,
                           segment: Callable[[RenderedSample, TemplateRecogniser],
                                             tuple[list[TouchGesture], list[float]]] | None = None,
+                          calibrate: Callable[[TemplateRecogniser], object] | None = None,
                           ) -> dict[str, RecogniserResult]:
     """Evaluate every recogniser of ``factories`` (name -> a new unfitted recogniser).
 
@@ -168,6 +169,8 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
         segment: ``segment(sample, fitted_recogniser) -> (gestures, latencies_s)`` cuts a held-out
             sample again with the fold's recogniser (the end of a gesture, :mod:`.ending_eval`);
             None: the sample's own gestures (the codebook always uses those).
+        calibrate: called with each fold's fitted recogniser before it reads the held-out subject (e.g. the
+            acceptance calibration of :mod:`.acceptance`, from the fold's codebook alone).
 
     Raises:
         ValueError: fewer than two subjects (nothing to leave out), or no recogniser.
@@ -197,6 +200,8 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             start = time.perf_counter()
             recogniser = make().fit(gestures, names, [r.subject for r in codebook])
             sizes[name].append(len(recogniser.templates_))
+            if calibrate is not None:
+                calibrate(recogniser)
             if hasattr(recogniser, 'choice_'):
                 res.choices[recogniser.choice_] = res.choices.get(recogniser.choice_, 0) + 1
             hits: dict[str, list[bool]] = {}
