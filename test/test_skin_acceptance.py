@@ -143,3 +143,39 @@ def test_auto_calibrates_the_recogniser_it_chose():
     calibrate_acceptance(auto, 0.005)
     assert auto.acceptance_ is auto.chosen_.acceptance_
     assert all(m.label == y for m, y in zip(auto.predict_many(gestures[:10]), labels[:10], strict=True))
+
+
+def test_codebook_calibrate_writes_a_calibrated_copy_and_refuses_bad_rates(tmp_path, monkeypatch, capsys):
+    from touch_lab.cli.main import main
+    from touch_lab.skin import acceptance
+    model, rng = people_codebook()
+    source = save_codebook(tmp_path / 'book.npz', model)
+    randoms = scribbles(rng, 120)
+    monkeypatch.setattr(acceptance, 'null_touches', lambda gap_s: randoms)   # no virtual skin in a unit test
+    out = tmp_path / 'calibrated.npz'
+    assert main(['codebook', 'calibrate', str(source), '--max-wrong-rate', '0.005', '-o', str(out)]) == 0
+    calibrated = load_codebook(out)
+    assert calibrated.acceptance_['max_wrong_rate'] == 0.005 and load_codebook(source).acceptance_ is None
+    assert main(['codebook', 'info', str(out)]) == 0
+    assert 'acceptance calibrated for 0.005' in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(['codebook', 'calibrate', str(source), '--max-wrong-rate', '0.7', '-o', str(out)])
+    unnamed = save_codebook(tmp_path / 'unnamed.npz', make_recogniser('trace').fit(*drawn(rng, people=2)[:2]))
+    assert main(['codebook', 'calibrate', str(unnamed), '--max-wrong-rate', '0.01', '-o', str(out)]) == 2
+    assert 'two people' in capsys.readouterr().err
+
+
+def test_the_report_names_the_command_of_every_row(tmp_path):
+    from touch_lab.skin.rejection_report import format_report
+    result = {'accuracy': 0.99, 'accuracy_with_rejection': 0.97, 'rejection_rate': 0.028, 'error_rate': 0.002,
+              'random_touch_acceptance': 0.01,
+              'acceptance': [{'wrong': 0.004, 'right': 0.96}, {'wrong': 0.006, 'right': 0.98}]}
+    runs = [{'traces': 'a.csv.gz', 'vocabulary': 'a', 'samples': 10, 'subjects': ['1', '2'], 'max_wrong_rate': 0.005,
+             'recognisers': {'trace': result}},
+            {'traces': 'a.csv.gz', 'vocabulary': 'a', 'samples': 10, 'subjects': ['1', '2'], 'max_wrong_rate': None,
+             'recognisers': {'trace': {**result, 'acceptance': None}}}]
+    text = format_report(runs)
+    assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json --max-wrong-rate 0.005`' in text
+    assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json`' in text
+    assert '| a (10 samples, 2 people) | trace | calibrated, 0.5 % | 99.00 % | **97.00 %** |' in text
+    assert '0.50 % / 97.00 %' in text   # the held-out estimate, mean over folds

@@ -30,7 +30,7 @@ another seed): the evaluation's random-touch figure is therefore not independent
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from types import SimpleNamespace
 
@@ -40,12 +40,16 @@ from touch_gestures.skin.base import TemplateRecogniser, acceptance_score, neare
 from touch_gestures.skin.fused import FusedRecogniser, sum_rule_nearest
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
+from touch_gestures.skin.segmentation import default_gap_s
+from touch_graph.cli.options import number
 
-__all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate_acceptance', 'class_scales',
-           'cross_person_outcomes', 'held_out_opinions', 'max_score', 'null_touches', 'touch_opinions']
+__all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calibrate_acceptance', 'class_scales',
+           'cross_person_outcomes', 'held_out_opinions', 'max_score', 'null_touches', 'touch_opinions', 'wrong_rate']
 
 #: A class's scale is this quantile of its held-out templates' distances to it.
 SCALE_QUANTILE = 0.9
+#: The argparse type of ``--max-wrong-rate``: a share in [0, 0.5].
+wrong_rate = number(low=0, high=0.5)
 #: The share of random touches (:func:`null_touches`) the limit lets fire: under the issue's goal of 3 %.
 MAX_RANDOM_FIRING = 0.02
 
@@ -268,3 +272,17 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
     if target is not recogniser:   # auto mirrors its choice
         recogniser.acceptance_ = target.acceptance_
     return recogniser
+
+
+def calibrate(model: TemplateRecogniser, max_wrong_rate: float, gap_s: float | None = None,
+              say: Callable[[str], None] | None = None) -> TemplateRecogniser:
+    """What the codebook tools run: :func:`calibrate_acceptance` of ``model`` with :func:`null_touches` cut at
+    ``gap_s`` (default: the vocabulary's gap), saying what it found."""
+    gap = default_gap_s(int(getattr(model, 'max_strokes_', 1))) if gap_s is None else gap_s
+    calibrate_acceptance(model, max_wrong_rate, null_touches(gap_s=gap))
+    if say is not None:
+        r = model.acceptance_
+        say(f'acceptance calibrated for {max_wrong_rate:.2%} wrong commands, leave-one-person-out over {r["people"]} '
+            f'people: {r["right"]:.2%} right, {r["wrong"]:.2%} wrong, {r["rejected"]:.2%} rejected; random touches '
+            f'firing {r["random_fired"]:.2%} of {r["random_touches"]} (synthetic)')
+    return model

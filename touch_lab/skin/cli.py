@@ -37,7 +37,7 @@ from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.cli.options import non_negative_int, non_negative_seconds, positive_int, seconds, seed
 from touch_graph.errors import SocialTouchError
-from touch_lab.skin.acceptance import calibrate_acceptance, null_touches
+from touch_lab.skin.acceptance import calibrate_acceptance, null_touches, wrong_rate
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
 from touch_lab.skin.early_eval import summary as early_summary
@@ -88,7 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='longest lift, s, that continues strokes the codebook calls the beginning of a longer '
                              f'gesture (default: {ENDING_WAIT_S} s for multi-stroke files; 0: none, every gesture '
                              'ends at --gap)')
-    parser.add_argument('--max-wrong-rate', type=float, default=None, metavar='RATE',
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, default=None, metavar='RATE',
                         help="calibrate each fold's acceptance from its codebook, leave-one-person-out, for at most "
                              'this share of wrong commands (touch_lab.skin.acceptance; default: the recognisers\' '
                              'own rejection)')

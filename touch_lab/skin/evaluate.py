@@ -65,6 +65,7 @@ class RecogniserResult:
     choices: dict[str, int] = field(default_factory=dict)   # 'auto': the recogniser its rule chose, per fold
     screened: int = 0                                       # held-out samples screened out (counted as rejected)
     latencies_s: list[float] = field(default_factory=list)  # with ``segment``: per whole sample, s
+    acceptance: list[dict] = field(default_factory=list)    # with ``calibrate``: each fold's calibration record
 
     @property
     def accuracy(self) -> float:
@@ -110,6 +111,9 @@ class RecogniserResult:
             'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
             'screened': self.screened, 'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
             **({'latency_s': _summary(self.latencies_s)} if self.latencies_s else {}),
+            **({'acceptance': [{k: a.get(k) for k in ('max_wrong_rate', 'max_score', 'right', 'wrong', 'rejected',
+                                                       'random_fired', 'people')} for a in self.acceptance]}
+               if self.acceptance else {}),
         }
 
     gestures_per_sample: dict[str, int] = field(default_factory=dict)
@@ -202,6 +206,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             sizes[name].append(len(recogniser.templates_))
             if calibrate is not None:
                 calibrate(recogniser)
+                res.acceptance.append(dict(getattr(recogniser, 'acceptance_', None) or {}))
             if hasattr(recogniser, 'choice_'):
                 res.choices[recogniser.choice_] = res.choices.get(recogniser.choice_, 0) + 1
             hits: dict[str, list[bool]] = {}
