@@ -21,6 +21,10 @@ on the people or the vocabulary it is used on: a new vocabulary calibrates itsel
 made. The record also holds the held-out estimate of right / wrong / rejected, each person's templates
 judged by a limit and scales set from everyone else's.
 
+Editing a codebook (``social-touch codebook add|remove|merge``) or setting the old rejection parameters on the
+``haptic_commands`` node (``max_distance``, ``auto_scale``, ``auto_quantile``, ``min_margin``) recomputes the
+thresholds and drops the calibration: calibrate again (``social-touch codebook calibrate``).
+
 The held-out estimate reads templates, not touches: the evidence of strokes (which classes a stroke
 count allows) is applied, the duration and one-stroke order checks are not (they only reject more).
 The random touches come from the generator the evaluation uses (:func:`touch_sim.skin.synthetic.random_touches`,
