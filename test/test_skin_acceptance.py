@@ -179,3 +179,13 @@ def test_the_report_names_the_command_of_every_row(tmp_path):
     assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json`' in text
     assert '| a (10 samples, 2 people) | trace | calibrated, 0.5 % | 99.00 % | **97.00 %** |' in text
     assert '0.50 % / 97.00 %' in text   # the held-out estimate, mean over folds
+
+
+def test_an_edited_codebook_drops_its_calibration():
+    from touch_lab.skin.codebook_tools import remove_gestures
+    model, rng = people_codebook()
+    calibrate_acceptance(model, 0.005, scribbles(rng, 60))
+    edited = remove_gestures(model, ['Z'])
+    assert model.acceptance_ is not None and edited.acceptance_ is None
+    # The old rule decides again: no 'score' rejection.
+    assert all(m.rejected != 'score' for m in edited.predict_many(scribbles(rng, 30)))
