@@ -84,7 +84,7 @@ def test_random_touches_are_held_at_their_share():
     randoms = scribbles(rng, 200)
     calibrate_acceptance(model, 0.5, randoms)   # the wrong commands set no limit here: the random touches do
     record = model.acceptance_
-    assert record['random_touches'] == len(touch_opinions(model, randoms).named) > 100
+    assert record['random_touches'] == len(randoms) and len(touch_opinions(model, randoms).named) > 100
     assert record['random_fired'] <= MAX_RANDOM_FIRING
     fired = np.mean([model.predict(g).label is not None for g in randoms])
     assert fired <= MAX_RANDOM_FIRING

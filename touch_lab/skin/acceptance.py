@@ -54,8 +54,9 @@ __all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calib
 SCALE_QUANTILE = 0.9
 #: The argparse type of ``--max-wrong-rate``: a share in [0, 0.5].
 wrong_rate = number(low=0, high=0.5)
-#: The share of random touches (:func:`null_touches`) the limit lets fire: under the issue's goal of 3 %.
-MAX_RANDOM_FIRING = 0.02
+#: The share of random touches (:func:`null_touches`) the limit lets fire, counted as the evaluation counts (over
+#: all touches; a screened one fires nothing): the issue's goal. A design constant chosen on the unistroke file.
+MAX_RANDOM_FIRING = 0.03
 
 
 @dataclass(frozen=True)
@@ -204,18 +205,22 @@ def _limit(values: np.ndarray, allowed: int) -> float:
     return math.inf if allowed >= values.size else float(np.nextafter(values[allowed], -np.inf))
 
 
-def max_score(held: HeldOut, randoms: HeldOut, scales: np.ndarray, max_wrong_rate: float) -> float:
+def max_score(held: HeldOut, randoms: HeldOut, scales: np.ndarray, max_wrong_rate: float,
+              random_touches: int | None = None) -> float:
     """The limit of the score (module doc): the wrong commands of ``held`` at most ``max_wrong_rate`` of its
-    templates, the random touches ``randoms`` firing at most :data:`MAX_RANDOM_FIRING` of them."""
+    templates, the random touches ``randoms`` firing at most :data:`MAX_RANDOM_FIRING` of ``random_touches``
+    (all that were made, screened ones included; default: ``randoms``' count)."""
     s = scores(held, scales)
     wrong = s[held.named != held.true]
     limit = _limit(wrong, math.floor(max_wrong_rate * len(held.true)))
     if len(randoms.named):
-        limit = min(limit, _limit(scores(randoms, scales), math.floor(MAX_RANDOM_FIRING * len(randoms.named))))
+        total = len(randoms.named) if random_touches is None else random_touches
+        limit = min(limit, _limit(scores(randoms, scales), math.floor(MAX_RANDOM_FIRING * total)))
     return limit
 
 
-def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float) -> np.ndarray:
+def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float,
+                          random_touches: int | None = None) -> np.ndarray:
     """(N,) what each held-out template gets, judged by scales and a limit set from everyone else's: 1 the
     right command, -1 a wrong one, 0 rejected."""
     n_classes = held.distances.shape[1]
@@ -224,7 +229,8 @@ def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float
         mine = held.people == person
         rest = held.subset(~mine)
         scales = class_scales(rest, n_classes)
-        accepted[mine] = scores(held.subset(mine), scales) <= max_score(rest, randoms, scales, max_wrong_rate)
+        accepted[mine] = scores(held.subset(mine), scales) <= max_score(rest, randoms, scales, max_wrong_rate,
+                                                                        random_touches)
     return np.where(accepted, np.where(held.named == held.true, 1, -1), 0)
 
 
@@ -263,12 +269,12 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
         held = held_out_opinions(target, per_class)
     null = touch_opinions(target, randoms)
     scales = class_scales(held, len(target.classes_))
-    limit = max_score(held, null, scales, max_wrong_rate)
-    outcome = cross_person_outcomes(held, null, max_wrong_rate)
-    fired = float(np.mean(scores(null, scales) <= limit)) if len(null.named) else None
+    limit = max_score(held, null, scales, max_wrong_rate, len(randoms))
+    outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms))
+    fired = float(np.sum(scores(null, scales) <= limit) / len(randoms)) if len(randoms) else None
     record = {'max_wrong_rate': float(max_wrong_rate), 'max_score': limit if math.isfinite(limit) else None,
               'class_scales': scales.tolist(), 'scale_quantile': SCALE_QUANTILE,
-              'max_random_firing': MAX_RANDOM_FIRING, 'random_touches': len(null.named), 'random_fired': fired,
+              'max_random_firing': MAX_RANDOM_FIRING, 'random_touches': len(randoms), 'random_fired': fired,
               'held_out': len(held.true), 'people': len(np.unique(held.people)),
               'right': float(np.mean(outcome == 1)), 'wrong': float(np.mean(outcome == -1)),
               'rejected': float(np.mean(outcome == 0))}
