@@ -41,15 +41,27 @@ def _pct(x: float | None) -> str:
 
 
 def _command(run: dict, recognisers: list[str]) -> str:
-    rate = run.get('max_wrong_rate')
+    rate, per_gesture = run.get('max_wrong_rate'), run.get('templates_per_gesture', 'all')
     return (f"`social-touch eval skin --traces {run['traces']} --recognisers {','.join(recognisers)} --json"
+            + ('' if per_gesture == 'all' else f' --templates-per-gesture {per_gesture}')
             + (f' --max-wrong-rate {rate:g}`' if rate is not None else '`'))
+
+
+def _goals(run: dict, r: dict) -> str:
+    """The issue's goals a row misses ('none' when it meets them all)."""
+    multi = bool(run.get('multi_stroke_samples'))
+    missed = [what for what, ok in (
+        ('right', r['accuracy_with_rejection'] >= GOALS['right_multi' if multi else 'right_single']),
+        ('wrong', r['error_rate'] <= GOALS['wrong']),
+        ('random', r['random_touch_acceptance'] is None or r['random_touch_acceptance'] <= GOALS['random'])) if not ok]
+    return ', '.join(missed) or 'none'
 
 
 def format_report(runs: list[dict]) -> str:
     """The markdown of the report from eval JSON objects (module doc)."""
     rows, commands = [], []
-    for run in sorted(runs, key=lambda r: (r['vocabulary'], r.get('max_wrong_rate') or 0)):
+    for run in sorted(runs, key=lambda r: (r['vocabulary'], str(r.get('templates_per_gesture')),
+                                           r.get('max_wrong_rate') or 0)):
         names = sorted(run['recognisers'])
         commands.append(f"- {run['vocabulary']}, "
                         + (f"calibrated for {run['max_wrong_rate']:g}" if run.get('max_wrong_rate') is not None
@@ -61,10 +73,13 @@ def format_report(runs: list[dict]) -> str:
             held = r.get('acceptance') or []
             estimate = (f"{_pct(sum(a['wrong'] for a in held) / len(held))} / "
                         f"{_pct(sum(a['right'] for a in held) / len(held))}") if held else ''
-            rows.append(f"| {run['vocabulary']} ({run['samples']} samples, {len(run['subjects'])} people) | {name} | "
+            per_gesture = run.get('templates_per_gesture', 'all')
+            book = '' if per_gesture == 'all' else f', {per_gesture} templates per gesture'
+            what = f"{run['vocabulary']} ({run['samples']} samples, {len(run['subjects'])} people{book})"
+            rows.append(f"| {what} | {name} | "
                         f"{rule} | {_pct(r['accuracy'])} | **{_pct(r['accuracy_with_rejection'])}** | "
                         f"{_pct(r['rejection_rate'])} | **{_pct(r['error_rate'])}** | "
-                        f"**{_pct(r['random_touch_acceptance'])}** | {estimate} |")
+                        f"**{_pct(r['random_touch_acceptance'])}** | {estimate} | {_goals(run, r)} |")
     return '\n'.join([
         '# Skin rejection tuned in one number',
         '',
@@ -101,8 +116,8 @@ def format_report(runs: list[dict]) -> str:
         "fold's codebook (wrong / right, mean over folds).",
         '',
         '| vocabulary | recogniser | rejection | nearest right | right | rejected | wrong | random touches firing '
-        '| held-out estimate |',
-        '|---|---|---|---|---|---|---|---|---|',
+        '| held-out estimate | goals missed |',
+        '|---|---|---|---|---|---|---|---|---|---|',
         *rows,
         '',
         '## Runs',
