@@ -122,6 +122,9 @@ def format_report(runs: list[dict]) -> str:
         '',
         '## Runs',
         '',
+        'Each row comes from one of these commands (its JSON kept in docs/skin-rejection-runs/, from which '
+        '`social-touch report skin-rejection --runs docs/skin-rejection-runs/*.json` writes this page):',
+        '',
         *commands,
         '',
     ])
