@@ -8,7 +8,7 @@ import pytest
 from doctest_testing import check_doctests
 
 MODULES = [f'touch_gestures.skin.{name}' for name in ('gesture', 'features', 'segmentation', 'proposed', 'registry',
-                                                      'codebook', 'fused', 'blobs', 'assignment',
+                                                      'codebook', 'fused', 'base', 'blobs', 'assignment',
                                                       'stroke_orders')] + \
     [f'touch_lab.skin.{name}' for name in ('datasets', 'cli', 'gaps', 'logged_times',
                                            'recognisers', 'recognisers.ndollar',

@@ -23,6 +23,11 @@ what the codebook alone determines).
   None disables the rule; or
 - the margin (runner-up class distance minus best) is below ``min_margin`` times the best
   distance: two classes are about equally close, the touch is ambiguous; or
+- for a codebook whose acceptance was calibrated (``acceptance_``, :meth:`TemplateRecogniser.set_acceptance`,
+  kept in the codebook file; made by :func:`touch_lab.skin.acceptance.calibrate_acceptance` from the codebook
+  itself, leave-one-person-out, for a wrong-command rate the user states), the two rules above are one:
+  no command when :func:`acceptance_score` (the distance over the class's scale, times the ratio to the
+  runner-up) exceeds ``acceptance_['max_score']`` (``'score'``) or the margin is negative; or
 - the touch's strokes or duration are none the nearest class shows in the codebook
   (:mod:`.evidence`; where the codebook knows its templates' strokes and contact times); or
 - for an order-free recogniser (``direction_aware`` False), a touch of one stroke whose
@@ -35,7 +40,8 @@ the classes written with the touch's number of strokes
 (:meth:`.evidence.CodebookEvidence.allowed`; all classes when none is, or when the codebook
 does not know its templates' strokes), its margin taken over the nearest other class of all,
 ruled out or not; no command if the distance is over the class's threshold (``'distance'``),
-the margin is too small (``'margin'``), the stroke count is rare or unseen for the class
+the margin is too small (``'margin'``), the calibrated score is too high (``'score'``), the stroke
+count is rare or unseen for the class
 (``'strokes'``), the duration is out of the class's range (``'duration'``) or the one-stroke
 path is out of order (``'order'``). A class ruled out yet nearer leaves a negative margin, and
 the touch is rejected for ``'strokes'``. The time in contact rejects but does not name: people
@@ -52,6 +58,7 @@ all gets no distance limit. A codebook with one class has no runner-up: the marg
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -63,7 +70,7 @@ from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
 
-__all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser', 'nearest_allowed']
+__all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser', 'acceptance_score', 'nearest_allowed']
 
 #: The steps of :meth:`TemplateRecogniser.predict`, in its order (the evidence comes before the decision,
 #: the classes the strokes allow, and after it, the named class's strokes and duration).
@@ -80,7 +87,7 @@ class Match:
         margin: distance of the nearest template of another class minus ``distance``
             (inf when the codebook has one class).
         nearest: the nearest class even when rejected (None if the gesture was unusable).
-        rejected: why there is no label: ``'distance'``, ``'margin'``, ``'strokes'``, ``'duration'``
+        rejected: why there is no label: ``'distance'``, ``'margin'``, ``'score'``, ``'strokes'``, ``'duration'``
             (:mod:`.evidence`), ``'order'`` (:mod:`.order_evidence`), ``'unusable'`` (no feature could be
             computed, e.g. an empty map), or
             None when accepted.
@@ -169,7 +176,8 @@ class TemplateRecogniser(Params):
                      class_thresholds: np.ndarray | None = None, template_strokes: Sequence[int] | None = None,
                      template_contact_s: Sequence[float] | None = None,
                      template_paths: np.ndarray | None = None,
-                     template_people: Sequence[str] | None = None) -> None:
+                     template_people: Sequence[str] | None = None,
+                     acceptance: dict | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
         ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
         ``template_strokes`` (T,) and ``template_contact_s`` (T,) s give each template's strokes and
@@ -177,7 +185,8 @@ class TemplateRecogniser(Params):
         ``template_paths`` (T, n, 2), NaN for templates of several strokes, each template's path
         (:func:`~.order_evidence.one_stroke_path`; ``template_paths_`` and ``order_evidence_`` for an
         order-free recogniser with distance limits, else None: no order check); ``template_people``
-        (T,), who drew each template ('' unknown: ``template_people_``, else None)."""
+        (T,), who drew each template ('' unknown: ``template_people_``, else None); ``acceptance``: a calibrated
+        acceptance for this codebook (:meth:`set_acceptance`; None: the thresholds and ``min_margin`` decide)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -226,6 +235,8 @@ class TemplateRecogniser(Params):
             self.order_evidence_ = OrderEvidence(self.template_paths_, self.template_labels_, len(classes),
                                                  self.auto_scale, self.auto_quantile)
         self._prepare_codebook()
+        self.acceptance_ = self._acceptance_scales = None
+        self._acceptance_limit = math.inf
         if class_thresholds is None:
             self.class_thresholds_ = self._rejection_thresholds()
         else:
@@ -234,6 +245,29 @@ class TemplateRecogniser(Params):
                 raise ValueError(f'class_thresholds must hold one number per class ({len(classes)}); got '
                                  f'{thresholds.shape}')
             self.class_thresholds_ = thresholds
+        if acceptance is not None:
+            self.set_acceptance(acceptance)
+
+    def set_acceptance(self, record: dict) -> None:
+        """Decide by a calibrated score (module doc): ``record`` holds ``'class_scales'`` (n_classes floats > 0, in
+        sorted class order) and ``'max_score'`` (>= 0, None: no limit but a negative margin), and whatever else
+        the calibration says of itself (kept as ``acceptance_``).
+
+        Raises:
+            ValueError: no codebook yet, or scales or limit out of range.
+        """
+        self._check_fitted()
+        scales = np.asarray(record.get('class_scales', ()), dtype=np.float64).reshape(-1)
+        limit = record.get('max_score')
+        if scales.shape != self.classes_.shape or not (np.all(np.isfinite(scales)) and np.all(scales > 0)):
+            raise ValueError(f'an acceptance needs one class scale > 0 per class ({len(self.classes_)}); got '
+                             f'{record.get("class_scales")!r}')
+        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
+                                  or not 0 <= limit < math.inf):
+            raise ValueError(f'an acceptance needs a max_score >= 0 (or None); got {limit!r}')
+        self.acceptance_ = dict(record)
+        self._acceptance_scales = scales.tolist()
+        self._acceptance_limit = math.inf if limit is None else float(limit)
 
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_classes,) float64 distance to the nearest template of each class, or None if unusable."""
@@ -322,6 +356,13 @@ class TemplateRecogniser(Params):
         # first, and the margin is NaN whatever the runner-up).
         margin = min(distances[:best] + distances[best + 1:]) - d1 if len(distances) > 1 else float('inf')
         nearest = str(self.classes_[best])
+        scales = getattr(self, '_acceptance_scales', None)
+        if scales is not None:
+            if margin >= 0 and not acceptance_score(d1, margin, scales[best]) > self._acceptance_limit:
+                return Match(nearest, d1, margin, nearest, None), best
+            ruled_out = margin < 0 and allowed is not None and not allowed[int(np.argmin(per_class))]
+            return Match(None, d1, margin, nearest, 'strokes' if ruled_out else
+                         'margin' if margin < 0 else 'score'), best
         if not d1 <= self.class_thresholds_[best]:
             return Match(None, d1, margin, nearest, 'distance'), best
         if margin < self.min_margin * d1:
@@ -402,6 +443,20 @@ def nearest_allowed(per_class: np.ndarray, allowed: np.ndarray | None) -> int:
     """Index of the smallest of (n_classes,) ``per_class`` among those ``allowed`` ((n_classes,) bool, at least
     one; None: all)."""
     return int(np.argmin(per_class if allowed is None else np.where(allowed, per_class, np.inf)))
+
+
+def acceptance_score(distance: float, margin: float, scale: float) -> float:
+    """How doubtful a touch is for its named class: ``distance / scale`` (how far from the class, in the class's
+    own scale) times ``distance / (distance + margin)`` (its distance over the runner-up's: 1 when two classes
+    are equally close). 0 for an exact match; inf where the runner-up is no farther or a value is NaN (never accepted).
+
+    >>> acceptance_score(1.0, 1.0, 2.0)
+    0.25
+    """
+    runner_up = distance + margin
+    if distance == 0:
+        return 0.0
+    return (distance / scale) * (distance / runner_up) if runner_up > 0 else math.inf
 
 
 def _no_step(name: str) -> None:

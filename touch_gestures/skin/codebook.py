@@ -24,6 +24,10 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
                                               (an order-free recogniser's rejection, :mod:`.order_evidence`)
     template_people     (T,)        str       optional: who drew each template ('' not known), so a
                                               codebook is judged leave-one-person-out
+    acceptance          ()          str       optional: JSON record of the calibration that set
+                                              class_thresholds for a stated wrong-command rate
+                                              (``max_wrong_rate``, ...; turns on the ``'ambiguous'``
+                                              rule, :mod:`.base`; :mod:`touch_lab.skin.acceptance`)
 
 A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
 ``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
@@ -119,7 +123,9 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
             **({} if getattr(recogniser, 'template_paths_', None) is None
                else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}),
             **({} if getattr(recogniser, 'template_people_', None) is None
-               else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}))
+               else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}),
+            **({} if getattr(recogniser, 'acceptance_', None) is None
+               else {'acceptance': np.array(json.dumps(recogniser.acceptance_, sort_keys=True))}))
     return path
 
 
@@ -188,11 +194,17 @@ def load_codebook(path: str | Path, recogniser: str | None = None,
         raise CodebookError(f'templates have {templates.shape[1]} features but {name} with these parameters '
                             f'computes {expected}; the file and its parameters disagree', where)
     try:
+        acceptance = json.loads(str(data['acceptance'])) if 'acceptance' in data else None
+        if acceptance is not None and not isinstance(acceptance, dict):
+            raise ValueError('acceptance must be a JSON object')
+    except ValueError as err:
+        raise CodebookError(f'bad acceptance record: {err}', where) from err
+    try:
         model.set_codebook(templates, classes[codes], class_thresholds=thresholds,
                            template_strokes=data.get('template_strokes'),
                            template_contact_s=data.get('template_contact_s'),
                            template_paths=data.get('template_paths'),
-                           template_people=data.get('template_people'))
+                           template_people=data.get('template_people'), acceptance=acceptance)
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None

@@ -52,6 +52,8 @@ CODEBOOK_TARGETS: dict[str, Command] = {
                    'add the labelled touches of skin session bags to a codebook (a new file)'),
     'remove': Command('touch_lab.skin.codebook_cli:REMOVE', 'remove gestures from a codebook (a new file)'),
     'merge': Command('touch_lab.skin.codebook_cli:MERGE', 'merge two codebooks of the same recogniser (a new file)'),
+    'calibrate': Command('touch_lab.skin.codebook_cli:CALIBRATE', 'set a codebook\'s rejection for a wrong-command '
+                         'rate, leave-one-person-out inside it (a new file)'),
 }
 
 REPORT_TARGETS: dict[str, Command] = {
@@ -63,6 +65,8 @@ REPORT_TARGETS: dict[str, Command] = {
                                              'virtual skin (about 15 minutes)'),
     'skin-multistroke': Command('touch_lab.skin.multistroke_report', 'regenerate docs/skin-multistroke.md: '
                                 'multi-stroke vocabularies, early decisions, collisions, cost'),
+    'skin-rejection': Command('touch_lab.skin.rejection_report', 'regenerate docs/skin-rejection.md: the calibrated '
+                              'rejection on both development files and across them'),
     'robustness': Command('touch_lab.robustness.report', 'regenerate docs/robustness.md (bad input, faults, floods, '
                                                          'unplug, kill -9; about 3 minutes)'),
     'compiled-code': Command('touch_lab.bench.compiled_code', "regenerate docs/compiled-code.md (each compiled "

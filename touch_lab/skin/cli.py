@@ -37,6 +37,7 @@ from touch_gestures.skin.ending import GestureEnd
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.cli.options import non_negative_int, non_negative_seconds, positive_int, seconds, seed
 from touch_graph.errors import SocialTouchError
+from touch_lab.skin.acceptance import calibrate_acceptance, null_touches, wrong_rate
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
 from touch_lab.skin.early_eval import summary as early_summary
@@ -87,6 +88,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='longest lift, s, that continues strokes the codebook calls the beginning of a longer '
                              f'gesture (default: {ENDING_WAIT_S} s for multi-stroke files; 0: none, every gesture '
                              'ends at --gap)')
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, default=None, metavar='RATE',
+                        help="calibrate each fold's acceptance from its codebook, leave-one-person-out, for at most "
+                             'this share of wrong commands (touch_lab.skin.acceptance; default: the recognisers\' '
+                             'own rejection)')
     parser.add_argument('--no-cache', action='store_true', help='render every trace again (cache: '
                         f'{default_cache_dir()})')
 
@@ -98,7 +103,7 @@ def _progress(line: str) -> None:
 def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None, templates_per_gesture: int = 0,
                   mode: str = 'sensor', random_count: int = 150, seed: int = 0, cache: bool = True,
                   progress: Any = _progress, gap_s: float | None = None, vocabulary: str | None = None,
-                  early_every: int = 0, wait_s: float | None = None) -> dict:
+                  early_every: int = 0, wait_s: float | None = None, max_wrong_rate: float | None = None) -> dict:
     """Run the whole evaluation and return the report object (see the module doc)."""
     for name in recognisers:
         make_recogniser(name)  # unknown names fail before minutes of rendering
@@ -126,7 +131,7 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
         'skipped_rows': trace_set.skipped_rows, 'gap_s': gap_s, 'wait_s': wait,
         'pauses_between_strokes_s': pause_percentiles_s(samples), 'samples_whole_per_gap': gap_table(samples),
         'logged_times': logged_times(samples),
-        'templates_per_gesture': per_gesture or 'all', 'seed': seed,
+        'templates_per_gesture': per_gesture or 'all', 'seed': seed, 'max_wrong_rate': max_wrong_rate,
         'protocol': 'leave-one-subject-out; accuracy = nearest class right (rejection off, as the paper); '
                     'accuracy_with_rejection, rejection_rate, error_rate with the rejection rule on',
     }
@@ -147,8 +152,12 @@ def evaluate_file(traces: str, recognisers: list[str], limit: int | None = None,
                               gap_s)
         say(f'rendered in {time.perf_counter() - t0:.1f} s; evaluating {", ".join(recognisers)}')
         segment = _segmenter(pieces, rendered, gap_s, wait)
+        calibrate = None
+        if max_wrong_rate is not None:
+            null = null_touches(gap_s=gap_s)   # another seed than the evaluation's random touches
+            calibrate = lambda model, null=null: calibrate_acceptance(model, max_wrong_rate, null)  # noqa: E731
         results = leave_one_subject_out(rendered, factories, per_gesture, seed, randoms, progress=say,
-                                        segment=segment)
+                                        segment=segment, calibrate=calibrate)
         block = {
             'mode': m, 'data': 'synthetic sensor frames (virtual skin) from real traces' if m == 'sensor'
             else 'true finger path and perfect maps (before the sensor)',
@@ -277,7 +286,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         report = evaluate_file(args.traces, names, args.limit, args.templates_per_gesture, args.mode,
                                args.random_touches, args.seed, cache=not args.no_cache, gap_s=args.gap,
-                               vocabulary=args.vocabulary, early_every=args.early, wait_s=args.wait)
+                               vocabulary=args.vocabulary, early_every=args.early, wait_s=args.wait,
+                               max_wrong_rate=args.max_wrong_rate)
     except (SocialTouchError, ValueError) as err:
         print(f'eval skin: {err}', file=sys.stderr)
         return 2

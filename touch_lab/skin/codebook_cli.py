@@ -4,10 +4,11 @@
     social-touch codebook add robot.npz --bags sessions/skin/* -o robot2.npz      # templates of labelled touches
     social-touch codebook remove robot.npz --gestures one,two -o robot2.npz
     social-touch codebook merge a.npz b.npz -o both.npz
+    social-touch codebook calibrate robot.npz --max-wrong-rate 0.005 -o robot2.npz  # rejection for a wrong rate
 
 Every edit writes a new file (``-o``) with a model card saying what was done to which file
 (:mod:`touch_gestures.model_card`); rejection thresholds are recomputed from the templates kept
-(:mod:`.codebook_tools`).
+(:mod:`.codebook_tools`), and a calibrated acceptance is dropped by an edit (calibrate again).
 """
 
 from __future__ import annotations
@@ -19,11 +20,12 @@ from collections import Counter
 from touch_gestures.model_card import attach_card, format_card, make_card, read_card
 from touch_graph.errors import SocialTouchError
 from touch_lab.cli.targets import Target
+from touch_lab.skin.acceptance import calibrate, wrong_rate
 from touch_lab.skin.recognisers import load_codebook, save_codebook
 
 from .codebook_tools import merge_codebooks, remove_gestures, template_labels
 
-__all__ = ['ADD', 'INFO', 'MERGE', 'REMOVE']
+__all__ = ['ADD', 'CALIBRATE', 'INFO', 'MERGE', 'REMOVE']
 
 
 def _fail(what: str, err: Exception) -> int:
@@ -45,8 +47,14 @@ def _info(args: argparse.Namespace) -> int:
     print(f'{args.file}: recogniser {book.name} {book.get_params()}')
     print(f'{len(book.classes_)} gestures, {len(book.templates_)} templates'
           + (f'; {book.description_}' if book.description_ else ''))
-    for name, threshold in zip(book.classes_, book.class_thresholds_, strict=True):
-        print(f'  {name:18s} {counts[name]:4d} templates, rejection distance {threshold:.4g}')
+    scales = (book.acceptance_ or {}).get('class_scales')
+    for i, (name, threshold) in enumerate(zip(book.classes_, book.class_thresholds_, strict=True)):
+        rule = f'scale {scales[i]:.4g}' if scales else f'rejection distance {threshold:.4g}'
+        print(f'  {name:18s} {counts[name]:4d} templates, {rule}')
+    if book.acceptance_:
+        a = book.acceptance_
+        print(f"acceptance calibrated for {a.get('max_wrong_rate')} wrong commands: max score {a.get('max_score')}; "
+              f"leave-one-person-out estimate {a.get('right')} right, {a.get('wrong')} wrong")
     print(format_card(card) if card else 'no model card (a codebook made before cards)')
     return 0
 
@@ -116,7 +124,25 @@ def _merge(args: argparse.Namespace) -> int:
                   {'synthetic': _synthetic(*args.files), 'sources': list(args.files)})
 
 
+def _calibrate_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('file', help='a codebook that says who drew its templates (two people or more)')
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, required=True, metavar='RATE',
+                        help='the share of gestures of new people that may fire a wrong command, e.g. 0.005')
+    parser.add_argument('--output', '-o', required=True, help='the codebook to write')
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    try:
+        model = calibrate(load_codebook(args.file), args.max_wrong_rate,
+                          say=lambda line: print(f'[codebook calibrate] {line}', file=sys.stderr))
+    except (SocialTouchError, ValueError) as err:
+        return _fail('calibrate', err)
+    return _write(args, model, f'{args.file} calibrated for {args.max_wrong_rate:g} wrong commands',
+                  {'synthetic': _synthetic(args.file), 'source': str(args.file), 'acceptance': model.acceptance_})
+
+
 INFO = Target(_info_arguments, _info)
 ADD = Target(_add_arguments, _add)
 REMOVE = Target(_remove_arguments, _remove)
 MERGE = Target(_merge_arguments, _merge)
+CALIBRATE = Target(_calibrate_arguments, _calibrate)

@@ -65,6 +65,7 @@ class RecogniserResult:
     choices: dict[str, int] = field(default_factory=dict)   # 'auto': the recogniser its rule chose, per fold
     screened: int = 0                                       # held-out samples screened out (counted as rejected)
     latencies_s: list[float] = field(default_factory=list)  # with ``segment``: per whole sample, s
+    acceptance: list[dict] = field(default_factory=list)    # with ``calibrate``: each fold's calibration record
 
     @property
     def accuracy(self) -> float:
@@ -110,6 +111,9 @@ class RecogniserResult:
             'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
             'screened': self.screened, 'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
             **({'latency_s': _summary(self.latencies_s)} if self.latencies_s else {}),
+            **({'acceptance': [{k: a.get(k) for k in ('max_wrong_rate', 'max_score', 'right', 'wrong', 'rejected',
+                                                       'random_fired', 'people')} for a in self.acceptance]}
+               if self.acceptance else {}),
         }
 
     gestures_per_sample: dict[str, int] = field(default_factory=dict)
@@ -156,6 +160,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
                           progress: Callable[[str], None] | None = None,
                           segment: Callable[[RenderedSample, TemplateRecogniser],
                                             tuple[list[TouchGesture], list[float]]] | None = None,
+                          calibrate: Callable[[TemplateRecogniser], object] | None = None,
                           ) -> dict[str, RecogniserResult]:
     """Evaluate every recogniser of ``factories`` (name -> a new unfitted recogniser).
 
@@ -168,6 +173,8 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
         segment: ``segment(sample, fitted_recogniser) -> (gestures, latencies_s)`` cuts a held-out
             sample again with the fold's recogniser (the end of a gesture, :mod:`.ending_eval`);
             None: the sample's own gestures (the codebook always uses those).
+        calibrate: called with each fold's fitted recogniser before it reads the held-out subject (e.g. the
+            acceptance calibration of :mod:`.acceptance`, from the fold's codebook alone).
 
     Raises:
         ValueError: fewer than two subjects (nothing to leave out), or no recogniser.
@@ -197,6 +204,9 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
             start = time.perf_counter()
             recogniser = make().fit(gestures, names, [r.subject for r in codebook])
             sizes[name].append(len(recogniser.templates_))
+            if calibrate is not None:
+                calibrate(recogniser)
+                res.acceptance.append(dict(getattr(recogniser, 'acceptance_', None) or {}))
             if hasattr(recogniser, 'choice_'):
                 res.choices[recogniser.choice_] = res.choices.get(recogniser.choice_, 0) + 1
             hits: dict[str, list[bool]] = {}

@@ -54,6 +54,7 @@ from touch_gestures.skin.registry import RECOGNISERS as RUNTIME_RECOGNISERS
 from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_graph.cli.options import non_negative_seconds, positive_int, seed
 from touch_graph.errors import SocialTouchError
+from touch_lab.skin.acceptance import calibrate, wrong_rate
 from touch_lab.skin.recognisers import (
     DEFAULT_RECOGNISER,
     RECOGNISERS,
@@ -88,6 +89,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--person', default='', metavar='NAME',
                         help='who traces (kept with each template, so the lab can choose the recogniser '
                         'leave-one-person-out; record each person with their own name, resuming the same file)')
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, metavar='RATE',
+                        help='calibrate the rejection from the codebook, leave-one-person-out, for at most this share '
+                        'of wrong commands on new people, e.g. 0.005 (needs two people or more; '
+                        'touch_lab.skin.acceptance); default: the recogniser\'s own thresholds')
     parser.add_argument('--simulate', type=positive_int, metavar='PERFORMERS',
                         help='record synthetic performers on a virtual skin instead of the live skin')
     parser.add_argument('--seed', type=seed, default=0, help='with --simulate: performers and sensor noise')
@@ -339,6 +344,8 @@ def run(args: argparse.Namespace) -> int:
                  f' --vocabulary {args.vocabulary}' + ('' if args.gap is None else f' --gap {args.gap:g}'))
             return 1
         model = recorder.fit(make_recogniser(args.recogniser))
+        if args.max_wrong_rate is not None:
+            calibrate(model, args.max_wrong_rate, args.gap, _say)
         path = save_codebook(args.output, model, description=description, vocabulary=args.vocabulary,
                              gap_s=args.gap)
         people = f'{args.simulate} simulated performers (seed {args.seed})' if args.simulate is not None else None

@@ -1,0 +1,193 @@
+"""Rejection tuned in one number, the wrong-command rate, calibrated from the codebook (issue 26, item 2).
+
+The gestures are synthetic (test/test_skin_codebook_people.py's letters: polylines with tremor, people
+drawing each letter their own way), and so are the touches that are no gesture (random corners).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_skin_codebook_people import LETTERS, drawn, stroke
+
+from touch_gestures.skin import load_codebook, make_recogniser, save_codebook
+from touch_gestures.skin.base import acceptance_score
+from touch_lab.skin.acceptance import (
+    MAX_RANDOM_FIRING,
+    HeldOut,
+    calibrate_acceptance,
+    class_scales,
+    cross_person_outcomes,
+    held_out_opinions,
+    max_score,
+    scores,
+    touch_opinions,
+)
+from touch_lab.skin.recognisers.auto import AutoRecogniser
+
+
+def scribbles(rng: np.random.Generator, count: int):
+    """Touches that are no letter: 3-6 random corners over the skin (synthetic)."""
+    return [stroke(rng.uniform(6, 41, (int(rng.integers(3, 7)), 2)), rng) for _ in range(count)]
+
+
+def people_codebook(seed=3, people=4, name='trace'):
+    rng = np.random.default_rng(seed)
+    gestures, labels, who = drawn(rng, people=people, per_person=5, backwards=())
+    return make_recogniser(name).fit(gestures, labels, who), rng
+
+
+def test_the_score_is_distance_over_scale_times_the_ratio_to_the_runner_up():
+    assert acceptance_score(1.0, 1.0, 2.0) == pytest.approx(0.25)
+    assert acceptance_score(0.0, 0.0, 1.0) == 0.0
+    assert acceptance_score(2.0, 0.0, 1.0) == pytest.approx(2.0)     # a tie: ratio 1
+    assert acceptance_score(float('nan'), 1.0, 1.0) == math.inf
+
+
+def test_held_out_opinions_read_each_person_by_the_others():
+    model, _ = people_codebook()
+    held = held_out_opinions(model)
+    assert len(held.true) == len(model.templates_)
+    assert sorted(set(held.people.tolist())) == ['p0', 'p1', 'p2', 'p3']
+    # Letters drawn the same way by everyone: every held-out template named right.
+    assert np.mean(held.named == held.true) == 1.0
+    # A person's own repetitions are not in the codebook that reads them: each distance is one to another person.
+    assert np.all(held.distances[np.arange(len(held.true)), held.true] > 0)
+
+
+def test_a_codebook_without_two_people_cannot_be_calibrated():
+    rng = np.random.default_rng(0)
+    gestures, labels, _ = drawn(rng, people=2, per_person=3, backwards=())
+    with pytest.raises(ValueError, match='two people'):
+        calibrate_acceptance(make_recogniser('trace').fit(gestures, labels), 0.005)
+    with pytest.raises(ValueError, match='share'):
+        calibrate_acceptance(make_recogniser('trace').fit(gestures, labels, ['a'] * len(labels)), 1.5)
+
+
+def test_the_limit_lets_through_no_more_wrong_commands_than_asked():
+    # Hand-made opinions: 3 classes, 10 held-out touches, 3 of them named wrong with known scores.
+    d = np.array([[1.0, 4.0, 8.0]] * 7 + [[1.0, 1.2, 4.0], [1.0, 1.1, 4.0], [1.0, 3.0, 4.0]])
+    true = np.array([0] * 7 + [1, 1, 1])
+    held = HeldOut(d, np.zeros(10, dtype=np.intp), true, np.array(['a', 'b'] * 5))
+    scales = np.ones(3)
+    s = scores(held, scales)
+    none = HeldOut(np.empty((0, 3)), np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp), np.empty(0, dtype=str))
+    assert max_score(held, none, scales, 0.0) < s[9] and max_score(held, none, scales, 0.0) >= s[0]
+    assert s[9] <= max_score(held, none, scales, 0.1) < s[7]   # 1 of 10 may be wrong: the least doubtful one
+    assert max_score(held, none, scales, 0.3) == math.inf      # all three may
+
+
+def test_random_touches_are_held_at_their_share():
+    model, rng = people_codebook()
+    randoms = scribbles(rng, 200)
+    calibrate_acceptance(model, 0.5, randoms)   # the wrong commands set no limit here: the random touches do
+    record = model.acceptance_
+    assert record['random_touches'] == len(randoms) and len(touch_opinions(model, randoms).named) > 100
+    assert record['random_fired'] <= MAX_RANDOM_FIRING
+    fired = np.mean([model.predict(g).label is not None for g in randoms])
+    assert fired <= MAX_RANDOM_FIRING
+    # Without the random touches the limit is looser and more of them fire.
+    loose, _ = people_codebook()
+    calibrate_acceptance(loose, 0.5)
+    assert np.mean([loose.predict(g).label is not None for g in randoms]) > fired
+
+
+@pytest.mark.parametrize('name', ['trace', 'fused'])
+def test_new_people_of_the_same_letters_are_read_and_the_record_survives_the_file(tmp_path, name):
+    model, rng = people_codebook(name=name)
+    calibrate_acceptance(model, 0.005, scribbles(rng, 120))
+    new, labels, _ = drawn(np.random.default_rng(99), people=2, per_person=4, backwards=())
+    right = np.mean([m.label == y for m, y in zip(model.predict_many(new), labels, strict=True)])
+    assert right >= 0.9, model.acceptance_
+    assert {'max_wrong_rate', 'max_score', 'class_scales', 'right', 'wrong'} <= set(model.acceptance_)
+    loaded = load_codebook(save_codebook(tmp_path / 'c.npz', model))
+    assert loaded.acceptance_ == model.acceptance_
+    assert [m.label for m in loaded.predict_many(new)] == [m.label for m in model.predict_many(new)]
+
+
+def test_a_calibrated_codebook_rejects_by_score_and_an_old_one_by_distance():
+    model, rng = people_codebook()
+    far = scribbles(rng, 60)
+    before = {model.predict(g).rejected for g in far}
+    calibrate_acceptance(model, 0.005, scribbles(rng, 120))
+    after = {model.predict(g).rejected for g in far}
+    assert 'score' not in before and 'score' in after and 'distance' not in after
+
+
+def test_bad_acceptance_records_are_refused():
+    model, _ = people_codebook()
+    n = len(model.classes_)
+    for record in ({'class_scales': [1.0] * (n - 1), 'max_score': 1.0}, {'class_scales': [0.0] * n, 'max_score': 1.0},
+                   {'class_scales': [1.0] * n, 'max_score': -1.0}, {'class_scales': [1.0] * n, 'max_score': True}):
+        with pytest.raises(ValueError, match='acceptance'):
+            model.set_acceptance(record)
+    model.set_acceptance({'class_scales': [1.0] * n, 'max_score': None})   # no limit but the margin's sign
+    assert model.acceptance_['max_score'] is None
+
+
+def test_cross_person_estimate_counts_every_held_out_template():
+    model, _ = people_codebook()
+    held = held_out_opinions(model)
+    none = touch_opinions(model, [])
+    outcome = cross_person_outcomes(held, none, 0.005)
+    assert outcome.shape == held.true.shape and set(outcome.tolist()) <= {-1, 0, 1}
+    assert class_scales(held, len(model.classes_)).shape == (len(LETTERS),)
+
+
+def test_auto_calibrates_the_recogniser_it_chose():
+    rng = np.random.default_rng(5)
+    gestures, labels, who = drawn(rng, people=3, per_person=4, backwards=())
+    auto = AutoRecogniser().fit(gestures, labels, who)
+    calibrate_acceptance(auto, 0.005)
+    assert auto.acceptance_ is auto.chosen_.acceptance_
+    assert all(m.label == y for m, y in zip(auto.predict_many(gestures[:10]), labels[:10], strict=True))
+
+
+def test_codebook_calibrate_writes_a_calibrated_copy_and_refuses_bad_rates(tmp_path, monkeypatch, capsys):
+    from touch_lab.cli.main import main
+    from touch_lab.skin import acceptance
+    model, rng = people_codebook()
+    source = save_codebook(tmp_path / 'book.npz', model)
+    randoms = scribbles(rng, 120)
+    monkeypatch.setattr(acceptance, 'null_touches', lambda gap_s: randoms)   # no virtual skin in a unit test
+    out = tmp_path / 'calibrated.npz'
+    assert main(['codebook', 'calibrate', str(source), '--max-wrong-rate', '0.005', '-o', str(out)]) == 0
+    calibrated = load_codebook(out)
+    assert calibrated.acceptance_['max_wrong_rate'] == 0.005 and load_codebook(source).acceptance_ is None
+    assert main(['codebook', 'info', str(out)]) == 0
+    assert 'acceptance calibrated for 0.005' in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(['codebook', 'calibrate', str(source), '--max-wrong-rate', '0.7', '-o', str(out)])
+    unnamed = save_codebook(tmp_path / 'unnamed.npz', make_recogniser('trace').fit(*drawn(rng, people=2)[:2]))
+    assert main(['codebook', 'calibrate', str(unnamed), '--max-wrong-rate', '0.01', '-o', str(out)]) == 2
+    assert 'two people' in capsys.readouterr().err
+
+
+def test_the_report_names_the_command_of_every_row(tmp_path):
+    from touch_lab.skin.rejection_report import format_report
+    result = {'accuracy': 0.99, 'accuracy_with_rejection': 0.97, 'rejection_rate': 0.028, 'error_rate': 0.002,
+              'random_touch_acceptance': 0.01,
+              'acceptance': [{'wrong': 0.004, 'right': 0.96}, {'wrong': 0.006, 'right': 0.98}]}
+    runs = [{'traces': 'a.csv.gz', 'vocabulary': 'a', 'samples': 10, 'subjects': ['1', '2'], 'max_wrong_rate': 0.005,
+             'recognisers': {'trace': result}},
+            {'traces': 'a.csv.gz', 'vocabulary': 'a', 'samples': 10, 'subjects': ['1', '2'], 'max_wrong_rate': None,
+             'recognisers': {'trace': {**result, 'acceptance': None}}}]
+    text = format_report(runs)
+    assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json --max-wrong-rate 0.005`' in text
+    assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json`' in text
+    assert '| a (10 samples, 2 people) | trace | calibrated, 0.5 % | 99.00 % | **97.00 %** |' in text
+    assert '0.50 % / 97.00 %' in text   # the held-out estimate, mean over folds
+    # 97 % right misses the single-stroke goal; the rest is met.
+    assert sum(line.endswith('| right |') for line in text.splitlines()) == 2
+
+
+def test_an_edited_codebook_drops_its_calibration():
+    from touch_lab.skin.codebook_tools import remove_gestures
+    model, rng = people_codebook()
+    calibrate_acceptance(model, 0.005, scribbles(rng, 60))
+    edited = remove_gestures(model, ['Z'])
+    assert model.acceptance_ is not None and edited.acceptance_ is None
+    # The old rule decides again: no 'score' rejection.
+    assert all(m.rejected != 'score' for m in edited.predict_many(scribbles(rng, 30)))
