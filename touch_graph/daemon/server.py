@@ -1,0 +1,170 @@
+"""The graph daemon process: a hidden node in the domain, answering graph queries on a Unix socket.
+
+Run by :func:`touch_graph.daemon.client.spawn` as ``python -m touch_graph.daemon.server``, detached
+(a session of its own, no terminal). One request per connection: a JSON line
+``{"op": "graph" | "status" | "stop", "version": ...}``; the answer is a pickled dict
+(:mod:`.client` reads it back with only the graph's classes allowed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import fcntl
+import json
+import os
+import pickle
+import signal
+import socketserver
+import sys
+import threading
+import time
+from typing import Any
+
+from .address import code_version, daemon_address
+
+__all__ = ['IDLE_TIMEOUT_S', 'main']
+
+#: A daemon nobody asked for this long exits, s (ros2cli's: two hours).
+IDLE_TIMEOUT_S = 2 * 3600.0
+#: How long a new daemon waits for the one it replaces (another code version) to leave, s.
+LOCK_WAIT_S = 5.0
+#: How long after joining the daemon waits for anyone before saying the domain is empty, s.
+DISCOVERY_TIMEOUT_S = 2.0
+
+
+class _GraphCache:
+    """The daemon's participant and when its graph last changed (tracked all the time, for the settle rule)."""
+
+    def __init__(self, tool: Any) -> None:
+        self.tool = tool
+        self.started = time.monotonic()
+        self.last_change = self.started
+        self.last_request = self.started
+        self.requests = 0
+        self._stop = threading.Event()
+        self._watcher = threading.Thread(target=self._watch, name='graph-daemon-watch', daemon=True)
+        self._watcher.start()
+
+    def _watch(self) -> None:
+        discovery = self.tool.discovery
+        version, structure = discovery.version, discovery.structure_version
+        while not self._stop.is_set():
+            version = discovery.wait_for_change(version, 0.5)
+            if discovery.structure_version != structure:
+                structure, self.last_change = discovery.structure_version, time.monotonic()
+
+    def complete_view(self) -> Any:
+        """The graph once complete (:func:`~touch_graph.dds.tool.wait_for_complete_graph`)."""
+        from ..dds.tool import wait_for_complete_graph
+        wait_for_complete_graph(self.tool.discovery, DISCOVERY_TIMEOUT_S, started=self.started,
+                                last_change=self.last_change)
+        return self.tool.graph()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._watcher.join(2.0)
+
+
+class _Server(socketserver.ThreadingMixIn, socketserver.UnixStreamServer):
+    daemon_threads = True
+
+    def __init__(self, path: str, cache: _GraphCache, version: str, info: dict) -> None:
+        super().__init__(path, _Handler)
+        self.cache, self.version, self.info = cache, version, info
+        self.stopping = threading.Event()
+
+    def stop(self) -> None:
+        if not self.stopping.is_set():
+            self.stopping.set()
+            threading.Thread(target=self.shutdown, daemon=True).start()
+
+
+class _Handler(socketserver.StreamRequestHandler):
+    server: _Server
+
+    def handle(self) -> None:
+        server = self.server
+        try:
+            request = json.loads(self.rfile.readline(4096) or b'{}')
+            op = request.get('op')
+        except (ValueError, AttributeError):
+            op, request = None, {}
+        cache = server.cache
+        cache.last_request = time.monotonic()
+        cache.requests += 1
+        reply: dict[str, Any] = {'ok': True, 'version': server.version, 'pid': os.getpid()}
+        if op == 'graph' and request.get('version') != server.version:
+            reply.update(ok=False, error='version')  # a newer installation asks: leave it the place
+            server.stop()
+        elif op == 'graph':
+            started = time.monotonic()
+            reply['view'] = cache.complete_view()
+            reply['waited_s'] = time.monotonic() - started
+        elif op == 'status':
+            reply.update(server.info, requests=cache.requests, up_s=time.monotonic() - cache.started,
+                         participants=cache.tool.discovery.remote_participant_count())
+        elif op == 'stop':
+            server.stop()
+        else:
+            reply.update(ok=False, error=f'unknown request {request!r}')
+        self.wfile.write(pickle.dumps(reply, protocol=pickle.HIGHEST_PROTOCOL))
+
+
+def _hold_lock(path: Any, wait_s: float) -> int | None:
+    """An exclusive lock on ``path`` for this process's life (one daemon per address), waiting up to ``wait_s``
+    for a daemon that is leaving; None if another still holds it."""
+    fd = os.open(path, os.O_CREAT | os.O_RDWR, 0o600)
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return fd
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                os.close(fd)
+                return None
+            time.sleep(0.05)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog='python -m touch_graph.daemon.server',
+                                     description='The social-touch graph daemon (started by the graph commands).')
+    parser.add_argument('--ros-domain-id', type=int, required=True,
+                        help='the domain (must match ROS_DOMAIN_ID; given to be seen in the process list)')
+    parser.add_argument('--idle-timeout', type=float, default=IDLE_TIMEOUT_S, metavar='S',
+                        help='exit after S seconds without a request (default two hours)')
+    args = parser.parse_args(argv)
+    address = daemon_address()
+    if args.ros_domain_id != address.domain_id:
+        parser.error(f'--ros-domain-id {args.ros_domain_id} is not ROS_DOMAIN_ID ({address.domain_id})')
+    lock = _hold_lock(address.lock_path, LOCK_WAIT_S)
+    if lock is None:
+        return 0  # another daemon serves this address
+    from ..dds.tool import GraphTool
+    address.socket_path.unlink(missing_ok=True)  # left by a daemon that was killed
+    version = code_version()
+    with GraphTool(f'daemon_{address.domain_id}', discovery_timeout_s=0.0) as tool:
+        cache = _GraphCache(tool)
+        info = {'domain_id': address.domain_id, 'discovery_range': address.discovery_range,
+                'socket': str(address.socket_path), 'idle_timeout_s': args.idle_timeout}
+        server = _Server(str(address.socket_path), cache, version, info)
+        for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+            signal.signal(signum, lambda *_: server.stop())
+
+        def idle_watch() -> None:
+            while not server.stopping.wait(min(args.idle_timeout, 5.0)):
+                if time.monotonic() - cache.last_request >= args.idle_timeout:
+                    server.stop()
+        threading.Thread(target=idle_watch, name='graph-daemon-idle', daemon=True).start()
+        try:
+            server.serve_forever(poll_interval=0.5)
+        finally:
+            server.server_close()
+            address.socket_path.unlink(missing_ok=True)
+            cache.close()
+    os.close(lock)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
