@@ -17,7 +17,6 @@ the like from its graph cache. This is the same design for ``social-touch``:
   the query is listed. It runs until ``social-touch daemon stop``, a client of another code
   version, or two hours without a query (as ros2cli's).
 - :mod:`.client`: what a command uses: the daemon's graph, starting the daemon in the background
-  on first use (that first command joins the domain itself, as ros2cli's does), and a
-  participant of the command's own when the daemon cannot be reached or ``--no-daemon`` is given
-  (or ``SOCIAL_TOUCH_DAEMON=0``, as the test suite sets it).
+  on first use, and a participant of the command's own when the daemon cannot be reached or
+  ``--no-daemon`` is given (or ``SOCIAL_TOUCH_DAEMON=0``, as the test suite sets it).
 """

@@ -3,9 +3,10 @@
 :func:`graph_source` is the one entry (a context manager): ``--no-daemon`` (or
 ``SOCIAL_TOUCH_DAEMON=0``) gives a :class:`~touch_graph.dds.tool.GraphTool`; otherwise the
 daemon's graph (:class:`DaemonGraph`). When no daemon answers, one is started in the background
-and this command joins the domain itself, as ros2cli's first call does; a daemon of another code
-version is stopped and replaced in the same way. Imports nothing of Cyclone or the runtime unless
-it falls back to a participant.
+and asked once it answers (ros2cli's first call joins the domain itself instead: here the daemon
+joining meanwhile would make that call wait for it); a daemon of another code version leaves and
+is replaced in the same way. When the daemon does not come up, the command joins the domain
+itself. Imports nothing of Cyclone or the runtime unless it falls back to a participant.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from .address import DaemonAddress, code_version, daemon_address
 
 __all__ = ['DaemonGraph', 'DaemonUnavailable', 'daemon_enabled', 'graph_source', 'request', 'spawn', 'stop']
 
+#: Longest the first command waits for the daemon it started to answer before joining the domain itself, s.
+START_TIMEOUT_S = 10.0
 #: Longest a query waits for the daemon's answer, s (the daemon's completeness wait is bounded well below).
 REPLY_TIMEOUT_S = 15.0
 #: The classes a daemon's answer may hold (anything else is refused, not unpickled).
@@ -86,15 +89,20 @@ def spawn(address: DaemonAddress | None = None) -> subprocess.Popen:
                             stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True, cwd='/')
 
 
-def wait_running(address: DaemonAddress | None = None, timeout_s: float = 10.0) -> dict | None:
-    """The daemon's status once it answers (None if it did not within ``timeout_s``)."""
+def wait_running(address: DaemonAddress | None = None, timeout_s: float = START_TIMEOUT_S,
+                 process: subprocess.Popen | None = None) -> dict | None:
+    """The daemon's status once it answers (None if it did not within ``timeout_s``, or ``process``, the daemon
+    just spawned, exited without answering); with ``process``, only a daemon of this code version counts."""
     address = daemon_address() if address is None else address
     deadline = time.monotonic() + timeout_s
     while True:
         try:
-            return request('status', address, timeout_s=max(0.1, deadline - time.monotonic()))
+            status = request('status', address, timeout_s=max(0.1, deadline - time.monotonic()))
+            if process is None or status.get('version') == code_version():
+                return status
+            raise DaemonUnavailable('the daemon of another version is still leaving')
         except DaemonUnavailable:
-            if time.monotonic() >= deadline:
+            if time.monotonic() >= deadline or (process is not None and process.poll() is not None):
                 return None
             time.sleep(0.05)
 
@@ -144,14 +152,19 @@ def fetch(address: DaemonAddress) -> GraphView:
 
 @contextlib.contextmanager
 def graph_source(name: str, no_daemon: bool = False) -> Iterator[GraphQueries]:
-    """The graph for command ``name``: the daemon's, else (starting the daemon) a participant of its own."""
+    """The graph for command ``name``: the daemon's (started here if none answers), else a participant of its own."""
     if not no_daemon and daemon_enabled():
         address = daemon_address()
         try:
             view = fetch(address)
         except DaemonUnavailable:
-            spawn(address)  # for the next command; this one joins the domain itself
-        else:
+            # Start it and ask it: joining the domain here as well would cost the same discovery wait, and the
+            # daemon's participant joining meanwhile would make this command wait for it too.
+            view = None
+            if wait_running(address, process=spawn(address)) is not None:
+                with contextlib.suppress(DaemonUnavailable):
+                    view = fetch(address)
+        if view is not None:
             yield DaemonGraph(address, view)
             return
     from ..dds.tool import GraphTool
