@@ -19,10 +19,7 @@ import time
 from collections import deque
 from typing import Any
 
-import yaml
-
 from ..errors import ConfigError, GraphError, MessageError
-from ..yamlconf import did_you_mean, safe_load
 from .daemon import add_no_daemon
 from .options import non_negative_seconds, positive_int, rate_hz, seconds
 
@@ -101,6 +98,7 @@ def abbreviate_arrays(msg: Any) -> dict[str, Any]:
 def check_field_path(type_name: str, path: str) -> None:
     """Raise GraphError unless ``a.b`` names a field (nested through messages) of ``type_name``."""
     from .. import messages
+    from ..yamlconf import did_you_mean
     cls = messages.get_message(type_name)
     parts = path.split('.')
     for i, part in enumerate(parts):
@@ -123,6 +121,7 @@ def select_field(data: Any, path: str) -> Any:
 
 
 def to_yaml(data: Any) -> str:
+    import yaml
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=False, width=sys.maxsize, allow_unicode=True)
 
 
@@ -301,6 +300,7 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
 def _pub(tool: Any, args: argparse.Namespace) -> int:
     from .. import messages
     from ..node_main import StopSignals
+    from ..yamlconf import safe_load
     type_name = messages.normalize_type_name(args.type)
     try:
         values = safe_load(args.values, 'the message values')
