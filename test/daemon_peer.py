@@ -16,9 +16,11 @@ import sys
 import textwrap
 import time
 
-#: A node of ours that is made when a line arrives on stdin ("ready" once it exists), then spins.
+#: A node of ours that is made when a line arrives on stdin ("ready" once it exists), then spins until stdin
+#: closes.
 NODE = textwrap.dedent('''
     import sys
+    import threading
     from touch_graph.compat import get_message
     from touch_graph.runtime import Context, Node, SingleThreadedExecutor
     String = get_message('std_msgs/msg/String')
@@ -31,9 +33,11 @@ NODE = textwrap.dedent('''
     print('ready', flush=True)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
+    closed = threading.Event()  # stdin closed: stop
+    threading.Thread(target=lambda: (sys.stdin.read(), closed.set()), daemon=True).start()
     try:
-        while sys.stdin.readline():
-            pass
+        while not closed.is_set():
+            executor.spin_once(0.1)
     finally:
         context.try_shutdown()
 ''')
