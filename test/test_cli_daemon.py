@@ -81,6 +81,8 @@ def test_daemon_graph_holds_our_node_with_its_endpoints(env):
         assert '/late_chatter [std_msgs/msg/String]' in topics.stdout
         direct = cli(env, 'topic', 'list', '-t', '--no-daemon')
         assert direct.stdout == topics.stdout
+        param = cli(env, 'param', 'get', '/probe_talker', 'use_sim_time')  # nodes from the daemon, calls direct
+        assert param.stdout.strip() == 'Boolean value is: False', param.stderr
     finally:
         stop(proc)
 
@@ -89,13 +91,13 @@ OLD_DAEMON = textwrap.dedent('''
     import sys
     from touch_graph.daemon import server
     server.code_version = lambda: 'an older installation'
-    sys.exit(server.main(sys.argv[1:]))
+    sys.exit(server.serve(int(sys.argv[1])))
 ''')
 
 
 def test_a_daemon_of_another_version_is_replaced(env):
     address = daemon_address(env)
-    old = subprocess.Popen([sys.executable, '-c', OLD_DAEMON, '--ros-domain-id', env['ROS_DOMAIN_ID']], env=env,
+    old = subprocess.Popen([sys.executable, '-c', OLD_DAEMON, env['ROS_DOMAIN_ID']], env=env,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         status = client.wait_running(address)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from .options import non_negative_int, seconds
+
 __all__ = ['add_arguments', 'add_no_daemon', 'run']
 
 
@@ -23,9 +25,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub.add_parser('start', help="start this domain's daemon if it is not running")
     sub.add_parser('stop', help="stop this domain's daemon")
     sub.add_parser('status', help="whether this domain's daemon runs, and for what")
+    p = sub.add_parser('serve', help='be the daemon, in this terminal (the graph commands start it in the background)')
+    p.add_argument('--ros-domain-id', type=non_negative_int, required=True, metavar='N',
+                   help='the domain: must match ROS_DOMAIN_ID (given to be seen in the process list)')
+    p.add_argument('--idle-timeout', type=seconds, metavar='S',
+                   help='exit after S seconds without a question (default two hours)')
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.action == 'serve':
+        from ..daemon.server import IDLE_TIMEOUT_S, serve
+        return serve(args.ros_domain_id, args.idle_timeout or IDLE_TIMEOUT_S)
     from ..daemon import client
     address = client.daemon_address()
     where = f'domain {address.domain_id}, discovery range {address.discovery_range}'
@@ -55,8 +65,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     client.spawn(address)
     if client.wait_running(address) is None:
-        print(f'social-touch daemon: error: the daemon did not start ({where}); run python -m '
-              'touch_graph.daemon.server --ros-domain-id N in a terminal to see why')
+        print(f'social-touch daemon: error: the daemon did not start ({where}); run social-touch daemon serve '
+              f'--ros-domain-id {address.domain_id} in a terminal to see why')
         return 1
     print(f'The daemon has been started ({where})')
     return 0

@@ -83,7 +83,9 @@ def request(op: str, address: DaemonAddress | None = None, timeout_s: float = RE
 def spawn(address: DaemonAddress | None = None) -> subprocess.Popen:
     """Start the daemon for the current environment in the background, detached from this terminal."""
     address = daemon_address() if address is None else address
-    argv = [sys.executable, '-m', 'touch_graph.daemon.server', '--ros-domain-id', str(address.domain_id)]
+    # the runtime's own command runner (the console script belongs to the lab); argv shows in the process list
+    argv = [sys.executable, '-c', 'import sys; from touch_graph.cli.main import main; sys.exit(main())', 'daemon',
+            'serve', '--ros-domain-id', str(address.domain_id)]
     env = {k: v for k, v in os.environ.items() if k != 'SOCIAL_TOUCH_NETWORK'}  # a daemon is in the domain
     return subprocess.Popen(argv, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True, cwd='/')

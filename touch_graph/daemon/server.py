@@ -1,28 +1,27 @@
 """The graph daemon process: a hidden node in the domain, answering graph queries on a Unix socket.
 
-Run by :func:`touch_graph.daemon.client.spawn` as ``python -m touch_graph.daemon.server``, detached
-(a session of its own, no terminal). One request per connection: a JSON line
+Run by :func:`touch_graph.daemon.client.spawn` as ``social-touch daemon serve``, detached (a session
+of its own, no terminal). One request per connection: a JSON line
 ``{"op": "graph" | "status" | "stop", "version": ...}``; the answer is a pickled dict
 (:mod:`.client` reads it back with only the graph's classes allowed).
 """
 
 from __future__ import annotations
 
-import argparse
 import fcntl
 import json
 import os
 import pickle
 import signal
 import socketserver
-import sys
 import threading
 import time
 from typing import Any
 
+from ..errors import GraphError
 from .address import code_version, daemon_address
 
-__all__ = ['IDLE_TIMEOUT_S', 'main']
+__all__ = ['IDLE_TIMEOUT_S', 'serve']
 
 #: A daemon nobody asked for this long exits, s (ros2cli's: two hours).
 IDLE_TIMEOUT_S = 2 * 3600.0
@@ -126,17 +125,15 @@ def _hold_lock(path: Any, wait_s: float) -> int | None:
             time.sleep(0.05)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_graph.daemon.server',
-                                     description='The social-touch graph daemon (started by the graph commands).')
-    parser.add_argument('--ros-domain-id', type=int, required=True,
-                        help='the domain (must match ROS_DOMAIN_ID; given to be seen in the process list)')
-    parser.add_argument('--idle-timeout', type=float, default=IDLE_TIMEOUT_S, metavar='S',
-                        help='exit after S seconds without a request (default two hours)')
-    args = parser.parse_args(argv)
+def serve(domain_id: int, idle_timeout_s: float = IDLE_TIMEOUT_S) -> int:
+    """Be the daemon of the current environment's address until stopped or idle for ``idle_timeout_s``.
+
+    ``domain_id`` must be ``ROS_DOMAIN_ID`` (given to be seen in the process list, as ros2cli's daemon does).
+    Returns 0 at once when another daemon serves the address.
+    """
     address = daemon_address()
-    if args.ros_domain_id != address.domain_id:
-        parser.error(f'--ros-domain-id {args.ros_domain_id} is not ROS_DOMAIN_ID ({address.domain_id})')
+    if domain_id != address.domain_id:
+        raise GraphError(f'--ros-domain-id {domain_id} is not ROS_DOMAIN_ID ({address.domain_id})')
     lock = _hold_lock(address.lock_path, LOCK_WAIT_S)
     if lock is None:
         return 0  # another daemon serves this address
@@ -146,14 +143,14 @@ def main(argv: list[str] | None = None) -> int:
     with GraphTool(f'daemon_{address.domain_id}', discovery_timeout_s=0.0) as tool:
         cache = _GraphCache(tool)
         info = {'domain_id': address.domain_id, 'discovery_range': address.discovery_range,
-                'socket': str(address.socket_path), 'idle_timeout_s': args.idle_timeout}
+                'socket': str(address.socket_path), 'idle_timeout_s': idle_timeout_s}
         server = _Server(str(address.socket_path), cache, version, info)
         for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
             signal.signal(signum, lambda *_: server.stop())
 
         def idle_watch() -> None:
-            while not server.stopping.wait(min(args.idle_timeout, 5.0)):
-                if time.monotonic() - cache.last_request >= args.idle_timeout:
+            while not server.stopping.wait(min(idle_timeout_s, 5.0)):
+                if time.monotonic() - cache.last_request >= idle_timeout_s:
                     server.stop()
         threading.Thread(target=idle_watch, name='graph-daemon-idle', daemon=True).start()
         try:
@@ -164,7 +161,3 @@ def main(argv: list[str] | None = None) -> int:
             cache.close()
     os.close(lock)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
