@@ -1,6 +1,7 @@
 """The graph daemon (``social-touch daemon``): started on first use, answers from its graph, complete, replaced
 when stale, stopped by each test that starts one (a domain of the test's own)."""
 
+import importlib
 import io
 import os
 import pickle
@@ -11,6 +12,7 @@ import textwrap
 
 import pytest
 from daemon_peer import daemon, domain_env, listed_of, load_node, node_list, start_node, stop
+from doctest_testing import check_doctests
 
 from touch_graph.daemon import client
 from touch_graph.daemon.address import daemon_address
@@ -87,18 +89,37 @@ def test_daemon_graph_holds_our_node_with_its_endpoints(env):
         stop(proc)
 
 
-OLD_DAEMON = textwrap.dedent('''
+OTHER_DAEMON = textwrap.dedent('''
     import sys
     from touch_graph.daemon import server
-    server.code_version = lambda: 'an older installation'
+    server.code_version = lambda: sys.argv[2]
     sys.exit(server.serve(int(sys.argv[1])))
 ''')
 
 
-def test_a_daemon_of_another_version_is_replaced(env):
+def other_daemon(env, version):
+    """A daemon that says it runs installation ``version``."""
+    return subprocess.Popen([sys.executable, '-c', OTHER_DAEMON, env['ROS_DOMAIN_ID'], version], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def test_a_daemon_of_a_newer_installation_stays(env):
     address = daemon_address(env)
-    old = subprocess.Popen([sys.executable, '-c', OLD_DAEMON, env['ROS_DOMAIN_ID']], env=env,
-                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    newer = f'{10**30}-from-the-future'
+    proc = other_daemon(env, newer)
+    try:
+        assert client.wait_running(address)['version'] == newer
+        result = cli(env, 'topic', 'list')  # asks its own participant (which sees the daemon's)
+        assert result.returncode in (0, 1) and 'Traceback' not in result.stderr, result.stderr
+        assert proc.poll() is None and client.request('status', address)['version'] == newer
+    finally:
+        client.stop(address)
+        proc.wait(10)
+
+
+def test_a_daemon_of_an_older_installation_is_replaced(env):
+    address = daemon_address(env)
+    old = other_daemon(env, 'an older installation')
     try:
         status = client.wait_running(address)
         assert status is not None and status['version'] == 'an older installation'
@@ -136,3 +157,8 @@ def test_a_query_through_the_daemon_loads_no_dds(env):
              ' or m.startswith("touch_graph.runtime") or m in ("numpy", "touch_graph.messages")))')
     out = subprocess.run([sys.executable, '-c', probe], env=env, capture_output=True, text=True, timeout=60)
     assert out.stdout.strip().splitlines()[-1] == '[]', out.stdout + out.stderr
+
+
+@pytest.mark.parametrize('name', ['touch_graph.daemon.address', 'touch_graph.cli.topic'])
+def test_doctests(name):
+    check_doctests(importlib.import_module(name))

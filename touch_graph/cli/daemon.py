@@ -37,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
         from ..daemon.server import IDLE_TIMEOUT_S, serve
         return serve(args.ros_domain_id, args.idle_timeout or IDLE_TIMEOUT_S)
     from ..daemon import client
+    from ..daemon.address import is_older
     address = client.daemon_address()
     where = f'domain {address.domain_id}, discovery range {address.discovery_range}'
     if args.action == 'stop':
@@ -55,10 +56,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"The daemon is running ({where}): pid {status['pid']}, up {status['up_s']:.0f} s, "
               f"{status['requests']} requests, {status['participants']} other participants, "
               f"socket {status['socket']}" + ('' if current else '; it runs another installation of social-touch '
-                                              'and is replaced at the next graph command'))
+                                              '(an older one is replaced at the next graph command)'))
         return 0
-    if status is not None and not current:
-        client.stop(address)  # another installation's daemon: replaced by ours
+    if status is not None and not current and is_older(status.get('version', ''), client.code_version()):
+        client.stop(address)  # an older installation's daemon: replaced by ours
         status = None
     if status is not None:
         print(f'The daemon is already running ({where})')

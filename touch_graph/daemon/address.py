@@ -13,7 +13,7 @@ from pathlib import Path
 from ..dds.config import domain_id, read_discovery
 from ..errors import GraphError
 
-__all__ = ['DaemonAddress', 'code_version', 'daemon_address', 'runtime_dir']
+__all__ = ['DaemonAddress', 'code_version', 'daemon_address', 'is_older', 'runtime_dir']
 
 #: The package whose files make the code version (what a daemon runs).
 _PACKAGE_DIR = Path(__file__).resolve().parent.parent
@@ -60,14 +60,31 @@ def daemon_address(environ: Mapping[str, str] | None = None) -> DaemonAddress:
 
 
 def code_version() -> str:
-    """The installation a daemon runs: its environment (``sys.prefix``) and the size and time of each file of
-    ``touch_graph``.
+    """The installation a daemon runs: ``<newest file time, ns>-<digest>`` of its environment (``sys.prefix``) and
+    the size and time of each file of ``touch_graph``.
 
-    A client that finds a daemon of another version stops it and starts its own (ros2cli compares the
-    RMW implementation in the same way).
+    A client that finds a daemon of an older installation makes it leave and starts its own (ros2cli compares the
+    RMW implementation in the same way); :func:`is_older` orders two versions.
     """
     digest = hashlib.sha1(f'{sys.prefix}\n'.encode())
+    newest = 0
     for path in sorted(_PACKAGE_DIR.rglob('*.py')):
         info = path.stat()
+        newest = max(newest, info.st_mtime_ns)
         digest.update(f'{path}:{info.st_size}:{info.st_mtime_ns}\n'.encode())
-    return digest.hexdigest()[:12]
+    return f'{newest}-{digest.hexdigest()[:12]}'
+
+
+def is_older(version: str, than: str) -> bool:
+    """Whether installation ``version`` is not newer than ``than`` (and not the same): its newest file is as old
+    or older. Unreadable versions count as older.
+
+    >>> is_older('100-aa', '200-bb'), is_older('200-aa', '100-bb'), is_older('100-aa', '100-bb'), is_older('x', '1-a')
+    (True, False, True, True)
+    """
+    if version == than:
+        return False
+    try:
+        return int(version.split('-', 1)[0]) <= int(than.split('-', 1)[0])
+    except ValueError:
+        return True

@@ -5,7 +5,7 @@
 daemon's graph (:class:`DaemonGraph`). When no daemon answers, one is started in the background
 and asked once it answers (ros2cli's first call joins the domain itself instead: here the daemon
 joining meanwhile would make that call wait for it); a daemon of another code version leaves and
-is replaced in the same way. When the daemon does not come up, the command joins the domain
+is replaced in the same way (a newer one stays). When the daemon does not come up, the command joins the domain
 itself. Imports nothing of Cyclone or the runtime unless it falls back to a participant.
 """
 
@@ -28,7 +28,8 @@ from ..dds.graph_queries import GraphQueries, no_graph_message
 from ..errors import GraphError
 from .address import DaemonAddress, code_version, daemon_address
 
-__all__ = ['DaemonGraph', 'DaemonUnavailable', 'daemon_enabled', 'graph_source', 'request', 'spawn', 'stop']
+__all__ = ['DaemonGraph', 'DaemonUnavailable', 'NewerDaemon', 'daemon_enabled', 'graph_source', 'request', 'spawn',
+           'stop']
 
 #: Longest the first command waits for the daemon it started to answer before joining the domain itself, s.
 START_TIMEOUT_S = 10.0
@@ -42,6 +43,10 @@ _ALLOWED = {('touch_graph.dds.graph', name) for name in
 
 class DaemonUnavailable(GraphError):
     """No daemon answered at the address (not running, being replaced, or its answer was not readable)."""
+
+
+class NewerDaemon(DaemonUnavailable):
+    """The daemon runs a newer installation than this command: it stays, and this command asks its own participant."""
 
 
 class _GraphUnpickler(pickle.Unpickler):
@@ -144,9 +149,12 @@ def fetch(address: DaemonAddress) -> GraphView:
     """The daemon's complete graph.
 
     Raises:
-        DaemonUnavailable: no daemon answers, or it runs another code version (it leaves; start another).
+        NewerDaemon: it runs a newer installation (it stays).
+        DaemonUnavailable: no daemon answers, or it runs an older installation (it leaves; start another).
     """
     reply = request('graph', address)
+    if reply.get('error') == 'version' and not reply.get('leaving'):
+        raise NewerDaemon(f'the graph daemon at {address.socket_path} runs a newer installation of social-touch')
     if not reply.get('ok'):
         raise DaemonUnavailable(f"the graph daemon at {address.socket_path} refused: {reply.get('error')}")
     return reply['view']
@@ -159,6 +167,8 @@ def graph_source(name: str, no_daemon: bool = False) -> Iterator[GraphQueries]:
         address = daemon_address()
         try:
             view = fetch(address)
+        except NewerDaemon:
+            view = None
         except DaemonUnavailable:
             # Start it and ask it: joining the domain here as well would cost the same discovery wait, and the
             # daemon's participant joining meanwhile would make this command wait for it too.

@@ -19,7 +19,7 @@ import time
 from typing import Any
 
 from ..errors import GraphError
-from .address import code_version, daemon_address
+from .address import code_version, daemon_address, is_older
 
 __all__ = ['IDLE_TIMEOUT_S', 'serve']
 
@@ -93,8 +93,10 @@ class _Handler(socketserver.StreamRequestHandler):
         cache.requests += 1
         reply: dict[str, Any] = {'ok': True, 'version': server.version, 'pid': os.getpid()}
         if op == 'graph' and request.get('version') != server.version:
-            reply.update(ok=False, error='version')  # a newer installation asks: leave it the place
-            server.stop()
+            leaving = is_older(server.version, str(request.get('version')))
+            reply.update(ok=False, error='version', leaving=leaving)
+            if leaving:  # a newer installation asks: leave it the place (an older one asks its own participant)
+                server.stop()
         elif op == 'graph':
             started = time.monotonic()
             reply['view'] = cache.complete_view()
