@@ -27,6 +27,10 @@ __all__ = ['IDLE_TIMEOUT_S', 'serve']
 IDLE_TIMEOUT_S = 2 * 3600.0
 #: How long a new daemon waits for the one it replaces (another code version) to leave, s.
 LOCK_WAIT_S = 5.0
+#: The daemon's participant announces itself this often (Cyclone configuration, after the user's): a Fast DDS node
+#: on LOCALHOST announces itself by multicast only and learns of a participant that started before it (the daemon)
+#: from that participant's next announcement; until then the daemon cannot know the node (touch_graph.dds.config).
+DAEMON_SPDP = '<CycloneDDS><Domain><Discovery><SPDPInterval>100ms</SPDPInterval></Discovery></Domain></CycloneDDS>'
 #: How long after joining the daemon waits for anyone before saying the domain is empty, s.
 DISCOVERY_TIMEOUT_S = 2.0
 
@@ -141,6 +145,8 @@ def serve(domain_id: int, idle_timeout_s: float = IDLE_TIMEOUT_S) -> int:
         return 0  # another daemon serves this address
     from ..dds.tool import GraphTool
     address.socket_path.unlink(missing_ok=True)  # left by a daemon that was killed
+    # After the address is known (the setting names the daemon): announce the daemon often, see DAEMON_SPDP.
+    os.environ['CYCLONEDDS_URI'] = ','.join(filter(None, [os.environ.get('CYCLONEDDS_URI', ''), DAEMON_SPDP]))
     version = code_version()
     with GraphTool(f'daemon_{address.domain_id}', discovery_timeout_s=0.0) as tool:
         cache = _GraphCache(tool)
