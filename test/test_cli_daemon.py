@@ -162,3 +162,15 @@ def test_a_query_through_the_daemon_loads_no_dds(env):
 @pytest.mark.parametrize('name', ['touch_graph.daemon.address', 'touch_graph.cli.topic'])
 def test_doctests(name):
     check_doctests(importlib.import_module(name))
+
+
+def test_bench_times_the_graph_queries_and_stops_its_daemon(monkeypatch):
+    from touch_lab.bench.cli import bench_graph_queries
+    stopped = []
+    real_stop = client.stop
+    monkeypatch.setattr(client, 'stop', lambda address, **kw: stopped.append(address) or real_stop(address, **kw))
+    result = bench_graph_queries(1, settle_s=0.5)
+    assert set(result) >= {'topic list, first call (s)', 'topic list, daemon settled (s)',
+                           'node list, daemon settled (s)', 'topic list --no-daemon (s)'}
+    assert all(v > 0 for k, v in result.items() if k.endswith('(s)'))
+    assert stopped and client.wait_running(stopped[-1], timeout_s=0.0) is None, 'the bench left its daemon running'
