@@ -14,8 +14,10 @@ the like from its graph cache. This is the same design for ``social-touch``:
   query with its graph once complete by the rule a command of its own waits by
   (:func:`~touch_graph.dds.tool.wait_for_complete_graph`): a participant announced but whose
   nodes or endpoints are not known yet is waited for (bounded), so a node started just before
-  the query is listed. It runs until ``social-touch daemon stop``, a client of another code
-  version, or two hours without a query (as ros2cli's).
+  the query is listed; and it announces itself more often than other participants of ours, so a
+  Fast DDS node made after it (which waits to hear of older participants) finds it at once
+  (:data:`.server.DAEMON_SPDP`). It runs until ``social-touch daemon stop``, a client of a newer
+  installation, or two hours without a query (as ros2cli's).
 - :mod:`.client`: what a command uses: the daemon's graph, starting the daemon in the background
   on first use, and a participant of the command's own when the daemon cannot be reached or
   ``--no-daemon`` is given (or ``SOCIAL_TOUCH_DAEMON=0``, as the test suite sets it).
