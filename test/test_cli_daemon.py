@@ -125,8 +125,8 @@ def test_a_daemon_of_an_older_installation_is_replaced(env):
         assert status is not None and status['version'] == 'an older installation'
         assert 'another installation' in cli(env, 'daemon', 'status').stdout
         cli(env, 'topic', 'list')  # answered without it; it leaves and ours starts
-        assert old.wait(10) == 0
-        status = client.wait_running(address)
+        assert old.wait(30) == 0
+        status = client.wait_running(address, timeout_s=30.0)  # it waits for the old one to leave
         assert status is not None and status['version'] == client.code_version()
     finally:
         if old.poll() is None:

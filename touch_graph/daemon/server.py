@@ -26,7 +26,7 @@ __all__ = ['IDLE_TIMEOUT_S', 'serve']
 #: A daemon nobody asked for this long exits, s (ros2cli's: two hours).
 IDLE_TIMEOUT_S = 2 * 3600.0
 #: How long a new daemon waits for the one it replaces (another code version) to leave, s.
-LOCK_WAIT_S = 5.0
+LOCK_WAIT_S = 30.0
 #: The daemon's participant announces itself this often (Cyclone configuration, after the user's): a Fast DDS node
 #: on LOCALHOST announces itself by multicast only and learns of a participant that started before it (the daemon)
 #: from that participant's next announcement; until then the daemon cannot know the node (touch_graph.dds.config).
