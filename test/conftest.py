@@ -23,6 +23,7 @@ from touch_sim.virtual_port import forget_devices
 from touch_view.scene import BackgroundScene
 
 os.environ['SOCIAL_TOUCH_NETWORK'] = '0'
+os.environ['SOCIAL_TOUCH_DAEMON'] = '0'  # no graph daemon outlives a test (test_cli_daemon.py starts its own)
 # Held until the session's process ends (the lock goes with its file descriptor).
 _session_domain = allocate_domain()
 os.environ['ROS_DOMAIN_ID'] = str(_session_domain.__enter__())

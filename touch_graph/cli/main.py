@@ -39,6 +39,7 @@ COMMANDS: dict[str, Command] = {
                      'parameters of running nodes: list, get, set, describe, dump, load, delete'),
     'record': Command('touch_graph.cli.record', 'record topics of the running graph to a rosbag2 (MCAP)'),
     'play': Command('touch_graph.cli.play', 'replay a rosbag2 into the running graph with its recorded timing'),
+    'daemon': Command('touch_graph.cli.daemon', 'the graph daemon of this domain: start, stop, status'),
     'bag': Command('touch_graph.cli.bag', 'bag info, bag reindex (recover a bag whose recorder died)'),
     'interface': Command('touch_graph.cli.interface', 'list message types or show one (like ros2 interface)'),
     'export-interfaces': Command('touch_graph.cli.export_interfaces',

@@ -3,6 +3,7 @@
 Nodes come from ``ros_discovery_info`` (ours and any ROS 2 node's); endpoints from DDS
 discovery: publishers, subscriptions, service servers and clients (``rq/``/``rr/`` topics).
 Hidden nodes (a name starting with ``_``, such as these commands' own) are listed with ``-a``.
+The graph comes from the domain's graph daemon (:mod:`touch_graph.daemon`) unless ``--no-daemon``.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from typing import Any
 
 from ..errors import GraphError
 from ..yamlconf import did_you_mean
+from .daemon import add_no_daemon
 
 __all__ = ['add_arguments', 'run']
 
@@ -21,14 +23,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser('list', help='nodes of the running graph')
     p.add_argument('-a', '--all', action='store_true', help='include hidden nodes (names starting with _)')
     p.add_argument('-c', '--count-nodes', action='store_true', help='print only the number of nodes')
+    add_no_daemon(p)
     p = sub.add_parser('info', help="a node's publishers and subscriptions")
     p.add_argument('node', help='fully qualified name, e.g. /bear/driver')
+    add_no_daemon(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..dds.tool import GraphTool
-    with GraphTool(f'node_{args.action}') as tool:
-        view = tool.require_graph()
+    from ..daemon.client import graph_source
+    with graph_source(f'node_{args.action}', args.no_daemon) as source:
+        view = source.require_graph()
         return _list(view, args) if args.action == 'list' else _info(view, args)
 
 

@@ -17,12 +17,15 @@ Examples::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 import yaml
 
 from ..errors import ConfigError, GraphError, ParameterError
+from .daemon import add_no_daemon
 from .options import seconds
 
 __all__ = ['add_arguments', 'run']
@@ -44,6 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         p.add_argument('--include-hidden-nodes', action='store_true', help='consider hidden nodes as well')
         p.add_argument('--timeout', type=seconds, default=5.0, metavar='S',
                        help='wait at most S seconds for the parameter services, and again for each answer (default 5)')
+        add_no_daemon(p)
         return p
 
     p = verb('list', 'list the parameters of a node (of every node when none is named)', node_optional=True)
@@ -68,22 +72,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..daemon.client import graph_source
+    with graph_source(f'param_{args.action}', args.no_daemon) as graph, _caller(graph, args.action) as tool:
+        return _VERBS[args.action](_Params(graph, tool, args), args)
+
+
+@contextlib.contextmanager
+def _caller(graph: Any, action: str) -> Iterator[Any]:
+    """The participant that calls the parameter services: the graph's own without the daemon; with it, one that
+    skips the discovery wait (the daemon knows the graph; each call waits for its service to match)."""
     from ..dds.tool import GraphTool
-    with GraphTool(f'param_{args.action}') as tool:
-        return _VERBS[args.action](_Params(tool, args), args)
+    if isinstance(graph, GraphTool):
+        yield graph
+        return
+    graph.require_graph()  # nobody there: say so before joining the domain
+    with GraphTool(f'param_{action}', discovery_timeout_s=0.0) as tool:
+        yield tool
 
 
 class _Params:
-    """Calls to one node's parameter services through a GraphTool."""
+    """Calls to a node's parameter services through a GraphTool (``tool``), the nodes from ``graph`` (the same tool,
+    or the graph daemon's graph)."""
 
-    def __init__(self, tool: Any, args: argparse.Namespace) -> None:
+    def __init__(self, graph: Any, tool: Any, args: argparse.Namespace) -> None:
+        self.graph = graph
         self.tool = tool
         self.timeout = args.timeout
         self.include_hidden = args.include_hidden_nodes
 
     def node(self, name: str) -> str:
         # a Fast DDS node's ros_discovery_info can come seconds after its endpoints: wait as for a service
-        return self.tool.require_node(name, self.include_hidden, wait_s=self.timeout)
+        return self.graph.require_node(name, self.include_hidden, wait_s=self.timeout)
 
     def call(self, node: str, service: str, **fields: Any) -> Any:
         """The response of ``node``'s parameter service ``service`` (e.g. ``get_parameters``) to ``fields``."""
@@ -98,7 +117,7 @@ class _Params:
 
 
 def _list(params: _Params, args: argparse.Namespace) -> int:
-    view = params.tool.require_graph()
+    view = params.graph.require_graph()
     if args.node_name:
         nodes = [params.node(args.node_name)]
     else:  # every node that serves parameters (ros2 param list does the same)
@@ -106,10 +125,10 @@ def _list(params: _Params, args: argparse.Namespace) -> int:
         # seconds after its services: wait (at most 2 s) for some parameter service, then for their nodes
         def serving(v: Any) -> set[str]:
             return {name.rsplit('/', 1)[0] for name in v.services if name.endswith('/list_parameters')}
-        params.tool.wait_until(lambda v: bool(serving(v)), min(params.timeout, 2.0))
-        servers = serving(params.tool.graph())
-        params.tool.wait_until(lambda v: servers <= {n.name for n in v.visible_nodes(True)}, params.timeout)
-        view = params.tool.graph()
+        params.graph.wait_until(lambda v: bool(serving(v)), min(params.timeout, 2.0))
+        servers = serving(params.graph.graph())
+        params.graph.wait_until(lambda v: servers <= {n.name for n in v.visible_nodes(True)}, params.timeout)
+        view = params.graph.graph()
         nodes = sorted(n.name for n in view.visible_nodes(args.include_hidden_nodes)
                        if f'{n.name}/list_parameters' in n.services)
     for node in nodes:

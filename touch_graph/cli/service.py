@@ -16,6 +16,7 @@ import time
 
 from ..errors import ConfigError, GraphError, MessageError
 from ..yamlconf import safe_load
+from .daemon import add_no_daemon
 from .options import rate_hz, seconds
 
 __all__ = ['add_arguments', 'run']
@@ -28,13 +29,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('-c', '--count-services', action='store_true', help='print only the number of services')
     p.add_argument('--include-hidden-services', action='store_true', help='include hidden services (a name part '
                                                                           'starting with _)')
+    add_no_daemon(p)
     p = sub.add_parser('type', help="a service's type")
     p.add_argument('service_name', help='e.g. /bear/bear_gestures/list_parameters')
     p.add_argument('--include-hidden-services', action='store_true', help='consider hidden services as well')
+    add_no_daemon(p)
     p = sub.add_parser('find', help='services of a type')
     p.add_argument('service_type', help='e.g. rcl_interfaces/srv/ListParameters')
     p.add_argument('-c', '--count-services', action='store_true', help='print only the number of services')
     p.add_argument('--include-hidden-services', action='store_true', help='consider hidden services as well')
+    add_no_daemon(p)
     p = sub.add_parser('call', help='call a service and print the response')
     p.add_argument('service_name', help="e.g. '/robot/set_mode'")
     p.add_argument('service_type', help="e.g. 'std_srvs/srv/SetBool' (or std_srvs/SetBool)")
@@ -49,9 +53,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.action == 'call':
         return _call(args)
-    from ..dds.tool import GraphTool
-    with GraphTool(f'service_{args.action}') as tool:
-        view = tool.require_graph()
+    from ..daemon.client import graph_source
+    with graph_source(f'service_{args.action}', args.no_daemon) as source:
+        view = source.require_graph()
         services = view.visible_services(args.include_hidden_services)
         if args.action == 'list':
             if args.count_services:

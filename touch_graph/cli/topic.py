@@ -19,11 +19,8 @@ import time
 from collections import deque
 from typing import Any
 
-import yaml
-
-from .. import messages
 from ..errors import ConfigError, GraphError, MessageError
-from ..yamlconf import did_you_mean, safe_load
+from .daemon import add_no_daemon
 from .options import non_negative_seconds, positive_int, rate_hz, seconds
 
 __all__ = ['HzMonitor', 'abbreviate_arrays', 'add_arguments', 'run', 'select_field']
@@ -80,10 +77,12 @@ def _array_note(type_str: str, value: Any) -> str:
 def abbreviate_arrays(msg: Any) -> dict[str, Any]:
     """``to_dict`` with every array field replaced by a note (``echo --no-arr``).
 
+    >>> from touch_graph import messages
     >>> Header = messages.get_message('std_msgs/msg/Header')
     >>> abbreviate_arrays(messages.get_message('DriverStatus')())['header'] == messages.to_dict(Header())
     True
     """
+    from .. import messages
     out = {}
     for name, type_str in type(msg).get_fields_and_field_types().items():
         value = getattr(msg, name)
@@ -98,6 +97,8 @@ def abbreviate_arrays(msg: Any) -> dict[str, Any]:
 
 def check_field_path(type_name: str, path: str) -> None:
     """Raise GraphError unless ``a.b`` names a field (nested through messages) of ``type_name``."""
+    from .. import messages
+    from ..yamlconf import did_you_mean
     cls = messages.get_message(type_name)
     parts = path.split('.')
     for i, part in enumerate(parts):
@@ -120,6 +121,7 @@ def select_field(data: Any, path: str) -> Any:
 
 
 def to_yaml(data: Any) -> str:
+    import yaml
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=False, width=sys.maxsize, allow_unicode=True)
 
 
@@ -130,6 +132,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('-t', '--show-types', action='store_true', help='print each topic with its type')
     p.add_argument('-c', '--count-topics', action='store_true', help='print only the number of topics')
     p.add_argument('--include-hidden-topics', action='store_true', help='also topics with a token starting with _')
+    add_no_daemon(p)
     p = sub.add_parser('echo', help='print the messages of a topic')
     p.add_argument('topic')
     p.add_argument('type', nargs='?', help='message type, to wait for a topic that is not published yet')
@@ -147,6 +150,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument('topic')
     p.add_argument('-v', '--verbose', action='store_true',
                    help='list each publisher and subscription: node, GID, QoS, and queue drops where known')
+    add_no_daemon(p)
     p = sub.add_parser('pub', help='publish a message given as YAML')
     p.add_argument('topic')
     p.add_argument('type', help='e.g. std_msgs/msg/String or social_touch_msgs/msg/HapticCommand')
@@ -160,9 +164,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.action in _GRAPH_QUERIES:
+        from ..daemon.client import graph_source
+        with graph_source(f'topic_{args.action}', args.no_daemon) as source:
+            return _GRAPH_QUERIES[args.action](source, args)
     from ..dds.tool import GraphTool
     with GraphTool(f'topic_{args.action}') as tool:
-        return {'list': _list, 'echo': _echo, 'hz': _hz, 'info': _info, 'pub': _pub}[args.action](tool, args)
+        return {'echo': _echo, 'hz': _hz, 'pub': _pub}[args.action](tool, args)
 
 
 # --------------------------------------------------------------------------- actions
@@ -197,13 +205,19 @@ def _info(tool: Any, args: argparse.Namespace) -> int:
     return 0
 
 
+#: The actions that only read the graph (answered by the graph daemon unless --no-daemon).
+_GRAPH_QUERIES = {'list': _list, 'info': _info}
+
+
 def _subscribe(tool: Any, topic: str, type_name: str, callback: Any, *, raw: bool = False, depth: int = 100) -> Any:
     """A subscription of the tool's node with the QoS the publishers of ``topic`` offer (remade if one joins
     that it cannot match)."""
+    from .. import messages
     return tool.subscribe(messages.get_message(type_name), topic, callback, depth, raw=raw)
 
 
 def _echo(tool: Any, args: argparse.Namespace) -> int:
+    from .. import messages
     from ..node_main import StopSignals
     limit = 1 if args.once else args.count
     if limit is not None and limit < 1:
@@ -284,7 +298,9 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _pub(tool: Any, args: argparse.Namespace) -> int:
+    from .. import messages
     from ..node_main import StopSignals
+    from ..yamlconf import safe_load
     type_name = messages.normalize_type_name(args.type)
     try:
         values = safe_load(args.values, 'the message values')

@@ -7,7 +7,16 @@ descriptions, domain and discovery settings); :mod:`.discovery` publishes and re
 ``ros_discovery_info`` and builds a :class:`GraphView` from DDS discovery.
 """
 
+from typing import Any
+
 from .graph import UNKNOWN_NODE, EndpointInfo, GraphView, NodeInfo, TopicInfo
-from .participant import DdsParticipant
 
 __all__ = ['UNKNOWN_NODE', 'DdsParticipant', 'EndpointInfo', 'GraphView', 'NodeInfo', 'TopicInfo']
+
+
+def __getattr__(name: str) -> Any:
+    # Cyclone loads with the participant only: the graph daemon's clients read graph views and nothing else.
+    if name == 'DdsParticipant':
+        from .participant import DdsParticipant
+        return DdsParticipant
+    raise AttributeError(f'module {__name__!r} has no attribute {name!r}')

@@ -34,7 +34,6 @@ import logging
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from xml.sax.saxutils import quoteattr
 
 from ..errors import GraphError
 
@@ -114,6 +113,7 @@ def cyclone_config(options: DiscoveryOptions, environ: Mapping[str, str] | None 
                       f'</MaxAutoParticipantIndex><SPDPInterval>{SPDP_INTERVAL}</SPDPInterval>'
         peers = (['localhost'] if localhost else []) + (list(options.static_peers) if add_peers else [])
         if peers:
+            from xml.sax.saxutils import quoteattr  # here: the graph daemon's clients read no XML
             config += '<Peers>' + ''.join(f'<Peer address={quoteattr(p)}/>' for p in peers) + '</Peers>'
         config += '</Discovery></Domain></CycloneDDS>,'
     return config + env.get('CYCLONEDDS_URI', '')

@@ -20,11 +20,11 @@ from typing import Any
 from ..errors import GraphError
 from ..offered_qos import OfferedQosSubscriptions
 from ..runtime import Context, Node, SingleThreadedExecutor
-from ..yamlconf import did_you_mean
 from .cdds import wait_for_acks
-from .graph import GraphView, TopicInfo
+from .graph import GraphView
+from .graph_queries import GraphQueries, NoGraphError, no_graph_message
 
-__all__ = ['GraphTool', 'NoGraphError']
+__all__ = ['GraphTool', 'NoGraphError', 'wait_for_complete_graph']
 
 #: Discovery counts as settled when the graph has not changed for this long, s.
 SETTLE_S = 0.3
@@ -32,11 +32,45 @@ SETTLE_S = 0.3
 COMPLETE_TIMEOUT_S = 5.0
 
 
-class NoGraphError(GraphError):
-    """No other participant is in the domain."""
+def wait_for_complete_graph(discovery: Any, timeout_s: float, *, started: float | None = None,
+                            last_change: float | None = None) -> bool:
+    """Wait until ``discovery``'s graph is complete, or ``timeout_s`` passed with nobody found; True if anyone is
+    there.
+
+    Complete: someone was found, every participant found has announced its nodes and DDS has shown
+    their endpoints (:meth:`~touch_graph.dds.discovery.GraphDiscovery.incomplete`), and no participant,
+    endpoint or node changed for :data:`SETTLE_S`. Once someone is found, waiting for the rest takes at most
+    :data:`COMPLETE_TIMEOUT_S` more.
+
+    Args:
+        discovery: a :class:`~touch_graph.dds.discovery.GraphDiscovery`.
+        timeout_s: how long after ``started`` to wait while nobody is found, s.
+        started: when the participant joined (``time.monotonic()``; default now).
+        last_change: when the graph last changed (monotonic; default now, as for a participant that just joined).
+    """
+    now = time.monotonic()
+    start = now if started is None else started
+    last_change = now if last_change is None else last_change
+    version = discovery.version
+    structure = discovery.structure_version
+    found_at: float | None = None
+    while True:
+        now = time.monotonic()
+        if discovery.remote_participant_count():
+            found_at = now if found_at is None else found_at
+            if now - last_change >= SETTLE_S and not discovery.incomplete():
+                break
+            if now - found_at >= COMPLETE_TIMEOUT_S:
+                break
+        elif now - start >= timeout_s:
+            break
+        version = discovery.wait_for_change(version, SETTLE_S / 3)
+        if discovery.structure_version != structure:  # statistics flowing in are no news
+            structure, last_change = discovery.structure_version, time.monotonic()
+    return discovery.remote_participant_count() > 0
 
 
-class GraphTool:
+class GraphTool(GraphQueries):
     """A command-line tool's place in the graph (a context manager).
 
     Args:
@@ -83,96 +117,16 @@ class GraphTool:
         return self.discovery.view()
 
     def wait_for_discovery(self, timeout_s: float) -> bool:
-        """Wait until the graph is complete or ``timeout_s`` passes with nobody found; True if anyone is there.
+        """Wait until the graph is complete or ``timeout_s`` passes with nobody found; True if anyone is there
+        (:func:`wait_for_complete_graph`)."""
+        return wait_for_complete_graph(self.discovery, timeout_s)
 
-        Complete: someone was found, every participant found has announced its nodes and DDS has shown
-        their endpoints (:meth:`~touch_graph.dds.discovery.GraphDiscovery.incomplete`), and no participant,
-        endpoint or node changed for :data:`SETTLE_S`. Once someone is found, waiting for the rest takes at most
-        :data:`COMPLETE_TIMEOUT_S` more.
-        """
-        start = time.monotonic()
-        version = self.discovery.version
-        structure = self.discovery.structure_version
-        last_change = start
-        found_at: float | None = None
-        while True:
-            now = time.monotonic()
-            if self.discovery.remote_participant_count():
-                found_at = now if found_at is None else found_at
-                if now - last_change >= SETTLE_S and not self.discovery.incomplete():
-                    break
-                if now - found_at >= COMPLETE_TIMEOUT_S:
-                    break
-            elif now - start >= timeout_s:
-                break
-            version = self.discovery.wait_for_change(version, SETTLE_S / 3)
-            if self.discovery.structure_version != structure:  # statistics flowing in are no news
-                structure, last_change = self.discovery.structure_version, time.monotonic()
-        return self.discovery.remote_participant_count() > 0
-
-    def wait_until(self, predicate: Callable[[GraphView], bool], timeout_s: float) -> bool:
-        """Wait (wall time) until ``predicate(graph())`` holds; returns its last value."""
-        deadline = time.monotonic() + timeout_s
-        version = self.discovery.version
-        while True:
-            if predicate(self.graph()):
-                return True
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            version = self.discovery.wait_for_change(version, min(left, 0.25))
+    def wait_for_change(self, timeout_s: float) -> None:
+        self.discovery.wait_for_change(self.discovery.version, timeout_s)
 
     def no_graph_message(self) -> str:
         transport = self.context.transport
-        return (f'no ROS 2 graph is running in DDS domain {transport.domain_id} (discovery range '
-                f'{transport.discovery_options.range}); start one with social-touch launch FILE (or a node with '
-                'ros2 run / its console script), or check ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE')
-
-    def require_graph(self) -> GraphView:
-        """The graph; NoGraphError when no other participant is in the domain."""
-        view = self.graph()
-        if not view.remote_participants():
-            raise NoGraphError(self.no_graph_message())
-        return view
-
-    def require_topic(self, topic: str, type_name: str | None = None, wait_s: float = 0.0) -> TopicInfo:
-        """The topic as the graph knows it, waiting up to ``wait_s`` for it to appear.
-
-        Raises:
-            NoGraphError: no graph running.
-            GraphError: the topic is unknown (with a did-you-mean), or carries several types.
-        """
-        view = self.require_graph()
-        if topic not in view.topics and wait_s > 0:
-            self.wait_until(lambda v: topic in v.topics, wait_s)
-            view = self.graph()
-        info = view.topics.get(topic)
-        if info is None:
-            if type_name:
-                return TopicInfo(topic, {type_name})
-            known = sorted(view.visible_topics())
-            raise GraphError(f"unknown topic '{topic}'{did_you_mean(topic, known)}; topics in the graph: "
-                             f'{", ".join(known) or "none"}')
-        if len(info.types) > 1 and not type_name:
-            raise GraphError(f"topic '{topic}' carries several types ({info.type_name}); name the one to use")
-        return info
-
-    def require_node(self, name: str, include_hidden: bool = False, wait_s: float = 1.0) -> str:
-        """The fully qualified name of a node of the graph (``name`` may lack the leading '/').
-
-        Raises:
-            NoGraphError: no graph running.
-            GraphError: no such node (with a did-you-mean and the nodes there are).
-        """
-        full = name if name.startswith('/') else '/' + name
-        view = self.require_graph()
-        if not view.find_nodes(full) and wait_s > 0:
-            self.wait_until(lambda v: bool(v.find_nodes(full)), wait_s)
-            view = self.graph()
-        if not view.find_nodes(full):
-            known = sorted(n.name for n in view.visible_nodes(include_hidden))
-            raise GraphError(f"node '{full}' not found{did_you_mean(full, known)}; nodes: {', '.join(known) or 'none'}")
-        return full
+        return no_graph_message(transport.domain_id, transport.discovery_options.range)
 
     def call(self, srv_type: Any, service: str, request: Any, timeout_s: float) -> Any:
         """Call ``service`` and return the response, waiting at most ``timeout_s`` for the server and again
