@@ -65,7 +65,7 @@ def test_read_on_arrival_false_polls_as_before() -> None:
         port.close()
 
 
-def test_an_unplugged_port_is_reported_and_read_again_once_back() -> None:
+def test_an_unplugged_port_is_reported_and_read_again_once_back(capsys) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         link = os.path.join(tmp, 'ttySKIN')
         first = PtyPort()
@@ -78,7 +78,8 @@ def test_an_unplugged_port_is_reported_and_read_again_once_back() -> None:
             os.unlink(link)
             first.close()                                  # the cable is pulled: the read fails
             assert executor.spin_until(lambda: not node.driver.is_open, timeout_sec=5.0)
-            assert 'stopped answering' in node.status().last_error and not node.status().connected
+            assert not node.status().connected and node.status().last_error   # (a retry may have renamed it)
+            assert 'stopped answering' in capsys.readouterr().err
             executor.spin_for(0.2)                         # retries find nothing at the path
             second = PtyPort()
             os.symlink(second.path, link)                  # plugged in again
@@ -92,3 +93,51 @@ def test_an_unplugged_port_is_reported_and_read_again_once_back() -> None:
             ctx.shutdown()
             if second is not None:
                 second.close()
+
+
+def test_poll_rate_hz_given_to_a_driver_that_reads_on_arrival_is_a_warning(capsys) -> None:
+    port = PtyPort()
+    ctx, node, _, _ = _driver(port.path, poll_rate_hz=50.0)
+    try:
+        assert node.reads_on_arrival
+        assert 'poll_rate_hz (50) is not used' in capsys.readouterr().err
+    finally:
+        node.destroy_node()
+        ctx.shutdown()
+        port.close()
+
+
+class _EndlessPort:
+    """A port that always has 10 bytes waiting (a sensor far faster than the executor takes them)."""
+
+    timeout = 0
+    in_waiting = 10
+
+    def read(self, size: int) -> bytes:
+        return b'x' * size
+
+    def cancel_read(self) -> None:
+        pass
+
+
+def test_a_reader_whose_executor_does_not_take_stops_reading_at_its_backlog() -> None:
+    from touch_driver.port_reader import MAX_BACKLOG, PortReader
+
+    class Guard:
+        triggers = 0
+
+        def trigger(self) -> None:
+            Guard.triggers += 1
+
+    reader = PortReader(_EndlessPort(), Guard(), 'test reader')
+    reader.start()
+    try:
+        deadline = time.monotonic() + 5.0
+        while len(reader.received) < MAX_BACKLOG and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.1)
+        assert len(reader.received) == MAX_BACKLOG            # the bytes wait in the port, not in memory
+        assert len(reader.take()) == MAX_BACKLOG and reader.alive
+    finally:
+        reader.stop()
+    assert not reader.alive

@@ -208,6 +208,9 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self._reopen_timer: Any = None
         if self.reads_on_arrival:
             self._arrival = self.create_guard_condition(self._on_arrival)
+            if poll_rate != 2.0 * expected:
+                self.get_logger().warning(f'poll_rate_hz ({poll_rate:g}) is not used: this driver reads {self.port} '
+                                          'when bytes arrive (read_on_arrival:=false polls it)')
         self._try_open(at_start=True)
         if self.reads_on_arrival:
             if not self.driver.is_open:

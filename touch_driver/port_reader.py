@@ -21,6 +21,9 @@ __all__ = ['PortReader']
 
 #: s a blocked read waits before it checks whether it should stop.
 READ_TIMEOUT_S = 0.5
+#: Reads handed over and not taken yet past which the thread stops reading (an executor that is not
+#: spinning): the bytes wait in the port's own buffer, which overruns as a UART's does, not in memory.
+MAX_BACKLOG = 1024
 
 
 class PortReader:
@@ -51,6 +54,9 @@ class PortReader:
         try:
             port.timeout = READ_TIMEOUT_S       # read() blocks until a byte comes or this passes
             while not self._stop.is_set():
+                if len(received) >= MAX_BACKLOG:
+                    self._stop.wait(0.01)
+                    continue
                 data = port.read(port.in_waiting or 1)
                 if data and not self._stop.is_set():
                     more = port.in_waiting      # the rest of a frame that came in pieces
