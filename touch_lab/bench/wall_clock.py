@@ -56,6 +56,8 @@ DRAIN_S = 4.0
 #: s a launch may take until every driver has reported (a loaded machine starting 17 processes).
 START_TIMEOUT_S = 180.0
 SENSORS = ('bear', 'patch', 'skin')
+#: What the feeder process runs (``python -c FEED_MAIN PLAN``): no module of ours has a ``__main__``.
+FEED_MAIN = 'import sys; from touch_lab.bench.wall_clock_feed import main; sys.exit(main())'
 _TICK = os.sysconf('SC_CLK_TCK')
 
 
@@ -163,7 +165,7 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
             with plan.open('wb') as file:
                 pickle.dump({'seconds': feed_s, 'feeds': [(p.master, recordings[s].period, recordings[s].chunks)
                                                           for s, p in zip(sensors, ports, strict=True)]}, file)
-            feeder = subprocess.Popen([sys.executable, '-m', 'touch_lab.bench.wall_clock_feed', str(plan)],
+            feeder = subprocess.Popen([sys.executable, '-c', FEED_MAIN, str(plan)],
                                       pass_fds=[p.master for p in ports], stdin=subprocess.PIPE,
                                       stdout=subprocess.PIPE, text=True)
             if feeder.stdout.readline().strip() != 'ready':

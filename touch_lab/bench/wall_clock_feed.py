@@ -1,7 +1,7 @@
 """The feeder of ``bench wall-clock``: a process of its own that writes recorded sensor bytes into
 pseudo-terminals at the sensors' real rates, on the wall clock.
 
-``python -m touch_lab.bench.wall_clock_feed PLAN`` reads the plan (a pickle: ``seconds`` and
+``python -c FEED_MAIN PLAN`` (:data:`touch_lab.bench.wall_clock.FEED_MAIN`) reads the plan (a pickle: ``seconds`` and
 ``feeds``, a list of ``(master_fd, period_s, chunks)``; the fds are inherited), prints ``ready``,
 waits for a line on stdin, then writes chunk ``i`` of each feed at ``i * period_s`` (looping over
 the chunks) for ``seconds`` and prints one JSON line: frames written per feed and the latest
@@ -49,7 +49,3 @@ def main() -> int:
     sys.stdin.readline()
     print(json.dumps(feed(plan['seconds'], plan['feeds'])), flush=True)
     return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())
