@@ -4,11 +4,17 @@ A sensor's node subclasses :class:`SerialDriverNode`, gives the sensor's stream 
 (:meth:`SerialDriverNode.make_decoder`) and turns each decoded scan into its calibrated message
 in :meth:`SerialDriverNode.handle_frame`. This base
 
-- reads the port from a timer at ``poll_rate_hz`` (twice the sensor rate by default) with
+- reads the port when bytes arrive, on the wall clock with a real port (a device path, a pty, a
+  ``socket://`` or ``rfc2217://`` URL): a thread blocks on the port's reads
+  (:class:`~touch_driver.port_reader.PortReader`) and triggers a guard condition, and the executor
+  decodes and publishes in its own thread, so no timer wakes the process for nothing. On a
+  simulated clock (``get_clock().ros_time_is_active``), on a virtual device (``skinsim://`` ...,
+  ``loop://``) or with ``read_on_arrival:=false`` it polls the port from a timer at
+  ``poll_rate_hz`` (twice the sensor rate by default) with
   :meth:`~touch_driver.serial_driver.SerialDriver.read_frame`, so a frame is published at most
   half a period after it arrives, on the graph's clock (a virtual device on a simulated clock
-  then runs as fast as the graph);
-- stamps every frame of a poll with its own time (:func:`frame_stamps_ns`): the last one read
+  then runs as fast as the graph, and a scene gives the same frames on every run);
+- stamps every frame of a read with its own time (:func:`frame_stamps_ns`): the last one read
   now, the ones before it a nominal period (``1 / expected_rate_hz``) apart, never at or before
   the previous frame's stamp. A poll that finds several frames (a late timer, a USB burst) thus
   still gives each its own increasing stamp, which rate and dwell estimates downstream rely on;
@@ -59,6 +65,7 @@ from touch_graph.errors import ParameterError
 from touch_graph.subscriber_drops import dropped_by_topic
 
 from .framing import ScanT, SensorStreamDecoder
+from .port_reader import PortReader
 from .serial_driver import DecodedFrame, DriverError, PortURLError, SerialDriver, url_handler_packages
 
 __all__ = ['SerialDriverNode', 'frame_stamps_ns', 'ranged']
@@ -147,7 +154,13 @@ class SerialDriverNode(Node, Generic[ScanT]):
         expected = self.declare_parameter(
             'expected_rate_hz', float(self.frame_rate_hz), ranged('frames/s the sensor sends', 0.01, 10_000.0)).value
         poll_rate = self.declare_parameter(
-            'poll_rate_hz', 2.0 * expected, ranged('port reads per second', 0.01, 100_000.0)).value
+            'poll_rate_hz', 2.0 * expected, ranged('port reads per second where the driver polls (a simulated '
+                                                   'clock, a virtual device, or read_on_arrival false)',
+                                                   0.01, 100_000.0)).value
+        read_on_arrival = self.declare_parameter(
+            'read_on_arrival', True,
+            ParameterDescriptor(description='on the wall clock with a real port, read when bytes arrive (a thread '
+                                            'blocked on the port) rather than polling at poll_rate_hz')).value
         self.reconnect_period_s = self.declare_parameter(
             'reconnect_period_s', 1.0, ranged('s between attempts to reopen a lost port', 0.001, 3600.0)).value
         status_period = self.declare_parameter(
@@ -188,8 +201,22 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self._status_period = status_period
         self._next_attempt_s = 0.0
         self._was_connected = False
+        #: True: a thread reads the port when bytes arrive; False: a timer polls it at poll_rate_hz.
+        self.reads_on_arrival = (read_on_arrival is True and not self.get_clock().ros_time_is_active
+                                 and not self._is_virtual_port())
+        self._reader: PortReader | None = None
+        self._reopen_timer: Any = None
+        if self.reads_on_arrival:
+            self._arrival = self.create_guard_condition(self._on_arrival)
+            if poll_rate != 2.0 * expected:
+                self.get_logger().warning(f'poll_rate_hz ({poll_rate:g}) is not used: this driver reads {self.port} '
+                                          'when bytes arrive (read_on_arrival:=false polls it)')
         self._try_open(at_start=True)
-        self.create_timer(1.0 / poll_rate, self._poll)
+        if self.reads_on_arrival:
+            if not self.driver.is_open:
+                self._watch_port()
+        else:
+            self.create_timer(1.0 / poll_rate, self._poll)
         self.create_timer(status_period, self._publish_status)
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
@@ -243,6 +270,11 @@ class SerialDriverNode(Node, Generic[ScanT]):
                                f"{self.sensor}sim:// URLs or a real port (parameter 'port' of "
                                f'{self.get_fully_qualified_name()})')
 
+    def _is_virtual_port(self) -> bool:
+        """A simulated device or pyserial's loopback: bytes made on a read, nothing a thread could wait for."""
+        scheme = self.port.split('://', 1)[0] if '://' in self.port else ''
+        return scheme in url_handler_packages() or scheme == 'loop'
+
     def _try_open(self, at_start: bool = False) -> None:
         try:
             self.driver.open()
@@ -265,6 +297,45 @@ class SerialDriverNode(Node, Generic[ScanT]):
             self.get_logger().info(f'reading {self.sensor} frames from {self.port}')
         self._was_connected = True
         self.last_error = ''
+        if self.reads_on_arrival:
+            self._start_reader()
+
+    # ------------------------------------------------------------------ reading when bytes arrive
+    def _start_reader(self) -> None:
+        if self._reopen_timer is not None:
+            self.destroy_timer(self._reopen_timer)
+            self._reopen_timer = None
+        self._reader = PortReader(self.driver.serial, self._arrival, name=f'{self.get_name()} reader')
+        self._reader.start()
+
+    def _watch_port(self) -> None:
+        """Try to reopen the port every ``reconnect_period_s`` until it is back (then the reader runs)."""
+        if self._reopen_timer is None:
+            self._reopen_timer = self.create_timer(self.reconnect_period_s, self._reopen)
+
+    def _reopen(self) -> None:
+        if not self.driver.is_open and self._clock_s() >= self._next_attempt_s:
+            self._try_open()
+
+    def _on_arrival(self) -> None:
+        """The reader's bytes, in the executor's thread: decode them and publish the frames."""
+        reader = self._reader
+        if reader is None:
+            return
+        for item in reader.take():
+            if isinstance(item, Exception):
+                self._reader = None
+                self.driver.close()
+                self._port_lost(f'{self.port} stopped answering: {item}')
+                self._watch_port()
+                break
+            self.driver.feed(item)
+        self._publish_frames(self.driver.take_frames())
+
+    def _port_lost(self, error: str) -> None:
+        self.last_error = error
+        self._next_attempt_s = self._clock_s() + self.reconnect_period_s
+        self.get_logger().warning(f'{error}; reconnecting every {self.reconnect_period_s:g} s')
 
     def _poll(self) -> None:
         if not self.driver.is_open:
@@ -278,13 +349,15 @@ class SerialDriverNode(Node, Generic[ScanT]):
             try:
                 frame = read_frame(0)        # what has arrived; never waits
             except DriverError as err:
-                self.last_error = str(err)
-                self._next_attempt_s = self._clock_s() + self.reconnect_period_s
-                self.get_logger().warning(f'{err}; reconnecting every {self.reconnect_period_s:g} s')
+                self._port_lost(str(err))
                 break                        # the frames read before the port went are still published
             if frame is None:
                 break
             frames.append(frame)
+        self._publish_frames(frames)
+
+    def _publish_frames(self, frames: list[DecodedFrame[ScanT]]) -> None:
+        """Stamp the frames read together now (:func:`frame_stamps_ns`), handle and count each."""
         if not frames:
             return
         stamps = frame_stamps_ns(len(frames), self.get_clock().now().nanoseconds,
@@ -389,6 +462,9 @@ class SerialDriverNode(Node, Generic[ScanT]):
             values=values)]))
 
     def destroy_node(self) -> None:
+        reader, self._reader = self._reader, None
+        if reader is not None:
+            reader.stop()
         self.driver.close()
         super().destroy_node()
 

@@ -206,6 +206,22 @@ class SerialDriver(Generic[ScanT]):
             self._decode(self._read_available(min(wait, 0.1)))
         return self._pending.popleft() if self._pending else None
 
+    @property
+    def serial(self) -> Any:
+        """The open pyserial port (None when closed), for a thread that blocks on its reads."""
+        return self._serial
+
+    def feed(self, data: bytes) -> None:
+        """Decode ``data``, bytes read from the port by someone else (a reader thread); the frames wait
+        for :meth:`read_frame`."""
+        self._decode(data)
+
+    def take_frames(self) -> list[DecodedFrame[ScanT]]:
+        """The frames decoded and not read yet, oldest first (without reading the port)."""
+        frames = list(self._pending)
+        self._pending.clear()
+        return frames
+
     def _decode(self, data: bytes) -> None:
         if not data:
             return

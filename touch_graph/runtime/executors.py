@@ -74,6 +74,8 @@ class Executor:
         for timer in node.timers:
             timer._executor = self
             self._schedule(timer)
+        for guard in node.guards:
+            guard._schedule_pending()
         self.wake()
         return True
 

@@ -31,6 +31,7 @@ from .clock import Clock, ClockType
 from .context import Context, get_default_context
 from .endpoints import Publisher, Subscription, Timer, warn_incompatible
 from .graph_info import endpoints_info
+from .guard_condition import GuardCondition
 from .logging import RcutilsLogger
 from .names import (
     RemapRule,
@@ -139,6 +140,7 @@ class Node(NodeParameters):
         self.services: list[Service] = []
         self.clients: list[Client] = []
         self.timers: list[Timer] = []
+        self.guards: list[GuardCondition] = []
         self.executor = None
         self.callback_errors = 0
         self._destroyed = False
@@ -355,6 +357,20 @@ class Node(NodeParameters):
         self.context._notify('subscription_removed', subscription)
         return True
 
+    def create_guard_condition(self, callback: Callable[[], Any], callback_group: Any = None) -> GuardCondition:
+        """A condition another thread triggers to have ``callback()`` run by this node's executor (rclpy's)."""
+        self._check_alive()
+        guard = GuardCondition(self, callback)
+        self.guards.append(guard)
+        return guard
+
+    def destroy_guard_condition(self, guard: GuardCondition) -> bool:
+        if guard not in self.guards:
+            return False
+        guard.destroy()
+        self.guards.remove(guard)
+        return True
+
     def destroy_timer(self, timer: Timer) -> bool:
         if timer not in self.timers:
             return False
@@ -376,6 +392,8 @@ class Node(NodeParameters):
             self.destroy_client(client)
         for timer in list(self.timers):
             self.destroy_timer(timer)
+        for guard in list(self.guards):
+            self.destroy_guard_condition(guard)
         if self.executor is not None:
             self.executor.remove_node(self)
         with self.context._lock:

@@ -39,6 +39,8 @@ BENCHES: dict[str, Command] = {
     'skin-node': Command('touch_lab.skin.session_eval:bench_node', 'the skin nodes on simulated sessions'),
     'node-memory': Command('touch_lab.bench.node_memory:bench_node_memory',
                            'RSS of each node process as launched (--processes) and of its imports'),
+    'wall-clock': Command('touch_lab.bench.wall_clock:bench_wall_clock',
+                          'the graph as launched on the wall clock, sensors fed through ptys: CPU share'),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
 }
 

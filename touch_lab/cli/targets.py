@@ -73,6 +73,8 @@ REPORT_TARGETS: dict[str, Command] = {
                              "twin's saving at the real rates; about 5 minutes)"),
     'node-memory': Command('touch_lab.bench.node_memory', 'regenerate docs/node-memory.md: RSS of the sensor '
                            "scenes' node processes (launch --processes; about 3 minutes)"),
+    'wall-clock': Command('touch_lab.bench.wall_clock', 'regenerate docs/wall-clock.md: CPU of the sensors and of '
+                          'N skin patches as launched on the wall clock (about 15 minutes)'),
     'view-screenshot': Command('touch_view.screenshot', "the README's screenshot of the touch view on the demo "
                                                         "scene (synthetic), in headless Chromium"),
     'foxglove-layout': Command('touch_view.foxglove_layout', "write the package's Foxglove layout "
