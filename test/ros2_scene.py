@@ -29,7 +29,8 @@ and ``--graph-checks N`` runs ``social-touch node list``, ``topic list`` and ``t
 /skin/frame`` N times each after the window and counts the runs that show every rclpy node.
 
 Prints (``--out``: writes) one JSON object: the backend, the nodes, the messages per topic in the
-window (a latched topic: every message received), each driver's counters over the window, and the
+window (a latched topic: every message received), each driver's counters over the window (and the
+``/touch/state`` messages touch_state published in it), and the
 callbacks that raised (our runtime counts them and goes on; real rclpy's spin ends at the first,
 which is then the ``error``).
 
@@ -139,11 +140,11 @@ def run_node(backend: str, index: int) -> int:
                 error = traceback.format_exc()
                 break
             if len(snapshots) < sum(event.is_set() for event in marks):
-                snapshots.append(node.counters() if hasattr(node, 'counters') else {})
+                snapshots.append(_node_counters(node))
         stop.wait()  # after an error: still answer the counter at its end
         callback_errors = getattr(runner.context, 'callback_errors', None)
         window = None
-        if len(snapshots) == 2 and hasattr(node, 'counters'):
+        if len(snapshots) == 2 and snapshots[0]:
             window = {key: snapshots[1][key] - snapshots[0][key] for key in snapshots[0]}
         # The counts are final here: report before the middleware's teardown, whose time is not the scene's
         # (a Fast DDS participant's deletion can take long on a busy machine; the counter kills what lingers).
@@ -151,6 +152,15 @@ def run_node(backend: str, index: int) -> int:
     finally:
         runner.shutdown()
     return 0
+
+
+def _node_counters(node: object) -> dict[str, int]:
+    """A driver's counters (frames published...), touch_state's ``/touch/state`` messages published, or nothing."""
+    if hasattr(node, 'counters'):
+        return node.counters()
+    if hasattr(node, 'published'):
+        return {'published': node.published}
+    return {}
 
 
 # ---------------------------------------------------------------------------------------------- the counter
@@ -345,12 +355,14 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
                 proc.proc.kill()
                 proc.proc.wait()
     names = sorted(up['node'] for up in ups) if error is None else []
-    drivers = {up['node']: report['driver'] for up, report in zip(ups, reports, strict=False)
+    windows = {up['node']: report['driver'] for up, report in zip(ups, reports, strict=False)
                if report['driver'] is not None}
+    drivers = {node: window for node, window in windows.items() if 'frames' in window}
+    published = {node: window['published'] for node, window in windows.items() if 'frames' not in window}
     errors = [report['callback_errors'] for report in reports]
     error = error or next((report['error'] for report in reports if report['error']), None)
     return {'backend': backend, 'duration_s': duration, 'start_s': None if ready_s is None else round(ready_s, 2),
-            'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers,
+            'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers, 'published': published,
             'callback_errors': None if None in errors else sum(errors), 'graph_checks': checks, 'error': error,
             **({'messages': kept} if dump else {})}
 
