@@ -325,6 +325,8 @@ def _list_converter(owner: str, field: str, item_conv: Callable, item_default: C
     return conv_list, default
 
 
+#: The field rosbags gives a message without fields (one uint8 on the wire, as rosidl sends it).
+_EMPTY_PLACEHOLDER = 'structure_needs_at_least_one_member'
 #: IDL names of the .msg basic types that differ (``char`` is IDL's ``uint8``), as rclpy's classes give them.
 _IDL_BASE = {'float32': 'float', 'float64': 'double', 'bool': 'boolean', 'byte': 'octet', 'char': 'uint8'}
 
@@ -420,7 +422,9 @@ def _make_class(typename: str) -> type[Message]:
     pkg, kind, short = typename.split('/')
     attrs: dict[str, Any] = {
         '__slots__': tuple(f'_f_{n}' for n in names), '__msgtype__': typename, '_fields': names,
-        '_field_types': type_strs,
+        # rosbags' placeholder field of an empty message (e.g. a message of constants only) is on the wire, but
+        # rclpy's classes do not list it.
+        '_field_types': {n: t for n, t in type_strs.items() if n != _EMPTY_PLACEHOLDER},
         '_msg_field_types': {name: _msg_type_str(desc) for name, desc in fields},
         '__init__': env['__init__'], '__module__': f'{pkg}.{kind}', '__qualname__': short,
     }
