@@ -84,9 +84,14 @@ def listed_of(tries: int, domain: int) -> int:
         node = start_node(f'fast_talker_{i}', env)
         try:
             time.sleep(0.1)
-            out = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'list'], env=env,
-                                 cwd=REPO, capture_output=True, text=True, timeout=60).stdout
-            listed += f'/fast_talker_{i}' in out.split()
+            started = time.monotonic()
+            run = subprocess.run([sys.executable, '-m', 'touch_lab.cli.main', 'node', 'list'], env=env,
+                                 cwd=REPO, capture_output=True, text=True, timeout=60)
+            if f'/fast_talker_{i}' in run.stdout.split():
+                listed += 1
+            else:  # what the tool saw instead, for the cause
+                print(f'try {i}: not listed after {time.monotonic() - started:.1f} s; node list said '
+                      f'{run.stdout.split()} {run.stderr.strip()[-300:]}', file=sys.stderr)
         finally:
             stop(node)
     return listed

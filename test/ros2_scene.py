@@ -29,7 +29,8 @@ and ``--graph-checks N`` runs ``social-touch node list``, ``topic list`` and ``t
 /skin/frame`` N times each after the window and counts the runs that show every rclpy node.
 
 Prints (``--out``: writes) one JSON object: the backend, the nodes, the messages per topic in the
-window (a latched topic: every message received), each driver's counters over the window, and the
+window (a latched topic: every message received), each driver's counters over the window (and the
+``/touch/state`` messages touch_state published in it), and the
 callbacks that raised (our runtime counts them and goes on; real rclpy's spin ends at the first,
 which is then the ``error``).
 
@@ -139,11 +140,11 @@ def run_node(backend: str, index: int) -> int:
                 error = traceback.format_exc()
                 break
             if len(snapshots) < sum(event.is_set() for event in marks):
-                snapshots.append(node.counters() if hasattr(node, 'counters') else {})
+                snapshots.append(_node_counters(node))
         stop.wait()  # after an error: still answer the counter at its end
         callback_errors = getattr(runner.context, 'callback_errors', None)
         window = None
-        if len(snapshots) == 2 and hasattr(node, 'counters'):
+        if len(snapshots) == 2 and snapshots[0]:
             window = {key: snapshots[1][key] - snapshots[0][key] for key in snapshots[0]}
         # The counts are final here: report before the middleware's teardown, whose time is not the scene's
         # (a Fast DDS participant's deletion can take long on a busy machine; the counter kills what lingers).
@@ -153,15 +154,53 @@ def run_node(backend: str, index: int) -> int:
     return 0
 
 
+def _node_counters(node: object) -> dict[str, int]:
+    """A driver's counters (frames published...), touch_state's ``/touch/state`` messages published, or nothing."""
+    if hasattr(node, 'counters'):
+        return node.counters()
+    if hasattr(node, 'published'):
+        return {'published': node.published}
+    return {}
+
+
 # ---------------------------------------------------------------------------------------------- the counter
 class _Counter:
-    """A subscription callback counting ``topic``'s messages into ``counts`` (one argument: the message)."""
+    """A subscription callback counting ``topic``'s messages into ``counts`` (one argument: the message, CDR bytes);
+    with ``kept`` a list, it keeps ``(wall s, topic, CDR bytes)`` of each too (``--dump``)."""
 
-    def __init__(self, counts: dict[str, int], topic: str) -> None:
-        self.counts, self.topic = counts, topic
+    def __init__(self, counts: dict[str, int], topic: str, kept: list | None = None) -> None:
+        self.counts, self.topic, self.kept = counts, topic, kept
 
     def __call__(self, msg: object) -> None:
         self.counts[self.topic] += 1
+        if self.kept is not None:
+            self.kept.append((time.time(), self.topic, bytes(msg)))
+
+
+def plain(msg: object) -> object:
+    """A message as JSON-able Python (nested dicts, lists, numbers, strings), on either backend."""
+    if hasattr(msg, 'get_fields_and_field_types'):
+        return {name: plain(getattr(msg, name)) for name in msg.get_fields_and_field_types()}
+    if isinstance(msg, (bytes, bytearray)):
+        return list(msg)
+    if isinstance(msg, (str, int, float, bool)) or msg is None:
+        return msg
+    if hasattr(msg, 'tolist'):
+        return msg.tolist()
+    return [plain(item) for item in msg]
+
+
+def decoded(kept: list, types: dict[str, str], backend: str) -> list:
+    """``[wall s, topic, message as plain Python]`` of the kept CDR samples (after the window: no time pressure)."""
+    from touch_graph import compat
+    if backend == 'rclpy':
+        from rclpy.serialization import deserialize_message
+
+        def decode(data: bytes, typename: str) -> object:
+            return deserialize_message(data, compat.get_message(typename))
+    else:
+        from touch_graph.messages import deserialize as decode
+    return [[round(at, 4), topic, plain(decode(data, types[topic]))] for at, topic, data in kept]
 
 
 def backend_env(backend: str, **extra: str) -> dict[str, str]:
@@ -213,9 +252,11 @@ def is_driver(spec: object) -> bool:
     return spec.exec.endswith('_driver')
 
 
-def run_scene(backend: str, duration: float, drivers: str | None = None, graph_checks: int = 0) -> dict:
+def run_scene(backend: str, duration: float, drivers: str | None = None, graph_checks: int = 0,
+              dump: tuple[str, ...] = ()) -> dict:
     """Start every node of the scene in its own process on ``backend`` (the drivers on ``drivers``, default the
-    same), count ``duration`` wall seconds from the devices' common time zero."""
+    same), count ``duration`` wall seconds from the devices' common time zero; the messages of the ``dump``
+    topics in the window are in the report's ``messages``."""
     _check_backend(backend)
     from touch_graph import compat
     specs = _plan_nodes()
@@ -227,6 +268,8 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
     latched: set[str] = set()
     ups: list[dict] = []
     reports: list[dict] = []
+    kept: list = []
+    types: dict[str, str] = {}
     error = None
     try:
         deadline = time.monotonic() + START_TIMEOUT_S
@@ -257,7 +300,9 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
                 qos = compat.QoSProfile(depth=1000, reliability=type(policies.reliability)[reliability],
                                         durability=type(policies.durability)[durability])
                 # Raw: counted, not decoded (a Python executor decoding 150 Hz frames falls behind on a busy machine).
-                counter.create_subscription(compat.get_message(typename), topic, _Counter(counts, topic), qos, raw=True)
+                types[topic] = typename
+                counter.create_subscription(compat.get_message(typename), topic,
+                                            _Counter(counts, topic, kept if topic in dump else None), qos, raw=True)
         deadline = time.monotonic() + MATCH_TIMEOUT_S
         while any(counter.count_publishers(topic) < n for topic, n in publishers.items()):
             if time.monotonic() > deadline:
@@ -277,11 +322,13 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
         for topic in counts:
             if topic not in latched:  # a latched message comes once per subscription, whenever it matched
                 counts[topic] = 0
+        kept.clear()
         end = time.monotonic() + duration
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
         for proc in procs:
             proc.tell('mark')
+        kept = decoded(list(kept), types, backend)
         rclpy_nodes = sorted(up['node'] for proc, up in zip(procs, ups, strict=True) if proc.backend == 'rclpy')
         if graph_checks:
             checks = graph_tool_checks(rclpy_nodes, graph_checks)
@@ -308,13 +355,16 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
                 proc.proc.kill()
                 proc.proc.wait()
     names = sorted(up['node'] for up in ups) if error is None else []
-    drivers = {up['node']: report['driver'] for up, report in zip(ups, reports, strict=False)
+    windows = {up['node']: report['driver'] for up, report in zip(ups, reports, strict=False)
                if report['driver'] is not None}
+    drivers = {node: window for node, window in windows.items() if 'frames' in window}
+    published = {node: window['published'] for node, window in windows.items() if 'frames' not in window}
     errors = [report['callback_errors'] for report in reports]
     error = error or next((report['error'] for report in reports if report['error']), None)
     return {'backend': backend, 'duration_s': duration, 'start_s': None if ready_s is None else round(ready_s, 2),
-            'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers,
-            'callback_errors': None if None in errors else sum(errors), 'graph_checks': checks, 'error': error}
+            'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers, 'published': published,
+            'callback_errors': None if None in errors else sum(errors), 'graph_checks': checks, 'error': error,
+            **({'messages': kept} if dump else {})}
 
 
 #: The graph tools checked (``--graph-checks``), as ``social-touch`` argument lists.
@@ -363,6 +413,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--drivers', choices=('ours', 'rclpy'), help='the drivers\' backend (default: --backend)')
     parser.add_argument('--graph-checks', type=int, default=0, metavar='N',
                         help='run node list, topic list and topic info -v N times each after the window')
+    parser.add_argument('--dump', default='', metavar='TOPIC,...',
+                        help="the messages of these topics in the window, decoded, in the report's 'messages'")
     args = parser.parse_args(argv)
     if args.backend == 'ours':
         os.environ['SOCIAL_TOUCH_SHIM'] = '1'
@@ -371,7 +423,8 @@ def main(argv: list[str] | None = None) -> int:
     sys.path[:0] = [str(ROOT), str(ROOT / 'examples' / 'touch_behaviour')]
     if args.node is not None:
         return run_node(args.backend, args.node)
-    text = json.dumps(run_scene(args.backend, args.duration, args.drivers, args.graph_checks),
+    text = json.dumps(run_scene(args.backend, args.duration, args.drivers, args.graph_checks,
+                                tuple(filter(None, args.dump.split(',')))),
                       indent=1)
     if args.out:
         Path(args.out).write_text(text + '\n', encoding='utf-8')

@@ -33,7 +33,7 @@ def random_message(type_name, rng):
     """A message of ``type_name`` with every field filled from ``rng`` (arrays, strings, nested)."""
     cls = messages.get_message(type_name)
     values = {}
-    for field, type_str in cls.get_fields_and_field_types().items():
+    for field, type_str in messages.msg_field_types(cls).items():
         default = getattr(cls(), field)
         if isinstance(default, messages.Message):
             values[field] = random_message(default.__msgtype__, rng)

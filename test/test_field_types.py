@@ -2,8 +2,9 @@
 
 rclpy's rule (Jazzy's generated classes, checked by the ros2-marked test below): a fixed-size numeric
 array is a ``numpy.ndarray`` of the field's dtype; a numeric sequence is an ``array.array``; ``bool``
-arrays and sequences, and arrays of strings or messages, are lists. test/field_types_probe.py lists
-each field's type in the three situations on either backend.
+arrays and sequences, and arrays of strings or messages, are lists. ``get_fields_and_field_types()``
+names the types as rclpy does, in IDL (``float[144]``, ``sequence<double>``, ``octet`` for ``byte``).
+test/field_types_probe.py lists each field's type in the three situations on either backend.
 """
 
 import json
@@ -18,27 +19,29 @@ from ros2_testing import require_ros2, ros2_env
 from touch_graph.messages import get_message, interface_names
 
 PROBE = Path(__file__).with_name('field_types_probe.py')
-_DTYPES = {'float32': 'float32', 'float64': 'float64', 'uint8': 'uint8', 'int8': 'int8', 'uint16': 'uint16',
-           'int16': 'int16', 'uint32': 'uint32', 'int32': 'int32', 'uint64': 'uint64', 'int64': 'int64'}
-_TYPECODES = {'float32': 'f', 'float64': 'd', 'uint8': 'B', 'int8': 'b', 'uint16': 'H', 'int16': 'h',
-              'uint32': 'I', 'int32': 'i', 'uint64': 'Q', 'int64': 'q'}
+#: IDL numeric type -> (numpy dtype of a fixed-size array, array.array typecode of a sequence).
+_NUMERIC = {'float': ('float32', 'f'), 'double': ('float64', 'd'), 'uint8': ('uint8', 'B'), 'int8': ('int8', 'b'),
+            'uint16': ('uint16', 'H'), 'int16': ('int16', 'h'), 'uint32': ('uint32', 'I'), 'int32': ('int32', 'i'),
+            'uint64': ('uint64', 'Q'), 'int64': ('int64', 'q')}
 
 
 def rclpy_rule(type_str: str) -> set[str]:
-    """The Python types rclpy gives a field of ``type_str`` (ours: ``float32[144]``, ``float64[]``...)."""
-    if '[' not in type_str:
+    """The Python types rclpy gives a field of IDL type ``type_str`` (``float[144]``, ``sequence<double>``...)."""
+    if type_str.startswith('sequence<'):
+        item, sequence = type_str[len('sequence<'):-1], True
+        head, _, bound = item.rpartition(', ')
+        item = head if bound.isdigit() else item
+    elif type_str.endswith(']'):
+        item, sequence = type_str.rpartition('[')[0], False
+    else:
         return set()  # scalars and nested messages: not about arrays
-    base, _, size = type_str.partition('[')
-    base = base.split('<=')[0]
-    if base in _DTYPES and size[:-1].isdigit():
-        return {f'ndarray[{_DTYPES[base]}]'}
-    if base in _TYPECODES:
-        return {f'array.array[{_TYPECODES[base]}]'}
-    if base == 'bool':
+    if item in _NUMERIC:
+        return {f'array.array[{_NUMERIC[item][1]}]'} if sequence else {f'ndarray[{_NUMERIC[item][0]}]'}
+    if item == 'boolean':
         return {'list[bool]', 'list[]'}
-    if base == 'string':
+    if item.startswith('string'):
         return {'list[str]', 'list[]'}
-    return {f'list[{base.rpartition("/")[2]}]', 'list[]'}
+    return {f'list[{item.rpartition("/")[2]}]', 'list[]'}
 
 
 def test_every_array_field_of_ours_has_rclpys_type_made_assigned_and_received():
@@ -82,3 +85,43 @@ def test_real_rclpy_gives_every_field_the_type_our_runtime_gives():
 
 test_real_rclpy_gives_every_field_the_type_our_runtime_gives = pytest.mark.ros2(
     test_real_rclpy_gives_every_field_the_type_our_runtime_gives)
+
+
+#: Prints ``{type name: get_fields_and_field_types()}`` of the rosidl-generated classes it can import (argv[1]: JSON
+#: list of type names).
+_FIELD_NAMES = """
+import importlib, json, sys
+out = {}
+for name in json.loads(sys.argv[1]):
+    pkg, kind, short = name.split('/')
+    try:
+        out[name] = getattr(importlib.import_module(pkg + '.' + kind), short).get_fields_and_field_types()
+    except (ImportError, AttributeError):  # a package the ROS 2 venv does not have
+        pass
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.ros2
+def test_field_type_names_are_rclpys_idl_names():
+    require_ros2()
+    from touch_graph.messages import typestore
+    names = sorted(name for name in typestore.fielddefs if '/msg/' in name)
+    result = subprocess.run([sys.executable, '-c', _FIELD_NAMES, json.dumps(names)], env=ros2_env(),
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    real = json.loads(result.stdout)
+    different = [(name, fields, get_message(name).get_fields_and_field_types()) for name, fields in real.items()
+                 if fields != get_message(name).get_fields_and_field_types()]
+    assert different == []
+    assert set(interface_names()) <= set(real) and len(real) > 100  # ours, and the standard types rclpy has
+
+
+def test_field_type_names_are_idl_names():
+    assert get_message('GestureEvent').get_fields_and_field_types() == {
+        'header': 'std_msgs/Header', 'gesture': 'string', 'probability': 'double', 'classes': 'sequence<string>',
+        'posteriors': 'sequence<double>', 'latency_s': 'float'}
+    assert get_message('std_msgs/msg/ByteMultiArray').get_fields_and_field_types()['data'] == 'sequence<octet>'
+    assert get_message('std_msgs/msg/Char').get_fields_and_field_types() == {'data': 'uint8'}
+    descriptor = get_message('rcl_interfaces/msg/ParameterDescriptor').get_fields_and_field_types()
+    assert descriptor['floating_point_range'] == 'sequence<rcl_interfaces/FloatingPointRange, 1>'

@@ -82,3 +82,49 @@ def test_set_wall_epoch_starts_held_devices_together(ports, monkeypatch):
     later = ports('epoch_later')
     time.sleep(max(0.0, epoch + 0.3 - time.time()))
     assert in_step(port, epoch) and in_step(later, epoch)
+
+
+class NodeClock:
+    """A driver node's clock as the driver attaches it (seconds of ROS time): here the Unix time, or a simulated
+    clock from ``start``."""
+
+    def __init__(self, start=None):
+        self.offset = 0.0 if start is None else start - time.time()
+
+    def now_s(self):
+        return time.time() + self.offset
+
+
+def test_devices_on_a_node_clock_that_reads_the_unix_time_keep_the_common_epoch(ports, monkeypatch):
+    # The drivers attach their node's clock to the device (touch_driver/serial_driver.py); without sim time it
+    # reads the Unix time, and the scene's common time zero must hold there too.
+    from touch_sim.virtual_port import set_wall_epoch
+    monkeypatch.setenv(EPOCH_ENV, repr(time.time() + 1e6))  # held back, as test/ros2_scene.py starts node processes
+    early = serial.serial_for_url('skinsim://epoch_node_a', timeout=0, do_not_open=True)
+    early.attach_clock(NodeClock().now_s)
+    early.open()
+    try:
+        assert early.read(100000) == b''
+        epoch = time.time() + 0.5
+        set_wall_epoch(epoch)
+        time.sleep(0.3)
+        later = ports('epoch_node_b')
+        time.sleep(max(0.0, epoch + 0.3 - time.time()))
+        assert in_step(early, epoch) and in_step(later, epoch)
+    finally:
+        early.close()
+        forget_device('epoch_node_a')
+
+
+def test_a_device_on_a_simulated_clock_starts_when_opened_whatever_the_epoch(monkeypatch):
+    monkeypatch.setenv(EPOCH_ENV, repr(time.time() - 100.0))
+    port = serial.serial_for_url('skinsim://epoch_sim', timeout=0, do_not_open=True)
+    port.attach_clock(NodeClock(start=5.0).now_s)
+    port.open()
+    try:
+        time.sleep(0.2)
+        port.read(100000)
+        assert 0 < port.device.next_index <= 0.4 * 150  # frames since opening, not the 100 s since the epoch
+    finally:
+        port.close()
+        forget_device('epoch_sim')

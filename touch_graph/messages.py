@@ -4,7 +4,8 @@ The ``.msg`` files in ``msg/`` are the one definition of every message. The rosb
 type system parses them (and knows the standard ROS 2 types such as
 ``std_msgs/msg/Header``); this module turns each type into a Python class with rclpy's
 manners: keyword construction with ROS defaults for every field, checked field types,
-constants as class attributes, ``get_fields_and_field_types()``. CDR (de)serialisation,
+constants as class attributes, ``get_fields_and_field_types()`` (with rclpy's IDL type names:
+``float[144]``, ``sequence<double>``, ``boolean``, ``octet`` for ``byte``). CDR (de)serialisation,
 the bytes ROS 2 puts on the wire and in bags, comes from an encoder and a decoder generated
 per type (:mod:`touch_graph.cdr`), byte-identical to rosbags', which still decodes
 big-endian payloads and the types the generator does not handle.
@@ -58,7 +59,8 @@ from .yamlconf import did_you_mean
 
 __all__ = [
     'Message', 'decoder', 'deserialize', 'encoder', 'from_dict', 'get_message',
-    'interface_names', 'message_definition', 'msg_files', 'normalize_type_name', 'serialize', 'to_dict', 'typestore',
+    'interface_names', 'message_definition', 'msg_field_types', 'msg_files', 'normalize_type_name', 'serialize',
+    'to_dict', 'typestore',
 ]
 
 _INT_RANGES = {
@@ -139,6 +141,7 @@ class Message:
     __msgtype__: ClassVar[str]
     _fields: ClassVar[tuple[str, ...]]
     _field_types: ClassVar[dict[str, str]]
+    _msg_field_types: ClassVar[dict[str, str]]
 
     @classmethod
     def get_fields_and_field_types(cls) -> dict[str, str]:
@@ -322,13 +325,46 @@ def _list_converter(owner: str, field: str, item_conv: Callable, item_default: C
     return conv_list, default
 
 
+#: The field rosbags gives a message without fields (one uint8 on the wire, as rosidl sends it).
+_EMPTY_PLACEHOLDER = 'structure_needs_at_least_one_member'
+#: IDL names of the .msg basic types that differ (``char`` is IDL's ``uint8``), as rclpy's classes give them.
+_IDL_BASE = {'float32': 'float', 'float64': 'double', 'bool': 'boolean', 'byte': 'octet', 'char': 'uint8'}
+
+
+def _idl_array(item: str, length: int | None, bound: int) -> str:
+    """rclpy's type string of an array (``float[144]``) or sequence (``sequence<double>``, ``sequence<int32, 5>``)."""
+    if length is not None:
+        return f'{item}[{length}]'
+    return f'sequence<{item}, {bound}>' if bound else f'sequence<{item}>'
+
+
+def _msg_type_str(desc: tuple) -> str:
+    """A field's type as its ``.msg`` definition writes it (``float32[144]``, ``SensorState[]``, ``string<=8``)."""
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        base, bound = detail
+        return f'{base}<={bound}' if bound else base
+    if kind == Nodetype.NAME:
+        return detail.replace('/msg/', '/')
+    sub, size = detail
+    if kind == Nodetype.ARRAY:
+        return f'{_msg_type_str(sub)}[{size}]'
+    return f'{_msg_type_str(sub)}[<={size}]' if size else f'{_msg_type_str(sub)}[]'
+
+
+def msg_field_types(cls: type[Message]) -> dict[str, str]:
+    """Field name -> type as the ``.msg`` file writes it (``get_fields_and_field_types()`` gives IDL names)."""
+    return dict(cls._msg_field_types)
+
+
 def _field_converter(owner: str, field: str, desc: tuple) -> tuple[Callable, Callable, str]:
-    """(converter, default factory, ROS type string) for one field descriptor."""
+    """(converter, default factory, IDL type string as rclpy's ``get_fields_and_field_types`` gives it) for one
+    field descriptor."""
     kind, detail = desc
     if kind == Nodetype.BASE:
         base, bound = detail
         conv, value = _scalar_converter(owner, field, base, bound)
-        type_str = f'{base}<={bound}' if bound else base
+        type_str = f'{base}<{bound}>' if bound else _IDL_BASE.get(base, base)
         return conv, (lambda: value), type_str
     if kind == Nodetype.NAME:
         cls = get_message(detail)
@@ -342,20 +378,19 @@ def _field_converter(owner: str, field: str, desc: tuple) -> tuple[Callable, Cal
         (sub_kind, sub_detail), size = detail
         length = size if kind == Nodetype.ARRAY else None
         bound = size if kind == Nodetype.SEQUENCE else 0
-        suffix = f'[{length}]' if length is not None else (f'[<={bound}]' if bound else '[]')
-        if sub_kind == Nodetype.BASE and sub_detail[0] == 'bool':
+        base = sub_detail[0] if sub_kind == Nodetype.BASE else None
+        if base is None or base == 'string':  # strings and messages: lists of them
+            item_conv, item_default, item_type = _field_converter(owner, field, (sub_kind, sub_detail))
+            what = 'str' if sub_kind == Nodetype.BASE else f'{sub_detail} messages'
+            conv, default = _list_converter(owner, field, item_conv, item_default, length, bound, what)
+            return conv, default, _idl_array(item_type, length, bound)
+        if base == 'bool':
             conv, default = _bool_list_converter(owner, field, length, bound)
-            return conv, default, 'bool' + suffix
-        if sub_kind == Nodetype.BASE and length is None and sub_detail[0] in _TYPECODES:
-            conv, default = _sequence_converter(owner, field, sub_detail[0], bound)
-            return conv, default, sub_detail[0] + suffix
-        if sub_kind == Nodetype.BASE and sub_detail[0] != 'string':
-            conv, default = _numeric_array_converter(owner, field, sub_detail[0], length, bound)
-            return conv, default, sub_detail[0] + suffix
-        item_conv, item_default, item_type = _field_converter(owner, field, (sub_kind, sub_detail))
-        what = 'str' if sub_kind == Nodetype.BASE else f'{sub_detail} messages'
-        conv, default = _list_converter(owner, field, item_conv, item_default, length, bound, what)
-        return conv, default, item_type + suffix
+        elif length is None and base in _TYPECODES:
+            conv, default = _sequence_converter(owner, field, base, bound)
+        else:
+            conv, default = _numeric_array_converter(owner, field, base, length, bound)
+        return conv, default, _idl_array(_IDL_BASE.get(base, base), length, bound)
     raise MessageError(f"field '{field}' of {owner}: unsupported descriptor {desc!r}")
 
 
@@ -387,7 +422,10 @@ def _make_class(typename: str) -> type[Message]:
     pkg, kind, short = typename.split('/')
     attrs: dict[str, Any] = {
         '__slots__': tuple(f'_f_{n}' for n in names), '__msgtype__': typename, '_fields': names,
-        '_field_types': type_strs,
+        # rosbags' placeholder field of an empty message (e.g. a message of constants only) is on the wire, but
+        # rclpy's classes do not list it.
+        '_field_types': {n: t for n, t in type_strs.items() if n != _EMPTY_PLACEHOLDER},
+        '_msg_field_types': {name: _msg_type_str(desc) for name, desc in fields},
         '__init__': env['__init__'], '__module__': f'{pkg}.{kind}', '__qualname__': short,
     }
     for cname, _ctype, cvalue in consts:

@@ -11,7 +11,8 @@ three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_
   several processes then play their scenes in step, and one opened before ``T`` sends nothing
   until then (:func:`set_wall_epoch` moves it). ``port.attach_clock(fn)`` (``fn() -> seconds``)
   puts it on another clock, such as a graph's simulated clock, so a scene runs faster than real
-  time and deterministically.
+  time and deterministically. A driver node attaches its own clock; when that clock reads the
+  Unix time (ROS time without sim time), the common time zero holds on it too.
 - **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of
   random bytes before it), ``corrupt=P`` (of one flipped byte in it), ``drop=P`` (of losing
   it), ``unplug_at=S&replug_at=S`` (device seconds between which the device is gone: reads
@@ -69,6 +70,8 @@ class DeviceState:
     #: the device's time zero, in the units of the clock it runs on (set by the first port)
     epoch: float | None = None
     epoch_clock: object = None
+    #: the clock it runs on (None: the wall clock, ``time.monotonic``)
+    clock: Callable[[], float] | None = None
 
     def unplug(self) -> None:
         """Pull the cable: reads fail and opens fail until :meth:`replug`."""
@@ -206,8 +209,8 @@ class VirtualSerial(SerialBase):
         state = self._state
         key = getattr(clock, '__self__', clock)  # bound methods of one object count as one clock
         if state.epoch is None or state.epoch_clock is not key:
-            state.epoch = clock() if clock is not None else _wall_epoch()
-            state.epoch_clock = key
+            state.epoch = _epoch_on(clock)
+            state.epoch_clock, state.clock = key, clock
         self._start_index = int(max(0.0, self._device_time()) / state.model.frame_period)
 
     def _device_time(self) -> float:
@@ -316,20 +319,49 @@ def set_wall_epoch(epoch: float) -> None:
         for state in _registry.values():
             if state.epoch_clock is None:
                 state.epoch = _wall_epoch()
+            elif _reads_unix_time(state.clock):
+                state.epoch = _epoch_on(state.clock)
+
+
+#: How far an attached clock may read from ``time.time()`` and still count as the wall clock, s (a node's ROS
+#: time without sim time reads the Unix time; a simulated clock starts at 0 or at a bag's time).
+WALL_CLOCK_TOLERANCE_S = 1.0
+
+
+def _reads_unix_time(clock: Callable[[], float] | None) -> bool:
+    return clock is not None and abs(clock() - time.time()) < WALL_CLOCK_TOLERANCE_S
+
+
+def _epoch_on(clock: Callable[[], float] | None) -> float:
+    """Device time zero for a device opened now on ``clock`` (None: the wall clock), in that clock's seconds:
+    ``$SOCIAL_TOUCH_SIM_EPOCH`` when set and the clock reads the Unix time, else now."""
+    if clock is None:
+        return _wall_epoch()
+    now = clock()
+    epoch = _env_epoch()
+    if epoch is None or not _reads_unix_time(clock):
+        return now
+    return now - (time.time() - epoch)
 
 
 def _wall_epoch() -> float:
     """Device time zero on the wall clock, in ``time.monotonic()`` seconds: now, or ``$SOCIAL_TOUCH_SIM_EPOCH``."""
+    epoch = _env_epoch()
+    return time.monotonic() if epoch is None else time.monotonic() - (time.time() - epoch)
+
+
+def _env_epoch() -> float | None:
+    """``$SOCIAL_TOUCH_SIM_EPOCH`` (a Unix time, s), None when unset; PortOptionError when it is not a time."""
     text = os.environ.get(EPOCH_ENV, '').strip()
     if not text:
-        return time.monotonic()
+        return None
     try:
         epoch = float(text)
     except ValueError:
         epoch = math.nan
     if not math.isfinite(epoch):
         raise PortOptionError(f'{EPOCH_ENV}={text!r} must be a Unix time in seconds (e.g. from time.time())')
-    return time.monotonic() - (time.time() - epoch)
+    return epoch
 
 
 def _float_option(options: dict[str, str], key: str) -> float:

@@ -11,6 +11,12 @@ bytes through unchanged in both directions (the frames do not depend on the subp
 the server's per-client queue still sees a slow client as slow. A client that asks for
 ``foxglove.sdk.v1`` is passed through untouched.
 
+foxglove-sdk 0.30 sometimes answers a subscribe sent right after an advertisement with the status
+``Unknown channel ID: N`` (the channel is advertised before it accepts subscriptions); a client
+that does not subscribe again (the Foxglove app) then never gets a frame. The front reads the
+WebSocket frames both ways (:class:`SubscribeReplay`) and sends such a refused subscribe to the
+server again, once the channel is advertised, a little later, up to :data:`MAX_REPLAYS` times.
+
 Before anything reaches the server, the front refuses with 403 a handshake from a page of another
 site (its ``Origin``) or sent to a name that is not this machine (its ``Host``: DNS rebinding), as
 :class:`~touch_view.origins.OriginPolicy` decides; foxglove-sdk's own server checks neither.
@@ -18,9 +24,14 @@ site (its ``Origin``) or sent to a name that is not this machine (its ``Host``: 
 
 from __future__ import annotations
 
+import json
+import os
 import re
 import socket
+import struct
 import threading
+import time
+from collections.abc import Callable
 from contextlib import suppress
 
 from .origins import FOXGLOVE_ORIGINS, OriginPolicy
@@ -93,9 +104,185 @@ def _pump(source: socket.socket, sink: socket.socket) -> None:
     with suppress(OSError):
         while chunk := source.recv(1 << 16):
             sink.sendall(chunk)
-    for sock in (sink, source):
+    _end(source, sink)
+
+
+def _end(*socks: socket.socket) -> None:
+    for sock in socks:
         with suppress(OSError):
             sock.shutdown(socket.SHUT_RDWR)
+
+
+#: How often one refused subscribe is sent again at most.
+MAX_REPLAYS = 20
+#: How long after a refusal (or after the channel's advertisement, when it came later) the subscribe is sent again, s.
+REPLAY_DELAY_S = 0.1
+_UNKNOWN_CHANNEL = re.compile(r'Unknown channel ID: (\d+)')
+
+
+class FrameReader:
+    """Whole WebSocket frames (RFC 6455 section 5.2) out of a byte stream: ``feed(bytes)`` returns the frames
+    completed, each as ``(raw bytes, fin, opcode, payload unmasked)``."""
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+
+    def feed(self, data: bytes) -> list[tuple[bytes, bool, int, bytes]]:
+        self._buf += data
+        frames = []
+        while (frame := self._next()) is not None:
+            frames.append(frame)
+        return frames
+
+    def _next(self) -> tuple[bytes, bool, int, bytes] | None:
+        buf = self._buf
+        if len(buf) < 2:
+            return None
+        fin, opcode, masked, length = buf[0] >> 7, buf[0] & 0x0F, buf[1] >> 7, buf[1] & 0x7F
+        at = 2
+        if length == 126:
+            if len(buf) < 4:
+                return None
+            length, at = struct.unpack_from('!H', buf, 2)[0], 4
+        elif length == 127:
+            if len(buf) < 10:
+                return None
+            length, at = struct.unpack_from('!Q', buf, 2)[0], 10
+        key = bytes(buf[at:at + 4]) if masked else b''
+        at += len(key) if masked else 0
+        if (masked and len(key) < 4) or len(buf) < at + length:
+            return None
+        payload = bytes(buf[at:at + length])
+        if masked and opcode == 1:  # only text is read (JSON); binary payloads stay masked
+            payload = _unmask(payload, key)
+        raw = bytes(buf[:at + length])
+        del buf[:at + length]
+        return raw, bool(fin), opcode, payload
+
+
+def _unmask(payload: bytes, key: bytes) -> bytes:
+    return bytes(b ^ key[i % 4] for i, b in enumerate(payload))
+
+
+def masked_text_frame(text: str) -> bytes:
+    """A client's text frame (masked, as RFC 6455 requires of a client) carrying ``text``."""
+    payload, key = text.encode(), os.urandom(4)
+    n = len(payload)
+    if n < 126:
+        length = bytes([0x80 | n])
+    elif n < 1 << 16:
+        length = bytes([0x80 | 126]) + struct.pack('!H', n)
+    else:
+        length = bytes([0x80 | 127]) + struct.pack('!Q', n)
+    return bytes([0x81]) + length + key + _unmask(payload, key)
+
+
+def _json(opcode: int, fin: bool, payload: bytes) -> dict | None:
+    """A whole text frame's JSON object (None for anything else: binary, fragments, control frames)."""
+    if opcode != 1 or not fin:
+        return None
+    try:
+        message = json.loads(payload)
+    except ValueError:
+        return None
+    return message if isinstance(message, dict) else None
+
+
+class SubscribeReplay:
+    """One connection's client-to-server and server-to-client streams, frame by frame: forwards every frame as
+    it came, and sends the server again a subscribe it refused with ``Unknown channel ID`` (see the module doc).
+
+    Attributes:
+        replayed: subscribes sent again.
+    """
+
+    def __init__(self, client: socket.socket, server: socket.socket, on_replay: Callable[[], None] = lambda: None,
+                 ) -> None:
+        self.client, self.server, self.on_replay = client, server, on_replay
+        self.replayed = 0
+        self._lock = threading.Lock()           # one frame at a time to the server
+        self._subscribed: dict[int, list[int]] = {}   # channel -> subscription ids the client asked for
+        self._advertised: set[int] = set()
+        self._refused: dict[int, int] = {}      # channel -> replays so far
+        self._waiting: set[int] = set()         # refused channels not advertised yet
+        self._fragmented = False                # the client is between the frames of one message
+
+    def upstream(self) -> None:
+        """Client to server (run in its own thread)."""
+        reader = FrameReader()
+        with suppress(OSError):
+            while chunk := self.client.recv(1 << 16):
+                for raw, fin, opcode, payload in reader.feed(chunk):
+                    message = _json(opcode, fin, payload)
+                    if message is not None and message.get('op') == 'subscribe':
+                        for sub in message.get('subscriptions', []):
+                            if isinstance(sub, dict) and isinstance(sub.get('channelId'), int):
+                                self._subscribed.setdefault(sub['channelId'], []).append(sub.get('id'))
+                    elif message is not None and message.get('op') == 'unsubscribe':
+                        gone = set(message.get('subscriptionIds', []))
+                        for ids in self._subscribed.values():
+                            ids[:] = [i for i in ids if i not in gone]
+                    with self._lock:
+                        if opcode in (0, 1, 2):
+                            self._fragmented = not fin
+                        self.server.sendall(raw)
+        _end(self.client, self.server)
+
+    def downstream(self) -> None:
+        """Server to client (in the serving thread)."""
+        reader = FrameReader()
+        with suppress(OSError):
+            while chunk := self.server.recv(1 << 16):
+                self.client.sendall(chunk)      # unchanged, at once; read after
+                for _, fin, opcode, payload in reader.feed(chunk):
+                    message = _json(opcode, fin, payload)
+                    if message is not None:
+                        self._on_server_message(message)
+        _end(self.server, self.client)
+
+    def _on_server_message(self, message: dict) -> None:
+        op = message.get('op')
+        if op == 'advertise':
+            channels = {c.get('id') for c in message.get('channels', []) if isinstance(c, dict)}
+            self._advertised |= channels
+            for channel in self._waiting & channels:
+                self._waiting.discard(channel)
+                self._replay_later(channel)
+        elif op == 'unadvertise':
+            self._advertised -= set(message.get('channelIds', []))
+        elif op == 'status' and (found := _UNKNOWN_CHANNEL.search(str(message.get('message', '')))):
+            channel = int(found.group(1))
+            if not self._subscribed.get(channel) or self._refused.get(channel, 0) >= MAX_REPLAYS:
+                return
+            self._refused[channel] = self._refused.get(channel, 0) + 1
+            if channel in self._advertised:
+                self._replay_later(channel)
+            else:
+                self._waiting.add(channel)
+
+    def _replay_later(self, channel: int) -> None:
+        timer = threading.Timer(REPLAY_DELAY_S, self._replay, args=(channel,))
+        timer.daemon = True
+        timer.start()
+
+    def _replay(self, channel: int) -> None:
+        ids = list(self._subscribed.get(channel, []))
+        if not ids or channel not in self._advertised:
+            return
+        frame = masked_text_frame(json.dumps({'op': 'subscribe', 'subscriptions': [
+            {'id': sid, 'channelId': channel} for sid in ids]}))
+        deadline = time.monotonic() + 1.0
+        while True:
+            with self._lock:
+                if not self._fragmented:
+                    with suppress(OSError):
+                        self.server.sendall(frame)
+                        self.replayed += 1
+                        self.on_replay()
+                    return
+            if time.monotonic() > deadline:
+                return
+            time.sleep(0.01)
 
 
 class SubprotocolFront:
@@ -106,12 +293,14 @@ class SubprotocolFront:
     Attributes:
         port: the port it listens on (the one given, or the free one picked for 0).
         renamed: connections whose handshake asked for ``foxglove.websocket.v1`` only.
+        replayed: subscribes the server refused as ``Unknown channel ID`` and the front sent again.
         policy: the Host and Origin checks; ``policy.refused`` counts the handshakes refused.
     """
 
     def __init__(self, host: str, port: int, backend_port: int, allowed_origins: tuple[str, ...] = ()) -> None:
         self.backend_port = backend_port
         self.renamed = 0
+        self.replayed = 0
         self.policy = OriginPolicy(host, allowed_origins, FOXGLOVE_ORIGINS)
         self._listener = socket.create_server((host, port), reuse_port=False)
         self.port = self._listener.getsockname()[1]
@@ -159,9 +348,10 @@ class SubprotocolFront:
             server.settimeout(None)
             for sock in (client, server):
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            upstream = threading.Thread(target=_pump, args=(client, server), daemon=True)
+            streams = SubscribeReplay(client, server, self._count_replay)
+            upstream = threading.Thread(target=streams.upstream, daemon=True)
             upstream.start()
-            _pump(server, client)
+            streams.downstream()
             upstream.join()
         except (OSError, ValueError):
             pass  # a client that left mid-handshake, a server that refused it: nothing to keep
@@ -171,6 +361,10 @@ class SubprotocolFront:
                     with self._lock:
                         self._connections.discard(sock)
                     sock.close()
+
+    def _count_replay(self) -> None:
+        with self._lock:
+            self.replayed += 1
 
     def close(self) -> None:
         """Stop listening and end every connection. Idempotent."""

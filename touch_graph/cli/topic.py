@@ -84,7 +84,7 @@ def abbreviate_arrays(msg: Any) -> dict[str, Any]:
     """
     from .. import messages
     out = {}
-    for name, type_str in type(msg).get_fields_and_field_types().items():
+    for name, type_str in messages.msg_field_types(type(msg)).items():
         value = getattr(msg, name)
         if type_str.endswith(']'):
             out[name] = _array_note(type_str, value)
@@ -102,7 +102,7 @@ def check_field_path(type_name: str, path: str) -> None:
     cls = messages.get_message(type_name)
     parts = path.split('.')
     for i, part in enumerate(parts):
-        fields = cls.get_fields_and_field_types()
+        fields = messages.msg_field_types(cls)
         if part not in fields:
             raise GraphError(f"{cls.__msgtype__} has no field '{part}'{did_you_mean(part, list(fields))} "
                              f"(in --field {path}); its fields: {', '.join(fields)}")

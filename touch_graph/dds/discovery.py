@@ -141,6 +141,8 @@ class GraphDiscovery:
         self._stats: dict[bytes, dict] = {}  # remote reader GUID -> its statistics
         self.version = 0  # bumps on every change (tools wait on it)
         self.structure_version = 0  # bumps when participants, endpoints or nodes change (not statistics)
+        self._counts: dict[tuple[str | None, str], int] = {}  # (ROS topic, 'writer'/'reader') -> endpoints
+        self._counts_version = -1  # the structure_version _counts was made at
         self.undecodable_info = 0
         self._dirty = True
         self._last_stats: Any = None
@@ -338,25 +340,40 @@ class GraphDiscovery:
             return self.version
 
     def incomplete(self, grace_s: float = 1.5) -> list[bytes]:
-        """Remote participants whose graph is not all here yet: their ``ros_discovery_info`` writer is known
-        but not its sample, or the sample names endpoints DDS has not shown yet, or (no such writer known)
-        they were discovered less than ``grace_s`` ago (their endpoints may still be on the way; a plain DDS
-        participant never announces nodes)."""
+        """Remote participants whose graph is not all here yet: a ROS 2 participant (its user data names an
+        ``enclave``, as rcl's and ours do) whose ``ros_discovery_info`` sample has not come, or any participant
+        whose sample names endpoints DDS has not shown yet, or one with a ``ros_discovery_info`` writer known but
+        not its sample, or a plain DDS participant (no enclave: it may never announce nodes) discovered less
+        than ``grace_s`` ago. A ROS 2 participant always announces its nodes, but on a busy machine its
+        endpoints can come seconds after it: the caller bounds the wait."""
         now = time.monotonic()
         out = []
         with self._lock:
             announcing = {e['participant'] for e in self._endpoints.values()
                           if e['topic'] == DISCOVERY_TOPIC and e['kind'] == 'writer'}
-            for gid in self._participants:
+            for gid, enclave in self._participants.items():
                 if gid == self.p.gid:
                     continue
                 nodes = self._nodes_of.get(gid)
                 if nodes is None:
-                    if gid in announcing or now - self._seen_at.get(gid, now) < grace_s:
+                    if enclave or gid in announcing or now - self._seen_at.get(gid, now) < grace_s:
                         out.append(gid)
                 elif any(g not in self._endpoints for _, _, readers, writers in nodes for g in (*readers, *writers)):
                     out.append(gid)
         return out
+
+    def count_endpoints(self, topic: str, kind: str) -> int:
+        """Writers (``kind`` 'publishers') or readers ('subscriptions') of the ROS topic ``topic`` that DDS shows,
+        ours included: ``len(view().topics[topic].publishers)`` without building the view, as cheap as rclpy's
+        ``count_publishers`` (a node may ask on every timer tick)."""
+        with self._lock:
+            if self._counts_version != self.structure_version:
+                counts: dict[tuple[str | None, str], int] = {}
+                for entry in self._endpoints.values():
+                    key = (ros_topic_name(entry['topic']), entry['kind'])
+                    counts[key] = counts.get(key, 0) + 1
+                self._counts, self._counts_version = counts, self.structure_version
+            return self._counts.get((topic, 'writer' if kind == 'publishers' else 'reader'), 0)
 
     def remote_participant_count(self) -> int:
         """How many other participants are alive in the domain (cheaper than :meth:`view`)."""

@@ -441,10 +441,9 @@ class Node(NodeParameters):
 
     def _count(self, topic_name: str, kind: str) -> int:
         name = self.resolve_topic_name(topic_name)
-        view = self._graph_view()
-        if view is not None:
-            topic = view.topics.get(name)
-            return len(getattr(topic, kind)) if topic else 0
+        transport = self.context.transport
+        if transport is not None:  # counted without building the graph's view: a node may ask on every tick
+            return transport.graph.count_endpoints(name, kind)
         topic = self.context.topics.get(name)
         return len(getattr(topic, kind)) if topic else 0
 

@@ -1,0 +1,91 @@
+"""The Foxglove front sends the server again a subscribe it refused as ``Unknown channel ID`` (foxglove-sdk 0.30's
+race: a subscribe right after the advertisement), so a client that never subscribes twice (the Foxglove app) still
+gets its frames.
+
+The server here is a scripted WebSocket server (websockets) speaking the Foxglove protocol's messages: it
+advertises channel 8 and refuses the first ``refusals`` subscribes with the status foxglove-sdk sends (its wording
+taken from a real foxglove-sdk server asked for a channel it does not have), then sends one frame.
+"""
+
+import json
+import struct
+import threading
+
+from websockets.sync.client import connect
+from websockets.sync.server import serve
+
+from touch_view.ws_front import MAX_REPLAYS, FrameReader, SubprotocolFront, masked_text_frame
+
+ADVERTISE = {'op': 'advertise', 'channels': [{'id': 8, 'topic': '/skin/frame', 'encoding': 'cdr',
+                                              'schemaName': 'social_touch_msgs/msg/SkinFrame', 'schema': ''}]}
+
+
+class ScriptedServer:
+    def __init__(self, refusals: int) -> None:
+        self.refusals = refusals
+        self.subscribes: list[dict] = []
+        self._server = serve(self._handle, '127.0.0.1', 0, subprotocols=['foxglove.sdk.v1'],
+                             compression=None)  # as foxglove-sdk's server: no permessage-deflate
+        self.port = self._server.socket.getsockname()[1]
+        threading.Thread(target=self._server.serve_forever, daemon=True).start()
+
+    def _handle(self, ws) -> None:
+        ws.send(json.dumps(ADVERTISE))
+        for text in ws:
+            message = json.loads(text)
+            if message['op'] != 'subscribe':
+                continue
+            self.subscribes.append(message)
+            if len(self.subscribes) <= self.refusals:
+                ws.send(json.dumps({'op': 'status', 'level': 2, 'message': 'Unknown channel ID: 8'}))
+            else:
+                ws.send(struct.pack('<BIQ', 1, message['subscriptions'][0]['id'], 0) + b'frame')
+
+    def close(self) -> None:
+        self._server.shutdown()
+
+
+def client_sees(refusals: int) -> tuple[list, ScriptedServer, SubprotocolFront]:
+    """What a client that subscribes once receives through the front (statuses and frames, for 3 s at most)."""
+    server = ScriptedServer(refusals)
+    front = SubprotocolFront('127.0.0.1', 0, server.port)
+    received = []
+    try:
+        with connect(f'ws://127.0.0.1:{front.port}', subprotocols=['foxglove.websocket.v1']) as ws:
+            assert json.loads(ws.recv(timeout=5))['op'] == 'advertise'
+            ws.send(json.dumps({'op': 'subscribe', 'subscriptions': [{'id': 1, 'channelId': 8}]}))
+            while True:
+                try:
+                    message = ws.recv(timeout=3)
+                except TimeoutError:
+                    break
+                received.append(message if isinstance(message, bytes) else json.loads(message)['message'])
+                if isinstance(message, bytes):
+                    break
+    finally:
+        front.close()
+        server.close()
+    return received, server, front
+
+
+def test_a_refused_subscribe_is_sent_again_and_the_client_gets_its_frame():
+    received, server, front = client_sees(refusals=2)
+    assert received[:2] == ['Unknown channel ID: 8'] * 2  # the client sees what the server said
+    assert received[2] == struct.pack('<BIQ', 1, 1, 0) + b'frame'
+    assert [s['subscriptions'] for s in server.subscribes] == [[{'id': 1, 'channelId': 8}]] * 3
+    assert front.replayed == 2
+
+
+def test_replays_stop_after_the_limit():
+    received, server, front = client_sees(refusals=MAX_REPLAYS + 5)
+    assert front.replayed == MAX_REPLAYS
+    assert all(isinstance(m, str) for m in received)
+    assert len(server.subscribes) == 1 + MAX_REPLAYS
+
+
+def test_frames_are_read_whole_across_chunks():
+    frame = masked_text_frame('{"op": "subscribe"}' * 10)
+    reader = FrameReader()
+    assert reader.feed(frame[:3]) == [] and reader.feed(frame[3:-1]) == []
+    [(raw, fin, opcode, payload)] = reader.feed(frame[-1:])
+    assert (raw, fin, opcode, payload) == (frame, True, 1, b'{"op": "subscribe"}' * 10)
