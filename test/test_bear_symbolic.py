@@ -226,12 +226,14 @@ def test_a_candidate_released_before_its_dwell_is_withdrawn_and_no_decision_foll
     assert events[1].onset == 1.0 and events[1].confidence == 0.0 and rec.announced_gestures() == {}
 
 
-def test_a_superseded_candidate_is_withdrawn_and_its_supersessor_announced() -> None:
+def test_a_touched_filter_is_announced_and_a_superseded_candidate_withdrawn() -> None:
     hug = ['chest_left', 'chest_right', 'back_upper', 'side_left_upper', 'side_right_upper']
     events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['side_left_upper', 'side_right_upper'] if t < 1.0
                    else hug, 4.0, decisions_only=False)
-    assert states(events) == [('tickle', 'CANDIDATE', 0.0, ''), ('tickle', 'WITHDRAWN', 1.0, 'superseded by hug'),
-                              ('hug', 'CANDIDATE', 1.0, ''), ('hug', 'START', 3.0, '')]
+    # Both are announced on the first touch of the side sensors (hug's filter has them too): hug as touched only.
+    assert states(events) == [('hug', 'CANDIDATE', 0.0, ''), ('tickle', 'CANDIDATE', 0.0, ''),
+                              ('tickle', 'WITHDRAWN', 1.0, 'superseded by hug'), ('hug', 'START', 3.0, '')]
+    assert [e.evidence for e in events if e.state_name == 'CANDIDATE'] == [0, 1]
 
 
 def test_a_brief_gesture_is_announced_then_confirmed_at_release_or_withdrawn_when_held() -> None:
@@ -260,13 +262,17 @@ def test_a_gesture_decided_on_its_first_match_sends_no_candidate(tmp_path) -> No
 
 
 def test_the_candidate_confidence_is_the_tables_rule_of_succession(tmp_path) -> None:
-    table = CandidateConfidence.loads('gestures:\n  head_pat: [[3, 8], [0, 0], [9, 9]]\n')
+    table = CandidateConfidence.loads('gestures:\n  head_pat: [[0, 0], [5, 8], [9, 9]]\n'
+                                      '  hug: [[1, 8], [0, 0], [0, 0]]\n')
     rec = SymbolicRecogniser(LIB, BODY, confidence=table)
     one = drive(rec, lambda t: ['head2'] if t < 0.5 else [], 3.0, decisions_only=False)
     rec.reset()
     three = drive(rec, lambda t: ['head1', 'head2', 'head3'] if t < 0.5 else [], 3.0, decisions_only=False)
-    assert one[0].confidence == pytest.approx(4 / 10) and three[0].confidence == pytest.approx(10 / 11)
-    assert table.confidence('hug', 0) == 0.5                       # nothing counted: 0.5
+    rec.reset()
+    chest = drive(rec, lambda t: ['chest_left'] if t < 0.5 else [], 3.0, decisions_only=False)
+    assert [(e.evidence, e.confidence) for e in (one[0], three[0], chest[0])] == [
+        (1, pytest.approx(6 / 10)), (2, pytest.approx(10 / 11)), (0, pytest.approx(2 / 10))]
+    assert chest[0].sensors == ('chest_left',) and table.confidence('tickle', 1) == 0.5   # nothing counted: 0.5
 
 
 def test_the_shipped_candidate_table_covers_every_detectable_gesture() -> None:

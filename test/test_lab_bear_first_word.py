@@ -14,21 +14,21 @@ from touch_lab.bear.first_word import candidate_outcomes, score_first_word
 LIB = GestureLibrary.default(BodyMap.default())
 
 
-def event(gesture: str, state: int, t: float, sensors=('x',), confidence: float = 1.0) -> SymbolicEvent:
-    return SymbolicEvent(gesture, state, t, 0.0, t, tuple(sensors), confidence=confidence)
+def event(gesture: str, state: int, t: float, evidence: int = 0, confidence: float = 1.0) -> SymbolicEvent:
+    return SymbolicEvent(gesture, state, t, 0.0, t, ('x',), confidence=confidence, evidence=evidence)
 
 
 def label(name: str, start: float, end: float):
     return SimpleNamespace(kind='symbolic', label=name, start_s=start, end_s=end)
 
 
-def test_counting_keys_each_candidate_by_its_evidence_and_its_outcome() -> None:
-    events = [event('hug', CANDIDATE, 0.0, sensors='abcd'), event('hug', START, 2.0), event('hug', END, 5.0),
-              event('hug', CANDIDATE, 9.0, sensors='abcdef'), event('hug', WITHDRAWN, 9.5),
-              event('head_pat', CANDIDATE, 10.0), event('head_pat', START, 12.0),
+def test_counting_keys_each_candidate_by_its_evidence_level_and_its_outcome() -> None:
+    events = [event('hug', CANDIDATE, 0.0, evidence=0), event('hug', START, 2.0), event('hug', END, 5.0),
+              event('hug', CANDIDATE, 9.0, evidence=2), event('hug', WITHDRAWN, 9.5),
+              event('head_pat', CANDIDATE, 10.0, evidence=0), event('head_pat', START, 12.0),
               event('tickle', START, 20.0)]                 # a decision without a candidate counts nowhere
     table = count_candidates(events, LIB, data='test')
-    assert table.counts['hug'] == [(1, 1), (0, 0), (0, 1)]   # 4 sensors: min_active; 6: two beyond
+    assert table.counts['hug'] == [(1, 1), (0, 0), (0, 1)]
     assert table.counts['head_pat'] == [(1, 1), (0, 0), (0, 0)] and table.counts['tickle'] == [(0, 0)] * 3
     assert table.confidence('hug', 0) == pytest.approx(2 / 3) and table.confidence('hug', 5) == pytest.approx(1 / 3)
     assert candidate_outcomes(events)['hug'] == {'candidates': 2, 'confirmed': 1, 'withdrawn': 1}

@@ -1,7 +1,8 @@
 """How often a symbolic gesture's CANDIDATE is confirmed: the confidence it is announced with.
 
-A candidate's *evidence* is how many of its filter's sensors count beyond ``min_active`` when it is
-announced (0, 1, or :data:`MAX_EXTRA` and more). For every gesture and evidence level the table holds
+A candidate's *evidence level* when it is announced: 0 when its filter is touched but not matched yet
+(fewer than ``min_active`` sensors, one side only, or without the subtype), 1 when it matches, 2 when
+it matches with more sensors than ``min_active`` (:data:`MAX_LEVEL`). For every gesture and level the table holds
 ``[confirmed, candidates]``, counted on a simulated scene by ``python -m touch_lab.bear.candidates``;
 the confidence is Laplace's rule of succession, ``(confirmed + 1) / (candidates + 2)``: the fraction
 confirmed, pulled towards 0.5 when few were seen (0.5 when none were). The table ships as
@@ -12,7 +13,7 @@ confirmed, pulled towards 0.5 when few were seen (0.5 when none were). The table
     format: 1
     data: synthetic ...           # what the counts come from (free text)
     gestures:
-      hug: [[4, 9], [3, 5], [10, 11]]   # [confirmed, candidates] at 0, 1, 2+ extra sensors
+      hug: [[4, 9], [3, 5], [10, 11]]   # [confirmed, candidates] at levels 0, 1, 2
 """
 
 from __future__ import annotations
@@ -22,10 +23,10 @@ from pathlib import Path
 
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, loads_yaml, typed
 
-__all__ = ['MAX_EXTRA', 'CandidateConfidence', 'laplace']
+__all__ = ['MAX_LEVEL', 'CandidateConfidence', 'laplace']
 
-#: Evidence levels: 0 .. MAX_EXTRA sensors beyond ``min_active`` (the last one: that many or more).
-MAX_EXTRA = 2
+#: Evidence levels: 0 touched, 1 matched, 2 matched with more sensors than ``min_active``.
+MAX_LEVEL = 2
 FORMAT_VERSION = 1
 
 
@@ -38,7 +39,7 @@ class CandidateConfidence:
     """Gesture name -> ``[confirmed, candidates]`` per evidence level (module doc).
 
     Args:
-        counts: gesture -> :data:`MAX_EXTRA` + 1 pairs ``(confirmed, candidates)``.
+        counts: gesture -> :data:`MAX_LEVEL` + 1 pairs ``(confirmed, candidates)``.
         source: where the counts come from (a file path), for messages.
         data: what the counts were measured on (free text).
     """
@@ -49,12 +50,12 @@ class CandidateConfidence:
         self.source = source
         self.data = data
 
-    def confidence(self, gesture: str, extra: int) -> float:
-        """Probability that a candidate of ``gesture`` with ``extra`` sensors beyond ``min_active`` is confirmed."""
+    def confidence(self, gesture: str, level: int) -> float:
+        """Probability that a candidate of ``gesture`` announced at evidence ``level`` is confirmed."""
         rows = self.counts.get(gesture)
         if rows is None:
             return laplace(0, 0)
-        return laplace(*rows[min(max(int(extra), 0), MAX_EXTRA)])
+        return laplace(*rows[min(max(int(level), 0), MAX_LEVEL)])
 
     @classmethod
     def default(cls) -> CandidateConfidence:
@@ -82,15 +83,15 @@ class CandidateConfidence:
                             'format')
         gestures = doc['gestures']
         if not isinstance(gestures, dict):
-            raise doc.error(f'gestures must map a gesture name to {MAX_EXTRA + 1} pairs [confirmed, candidates]',
+            raise doc.error(f'gestures must map a gesture name to {MAX_LEVEL + 1} pairs [confirmed, candidates]',
                             'gestures')
         counts = {}
         for name, rows in gestures.items():
-            ok = isinstance(rows, list) and len(rows) == MAX_EXTRA + 1 and all(
+            ok = isinstance(rows, list) and len(rows) == MAX_LEVEL + 1 and all(
                 isinstance(r, list) and len(r) == 2 and all(isinstance(v, int) and not isinstance(v, bool)
                                                             for v in r) and 0 <= r[0] <= r[1] for r in rows)
             if not ok:
-                raise gestures.error(f"gesture '{name}': expected {MAX_EXTRA + 1} pairs [confirmed, candidates] of "
+                raise gestures.error(f"gesture '{name}': expected {MAX_LEVEL + 1} pairs [confirmed, candidates] of "
                                      f'integers with 0 <= confirmed <= candidates; got {rows!r}', name)
             counts[str(name)] = [(int(a), int(b)) for a, b in rows]
         return cls(counts, source, typed(doc, 'data', str, what, default=''))

@@ -24,12 +24,13 @@ Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) 
   most ``max_s`` seconds, and ENDs in the same cycle. A longer touch on its filter (a pat, a pet, a
   hold on the shoulder) never STARTs it.
 
-A first word before the decision (START is the confirmation): a candidate that matches now, is not
-suppressed and has not STARTed is announced at once with CANDIDATE (its first matching cycle, or the
-cycle its supersessor lets go), with a confidence from :class:`CandidateConfidence`; WITHDRAWN follows
-when it stops being a live candidate without STARTing (released, superseded, or a brief gesture held
-past ``max_s``). A gesture that STARTs in the cycle it first matches (``dwell_s: 0``) sends no CANDIDATE.
-Code that waits for the decision reads START and END only and ignores the other two states.
+A first word before the decision (START is the confirmation): a gesture whose filter is touched (one
+of its sensors active, before ``min_active``, sides or subtypes are met), that is not suppressed and has
+not STARTed is announced at once with CANDIDATE, with a confidence from :class:`CandidateConfidence`
+for its evidence (touched only, matched, matched with more sensors); WITHDRAWN follows when it is
+superseded, when neither a match nor a contact has held it for ``gap_s``, or (a brief gesture) when it
+matched longer than ``max_s``. A gesture that STARTs in the cycle it is first touched (``dwell_s: 0``)
+sends no CANDIDATE. Code that waits for the decision reads START and END only and ignores the other two.
 """
 
 from __future__ import annotations
@@ -121,6 +122,8 @@ class SymbolicEvent:
             ``'longer than max_s'``; empty otherwise.
         confidence: 0..1, the estimated probability that the gesture is (or was) confirmed: for a
             CANDIDATE from :class:`CandidateConfidence`; 1 for START and END, 0 for WITHDRAWN.
+        evidence: for a CANDIDATE, its evidence level (:mod:`.candidates`): 0 a contact in the filter that
+            does not match it yet, 1 a match, 2 a match with more sensors than ``min_active``; else 0.
     """
 
     gesture: str
@@ -131,6 +134,7 @@ class SymbolicEvent:
     sensors: tuple[str, ...]
     reason: str = ''
     confidence: float = 1.0
+    evidence: int = 0
 
     @property
     def state_name(self) -> str:
@@ -386,6 +390,7 @@ class SymbolicRecogniser:
         #: per gesture: a CANDIDATE is out (no START nor WITHDRAWN since)
         self.announced: list[bool] = [False] * G
         self._announced_onset = [0.0] * G                 # onset of the announced candidate (for its WITHDRAWN)
+        self._last_touch = [-math.inf] * G                # time of the latest contact in the filter, s
         self._spent = [False] * G           # a brief gesture held past max_s: not announced again until released
 
     def _sensor_names(self, i: int) -> tuple[str, ...]:
@@ -416,7 +421,8 @@ class SymbolicRecogniser:
             CANDIDATEs.
         """
         active = np.asarray(active, dtype=bool)
-        counting = self._member & active[None, :]
+        self._touch_row = self._member & active[None, :]
+        counting = self._touch_row.copy()
         if self._needs_subtype.any():
             if subtype_codes is None:
                 counting[self._needs_subtype] = False
@@ -427,14 +433,17 @@ class SymbolicRecogniser:
         sides_ok = ~self._both | ((counting & self._left).any(axis=1) & (counting & self._right).any(axis=1))
         matched = (counts >= self._min_active) & sides_ok
 
+        touched = (self._member & active[None, :]).any(axis=1)   # contact in the filter, matched or not
         # The state machine runs on Python lists: scalar numpy indexing would cost more than the maths.
-        matched_l = matched.tolist()
+        matched_l, touched_l = matched.tolist(), touched.tolist()
         counts_l = counts.tolist()
         onset, last, started, announced = self.onset, self.last_match, self.started, self.announced
         ends: list[SymbolicEvent] = []
         starts: list[SymbolicEvent] = []
         live = [False] * len(self.gestures)          # candidate and not suppressed
         for i, g in enumerate(self.gestures):        # priority order: supersessors are decided first
+            if touched_l[i]:
+                self._last_touch[i] = t
             if matched_l[i]:
                 if onset[i] is None:
                     onset[i] = t
@@ -445,19 +454,20 @@ class SymbolicRecogniser:
                         g.dwell_s <= last[i] - onset[i] <= g.max_s + 1e-9:
                     announced[i] = False
                     starts += self._brief(g, i, t, onset[i])
-                elif announced[i]:
-                    ends.append(self._withdrawn(i, t, 'released'))
                 onset[i] = last[i] = None
                 self._spent[i] = False
             by = [h for h in self._superseded_by[i] if live[h]]
             live[i] = onset[i] is not None and not by
+            # A CANDIDATE out is withdrawn when superseded, or once neither a match nor a contact holds it.
+            released = onset[i] is None and t - self._last_touch[i] > g.gap_s + 1e-9
             if g.max_s is not None:                  # brief gestures START only at their release (above)
-                if announced[i] and (by or last[i] - onset[i] > g.max_s + 1e-9):   # matched too long: not a tap
-                    reason = f'superseded by {self.gestures[by[0]].name}' if by else 'longer than max_s'
+                if announced[i] and (by or released or last[i] - onset[i] > g.max_s + 1e-9):
+                    reason = (f'superseded by {self.gestures[by[0]].name}' if by else 'released' if released
+                              else 'longer than max_s')
                     ends.append(self._withdrawn(i, t, reason))
-                    self._spent[i] = not by
-                elif live[i] and matched_l[i] and not announced[i] and not self._spent[i]:
-                    starts.append(self._candidate(g, i, t, counts_l[i]))
+                    self._spent[i] = not by and not released   # held too long: not a tap until released
+                elif touched_l[i] and not by and not announced[i] and not self._spent[i]:
+                    starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
                 continue
             if started[i] and not live[i]:
                 reason = f'superseded by {self.gestures[by[0]].name}' if by else 'released'
@@ -469,18 +479,23 @@ class SymbolicRecogniser:
                 announced[i] = False
                 self._start_onset[i] = onset[i]
                 starts.append(SymbolicEvent(g.name, START, t, onset[i], t - onset[i], self._sensor_names(i)))
-            elif announced[i] and not live[i]:
+            elif announced[i] and (by or released):
                 ends.append(self._withdrawn(i, t, f'superseded by {self.gestures[by[0]].name}' if by else 'released'))
-            elif not started[i] and not announced[i] and live[i] and matched_l[i]:
-                starts.append(self._candidate(g, i, t, counts_l[i]))
+            elif touched_l[i] and not by and not started[i] and not announced[i]:
+                starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
         return ends + starts
 
-    def _candidate(self, g: GestureFilter, i: int, t: float, count: int) -> SymbolicEvent:
+    def _candidate(self, g: GestureFilter, i: int, t: float, matched: bool, count: int) -> SymbolicEvent:
         """Announce gesture ``i`` (module doc), with the confidence of its evidence."""
         self.announced[i] = True
-        onset = self._announced_onset[i] = self.onset[i]
-        return SymbolicEvent(g.name, CANDIDATE, t, onset, t - onset, self._sensor_names(i),
-                             confidence=self.confidence.confidence(g.name, count - g.min_active))
+        evidence = 1 + min(count - g.min_active, 1) if matched else 0
+        onset = self._announced_onset[i] = self.onset[i] if matched else t
+        sensors = self._sensor_names(i) if matched else self._touched_names(i)
+        return SymbolicEvent(g.name, CANDIDATE, t, onset, t - onset, sensors,
+                             confidence=self.confidence.confidence(g.name, evidence), evidence=evidence)
+
+    def _touched_names(self, i: int) -> tuple[str, ...]:
+        return tuple(self._names_by_channel.get(int(c), str(c)) for c in np.flatnonzero(self._touch_row[i]))
 
     def _withdrawn(self, i: int, t: float, reason: str) -> SymbolicEvent:
         self.announced[i] = False

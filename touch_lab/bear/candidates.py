@@ -13,22 +13,21 @@ from __future__ import annotations
 import argparse
 import sys
 
-from touch_gestures.bear.candidates import MAX_EXTRA, CandidateConfidence
+from touch_gestures.bear.candidates import MAX_LEVEL, CandidateConfidence
 from touch_gestures.bear.symbolic import CANDIDATE, START, WITHDRAWN, GestureLibrary
 
 __all__ = ['count_candidates', 'main', 'measure']
 
 
 def count_candidates(events: list, library: GestureLibrary, data: str = '') -> CandidateConfidence:
-    """The table of ``events`` (time order): a CANDIDATE's evidence is its counting sensors beyond
-    ``min_active`` (``len(sensors) - min_active``, capped at :data:`MAX_EXTRA`)."""
-    counts = {g.name: [[0, 0] for _ in range(MAX_EXTRA + 1)] for g in library.detectable}
+    """The table of ``events`` (time order), keyed by each CANDIDATE's evidence level."""
+    counts = {g.name: [[0, 0] for _ in range(MAX_LEVEL + 1)] for g in library.detectable}
     open_: dict[str, int] = {}            # gesture -> evidence level of its CANDIDATE out
     for e in events:
         if e.gesture not in counts:
             continue
         if e.state == CANDIDATE:
-            level = min(max(len(e.sensors) - library[e.gesture].min_active, 0), MAX_EXTRA)
+            level = e.evidence
             counts[e.gesture][level][1] += 1
             open_[e.gesture] = level
         elif e.state in (START, WITHDRAWN) and e.gesture in open_:
