@@ -290,3 +290,21 @@ def test_the_shipped_candidate_table_covers_every_detectable_gesture() -> None:
 def test_candidate_table_errors(text: str, message: str) -> None:
     with pytest.raises(ConfigError, match=message):
         CandidateConfidence.loads(text)
+
+
+def test_a_patting_hand_that_lifts_through_the_end_of_the_dwell_is_a_head_pat() -> None:
+    """At the real 3.4 Hz scan a pat may be seen on two scans 1.5 s apart and on none at the end of the dwell."""
+    rate = 3.4
+    seen = {4, 9}                                        # the scans that saw the hand (simulated people do this)
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['head2'] if round(t * rate) in seen else [], 6.0,
+                   rate_hz=rate)
+    assert [(e.gesture, e.state_name) for e in events][:1] == [('head_pat', 'START')]
+    assert events[0].t == pytest.approx(11 / rate) and events[0].onset == pytest.approx(4 / rate)   # in the lift
+
+
+@pytest.mark.parametrize('seen', [{4}, {4, 5, 6}, {4, 6}], ids=['one scan', 'one touch', 'pats within a third'])
+def test_a_single_touch_or_pats_spanning_under_half_the_dwell_do_not_start_in_a_lift(seen) -> None:
+    rate = 3.4
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['head2'] if round(t * rate) in seen else [], 6.0,
+                   rate_hz=rate)
+    assert events == []

@@ -16,8 +16,12 @@ Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) 
   ``gap_s``;
 - priority logic: ``g`` is suppressed while a candidate that supersedes it is itself not suppressed
   (the paper's "Tickle: (not Hug) && ..."); gestures are visited in topological order of "supersedes";
-- START when a candidate, not suppressed, matches now and ``t - onset >= dwell_s``; END when it stops
-  being a candidate or becomes suppressed. Gestures that do not supersede one another can be active
+- START when a candidate, not suppressed, has ``t - onset >= dwell_s`` and matches now, or is in a
+  lift (no match for at most ``gap_s``) after at least two separate contacts that span at least half
+  the dwell: a patting hand lifts between pats, and at the bear's 3.4 Hz scan a whole dwell may hold
+  only two or three touched scans, none at its end. One touch, however long, never STARTs a gesture
+  by its lift (the paper's two seconds hold for it). END when it stops being a candidate or becomes
+  suppressed. Gestures that do not supersede one another can be active
   at the same time.
 - a *brief* gesture (``max_s`` set, e.g. a shoulder tap) is told by its end: it STARTs when its
   candidate is released (a gap longer than ``gap_s``) after matching for at least ``dwell_s`` and at
@@ -390,6 +394,8 @@ class SymbolicRecogniser:
         #: per gesture: a CANDIDATE is out (no START nor WITHDRAWN since)
         self.announced: list[bool] = [False] * G
         self._announced_onset = [0.0] * G                 # onset of the announced candidate (for its WITHDRAWN)
+        self._contacts = [0] * G                          # separate contacts (matches after a lift) since onset
+        self._previous_t: float | None = None             # the previous cycle's time
         self._last_touch = [-math.inf] * G                # time of the latest contact in the filter, s
         self._spent = [False] * G           # a brief gesture held past max_s: not announced again until released
 
@@ -447,6 +453,9 @@ class SymbolicRecogniser:
             if matched_l[i]:
                 if onset[i] is None:
                     onset[i] = t
+                    self._contacts[i] = 0
+                if last[i] != self._previous_t:     # a new contact after a lift
+                    self._contacts[i] += 1
                 last[i] = t
                 self._last_counting[i] = counting[i]
             elif last[i] is not None and t - last[i] > g.gap_s + 1e-9:   # 1e-9: float time steps
@@ -474,7 +483,8 @@ class SymbolicRecogniser:
                 begin = self._start_onset[i]
                 ends.append(SymbolicEvent(g.name, END, t, begin, t - begin, self._sensor_names(i), reason))
                 started[i] = False
-            elif not started[i] and live[i] and matched_l[i] and t - onset[i] >= g.dwell_s:
+            elif not started[i] and live[i] and t - onset[i] >= g.dwell_s and (matched_l[i] or (
+                    self._contacts[i] >= 2 and last[i] - onset[i] >= g.dwell_s / 2)):   # in a lift: module doc
                 started[i] = True
                 announced[i] = False
                 self._start_onset[i] = onset[i]
@@ -483,6 +493,7 @@ class SymbolicRecogniser:
                 ends.append(self._withdrawn(i, t, f'superseded by {self.gestures[by[0]].name}' if by else 'released'))
             elif touched_l[i] and not by and not started[i] and not announced[i]:
                 starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
+        self._previous_t = t
         return ends + starts
 
     def _candidate(self, g: GestureFilter, i: int, t: float, matched: bool, count: int) -> SymbolicEvent:
