@@ -12,7 +12,7 @@ import touch_gestures.bear.gate
 import touch_gestures.bear.node as node_module
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.symbolic import END, START, SymbolicRecogniser
+from touch_gestures.bear.symbolic import CANDIDATE, END, START, WITHDRAWN, SymbolicRecogniser
 from touch_graph.errors import ParameterError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
@@ -69,10 +69,14 @@ class Graph:
             self.pub.publish(msg)
             self.executor.spin_for(0.0)      # deliver now: every ready callback runs
 
+    def decided(self) -> list:
+        """The decisions (START, END) of /touch/symbolic, what code that waits for them reads."""
+        return [m for m in self.got['symbolic'] if m.state in (START, END)]
+
     def symbolic(self) -> list[tuple[str, int, float]]:
-        """(gesture, state, stamp s since the epoch) of /touch/symbolic."""
+        """(gesture, state, stamp s since the epoch) of the decisions on /touch/symbolic."""
         return [(m.gesture, m.state, m.header.stamp.sec - EPOCH_S + m.header.stamp.nanosec * 1e-9)
-                for m in self.got['symbolic']]
+                for m in self.decided()]
 
     def close(self) -> None:
         self.node.destroy_node()
@@ -113,8 +117,12 @@ def test_head_hold_gives_sensor_level_every_cycle_subtypes_and_a_head_pat_start_
 
     events = g.symbolic()
     assert [(name, state) for name, state, _ in events] == [('head_pat', START), ('head_pat', END)]
-    start, end = g.got['symbolic']
+    candidate, start, end = g.got['symbolic']
     onset_s = start.onset.sec - EPOCH_S + start.onset.nanosec * 1e-9
+    # The first word: on the first touched scan, with the shipped table's confidence; START confirms it.
+    assert candidate.state == CANDIDATE and candidate.gesture == 'head_pat' and candidate.onset == start.onset
+    assert candidate.header.stamp == frame(10).header.stamp and candidate.duration_s == 0.0
+    assert 0.0 < candidate.confidence < 1.0 and start.confidence == 1.0 and end.confidence == 1.0
     assert onset_s == pytest.approx(10 / RATE, abs=1e-6)                   # the first touched scan
     assert events[0][2] == pytest.approx(17 / RATE, abs=1e-6)              # first scan >= 2 s of dwell later
     assert start.duration_s == pytest.approx(7 / RATE, abs=1e-5) and start.sensors == ['head2']
@@ -174,7 +182,7 @@ def test_time_going_back_ends_what_is_under_way_and_starts_afresh(graph) -> None
     g.update([frame(4), frame(5)])                                  # a looped bag: time jumps back 2.6 s and goes on
     assert [(n, s) for n, s, _ in g.symbolic()] == [('hug', START), ('hug', END)]
     assert g.node.screen.source_changes == 1 and not g.node.screen.screened
-    end = g.got['symbolic'][-1]
+    end = g.decided()[-1]
     assert end.header.stamp == frame(11).header.stamp and end.duration_s == pytest.approx(11 / RATE, abs=1e-5)
     released = g.got['subtype'][before:]
     assert {m.sensor for m in released} == {BODY.by_channel(c).name for c in hug}
@@ -190,7 +198,16 @@ def test_frames_that_stop_end_gestures_after_max_gap(graph) -> None:
     assert [(n, s) for n, s, _ in g.symbolic()] == [('head_pat', START), ('head_pat', END)]
     assert g.got['subtype'][-1].subtype == 'none' and g.node.resets == 1
     g.executor.spin_for(3.0)
-    assert len(g.got['symbolic']) == 2 and g.node.resets == 1     # nothing left to end
+    assert len(g.got['symbolic']) == 3 and g.node.resets == 1     # CANDIDATE, START, END: nothing left to end
+
+
+def test_frames_that_stop_withdraw_a_candidate_out(graph) -> None:
+    g = graph(subtype_classifier='rule', max_gap_s=2.0)
+    g.update(frame(i, {ch('head2')[0]: 1.0}) for i in range(3))           # under the 2 s dwell
+    g.executor.spin_for(3.0)
+    assert [(m.gesture, m.state, m.confidence) for m in g.got['symbolic']] == [
+        ('head_pat', CANDIDATE, g.got['symbolic'][0].confidence), ('head_pat', WITHDRAWN, 0.0)]
+    assert g.got['symbolic'][1].onset == g.got['symbolic'][0].onset
 
 
 def test_dwell_and_gap_parameters_override_the_files_defaults(graph) -> None:

@@ -21,7 +21,7 @@ from touch_driver.bear.calibration import BearCalibrator
 from touch_driver.bear.node import BearDriverNode
 from touch_driver.bear.protocol import BearDecoder
 from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.symbolic import END, START
+from touch_gestures.bear.symbolic import CANDIDATE, END, START, WITHDRAWN
 from touch_graph.errors import ConfigError
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
@@ -143,8 +143,14 @@ def test_driver_and_recognisers_in_one_graph_report_a_hug_and_a_head_pat() -> No
 
     events = [(m.gesture, m.state, rel(m.onset), rel(m.header.stamp), tuple(m.sensors)) for m in got['SymbolicGesture']]
     # The 1 s touch on the sole is shorter than foot_rub's 2 s dwell: a poke, no gesture.
-    assert [(e[0], e[1]) for e in events] == [('hug', START), ('hug', END), ('head_pat', START), ('head_pat', END)]
-    hug_start, hug_end, pat_start, pat_end = events[:4]
+    decided = [e for e in events if e[1] in (START, END)]
+    assert [(e[0], e[1]) for e in decided] == [('hug', START), ('hug', END), ('head_pat', START), ('head_pat', END)]
+    hug_start, hug_end, pat_start, pat_end = decided
+    # The first word: a CANDIDATE of each on the scan its filter first matched, and the sole's touch withdrawn.
+    said = {(e[0], e[1]): e for e in reversed(events) if e[1] in (CANDIDATE, WITHDRAWN)}
+    for name, begun in (('hug', hug_start), ('head_pat', pat_start)):
+        assert said[name, CANDIDATE][2] == said[name, CANDIDATE][3] == begun[2]
+    assert said['foot_rub', CANDIDATE][3] < said['foot_rub', WITHDRAWN][3] and ('foot_rub', WITHDRAWN) in said
     assert 5.0 <= hug_start[2] < 5.5 and hug_start[3] - hug_start[2] >= 2.0 and set(hug_start[4]) == set(HUG)
     assert 11.0 <= hug_end[3] < 11.0 + 1.5 + 0.7                 # released: after the 1.5 s gap, within 2 scans
     assert 14.0 <= pat_start[2] < 14.5 and set(pat_start[4]) <= {'head1', 'head2'}

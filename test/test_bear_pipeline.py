@@ -46,7 +46,7 @@ def test_sensor_level_subtype_and_symbolic_through_the_driver_node() -> None:
     # 20 cycles (5.9 s) have passed. That tail is the paper's; the trained model learns to say none there.
     assert changes == [('head2', 'none', 'poke'), ('head2', 'poke', 'hold'), ('head2', 'hold', 'pet'),
                        ('head2', 'pet', 'none')]
-    assert events(results) == [('head_pat', 'START'), ('head_pat', 'END')]
+    assert events(results) == [('head_pat', 'CANDIDATE'), ('head_pat', 'START'), ('head_pat', 'END')]
     assert not any(r.active_sensors for r in results if r.t < 4.5)                    # baseline learnt, no touch
 
 

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap, BodySensor
+from touch_gestures.bear.candidates import CandidateConfidence
 from touch_gestures.bear.subtype_labels import subtype_index
-from touch_gestures.bear.symbolic import END, START, GestureLibrary, SymbolicRecogniser
+from touch_gestures.bear.symbolic import DECISIONS, END, START, GestureLibrary, SymbolicRecogniser
 from touch_graph.errors import ConfigError
 from touch_graph.paths import share_file
 
@@ -15,8 +16,10 @@ BODY = BodyMap.default()
 LIB = GestureLibrary.default(BODY)
 
 
-def drive(rec: SymbolicRecogniser, active_at, duration_s: float, rate_hz: float = 10.0, subtype_at=None):
-    """Run ``rec`` with the sensors named by ``active_at(t)`` active; return all events."""
+def drive(rec: SymbolicRecogniser, active_at, duration_s: float, rate_hz: float = 10.0, subtype_at=None,
+          decisions_only: bool = True):
+    """Run ``rec`` with the sensors named by ``active_at(t)`` active; return its decisions (START, END), or all
+    events (CANDIDATE and WITHDRAWN too) unless ``decisions_only``."""
     events = []
     for i in range(int(duration_s * rate_hz)):
         t = i / rate_hz
@@ -28,7 +31,7 @@ def drive(rec: SymbolicRecogniser, active_at, duration_s: float, rate_hz: float 
             for name, sub in subtype_at(t).items():
                 codes[BODY.by_name(name).channel] = subtype_index(sub)
         events += rec.update(t, mask, codes)
-    return events
+    return [e for e in events if e.state in DECISIONS] if decisions_only else events
 
 
 def summary(events):
@@ -200,3 +203,108 @@ def test_max_s_below_dwell_is_a_config_error(tmp_path) -> None:
     path.write_text('gestures:\n  poke_head:\n    sensors: [head1]\n    dwell_s: 1.0\n    max_s: 0.5\n')
     with pytest.raises(ConfigError, match=r'max_s \(0.5 s\) must be at least dwell_s'):
         GestureLibrary.load(path, BODY)
+
+
+def states(events):
+    return [(e.gesture, e.state_name, round(e.t, 2), e.reason) for e in events]
+
+
+def test_a_candidate_on_the_first_match_then_start_confirms_it() -> None:
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['head2'] if 1.0 <= t < 4.0 else [], 8.0,
+                   decisions_only=False)
+    assert states(events) == [('head_pat', 'CANDIDATE', 1.0, ''), ('head_pat', 'START', 3.0, ''),
+                              ('head_pat', 'END', 5.5, 'released')]
+    assert events[0].onset == events[1].onset == 1.0 and events[0].duration_s == 0.0
+    assert 0.0 < events[0].confidence < 1.0 and events[1].confidence == 1.0
+
+
+def test_a_candidate_released_before_its_dwell_is_withdrawn_and_no_decision_follows() -> None:
+    rec = SymbolicRecogniser(LIB, BODY)
+    events = drive(rec, lambda t: ['head2'] if 1.0 <= t < 2.5 else [], 6.0, decisions_only=False)
+    # WITHDRAWN gap_s after the last match (2.4 s)
+    assert states(events) == [('head_pat', 'CANDIDATE', 1.0, ''), ('head_pat', 'WITHDRAWN', 4.0, 'released')]
+    assert events[1].onset == 1.0 and events[1].confidence == 0.0 and rec.announced_gestures() == {}
+
+
+def test_a_touched_filter_is_announced_and_a_superseded_candidate_withdrawn() -> None:
+    hug = ['chest_left', 'chest_right', 'back_upper', 'side_left_upper', 'side_right_upper']
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['side_left_upper', 'side_right_upper'] if t < 1.0
+                   else hug, 4.0, decisions_only=False)
+    # Both are announced on the first touch of the side sensors (hug's filter has them too): hug as touched only.
+    assert states(events) == [('hug', 'CANDIDATE', 0.0, ''), ('tickle', 'CANDIDATE', 0.0, ''),
+                              ('tickle', 'WITHDRAWN', 1.0, 'superseded by hug'), ('hug', 'START', 3.0, '')]
+    assert [e.evidence for e in events if e.state_name == 'CANDIDATE'] == [0, 1]
+
+
+def test_a_brief_gesture_is_announced_then_confirmed_at_release_or_withdrawn_when_held() -> None:
+    tap = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['shoulder_left'] if 1.0 <= t < 1.3 else [], 4.0,
+                decisions_only=False)
+    assert [(g, s) for g, s, _, _ in states(tap)] == [('shoulder_tap', 'CANDIDATE'), ('shoulder_tap', 'START'),
+                                                      ('shoulder_tap', 'END')]
+    held = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['shoulder_left'] if 1.0 <= t < 4.0 else [], 8.0,
+                 decisions_only=False)
+    assert states(held) == [('shoulder_tap', 'CANDIDATE', 1.0, ''),
+                            ('shoulder_tap', 'WITHDRAWN', 2.1, 'longer than max_s')]   # once, not again
+
+
+def test_a_lifting_hand_does_not_withdraw_a_tap_still_in_its_bounds() -> None:
+    """A tap, 0.3 s of lift and another tap: the candidate waits for the release (gap_s), not for max_s of time."""
+    touch = lambda t: ['shoulder_left'] if 1.0 <= t < 1.2 or 1.5 <= t < 1.7 else []   # noqa: E731
+    events = drive(SymbolicRecogniser(LIB, BODY), touch, 5.0, decisions_only=False)
+    assert [s for _, s, _, _ in states(events)] == ['CANDIDATE', 'START', 'END']
+
+
+def test_a_gesture_decided_on_its_first_match_sends_no_candidate(tmp_path) -> None:
+    path = write(tmp_path, 'gestures:\n  now:\n    sensors: [head1]\n    dwell_s: 0\n')
+    events = drive(SymbolicRecogniser(GestureLibrary.load(path, BODY), BODY), lambda t: ['head1'] if t < 1 else [],
+                   4.0, decisions_only=False)
+    assert [e.state_name for e in events] == ['START', 'END']
+
+
+def test_the_candidate_confidence_is_the_tables_rule_of_succession(tmp_path) -> None:
+    table = CandidateConfidence.loads('gestures:\n  head_pat: [[0, 0], [5, 8], [9, 9]]\n'
+                                      '  hug: [[1, 8], [0, 0], [0, 0]]\n')
+    rec = SymbolicRecogniser(LIB, BODY, confidence=table)
+    one = drive(rec, lambda t: ['head2'] if t < 0.5 else [], 3.0, decisions_only=False)
+    rec.reset()
+    three = drive(rec, lambda t: ['head1', 'head2', 'head3'] if t < 0.5 else [], 3.0, decisions_only=False)
+    rec.reset()
+    chest = drive(rec, lambda t: ['chest_left'] if t < 0.5 else [], 3.0, decisions_only=False)
+    assert [(e.evidence, e.confidence) for e in (one[0], three[0], chest[0])] == [
+        (1, pytest.approx(6 / 10)), (2, pytest.approx(10 / 11)), (0, pytest.approx(2 / 10))]
+    assert chest[0].sensors == ('chest_left',) and table.confidence('tickle', 1) == 0.5   # nothing counted: 0.5
+
+
+def test_the_shipped_candidate_table_covers_every_detectable_gesture() -> None:
+    table = CandidateConfidence.default()
+    assert set(table.counts) == {g.name for g in LIB.detectable} and 'synthetic' in table.data
+    assert CandidateConfidence.loads(table.dumps()).counts == table.counts
+
+
+@pytest.mark.parametrize('text, message', [
+    ('gestures:\n  hug: [[1, 2]]\n', '3 pairs'),
+    ('gestures:\n  hug: [[3, 2], [0, 0], [0, 0]]\n', '0 <= confirmed <= candidates'),
+    ('gestures:\n  hug: [[1, 2], [0, 0], [0, 0]]\nformat: 2\n', 'format 2'),
+    ('gestures:\n  hug: [[1, 2], [0, 0], [0, 0]]\ndat: x\n', "unknown key 'dat'"),
+])
+def test_candidate_table_errors(text: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        CandidateConfidence.loads(text)
+
+
+def test_a_patting_hand_that_lifts_through_the_end_of_the_dwell_is_a_head_pat() -> None:
+    """At the real 3.4 Hz scan a pat may be seen on two scans 1.5 s apart and on none at the end of the dwell."""
+    rate = 3.4
+    seen = {4, 9}                                        # the scans that saw the hand (simulated people do this)
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['head2'] if round(t * rate) in seen else [], 6.0,
+                   rate_hz=rate)
+    assert [(e.gesture, e.state_name) for e in events][:1] == [('head_pat', 'START')]
+    assert events[0].t == pytest.approx(11 / rate) and events[0].onset == pytest.approx(4 / rate)   # in the lift
+
+
+@pytest.mark.parametrize('seen', [{4}, {4, 5, 6}, {4, 6}], ids=['one scan', 'one touch', 'pats within a third'])
+def test_a_single_touch_or_pats_spanning_under_half_the_dwell_do_not_start_in_a_lift(seen) -> None:
+    rate = 3.4
+    events = drive(SymbolicRecogniser(LIB, BODY), lambda t: ['head2'] if round(t * rate) in seen else [], 6.0,
+                   rate_hz=rate)
+    assert events == []

@@ -177,6 +177,18 @@ def test_the_tracker_drops_a_gesture_at_its_end_and_a_subtype_back_to_none() -> 
     assert tracker.state(Running(bear=False)).sensors == []
 
 
+def test_the_tracker_lists_decided_gestures_only() -> None:
+    """A CANDIDATE or WITHDRAWN is not a gesture under way, and changes nothing a client would be told."""
+    tracker = TouchStateTracker(BODY)
+    Symbolic = get_message('SymbolicGesture')
+    tracker.on_symbolic(Symbolic(gesture='hug', state=Symbolic.CANDIDATE, confidence=0.8))
+    assert tracker.state(Running(bear=True)).gestures == [] and tracker.version == 0
+    tracker.on_symbolic(Symbolic(gesture='hug', state=Symbolic.START, confidence=1.0, sensors=['chest_left']))
+    tracker.on_symbolic(Symbolic(gesture='tickle', state=Symbolic.CANDIDATE))
+    tracker.on_symbolic(Symbolic(gesture='tickle', state=Symbolic.WITHDRAWN))
+    assert [g.gesture for g in tracker.state(Running(bear=True)).gestures] == ['hug'] and tracker.version == 1
+
+
 @pytest.mark.parametrize('name, value', [('rate_hz', 0.0), ('max_rate_hz', math.nan), ('body_map', '/no/such.yaml')])
 def test_bad_parameters_give_a_clear_error(name, value) -> None:
     ctx = Context('sim')

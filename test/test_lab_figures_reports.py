@@ -78,7 +78,9 @@ def test_report_bear_writes_and_shows_its_figures(tmp_path, monkeypatch):
     monkeypatch.setattr(bear_report, 'alias_table', _smaller(bear_report.alias_table, freqs=(1.0,)))
     assert social_touch(['report', 'bear', '--quick', '--out-dir', str(tmp_path)]) == 0
     assert_figures_referenced(tmp_path / 'bear-evaluation.md', {'bear-subtype-confusion.png',
-                                                                 'bear-symbolic-confusion.png', 'bear-speed-error.png'})
+                                                                 'bear-symbolic-confusion.png', 'bear-speed-error.png',
+                                                                 'bear-first-word.png'})
+    assert 'the first word' in (tmp_path / 'bear-evaluation.md').read_text(encoding='utf-8')
 
 
 def test_report_skin_writes_and_shows_its_figures(tmp_path, monkeypatch):

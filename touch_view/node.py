@@ -107,7 +107,9 @@ class TouchViewNode(Node):
         state, subs = self.state, OfferedQosSubscriptions(self)
         start = SymbolicGesture.START
         subs.create_subscription(BearFrame, SENSORS['bear'], state.on_bear_frame, 5)
-        subs.create_subscription(SymbolicGesture, '/touch/symbolic', lambda m: state.on_symbolic(m, start), 50)
+        decided = (start, SymbolicGesture.END)           # candidates are not shown
+        subs.create_subscription(SymbolicGesture, '/touch/symbolic',
+                                 lambda m: state.on_symbolic(m, start) if m.state in decided else None, 50)
         subs.create_subscription(TouchSubtype, '/touch/subtype', state.on_subtype, 200)
         subs.create_subscription(PatchFrame, SENSORS['patch'], state.on_patch_frame, 5)
         subs.create_subscription(PanelContact, '/patch/panels', state.on_panels, 50)

@@ -5,7 +5,9 @@ Subscribes to ``frame`` (``/bear/frame`` in the ``bear`` namespace, ``BearFrame`
 
 - ``/touch/sensor_level`` (``SensorLevel``): the active sensors, every cycle (V.C);
 - ``/touch/subtype`` (``TouchSubtype``): a sensor's subtype changed, with its buffer features (V.D);
-- ``/touch/symbolic`` (``SymbolicGesture``): a gesture STARTs or ENDs, with onset and sensors (V.E).
+- ``/touch/symbolic`` (``SymbolicGesture``): a gesture STARTs or ENDs, with onset and sensors (V.E);
+  before its START, a CANDIDATE as soon as its filter matches, with a confidence, then START or
+  WITHDRAWN (:mod:`.symbolic`).
 
 Time is the frame's header stamp (so a replayed bag gives the same events as the live run).
 Faulty channels (``faults != 0``) and channels the frame says are unfitted read as untouched. A
@@ -46,7 +48,7 @@ from .pipeline import BearRecogniser
 from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, N_CHANNELS
 from .subtype import PaperRuleClassifier, SubtypePredictor
 from .subtype_model import SubtypeModel
-from .symbolic import END, GestureLibrary
+from .symbolic import END, WITHDRAWN, GestureLibrary
 
 __all__ = ['DEFAULT_MODEL', 'BearGesturesNode', 'main']
 
@@ -336,7 +338,7 @@ class BearGesturesNode(Node):
         for e in events:
             self.symbolic_pub.publish(SymbolicGesture(
                 header=header, gesture=e.gesture, state=e.state, onset=_time_msg(self._t0_ns + round(e.onset * _NS)),
-                duration_s=e.duration_s, sensors=list(e.sensors), **self._centroid(
+                duration_s=e.duration_s, sensors=list(e.sensors), confidence=e.confidence, **self._centroid(
                     [self._channels[n] for n in e.sensors if n in self._channels], weighted=False)))
 
     def _centroid(self, channels: list[int], weighted: bool) -> dict[str, Any]:
@@ -373,7 +375,12 @@ class BearGesturesNode(Node):
                 for name, onset in rec.symbolic.active_gestures().items():
                     self.symbolic_pub.publish(SymbolicGesture(
                         header=header, gesture=name, state=END, onset=_time_msg(self._t0_ns + round(onset * _NS)),
-                        duration_s=t - onset, sensors=[], **self._centroid([], weighted=False)))
+                        duration_s=t - onset, sensors=[], confidence=1.0, **self._centroid([], weighted=False)))
+                for name, onset in rec.symbolic.announced_gestures().items():
+                    self.symbolic_pub.publish(SymbolicGesture(
+                        header=header, gesture=name, state=WITHDRAWN,
+                        onset=_time_msg(self._t0_ns + round(onset * _NS)), duration_s=t - onset, sensors=[],
+                        confidence=0.0, **self._centroid([], weighted=False)))
             if self.publish_subtypes:
                 for channel, subtype in rec.tracker.labels().items():
                     self.subtype_pub.publish(TouchSubtype(header=header, channel=channel, sensor=self._names[channel],

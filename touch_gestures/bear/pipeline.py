@@ -20,6 +20,7 @@ import numpy as np
 
 from touch_driver.bear.body_map import BodyMap
 
+from .candidates import CandidateConfidence
 from .features import MIN_COMPONENT, BufferFeatures, FeatureExtractor
 from .sensor_level import ACTIVATION_THRESHOLD, BUFFER_LEN, ActiveSensor, LevelBuffer, active_sensors
 from .subtype import PaperRuleClassifier, SubtypeChange, SubtypePredictor, SubtypeTracker
@@ -53,7 +54,7 @@ class CycleResult:
         confidence: (64,) float32 classifier confidence (1 for the rule); None when not classifying.
         active_sensors: named active sensors (/touch/sensor_level).
         subtype_changes: sensors whose subtype changed (/touch/subtype).
-        symbolic_events: gesture START/END events (/touch/symbolic).
+        symbolic_events: gesture CANDIDATE/WITHDRAWN/START/END events (/touch/symbolic).
     """
 
     t: float
@@ -85,13 +86,14 @@ class BearRecogniser:
         symbolic: run the symbolic gestures (``/touch/symbolic``).
         classify: compute the features and classify every cycle; by default when ``subtypes`` is on or
             a symbolic gesture needs a subtype ("model only what a scene needs": no features otherwise).
+        candidate_confidence: the symbolic CANDIDATE confidences (default: ``config/bear_candidates.yaml``).
     """
 
     def __init__(self, rate_hz: float = 3.4, buffer_len: int = BUFFER_LEN, threshold: float = ACTIVATION_THRESHOLD,
                  classifier: SubtypePredictor | None = None, library: GestureLibrary | None = None,
                  body_map: BodyMap | None = None, detrend: str = 'constant', min_component: float = MIN_COMPONENT,
                  named_outputs: bool = True, subtypes: bool = True, symbolic: bool = True,
-                 classify: bool | None = None) -> None:
+                 classify: bool | None = None, candidate_confidence: CandidateConfidence | None = None) -> None:
         body_map = body_map if body_map is not None else BodyMap.default()
         self.body_map = body_map
         self.rate_hz = float(rate_hz)
@@ -105,7 +107,7 @@ class BearRecogniser:
         self.tracker = SubtypeTracker(self.fitted)
         if library is None:
             library = GestureLibrary.default(body_map) if symbolic else GestureLibrary([], source='(symbolic off)')
-        self.symbolic = SymbolicRecogniser(library, body_map)
+        self.symbolic = SymbolicRecogniser(library, body_map, confidence=candidate_confidence)
         self.track_subtypes = subtypes
         self.run_symbolic = symbolic
         self.classifies = classify if classify is not None else \

@@ -16,13 +16,25 @@ Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) 
   ``gap_s``;
 - priority logic: ``g`` is suppressed while a candidate that supersedes it is itself not suppressed
   (the paper's "Tickle: (not Hug) && ..."); gestures are visited in topological order of "supersedes";
-- START when a candidate, not suppressed, matches now and ``t - onset >= dwell_s``; END when it stops
-  being a candidate or becomes suppressed. Gestures that do not supersede one another can be active
+- START when a candidate, not suppressed, has ``t - onset >= dwell_s`` and matches now, or is in a
+  lift (no match for at most ``gap_s``) after at least two separate contacts that span at least half
+  the dwell: a patting hand lifts between pats, and at the bear's 3.4 Hz scan a whole dwell may hold
+  only two or three touched scans, none at its end. One touch, however long, never STARTs a gesture
+  by its lift (the paper's two seconds hold for it). END when it stops being a candidate or becomes
+  suppressed. Gestures that do not supersede one another can be active
   at the same time.
 - a *brief* gesture (``max_s`` set, e.g. a shoulder tap) is told by its end: it STARTs when its
   candidate is released (a gap longer than ``gap_s``) after matching for at least ``dwell_s`` and at
   most ``max_s`` seconds, and ENDs in the same cycle. A longer touch on its filter (a pat, a pet, a
   hold on the shoulder) never STARTs it.
+
+A first word before the decision (START is the confirmation): a gesture whose filter is touched (one
+of its sensors active, before ``min_active``, sides or subtypes are met), that is not suppressed and has
+not STARTed is announced at once with CANDIDATE, with a confidence from :class:`CandidateConfidence`
+for its evidence (touched only, matched, matched with more sensors); WITHDRAWN follows when it is
+superseded, when neither a match nor a contact has held it for ``gap_s``, or (a brief gesture) when it
+matched longer than ``max_s``. A gesture that STARTs in the cycle it is first touched (``dwell_s: 0``)
+sends no CANDIDATE. Code that waits for the decision reads START and END only and ignores the other two.
 """
 
 from __future__ import annotations
@@ -39,17 +51,22 @@ from touch_driver.bear.body_map import BodyMap
 from touch_graph.errors import ConfigError
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, loads_yaml, typed
 
+from .candidates import CandidateConfidence
 from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES
 
-__all__ = ['DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'END', 'START', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent',
-           'SymbolicRecogniser']
+__all__ = ['CANDIDATE', 'DECISIONS', 'DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'END', 'START', 'STATE_NAMES', 'WITHDRAWN',
+           'CandidateConfidence', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent', 'SymbolicRecogniser']
 
 #: "active for at least two seconds, an increment informally chosen to parallel human recognition time" (V.E).
 DEFAULT_DWELL_S = 2.0
 #: Not in the paper: tolerated dropout between matches, so pats and tickles do not restart the dwell.
 DEFAULT_GAP_S = 1.5
-#: Event states, as in msg/SymbolicGesture.msg.
-START, END = 1, 2
+#: Event states, as in msg/SymbolicGesture.msg: START is the confirmed decision, END its end; CANDIDATE
+#: and WITHDRAWN come before a decision (module doc).
+START, END, CANDIDATE, WITHDRAWN = 1, 2, 3, 4
+STATE_NAMES = {START: 'START', END: 'END', CANDIDATE: 'CANDIDATE', WITHDRAWN: 'WITHDRAWN'}
+#: The states of the final decision (what behaviour code that waits for it reads).
+DECISIONS = (START, END)
 FORMAT_VERSION = 1
 
 _NAME = re.compile(r'^[a-z][a-z0-9_]*$')
@@ -96,16 +113,21 @@ class GestureFilter:
 
 @dataclass(frozen=True, slots=True)
 class SymbolicEvent:
-    """A gesture started or ended (msg/SymbolicGesture.msg).
+    """A gesture was announced, withdrawn, started or ended (msg/SymbolicGesture.msg).
 
     Attributes:
         gesture: gesture name.
-        state: :data:`START` or :data:`END`.
+        state: :data:`CANDIDATE`, :data:`WITHDRAWN`, :data:`START` or :data:`END`.
         t: cycle time of the event, s.
         onset: when the filter first matched (dwell start), s.
         duration_s: ``t - onset``.
         sensors: names of the filter's sensors counting at the event (at END: at the last match).
-        reason: for END, ``'released'`` or ``'superseded by <name>'``; empty for START.
+        reason: for END and WITHDRAWN, ``'released'``, ``'superseded by <name>'`` or (a brief gesture)
+            ``'longer than max_s'``; empty otherwise.
+        confidence: 0..1, the estimated probability that the gesture is (or was) confirmed: for a
+            CANDIDATE from :class:`CandidateConfidence`; 1 for START and END, 0 for WITHDRAWN.
+        evidence: for a CANDIDATE, its evidence level (:mod:`.candidates`): 0 a contact in the filter that
+            does not match it yet, 1 a match, 2 a match with more sensors than ``min_active``; else 0.
     """
 
     gesture: str
@@ -115,10 +137,12 @@ class SymbolicEvent:
     duration_s: float
     sensors: tuple[str, ...]
     reason: str = ''
+    confidence: float = 1.0
+    evidence: int = 0
 
     @property
     def state_name(self) -> str:
-        return 'START' if self.state == START else 'END'
+        return STATE_NAMES[self.state]
 
 
 class GestureLibrary:
@@ -318,19 +342,21 @@ def _priority_order(parsed: dict[str, GestureFilter], items: YamlDict) -> list[G
 
 
 class SymbolicRecogniser:
-    """Runs a :class:`GestureLibrary` once per cycle and emits START / END events.
+    """Runs a :class:`GestureLibrary` once per cycle and emits CANDIDATE / WITHDRAWN / START / END events.
 
     Args:
         library: the gestures (default: ``config/bear_gestures.yaml``).
         body_map: the body map (default: the package's); gives the sides for ``both_sides``.
         n_channels: wire channels.
+        confidence: the CANDIDATE confidences (default: ``config/bear_candidates.yaml``).
     """
 
     def __init__(self, library: GestureLibrary | None = None, body_map: BodyMap | None = None,
-                 n_channels: int = 64) -> None:
+                 n_channels: int = 64, confidence: CandidateConfidence | None = None) -> None:
         if body_map is None:
             body_map = BodyMap.default()
         self.library = library if library is not None else GestureLibrary.default(body_map)
+        self.confidence = confidence if confidence is not None else CandidateConfidence.default()
         self.gestures = self.library.detectable
         names = [g.name for g in self.gestures]
         index = {n: i for i, n in enumerate(names)}
@@ -365,6 +391,13 @@ class SymbolicRecogniser:
         self.started: list[bool] = [False] * G
         self._start_onset = [0.0] * G                     # onset of the started episode (for its END)
         self._last_counting: list[np.ndarray | None] = [None] * G   # counting sensors at the latest match
+        #: per gesture: a CANDIDATE is out (no START nor WITHDRAWN since)
+        self.announced: list[bool] = [False] * G
+        self._announced_onset = [0.0] * G                 # onset of the announced candidate (for its WITHDRAWN)
+        self._contacts = [0] * G                          # separate contacts (matches after a lift) since onset
+        self._previous_t: float | None = None             # the previous cycle's time
+        self._last_touch = [-math.inf] * G                # time of the latest contact in the filter, s
+        self._spent = [False] * G           # a brief gesture held past max_s: not announced again until released
 
     def _sensor_names(self, i: int) -> tuple[str, ...]:
         row = self._last_counting[i]
@@ -376,6 +409,10 @@ class SymbolicRecogniser:
         """Gesture name -> onset (s) of the gestures started and not ended."""
         return {g.name: float(self._start_onset[i]) for i, g in enumerate(self.gestures) if self.started[i]}
 
+    def announced_gestures(self) -> dict[str, float]:
+        """Gesture name -> onset (s) of the CANDIDATEs out (neither confirmed nor withdrawn)."""
+        return {g.name: float(self._announced_onset[i]) for i, g in enumerate(self.gestures) if self.announced[i]}
+
     def update(self, t: float, active: np.ndarray, subtype_codes: np.ndarray | None = None) -> list[SymbolicEvent]:
         """One cycle.
 
@@ -386,10 +423,12 @@ class SymbolicRecogniser:
                 None means no subtype is known, so such gestures never match).
 
         Returns:
-            The events of this cycle: ENDs first (in priority order), then STARTs.
+            The events of this cycle: ENDs and WITHDRAWNs first (in priority order), then STARTs and
+            CANDIDATEs.
         """
         active = np.asarray(active, dtype=bool)
-        counting = self._member & active[None, :]
+        self._touch_row = self._member & active[None, :]
+        counting = self._touch_row.copy()
         if self._needs_subtype.any():
             if subtype_codes is None:
                 counting[self._needs_subtype] = False
@@ -400,39 +439,80 @@ class SymbolicRecogniser:
         sides_ok = ~self._both | ((counting & self._left).any(axis=1) & (counting & self._right).any(axis=1))
         matched = (counts >= self._min_active) & sides_ok
 
+        touched = (self._member & active[None, :]).any(axis=1)   # contact in the filter, matched or not
         # The state machine runs on Python lists: scalar numpy indexing would cost more than the maths.
-        matched_l = matched.tolist()
-        onset, last, started = self.onset, self.last_match, self.started
+        matched_l, touched_l = matched.tolist(), touched.tolist()
+        counts_l = counts.tolist()
+        onset, last, started, announced = self.onset, self.last_match, self.started, self.announced
         ends: list[SymbolicEvent] = []
         starts: list[SymbolicEvent] = []
         live = [False] * len(self.gestures)          # candidate and not suppressed
         for i, g in enumerate(self.gestures):        # priority order: supersessors are decided first
+            if touched_l[i]:
+                self._last_touch[i] = t
             if matched_l[i]:
                 if onset[i] is None:
                     onset[i] = t
+                    self._contacts[i] = 0
+                if last[i] != self._previous_t:     # a new contact after a lift
+                    self._contacts[i] += 1
                 last[i] = t
                 self._last_counting[i] = counting[i]
             elif last[i] is not None and t - last[i] > g.gap_s + 1e-9:   # 1e-9: float time steps
                 if g.max_s is not None and not self._suppressed(i, live) and \
                         g.dwell_s <= last[i] - onset[i] <= g.max_s + 1e-9:
+                    announced[i] = False
                     starts += self._brief(g, i, t, onset[i])
                 onset[i] = last[i] = None
-            if g.max_s is not None:                  # brief gestures START only at their release (above)
-                live[i] = onset[i] is not None and not self._suppressed(i, live)
-                continue
-            candidate = onset[i] is not None
+                self._spent[i] = False
             by = [h for h in self._superseded_by[i] if live[h]]
-            live[i] = candidate and not by
+            live[i] = onset[i] is not None and not by
+            # A CANDIDATE out is withdrawn when superseded, or once neither a match nor a contact holds it.
+            released = onset[i] is None and t - self._last_touch[i] > g.gap_s + 1e-9
+            if g.max_s is not None:                  # brief gestures START only at their release (above)
+                if announced[i] and (by or released or last[i] - onset[i] > g.max_s + 1e-9):
+                    reason = (f'superseded by {self.gestures[by[0]].name}' if by else 'released' if released
+                              else 'longer than max_s')
+                    ends.append(self._withdrawn(i, t, reason))
+                    self._spent[i] = not by and not released   # held too long: not a tap until released
+                elif touched_l[i] and not by and not announced[i] and not self._spent[i]:
+                    starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
+                continue
             if started[i] and not live[i]:
                 reason = f'superseded by {self.gestures[by[0]].name}' if by else 'released'
                 begin = self._start_onset[i]
                 ends.append(SymbolicEvent(g.name, END, t, begin, t - begin, self._sensor_names(i), reason))
                 started[i] = False
-            elif not started[i] and live[i] and matched_l[i] and t - onset[i] >= g.dwell_s:
+            elif not started[i] and live[i] and t - onset[i] >= g.dwell_s and (matched_l[i] or (
+                    self._contacts[i] >= 2 and last[i] - onset[i] >= g.dwell_s / 2)):   # in a lift: module doc
                 started[i] = True
+                announced[i] = False
                 self._start_onset[i] = onset[i]
                 starts.append(SymbolicEvent(g.name, START, t, onset[i], t - onset[i], self._sensor_names(i)))
+            elif announced[i] and (by or released):
+                ends.append(self._withdrawn(i, t, f'superseded by {self.gestures[by[0]].name}' if by else 'released'))
+            elif touched_l[i] and not by and not started[i] and not announced[i]:
+                starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
+        self._previous_t = t
         return ends + starts
+
+    def _candidate(self, g: GestureFilter, i: int, t: float, matched: bool, count: int) -> SymbolicEvent:
+        """Announce gesture ``i`` (module doc), with the confidence of its evidence."""
+        self.announced[i] = True
+        evidence = 1 + min(count - g.min_active, 1) if matched else 0
+        onset = self._announced_onset[i] = self.onset[i] if matched else t
+        sensors = self._sensor_names(i) if matched else self._touched_names(i)
+        return SymbolicEvent(g.name, CANDIDATE, t, onset, t - onset, sensors,
+                             confidence=self.confidence.confidence(g.name, evidence), evidence=evidence)
+
+    def _touched_names(self, i: int) -> tuple[str, ...]:
+        return tuple(self._names_by_channel.get(int(c), str(c)) for c in np.flatnonzero(self._touch_row[i]))
+
+    def _withdrawn(self, i: int, t: float, reason: str) -> SymbolicEvent:
+        self.announced[i] = False
+        onset = self._announced_onset[i]
+        return SymbolicEvent(self.gestures[i].name, WITHDRAWN, t, onset, t - onset, self._sensor_names(i), reason,
+                             confidence=0.0)
 
     def _suppressed(self, i: int, live: list[bool]) -> bool:
         return any(live[h] for h in self._superseded_by[i])

@@ -69,6 +69,8 @@ class TouchStateTracker:
             self.version += 1
 
     def on_symbolic(self, msg: Any) -> None:
+        if msg.state not in (START, END):     # a CANDIDATE or WITHDRAWN: gestures under way are decided ones
+            return
         if msg.state == START:
             self.gestures[msg.gesture] = msg
         elif msg.state == END:

@@ -22,7 +22,8 @@ Scoring (documented here because the numbers mean nothing without it):
   A START outside every labelled gesture is a false alarm (row 'none'), except during single-sensor
   subtype interactions, where filters such as head_pat legitimately fire on a long touch: those are
   counted apart (``starts_during_subtype_touches``). ``symbolic_accuracy`` is detected / labelled.
-  Latency: START time minus the gesture's start (includes the dwell, 2 s by default).
+  Latency: START time minus the gesture's start (includes the dwell, 2 s by default). Only STARTs
+  count here: CANDIDATEs and WITHDRAWNs are scored apart (``first_word``, :mod:`.first_word`).
 - *Table III* (knight2009 VI.C), for the paper's four gestures: "activated on first try" = fraction of
   people whose first attempt was detected; "activated with explanation" = detected on the first or the
   second attempt (the second strays less, as after an explanation); "regional accuracy" = share of the
@@ -46,6 +47,7 @@ from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from touch_gestures.bear.symbolic import START, GestureLibrary
+from touch_lab.bear.first_word import score_first_word
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.hand_people import PORT_OPTIONS, HandScene, make_hand_scene
 from touch_sim.bear.people import BearScene, make_scene
@@ -371,7 +373,8 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
     ``model``, when given, is scored as it is (no training scene).
 
     Top-level keys (the trained model's figures): ``subtype_accuracy``, ``symbolic_accuracy``,
-    ``median_detection_latency_s`` (symbolic START from gesture start), ``median_subtype_latency_s``,
+    ``median_detection_latency_s`` (symbolic START from gesture start), ``median_first_message_s``
+    (the gesture's first CANDIDATE or START, :mod:`.first_word`), ``median_subtype_latency_s``,
     ``us_per_cycle``; then ``model`` and ``rule`` with the full scores of each, and the config.
     """
     say = progress or (lambda msg: None)
@@ -397,6 +400,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
         results[name] = {
             'subtype': score_subtypes(scene, run, run.codes[name], fitted, body_map, config.rate_hz),
             'symbolic': score_symbolic(scene, run, run.events[name], library),
+            'first_word': score_first_word(scene, run.events[name], library),
             'us_per_cycle': float(np.median(run.step_us[name])),
         }
     best = results['model']
@@ -406,6 +410,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
         'subtype_accuracy': best['subtype']['accuracy'],
         'symbolic_accuracy': best['symbolic']['accuracy'],
         'median_detection_latency_s': best['symbolic']['median_latency_s'],
+        'median_first_message_s': best['first_word']['median_first_message_s'],
         'median_subtype_latency_s': best['subtype']['median_latency_s'],
         'us_per_cycle': best['us_per_cycle'],
         'rule_subtype_accuracy': results['rule']['subtype']['accuracy'],

@@ -228,6 +228,47 @@ def populations_md(cross: dict, shipped_name: str) -> list[str]:
     return [*lines, '']
 
 
+def first_word_md(main_result: dict, figure: list[str]) -> list[str]:
+    """The section on the first word (CANDIDATE before START, :mod:`touch_lab.bear.first_word`)."""
+    fw = main_result['model'].get('first_word')
+    if not fw:
+        return []
+    taus = fw['taus_s']
+    at = [k for k, t in enumerate(taus) if t in (0.3, 0.6, 1.0, 2.0, 3.0, 4.0)]
+    rows = [f"| {taus[k]:.1f} | {_fmt(fw['said_accuracy'][k])} | {_fmt(fw['decided_accuracy'][k])} |" for k in at]
+    outcomes = [f"| {g} | {v['candidates']} | {v['confirmed']} | {v['withdrawn']} |"
+                for g, v in fw['candidates'].items() if v['candidates']]
+    return [
+        '## Symbolic gestures: the first word',
+        '',
+        'A CANDIDATE is published on the first cycle a gesture\'s filter matches, with its confidence '
+        '(config/bear_candidates.yaml: the fraction of such candidates confirmed on the training people, '
+        '`python -m touch_lab.bear.candidates`), then START (confirmed) or WITHDRAWN. Scoring: '
+        '`touch_lab/bear/first_word.py`.',
+        '',
+        f"- median first message of the labelled gesture (its CANDIDATE or START) from the gesture's start: "
+        f"**{_fmt(fw['median_first_message_s'])} s** ({_fmt(fw['first_message_rate'])} of the {fw['labelled']} "
+        f"gestures got one); of any gesture: {_fmt(fw['median_first_any_message_s'])} s;",
+        f"- the decision (START): {_fmt(main_result['model']['symbolic']['median_latency_s'])} s, accuracy "
+        f"{_fmt(main_result['model']['symbolic']['accuracy'])}, {main_result['model']['symbolic']['false_alarms']} "
+        'false alarms (as above: candidates change none of them).',
+        '',
+        'What the bear says at a time since the gesture\'s start, against the label: "said" is the latest START, '
+        'else the most confident open CANDIDATE; "decided" is STARTs alone (what code that waits for the '
+        'decision knows).',
+        '',
+        '| time since start, s | said accuracy | decided accuracy |',
+        '|---|---|---|',
+        *rows,
+        *figure,
+        '',
+        '| gesture | candidates | confirmed | withdrawn |',
+        '|---|---|---|---|',
+        *outcomes,
+        '',
+    ]
+
+
 def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: list[dict], gaps: list[dict],
                   command: str, figures: dict[str, str] | None = None, populations: list[str] | None = None) -> str:
     """The Markdown of docs/bear-evaluation.md; ``figures``: key -> image line (touch_lab.figures.bear);
@@ -301,6 +342,7 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         '',
         _matrix_md(r['symbolic']['labels'], r['symbolic']['confusion']),
         '',
+        *first_word_md(main_result, fig.get('first_word', [])),
         '## Table III shape (knight2009 VI.C), simulated people',
         '',
         '| gesture | activated on first try | activated with explanation | regional accuracy |',

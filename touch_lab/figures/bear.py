@@ -26,7 +26,7 @@ def bear_figures(out_dir: str | Path, main_result: dict, sweep: Sequence[dict], 
         sweep: rows of :func:`touch_lab.bear.report.speed_error_table`.
         models: rows of :func:`touch_lab.bear.report.compare_models`.
 
-    Keys: ``subtype_confusion``, ``symbolic_confusion``, ``speed_error``.
+    Keys: ``subtype_confusion``, ``symbolic_confusion``, ``speed_error``, ``first_word`` (when the result has one).
     """
     cfg = main_result['config']
     where = f"{cfg['rate_hz']} Hz, buffer {cfg['buffer_len']}, {cfg['n_people']} test people"
@@ -54,4 +54,16 @@ def bear_figures(out_dir: str | Path, main_result: dict, sweep: Sequence[dict], 
     out['speed_error'] = figure_md(out_dir, 'bear-speed-error.png', 'bear: speed against error (synthetic)',
                                    lambda path: speed_error_figure(path, panels, 'Bear: speed against error',
                                                                    SYNTHETIC), say)
+    fw = model.get('first_word')
+    if fw:
+        series = {name: [(t, _error_pct(a), '') for t, a in zip(fw['taus_s'], fw[key], strict=True)]
+                  for name, key in (('said: latest START, else most confident CANDIDATE', 'said_accuracy'),
+                                    ('decided: STARTs only', 'decided_accuracy'))}
+        panel = SpeedErrorPanel(series, 'time since the gesture started, s', f'symbolic gestures ({where})',
+                                ylabel='labelled gestures not (yet) said right, %')
+        out['first_word'] = figure_md(out_dir, 'bear-first-word.png',
+                                      'bear: error of what is said against time since onset (synthetic)',
+                                      lambda path: speed_error_figure(path, [panel], 'Bear symbolic gestures: the '
+                                                                      'first word against the decision', SYNTHETIC),
+                                      say)
     return out

@@ -63,6 +63,8 @@ class TouchBehaviour(Node):
             self.look_at(msg)
 
     def on_symbolic(self, msg):
+        # START is the decided hug; CANDIDATE (a first word, with its confidence) and WITHDRAWN come before
+        # a decision, and this behaviour waits for it.
         if msg.gesture == 'hug' and msg.state == SymbolicGesture.START:
             self.say('Hello! Thank you for the hug.')
             self.feel(AROUSAL_STEP['hug'])
