@@ -66,6 +66,7 @@ class SymbolicGesture_(IdlStruct, typename='social_touch_msgs::msg::dds_::Symbol
     has_centroid: bool
     centroid: Point_
     frame_id: str
+    confidence: float32
 
 
 @dataclass

@@ -47,7 +47,7 @@ from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from touch_gestures.bear.symbolic import START, GestureLibrary
-from touch_lab.bear.first_word import score_first_word
+from touch_lab.bear.first_word import SYMBOLIC_GRACE_S, score_first_word, start_grace_s
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.hand_people import PORT_OPTIONS, HandScene, make_hand_scene
 from touch_sim.bear.people import BearScene, make_scene
@@ -75,8 +75,6 @@ PAPER_GESTURES = ('head_pat', 'tickle', 'hug', 'foot_rub')
 #: Table II statistics) and ``hands`` (touch_sim/bear/hand_people.py: hands over plates, written
 #: independently from knight2009). Both are synthetic.
 FAMILIES = ('script', 'hands')
-#: Seconds after a labelled gesture's end during which its START still counts.
-SYMBOLIC_GRACE_S = 1.0
 
 
 def percent_text(value: float | None) -> str:
@@ -88,12 +86,6 @@ def seconds_text(value: float | None) -> str:
     """A duration (s) as a report's seconds, ``'n/a'`` for None."""
     return 'n/a' if value is None else f'{value:.2f} s'
 
-
-
-def start_grace_s(gesture) -> float:
-    """Seconds after a trial of ``gesture`` (a ``GestureFilter``) during which its START counts: a brief
-    gesture (``max_s``) STARTs at its release, ``gap_s`` after its last contact, so it has that much more."""
-    return SYMBOLIC_GRACE_S + (gesture.gap_s if gesture.max_s is not None else 0.0)
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """The bear's first word: how soon, and how right, /touch/symbolic is before and after its decision.
 
 For every labelled symbolic gesture of a scene (window: its start to its end plus
-:func:`~touch_lab.bear.evaluate.start_grace_s`), from the recogniser's events:
+:func:`start_grace_s`), from the recogniser's events:
 
 - *first message*: the first CANDIDATE or START of the labelled gesture in the window; its latency is
   its time minus the gesture's start. ``median_first_message_s`` is over the gestures that got one;
@@ -20,7 +20,7 @@ import numpy as np
 
 from touch_gestures.bear.symbolic import CANDIDATE, START, WITHDRAWN, GestureLibrary
 
-__all__ = ['TAUS_S', 'candidate_outcomes', 'score_first_word']
+__all__ = ['SYMBOLIC_GRACE_S', 'TAUS_S', 'candidate_outcomes', 'score_first_word', 'start_grace_s']
 
 #: Times since a gesture's start at which the curve is read, s (0.1 s steps up to 4 s: past the 2 s dwell).
 TAUS_S = tuple(round(0.1 * k, 1) for k in range(41))
@@ -60,9 +60,18 @@ def candidate_outcomes(events: list) -> dict[str, dict[str, int]]:
     return out
 
 
+#: Seconds after a labelled gesture's end during which its START still counts.
+SYMBOLIC_GRACE_S = 1.0
+
+
+def start_grace_s(gesture) -> float:
+    """Seconds after a trial of ``gesture`` (a ``GestureFilter``) during which its START counts: a brief
+    gesture (``max_s``) STARTs at its release, ``gap_s`` after its last contact, so it has that much more."""
+    return SYMBOLIC_GRACE_S + (gesture.gap_s if gesture.max_s is not None else 0.0)
+
+
 def score_first_word(scene, events: list, library: GestureLibrary, taus_s=TAUS_S) -> dict:
     """First-message latency and the said / decided accuracy curve over ``scene``'s symbolic labels."""
-    from touch_lab.bear.evaluate import start_grace_s
     names = {g.name for g in library.detectable}
     labels = [lab for lab in scene.labels if lab.kind == 'symbolic' and lab.label in names]
     events = sorted(events, key=lambda e: e.t)

@@ -342,9 +342,9 @@ def _counts(text: str) -> tuple[int, ...]:
 
 
 def add_arguments(parser: Any) -> None:
-    from touch_graph.cli.options import add_output, positive_int
+    from touch_graph.cli.options import add_output, positive_int, seconds
     parser.add_argument('--repeats', type=positive_int, default=3, help='runs to take the median of (default 3)')
-    parser.add_argument('--seconds', type=float, default=8.0, help='wall seconds each CPU window lasts (default 8)')
+    parser.add_argument('--seconds', type=seconds, default=8.0, help='wall seconds each CPU window lasts (default 8)')
     parser.add_argument('--patches', type=_counts, default=(1, 2, 4, 8),
                         help='patch counts in one process, comma-separated (default 1,2,4,8)')
     parser.add_argument('--process-patches', type=_counts, default=(1, 2, 4, 8),
