@@ -3,7 +3,7 @@
 A candidate's *evidence level* when it is announced: 0 when its filter is touched but not matched yet
 (fewer than ``min_active`` sensors, one side only, or without the subtype), 1 when it matches, 2 when
 it matches with more sensors than ``min_active`` (:data:`MAX_LEVEL`). For every gesture and level the table holds
-``[confirmed, candidates]``, counted on a simulated scene by ``python -m touch_lab.bear.candidates``;
+``[confirmed, candidates]``, counted on a simulated scene by ``social-touch train bear-candidates``;
 the confidence is Laplace's rule of succession, ``(confirmed + 1) / (candidates + 2)``: the fraction
 confirmed, pulled towards 0.5 when few were seen (0.5 when none were). The table ships as
 ``config/bear_candidates.yaml`` (format below); a gesture it does not name gets 0.5.

@@ -1,6 +1,6 @@
 """Count how often each symbolic CANDIDATE is confirmed, for ``config/bear_candidates.yaml``.
 
-    python -m touch_lab.bear.candidates --out config/bear_candidates.yaml
+    social-touch train bear-candidates -o config/bear_candidates.yaml
 
 Runs a scene of simulated people (**synthetic**; by default the evaluation's training people, seed
 1000, not its test people, seed 0) through the bear's graph and recogniser with the shipped subtype
@@ -15,8 +15,13 @@ import sys
 
 from touch_gestures.bear.candidates import MAX_LEVEL, CandidateConfidence
 from touch_gestures.bear.symbolic import CANDIDATE, START, WITHDRAWN, GestureLibrary
+from touch_graph.cli.options import add_output, positive_int, seed
+from touch_graph.files import write_text
 
-__all__ = ['count_candidates', 'main', 'measure']
+__all__ = ['COMMAND', 'add_arguments', 'count_candidates', 'measure', 'run']
+
+#: The command that writes the table.
+COMMAND = 'social-touch train bear-candidates'
 
 
 def count_candidates(events: list, library: GestureLibrary, data: str = '') -> CandidateConfidence:
@@ -52,24 +57,24 @@ def measure(n_people: int = 8, seed: int = 1000, family: str = 'script', rate_hz
     rec = BearRecogniser(rate_hz, classifier=classifier, candidate_confidence=CandidateConfidence())
     run = run_scene(scene, bear_cycles(scene, config, seed), {'model': rec}, progress=progress)
     data = (f'synthetic: {n_people} simulated people of the {family!r} family (seed {seed}) at {rate_hz:g} Hz, '
-            'the shipped subtype model; python -m touch_lab.bear.candidates')
+            f'the shipped subtype model; {COMMAND}')
     return count_candidates(run.events['model'], rec.symbolic.library, data)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.candidates', description=__doc__.split('\n')[0])
-    parser.add_argument('--out', required=True, help='YAML file to write (config/bear_candidates.yaml)')
-    parser.add_argument('--people', type=int, default=8)
-    parser.add_argument('--seed', type=int, default=1000)
-    parser.add_argument('--family', choices=('script', 'hands'), default='script')
-    args = parser.parse_args(argv)
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch train bear-candidates``."""
+    add_output(parser, 'the YAML file to write (config/bear_candidates.yaml)', required=True)
+    parser.add_argument('--people', type=positive_int, default=8, help='simulated people to count on (8)')
+    parser.add_argument('--seed', type=seed, default=1000,
+                        help="scene seed (1000: the evaluation's training people, not its test people)")
+    parser.add_argument('--family', choices=('script', 'hands'), default='script',
+                        help='family of simulated people (script)')
+
+
+def run(args: argparse.Namespace) -> int:
+    """Count the candidates and write the table; progress on stderr."""
     table = measure(args.people, args.seed, args.family,
                     progress=lambda m: print(f'[candidates] {m}', file=sys.stderr, flush=True))
-    from touch_graph.files import write_text
-    write_text(args.out, '# Generated: python -m touch_lab.bear.candidates --out ' + args.out + '\n' + table.dumps())
-    print(args.out)
+    write_text(args.output, f'# Generated: {COMMAND} -o {args.output}\n' + table.dumps())
+    print(args.output)
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

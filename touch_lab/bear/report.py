@@ -243,7 +243,7 @@ def first_word_md(main_result: dict, figure: list[str]) -> list[str]:
         '',
         'A CANDIDATE is published on the first cycle a gesture\'s filter matches, with its confidence '
         '(config/bear_candidates.yaml: the fraction of such candidates confirmed on the training people, '
-        '`python -m touch_lab.bear.candidates`), then START (confirmed) or WITHDRAWN. Scoring: '
+        '`social-touch train bear-candidates`), then START (confirmed) or WITHDRAWN. Scoring: '
         '`touch_lab/bear/first_word.py`.',
         '',
         f"- median first message of the labelled gesture (its CANDIDATE or START) from the gesture's start: "

@@ -37,6 +37,8 @@ EVAL_TARGETS: dict[str, Command] = {
 TRAIN_TARGETS: dict[str, Command] = {
     'bear': Command('touch_lab.bear.train',
                     'train the Sensate Bear subtype model on simulated people (synthetic) and write it as .npz'),
+    'bear-candidates': Command('touch_lab.bear.candidates', 'count how often each bear gesture CANDIDATE is '
+                               'confirmed on simulated people (synthetic): config/bear_candidates.yaml'),
     'patch': Command('touch_lab.patch.cli:TRAIN',
                      'train the patch gesture model (Gaussian mixtures) from a CSV, bags or simulated people'),
     'skin': Command('touch_lab.skin.train_cli',
