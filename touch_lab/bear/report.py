@@ -241,8 +241,8 @@ def first_word_md(main_result: dict, figure: list[str]) -> list[str]:
     return [
         '## Symbolic gestures: the first word',
         '',
-        'A CANDIDATE is published on the first cycle a gesture\'s filter matches, with its confidence '
-        '(config/bear_candidates.yaml: the fraction of such candidates confirmed on the training people, '
+        'A CANDIDATE is published on the first cycle one of a gesture\'s filter sensors is touched, with its '
+        'confidence (config/bear_candidates.yaml: the fraction of such candidates confirmed on the training people, '
         '`social-touch train bear-candidates`), then START (confirmed) or WITHDRAWN. Scoring: '
         '`touch_lab/bear/first_word.py`.',
         '',
