@@ -8,13 +8,14 @@ taken from a real foxglove-sdk server asked for a channel it does not have), the
 """
 
 import json
+import socket
 import struct
 import threading
 
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
-from touch_view.ws_front import MAX_REPLAYS, FrameReader, SubprotocolFront, masked_text_frame
+from touch_view.ws_front import MAX_REPLAYS, FrameReader, SubprotocolFront, SubscribeReplay, masked_text_frame
 
 ADVERTISE = {'op': 'advertise', 'channels': [{'id': 8, 'topic': '/skin/frame', 'encoding': 'cdr',
                                               'schemaName': 'social_touch_msgs/msg/SkinFrame', 'schema': ''}]}
@@ -89,3 +90,40 @@ def test_frames_are_read_whole_across_chunks():
     assert reader.feed(frame[:3]) == [] and reader.feed(frame[3:-1]) == []
     [(raw, fin, opcode, payload)] = reader.feed(frame[-1:])
     assert (raw, fin, opcode, payload) == (frame, True, 1, b'{"op": "subscribe"}' * 10)
+
+
+def server_text_frame(message: dict) -> bytes:
+    """A server's text frame (unmasked) carrying ``message`` as JSON (short: < 126 bytes)."""
+    payload = json.dumps(message).encode()
+    assert len(payload) < 126
+    return bytes([0x81, len(payload)]) + payload
+
+
+def test_an_advertise_read_with_the_handshake_answer_counts():
+    """A server may send its advertise in the same read as its handshake answer (websockets 13 does, now and
+    then): the front forwards it with the answer, and must still know the channel is advertised."""
+    client_far, client_near = socket.socketpair()
+    server_far, server_near = socket.socketpair()
+    streams = SubscribeReplay(client_near, server_near)
+    threading.Thread(target=streams.upstream, daemon=True).start()
+    advertise = {'op': 'advertise', 'channels': [{'id': 8, 'topic': '/skin/frame'}]}
+    down = threading.Thread(target=streams.downstream, kwargs={'forwarded': server_text_frame(advertise)}, daemon=True)
+    down.start()
+    try:
+        subscribe = {'op': 'subscribe', 'subscriptions': [{'id': 1, 'channelId': 8}]}
+        client_far.sendall(masked_text_frame(json.dumps(subscribe)))
+        server_far.settimeout(5)
+        reader = FrameReader()
+        got = []
+        while not got:
+            got = reader.feed(server_far.recv(1 << 16))
+        server_far.sendall(server_text_frame({'op': 'status', 'level': 2, 'message': 'Unknown channel ID: 8'}))
+        again = []
+        while not again:
+            again = reader.feed(server_far.recv(1 << 16))
+        assert json.loads(again[0][3]) == subscribe
+        assert streams.replayed == 1
+    finally:
+        for sock in (client_far, client_near, server_far, server_near):
+            sock.close()
+        down.join(timeout=5)

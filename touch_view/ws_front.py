@@ -228,17 +228,22 @@ class SubscribeReplay:
                         self.server.sendall(raw)
         _end(self.client, self.server)
 
-    def downstream(self) -> None:
-        """Server to client (in the serving thread)."""
+    def downstream(self, forwarded: bytes = b'') -> None:
+        """Server to client (in the serving thread). ``forwarded``: frames the server sent in the same read as its
+        handshake answer (an advertise may come with it), already forwarded to the client: they are read here."""
         reader = FrameReader()
+        self._read_server(reader, forwarded)
         with suppress(OSError):
             while chunk := self.server.recv(1 << 16):
                 self.client.sendall(chunk)      # unchanged, at once; read after
-                for _, fin, opcode, payload in reader.feed(chunk):
-                    message = _json(opcode, fin, payload)
-                    if message is not None:
-                        self._on_server_message(message)
+                self._read_server(reader, chunk)
         _end(self.server, self.client)
+
+    def _read_server(self, reader: FrameReader, chunk: bytes) -> None:
+        for _, fin, opcode, payload in reader.feed(chunk):
+            message = _json(opcode, fin, payload)
+            if message is not None:
+                self._on_server_message(message)
 
     def _on_server_message(self, message: dict) -> None:
         op = message.get('op')
@@ -351,7 +356,7 @@ class SubprotocolFront:
             streams = SubscribeReplay(client, server, self._count_replay)
             upstream = threading.Thread(target=streams.upstream, daemon=True)
             upstream.start()
-            streams.downstream()
+            streams.downstream(forwarded=rest)
             upstream.join()
         except (OSError, ValueError):
             pass  # a client that left mid-handshake, a server that refused it: nothing to keep
