@@ -142,6 +142,10 @@ def run_node(backend: str, index: int) -> int:
             if len(snapshots) < sum(event.is_set() for event in marks):
                 snapshots.append(_node_counters(node))
         stop.wait()  # after an error: still answer the counter at its end
+        # The counter sends the last 'mark' and then 'stop': both may arrive during one spin, and the loop above
+        # then ends before taking the last snapshot. The counts are the window's end either way.
+        while len(snapshots) < sum(event.is_set() for event in marks):
+            snapshots.append(_node_counters(node))
         callback_errors = getattr(runner.context, 'callback_errors', None)
         window = None
         if len(snapshots) == 2 and snapshots[0]:
