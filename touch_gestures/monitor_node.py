@@ -64,7 +64,7 @@ class TouchMonitorNode(Node):
         if msg.state == SymbolicGesture.START:
             sensors = ', '.join(msg.sensors[:6]) + (', ...' if len(msg.sensors) > 6 else '')
             self._say('bear', f'{msg.gesture} started ({sensors})')
-        else:
+        elif msg.state == SymbolicGesture.END:  # a CANDIDATE or WITHDRAWN is no decision: not said
             self._say('bear', f'{msg.gesture} ended after {msg.duration_s:.1f} s')
 
     def _on_subtype(self, msg: Any) -> None:
