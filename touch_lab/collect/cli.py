@@ -44,14 +44,24 @@ def _names(text: str) -> tuple[str, ...]:
     return names
 
 
+def _gesture_names(text: str) -> tuple[str, ...]:
+    from touch_sim.skin.synthetic import VOCABULARIES, gesture_list  # lazy: --help stays fast
+    names = tuple(gesture_list(text))
+    if not names:
+        raise argparse.ArgumentTypeError(f'expected comma-separated names such as stroke,slap or a vocabulary '
+                                         f'({", ".join(VOCABULARIES)}); got {text!r}')
+    return names
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch collect``."""
     parser.add_argument('sensor', choices=SENSORS, help='the sensor whose topics are recorded')
     add_output(parser, 'the bag to write (live), or the directory of one bag per person (--simulate)', required=True)
     parser.add_argument('--simulate', metavar='N', type=positive_int,
                         help='run the protocol with N simulated people on the virtual device (SYNTHETIC data)')
-    parser.add_argument('--gestures', type=_names,
-                        help='comma-separated classes to prompt (default: ' +
+    parser.add_argument('--gestures', type=_gesture_names,
+                        help='comma-separated classes to prompt, or a vocabulary of the skin: digits, letters '
+                        '(default: ' +
                         '; '.join(f'{s}: {",".join(g)}' for s, g in DEFAULT_GESTURES.items()) + ')')
     parser.add_argument('--symbolic', nargs='?', const='all', type=str, metavar='GESTURES',
                         help="bear: also prompt symbolic gestures of config/bear_gestures.yaml, labelled "

@@ -73,8 +73,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``social-touch codebook record``."""
     parser.add_argument('-o', '--output', default='skin_codebook.npz', help='codebook file to write '
                         '(default skin_codebook.npz)')
-    parser.add_argument('--gestures', help='comma-separated gesture names, in recording order (default: those '
-                        'of the command map)')
+    parser.add_argument('--gestures', help='comma-separated gesture names, in recording order, or a vocabulary: '
+                        'digits, letters (default: those of the command map)')
     parser.add_argument('--commands', help="command map whose gestures to record (default: the package's "
                         'config/skin_commands.yaml)')
     parser.add_argument('--repetitions', '-m', type=positive_int, default=10,
@@ -119,7 +119,8 @@ def partial_path(output: str | Path) -> Path:
 
 def _gesture_names(args: argparse.Namespace) -> list[str]:
     if args.gestures:
-        names = [g.strip() for g in args.gestures.split(',') if g.strip()]
+        from touch_sim.skin.synthetic import gesture_list  # the vocabularies' names, not the simulation
+        names = gesture_list(args.gestures)
         if not names:
             raise ValueError('--gestures needs at least one name')
         return names

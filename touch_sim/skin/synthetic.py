@@ -28,8 +28,8 @@ import numpy as np
 from touch_gestures.skin.gesture import ACTIVE_MM
 from touch_sim.skin.traces import TraceSample
 
-__all__ = ['DIGITS', 'PAPER_CENTROID_SET', 'PAPER_MAP_SET', 'SHAPES', 'random_touches', 'shape_points',
-           'synthetic_traces']
+__all__ = ['DIGITS', 'LETTERS', 'LETTER_SHAPES', 'PAPER_CENTROID_SET', 'PAPER_MAP_SET', 'SHAPES', 'VOCABULARIES',
+           'gesture_list', 'random_touches', 'shape_points', 'synthetic_traces']
 
 # Unistroke shapes as waypoint polylines in a unit box, y downward (as on a screen and the skin).
 SHAPES: dict[str, list[tuple[float, float]]] = {
@@ -58,6 +58,58 @@ PAPER_MAP_SET = ('diagonal_down', 'secondary_diagonal', 'line_right', 'one', 'tw
 #: cirillo2017 Fig. 8 (centroid-based method; a and b, c and d differ only in direction).
 PAPER_CENTROID_SET = ('diagonal_down', 'diagonal_up', 'line_right', 'line_left', 'one')
 DIGITS = ('zero', 'one', 'two', 'three', 'four', 'five', 'six', 'seven', 'eight', 'nine')
+#: Capital letters in one stroke each, as a finger writes them on a small pad: where paper needs a second
+#: stroke the finger goes back along the first (E, F, H, T, Y) or leaves it out (A without its bar, as in
+#: Graffiti). Synthetic shapes for simulated recordings; a live vocabulary is whatever people trace.
+LETTER_SHAPES: dict[str, list[tuple[float, float]]] = {
+    'A': [(0, 1), (0.5, 0), (1, 1)],
+    'B': [(0, 1), (0, 0), (0.7, 0.05), (0.85, 0.25), (0.6, 0.48), (0, 0.5), (0.8, 0.55), (0.95, 0.8), (0.7, 1),
+          (0, 1)],
+    'C': [(0.95, 0.15), (0.6, 0), (0.2, 0.1), (0, 0.5), (0.2, 0.9), (0.6, 1), (0.95, 0.85)],
+    'D': [(0, 1), (0, 0), (0.6, 0.05), (0.95, 0.4), (0.9, 0.75), (0.55, 1), (0, 1)],
+    'E': [(0.95, 0), (0, 0), (0, 0.5), (0.7, 0.5), (0, 0.5), (0, 1), (0.95, 1)],
+    'F': [(0.95, 0), (0, 0), (0, 0.5), (0.7, 0.5), (0, 0.5), (0, 1)],
+    'G': [(0.95, 0.15), (0.6, 0), (0.2, 0.1), (0, 0.5), (0.2, 0.9), (0.6, 1), (0.95, 0.8), (0.95, 0.55),
+          (0.55, 0.55)],
+    'H': [(0, 0), (0, 1), (0, 0.5), (1, 0.5), (1, 0), (1, 1)],
+    'I': [(0.5, 0), (0.5, 1)],
+    'J': [(0.8, 0), (0.8, 0.8), (0.6, 1), (0.25, 1), (0.05, 0.8)],
+    'K': [(0, 0), (0, 1), (0, 0.55), (0.85, 0), (0.25, 0.4), (0.9, 1)],
+    'L': [(0, 0), (0, 1), (0.9, 1)],
+    'M': [(0, 1), (0, 0), (0.5, 0.6), (1, 0), (1, 1)],
+    'N': [(0, 1), (0, 0), (1, 1), (1, 0)],
+    'O': [(0.5, 0), (0.1, 0.2), (0, 0.5), (0.1, 0.8), (0.5, 1), (0.9, 0.8), (1, 0.5), (0.9, 0.2), (0.5, 0)],
+    'P': [(0, 1), (0, 0), (0.7, 0.02), (0.95, 0.25), (0.7, 0.5), (0, 0.5)],
+    'Q': [(0.5, 0), (0.1, 0.2), (0, 0.5), (0.1, 0.8), (0.5, 1), (0.9, 0.8), (1, 0.5), (0.9, 0.2), (0.5, 0),
+          (0.6, 0.6), (1, 1)],
+    'R': [(0, 1), (0, 0), (0.7, 0.02), (0.95, 0.25), (0.7, 0.5), (0, 0.5), (0.95, 1)],
+    'S': [(0.95, 0.1), (0.5, 0), (0.05, 0.2), (0.2, 0.45), (0.8, 0.55), (0.95, 0.8), (0.5, 1), (0.05, 0.9)],
+    'T': [(0, 0), (1, 0), (0.5, 0), (0.5, 1)],
+    'U': [(0, 0), (0, 0.75), (0.25, 1), (0.75, 1), (1, 0.75), (1, 0)],
+    'V': [(0, 0), (0.5, 1), (1, 0)],
+    'W': [(0, 0), (0.25, 1), (0.5, 0.4), (0.75, 1), (1, 0)],
+    'X': [(0, 0), (1, 1), (1, 0), (0, 1)],
+    'Y': [(0, 0), (0.5, 0.5), (1, 0), (0.5, 0.5), (0.5, 1)],
+    'Z': [(0, 0), (1, 0), (0, 1), (1, 1)],
+}
+SHAPES.update(LETTER_SHAPES)
+LETTERS = tuple(LETTER_SHAPES)
+#: Vocabularies named in place of a list of gestures (``--gestures digits``).
+VOCABULARIES: dict[str, tuple[str, ...]] = {'digits': DIGITS, 'letters': LETTERS}
+
+
+def gesture_list(text: str) -> list[str]:
+    """Gesture names from a comma-separated list in which a vocabulary's name stands for its gestures.
+
+    >>> gesture_list('digits')[:3]
+    ['zero', 'one', 'two']
+    >>> gesture_list('line_right, A,B')
+    ['line_right', 'A', 'B']
+    """
+    names: list[str] = []
+    for name in (n.strip() for n in text.split(',')):
+        names += list(VOCABULARIES.get(name, (name,) if name else ()))
+    return names
 
 
 def shape_points(name: str) -> np.ndarray:
