@@ -54,6 +54,8 @@ CODEBOOK_TARGETS: dict[str, Command] = {
                    'add the labelled touches of skin session bags to a codebook (a new file)'),
     'remove': Command('touch_lab.skin.codebook_cli:REMOVE', 'remove gestures from a codebook (a new file)'),
     'merge': Command('touch_lab.skin.codebook_cli:MERGE', 'merge two codebooks of the same recogniser (a new file)'),
+    'forecast': Command('touch_lab.skin.forecast:FORECAST', 'which gestures of a codebook the skin will confuse on '
+                        'new people, before deploying it (leave-one-person-out inside it)'),
     'calibrate': Command('touch_lab.skin.codebook_cli:CALIBRATE', 'set a codebook\'s rejection for a wrong-command '
                          'rate, leave-one-person-out inside it (a new file)'),
 }
