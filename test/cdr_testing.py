@@ -26,14 +26,17 @@ TEST_TYPES = {
         'bool[] flags\nbyte[] blob\nchar[4] code\nWide w\nint64[2] big\nuint8 last\n'),
     'codec_test_msgs/msg/Align': 'uint8 a\nfloat64[] d\nfloat64 x\nuint16[] h\nint64 y\nbool[] z\nfloat64 w\nInner i\n',
     'codec_test_msgs/msg/Strings': 'string<=3[<=2] tiny\nstring[] words\nuint32[] counts\nfloat32 f\n',
+    # every byte-field shape (bytes of length 1 and lists of them, as rclpy has them) and char ones (ints)
+    'codec_test_msgs/msg/Octets': 'byte one\nbyte[3] fixed\nbyte[] blob\nbyte[<=2] few\nchar c\nchar[] chars\n'
+                                  'char[2] pair\nbyte[0] none\nuint16 after\n',
 }
 for _name, _text in TEST_TYPES.items():
     typestore.register(get_types_from_msg(_text, _name))
 
 _INT = {'int8': (-2**7, 2**7 - 1), 'uint8': (0, 255), 'char': (0, 255), 'int16': (-2**15, 2**15 - 1),
         'uint16': (0, 2**16 - 1), 'int32': (-2**31, 2**31 - 1), 'uint32': (0, 2**32 - 1),
-        'int64': (-2**63, 2**63 - 1), 'uint64': (0, 2**64 - 1),
-        'byte': (0, 127)}  # rosbags packs a scalar byte signed: the upper half is tested on its own below
+        'int64': (-2**63, 2**63 - 1), 'uint64': (0, 2**64 - 1)}
+_OCTET = st.binary(min_size=1, max_size=1)  # a byte: bytes of length 1, as rclpy has it
 _DTYPE = {'bool': np.bool_, 'byte': np.uint8, 'char': np.uint8, 'float32': np.float32, 'float64': np.float64}
 _LENGTHS = st.one_of(st.integers(0, 3), st.integers(0, 300))
 _TEXT = st.one_of(st.text(max_size=8), st.text(max_size=300), st.just(''), st.sampled_from(['ü', '触覚', '😀x']))
@@ -44,6 +47,8 @@ def _scalar(base: str, bound: int = 0) -> st.SearchStrategy:
         return st.text(max_size=bound) if bound else _TEXT
     if base == 'bool':
         return st.booleans()
+    if base == 'byte':
+        return _OCTET
     if base in ('float32', 'float64'):
         return st.floats(width=32 if base == 'float32' else 64)  # NaN and infinities included
     lo, hi = _INT[base]
@@ -51,6 +56,8 @@ def _scalar(base: str, bound: int = 0) -> st.SearchStrategy:
 
 
 def _array(base: str, length: st.SearchStrategy) -> st.SearchStrategy:
+    if base == 'byte':  # byte[N], byte[]: a list of bytes of length 1, as rclpy has it
+        return length.flatmap(lambda n: st.lists(_OCTET, min_size=n, max_size=n))
     dtype = np.dtype(_DTYPE.get(base, base))
     if base in ('float32', 'float64'):
         elements = st.floats(width=dtype.itemsize * 8)

@@ -18,6 +18,7 @@ from touch_driver.driver_node import SerialDriverNode, frame_stamps_ns
 from touch_driver.framing import SensorStreamDecoder, encode_frame
 from touch_driver.serial_driver import DriverError, PortDisconnected, SerialDriver
 from touch_graph.messages import get_message
+from touch_graph.node_health import level_number
 from touch_graph.runtime import Context, SingleThreadedExecutor
 from touch_sim.virtual_port import VirtualSerial, device_state, forget_devices
 
@@ -189,7 +190,7 @@ def test_driver_node_publishes_status_and_survives_unplug_replug():
     assert statuses and statuses[0].connected and statuses[0].rate_hz == pytest.approx(50, abs=2)
     assert any(not s.connected for s in statuses)
     assert statuses[-1].connected and statuses[-1].reconnects == 1
-    levels = [d.status[0].level for d in diagnostics]
+    levels = [level_number(d.status[0]) for d in diagnostics]
     assert 2 in levels and levels[-1] == 0
     # Frames resume after the replug; those sent while unplugged are lost, as on hardware.
     assert node.values[0] == 0 and max(node.values) >= 290

@@ -8,6 +8,8 @@ from test_bear_node import Graph, frame  # the bear_gestures test graph, synthet
 from touch_graph.messages import get_message
 from touch_graph.subscriber_drops import dropped_by_topic
 
+DiagnosticStatus = get_message('diagnostic_msgs/msg/DiagnosticStatus')
+
 
 def test_frames_lost_by_a_node_that_falls_behind_are_counted_and_warned(capfd) -> None:
     g = Graph(subtype_classifier='rule')
@@ -41,7 +43,7 @@ def test_dropped_frames_turn_the_nodes_diagnostics_to_warn() -> None:
             g.pub.publish(frame(i))
         g.executor.spin_for(5.0)
         mine = [s for s in got if s.name == 'social_touch: /bear/bear_gestures']
-        assert mine[0].level == 1 and '20 messages dropped' in mine[0].message
+        assert mine[0].level == DiagnosticStatus.WARN and '20 messages dropped' in mine[0].message
         assert {kv.key: kv.value for kv in mine[0].values}['subscriber_drops'] == '20'
     finally:
         g.close()
@@ -58,9 +60,9 @@ def test_a_recogniser_failing_at_run_time_reports_error_with_the_reason(monkeypa
         g.update([frame(i) for i in range(3)])
         g.executor.spin_for(5.5)
         mine = [s for s in got if s.name == 'social_touch: /bear/bear_gestures']
-        assert mine[0].level == 2 and 'FloatingPointError: features diverged' in mine[0].message
+        assert mine[0].level == DiagnosticStatus.ERROR and 'FloatingPointError: features diverged' in mine[0].message
         g.executor.spin_for(5.5)               # no new failure: back to OK
         mine = [s for s in got if s.name == 'social_touch: /bear/bear_gestures']
-        assert len(mine) == 2 and mine[-1].level == 0
+        assert len(mine) == 2 and mine[-1].level == DiagnosticStatus.OK
     finally:
         g.close()

@@ -24,6 +24,7 @@ SkinFrame = get_message('social_touch_msgs/msg/SkinFrame')
 HapticCommand = get_message('social_touch_msgs/msg/HapticCommand')
 Header = get_message('std_msgs/msg/Header')
 Time = get_message('builtin_interfaces/msg/Time')
+DiagnosticStatus = get_message('diagnostic_msgs/msg/DiagnosticStatus')
 NS = 1_000_000_000
 T0_NS = 1_700_000_000 * NS
 PERIOD_NS = round(NS / 150)
@@ -386,10 +387,10 @@ def test_a_failing_recogniser_reports_error_on_diagnostics_and_the_node_goes_on(
     h.executor.spin_for(5.5)                       # the health period (simulated time)
     assert h.node.health.errors == 10              # every frame failed; the node caught each and went on
     assert h.node.callback_errors == 0             # none reached the executor (that would end the spin)
-    assert got and got[0].level == 2 and 'FloatingPointError: distance diverged' in got[0].message
+    assert got and got[0].level == DiagnosticStatus.ERROR and 'FloatingPointError: distance diverged' in got[0].message
     monkeypatch.undo()
     h.executor.spin_for(5.5)                       # no new failure: back to OK
-    assert len(got) == 2 and got[-1].level == 0
+    assert len(got) == 2 and got[-1].level == DiagnosticStatus.OK
 
 
 def test_what_became_of_the_gestures_is_on_diagnostics(harness):
@@ -403,5 +404,6 @@ def test_what_became_of_the_gestures_is_on_diagnostics(harness):
     h.touch(path([6.0, 23.0], [41.0, 23.0], 0.8))
     h.executor.spin_for(5.5)                       # the health period (simulated time)
     values = {kv.key: kv.value for kv in got[-1].values}
-    assert got[-1].level == 0 and values['outcome_published'] == '1' and values['segmenter_gestures'] == '1'
+    assert got[-1].level == DiagnosticStatus.OK
+    assert values['outcome_published'] == '1' and values['segmenter_gestures'] == '1'
     assert values['segmenter_ended_at_bound'] == '0' and values['callback_errors'] == '0'

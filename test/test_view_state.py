@@ -158,7 +158,8 @@ def test_a_sensor_is_shown_only_when_the_scene_runs_it_and_silent_after_stale_af
 def test_diagnostics_and_panels_and_the_log_stay_bounded():
     state, _ = make_state()
     for i in range(100):
-        status = DiagnosticStatus(level=2 if i == 99 else 0, name=f'driver{i % 40}', message='m', hardware_id='p',
+        level = DiagnosticStatus.ERROR if i == 99 else DiagnosticStatus.OK
+        status = DiagnosticStatus(level=level, name=f'driver{i % 40}', message='m', hardware_id='p',
                                   values=[KeyValue(key='rate_hz', value='20.0')])
         state.on_diagnostics(DiagnosticArray(header=header(i), status=[status]))
     snap = as_json(state)

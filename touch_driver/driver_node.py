@@ -52,7 +52,6 @@ import dataclasses
 from typing import Any, Generic
 
 from touch_graph.compat import (
-    USING_ROS,
     FloatingPointRange,
     IntegerRange,
     Node,
@@ -76,8 +75,6 @@ DiagnosticStatus = get_message('diagnostic_msgs/msg/DiagnosticStatus')
 KeyValue = get_message('diagnostic_msgs/msg/KeyValue')
 
 _OK, _WARN, _ERROR = 0, 1, 2
-# diagnostic_msgs/DiagnosticStatus.level is a `byte`: an int in our classes, bytes under rclpy.
-_BYTE_LEVEL = USING_ROS
 #: Bad or lost frames counted in a status period's error fraction (DriverStatus fields).
 _BAD_FRAME_COUNTERS = ('frames_missed', 'checksum_errors', 'decode_errors', 'length_errors', 'handle_errors')
 _DIAGNOSTIC_KEYS = ('frames', 'dropped_bytes', 'header_errors', 'version_errors', 'length_errors', 'checksum_errors',
@@ -457,7 +454,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
         values = [KeyValue(key=key, value=str(extra[key] if key in extra else getattr(status, key)))
                   for key in _DIAGNOSTIC_KEYS]
         self.diagnostics_pub.publish(DiagnosticArray(header=status.header, status=[DiagnosticStatus(
-            level=bytes([level]) if _BYTE_LEVEL else level,
+            level=bytes([level]),
             name=f'social_touch: {self.get_fully_qualified_name()}', message=text, hardware_id=self.port,
             values=values)]))
 

@@ -14,7 +14,8 @@ functions, generated once from its field definitions (Python source compiled wit
   structured record (one ``numpy.ndarray`` call and a field lookup each, about half the
   cost of one ``numpy.frombuffer`` each);
 - the decoded field types are rclpy's: a numeric sequence is an ``array.array`` (a copy of
-  its bytes), ``bool[N]`` and ``bool[]`` are lists of Python bools;
+  its bytes), ``bool[N]`` and ``bool[]`` are lists of Python bools, a ``byte`` is ``bytes`` of
+  length 1 and ``byte[N]``/``byte[]`` lists of them;
 - a runtime alignment step is emitted only after a field of variable size (a string, a
   sequence), where the offset is no longer known;
 - nested messages are inlined; decoded messages are made without ``__init__`` and their
@@ -24,9 +25,8 @@ functions, generated once from its field definitions (Python source compiled wit
 Encoding is XCDR1 little endian with the 4-byte encapsulation header; every primitive is
 aligned to its size relative to the end of that header, and the elements of an empty
 primitive sequence are not aligned (as rosbags and Fast-CDR). Decoding takes little
-endian; :mod:`touch_graph.messages` hands big-endian payloads to rosbags. One deliberate
-difference: a scalar ``byte`` is an unsigned octet (0-255) as in ROS 2, where rosbags packs
-it signed and so cannot encode 128-255.
+endian; :mod:`touch_graph.messages` hands big-endian payloads to rosbags (whose ``byte`` ints
+the message classes turn into bytes).
 
 Errors: an encoder raises :class:`~touch_graph.errors.MessageError` for a field value
 of the wrong type or size, a decoder for bytes that do not decode (truncated, bad length,
@@ -45,18 +45,20 @@ from rosbags.interfaces import Nodetype
 
 from .errors import MessageError
 
-__all__ = ['Codec', 'UnsupportedType', 'make_codec']
+__all__ = ['OCTETS', 'Codec', 'UnsupportedType', 'make_codec']
 
 #: Encapsulation header of little-endian plain CDR (XCDR1), options zero.
 HEADER_LE = b'\x00\x01\x00\x00'
 
-_FORMATS = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H',
+_FORMATS = {'bool': '?', 'byte': 'c', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H',
             'int32': 'i', 'uint32': 'I', 'int64': 'q', 'uint64': 'Q', 'float32': 'f', 'float64': 'd'}
 _SIZES = {name: struct.calcsize(fmt) for name, fmt in _FORMATS.items()}
 _DTYPES = {'bool': np.dtype(np.bool_), 'byte': np.dtype(np.uint8), 'char': np.dtype(np.uint8),
            **{name: np.dtype(name) for name in _FORMATS if name not in ('bool', 'byte', 'char')}}
 #: ``array.array`` typecodes of numeric sequences (rclpy's field type for them).
-_TYPECODES = {'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
+#: Every ``byte`` value as rclpy holds it: ``bytes`` of length 1 (``OCTETS[n]`` is ``bytes([n])``, shared).
+OCTETS = tuple(bytes([n]) for n in range(256))
+_TYPECODES = {'int8': 'b', 'uint8': 'B', 'char': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
               'int64': 'q', 'uint64': 'Q', 'float32': 'f', 'float64': 'd'}
 _ZEROS = tuple(bytes(n) for n in range(16))
 _COUNT = struct.Struct('<I').pack
@@ -112,7 +114,7 @@ class _Generator:
         self.env: dict[str, Any] = {'_ZEROS': _ZEROS, '_frombuffer': np.frombuffer, '_ndarray': np.ndarray,
                                     '_new': object.__new__, '_coerce': _coerce, '_bad': _bad,
                                     '_array': array.array, '_bools': _bools, '_to_sequence': _to_sequence,
-                                    '_sequence': _sequence}
+                                    '_sequence': _sequence, '_octets': _octets, '_octet_list': _octet_list}
         self.indent = 1
         self.off = 0
         self.known = 8
@@ -265,8 +267,8 @@ class _Encoder(_Generator):
         dt = self.const('DT', dtype)
         arr = self.name('a')
         self.emit(f'{arr} = {expr}')
-        if base == 'bool':  # a list of bools: one byte each
-            self.emit(f'{arr} = _bools({arr}, {length}, {field!r})')
+        if base in ('bool', 'byte'):  # a list of bools or of bytes: one octet each
+            self.emit(f'{arr} = {"_bools" if base == "bool" else "_octets"}({arr}, {length}, {field!r})')
             if length is not None:
                 self.flush()
                 self.emit(f'_a({arr})')
@@ -359,7 +361,7 @@ class _Decoder(_Generator):
 
     def __init__(self, fielddefs: dict, get_class: Callable[[str], type]) -> None:
         super().__init__(fielddefs, get_class)
-        self.run_views: list[tuple[str, np.dtype, int, int]] = []  # fixed arrays of the run: target, dtype, length, off
+        self.run_views: list[tuple[str, str, int, int]] = []  # fixed arrays of the run: target, base, length, off
 
     def flush(self) -> None:
         if not self.run_fmt:
@@ -379,20 +381,19 @@ class _Decoder(_Generator):
         """The fixed arrays of the run: one view each, or fields of one record view when there are several."""
         views, self.run_views = self.run_views, []
         if len(views) == 1:
-            target, dtype, length, off = views[0]
+            target, base, length, off = views[0]
             where = f'p + {off}' if off else 'p'
-            listed = '.tolist()' if dtype == np.bool_ else ''  # bool[N]: a list of bools, as rclpy gives it
-            self.emit(f'{target} = _frombuffer(data, {self.const("DT", dtype)}, {length}, {where}){listed}')
+            self.emit(f'{target} = ' + _as_field(base, f'_frombuffer(data, {self.const("DT", _DTYPES[base])}, '
+                                                       f'{length}, {where})'))
         elif views:
             first = views[0][3]
             record = np.dtype({'names': [f'f{i}' for i in range(len(views))],
-                               'formats': [(dtype, (length,)) for _, dtype, length, _ in views],
+                               'formats': [(_DTYPES[base], (length,)) for _, base, length, _ in views],
                                'offsets': [off - first for *_, off in views]})
             rec = self.name('r')
             self.emit(f'{rec} = _ndarray((), {self.const("RT", record)}, data, p + {first})')
-            for i, (target, dtype, *_rest) in enumerate(views):
-                listed = '.tolist()' if dtype == np.bool_ else ''
-                self.emit(f"{target} = {rec}['f{i}']{listed}")
+            for i, (target, base, *_rest) in enumerate(views):
+                self.emit(f'{target} = ' + _as_field(base, f"{rec}['f{i}']"))
 
     def runtime_pad(self, align: int) -> None:
         self.sync()
@@ -431,9 +432,9 @@ class _Decoder(_Generator):
         if length is not None:
             self.pad(size)
             if length:
-                self.run_views.append((target, dtype, length, self.off))
+                self.run_views.append((target, base, length, self.off))
             else:
-                self.emit(f'{target} = []' if base == 'bool' else f'{target} = _frombuffer(data, {dt}, 0)')
+                self.emit(f'{target} = []' if base in ('bool', 'byte') else f'{target} = _frombuffer(data, {dt}, 0)')
             self.run_fmt.append(f'{length * size}x')  # the pending run's unpack skips the array
             self.off += length * size
             return
@@ -446,8 +447,7 @@ class _Decoder(_Generator):
         if base in _TYPECODES:  # rclpy's type for a numeric sequence
             self.emit(f'{target} = _sequence({_TYPECODES[base]!r}, data, p, {n} * {size})')
         else:
-            listed = '.tolist()' if base == 'bool' else ''
-            self.emit(f'{target} = _frombuffer(data, {dt}, {n}, p){listed}')
+            self.emit(f'{target} = ' + _as_field(base, f'_frombuffer(data, {dt}, {n}, p)'))
         self.emit(f'p += {n} * {size}')
         self.known = min(4, size)
 
@@ -525,6 +525,15 @@ class _Decoder(_Generator):
                 '        raise _failed(data, err) from err\n')
 
 
+def _as_field(base: str, view: str) -> str:
+    """The expression of a decoded array field from ``view`` (a numpy view of its octets) as rclpy has it."""
+    if base == 'bool':
+        return f'{view}.tolist()'
+    if base == 'byte':
+        return f'_octet_list({view})'
+    return view
+
+
 def _coerce(arr: Any, dtype: np.dtype, length: int | None, field: str) -> np.ndarray:
     """An array field that is not exactly ``dtype``, 1-D: accepted if equal in dtype, else ValueError."""
     if not isinstance(arr, np.ndarray) or arr.dtype != dtype or arr.ndim != 1:
@@ -546,6 +555,23 @@ def _bools(values: Any, length: int | None, field: str) -> bytes:
     if length is not None and len(data) != length:
         raise ValueError(f'field {field} must hold {length} values; got {len(data)}')
     return data
+
+
+def _octets(values: Any, length: int | None, field: str) -> bytes:
+    """The octets of a ``byte[N]``/``byte[]`` field given as a list (or tuple) of bytes of length 1."""
+    if isinstance(values, (bytes, bytearray, str, np.ndarray)):
+        raise ValueError(f'field {field} must be a list of bytes of length 1; got {type(values).__name__}')
+    data = b''.join(values)  # TypeError for an item that is not bytes-like
+    if len(data) != len(values):
+        raise ValueError(f'field {field} must hold bytes of length 1; got {values!r}'[:200])
+    if length is not None and len(data) != length:
+        raise ValueError(f'field {field} must hold {length} values; got {len(data)}')
+    return data
+
+
+def _octet_list(view: np.ndarray) -> list:
+    """A ``byte[N]``/``byte[]`` field from a uint8 view of its octets: a list of bytes of length 1."""
+    return list(map(OCTETS.__getitem__, view.tobytes()))
 
 
 def _to_sequence(values: Any, typecode: str, dtype: np.dtype, field: str) -> array.array:

@@ -51,7 +51,7 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.base import TypesysError
 
-from .cdr import Codec, UnsupportedType, make_codec
+from .cdr import OCTETS, Codec, UnsupportedType, make_codec
 from .errors import MessageError
 from .paths import INTERFACE_PACKAGE, share_file
 from .srv_definitions import service_types
@@ -75,7 +75,7 @@ _DTYPES = {**{k: np.dtype(k) for k in _INT_RANGES if k not in ('byte', 'char')},
            **{k: np.dtype(v) for k, v in _FLOATS.items()}}
 
 #: ``array.array`` typecodes of numeric sequences, as rclpy's generated classes use them.
-_TYPECODES = {'int8': 'b', 'uint8': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
+_TYPECODES = {'int8': 'b', 'uint8': 'B', 'char': 'B', 'int16': 'h', 'uint16': 'H', 'int32': 'i', 'uint32': 'I',
               'int64': 'q', 'uint64': 'Q', 'float32': 'f', 'float64': 'd'}
 
 _lock = threading.RLock()
@@ -178,15 +178,31 @@ def _values_equal(a: Any, b: Any) -> bool:
 
 
 # --------------------------------------------------------------------------- field converters
-# Each field gets a converter: value -> checked value, raising MessageError with the field name.
+# Each field gets a converter: value -> checked value, raising FieldError with the field name.
 
-def _fail(owner: str, field: str, expected: str, value: Any, hint: str = '') -> MessageError:
+class FieldError(MessageError, AssertionError):
+    """A value a message field does not take. Also an ``AssertionError``: what rclpy's generated setters
+    raise for it (with ``ROS_PYTHON_CHECK_FIELDS=1``), so a node catching either catches it on both runtimes."""
+
+
+def _fail(owner: str, field: str, expected: str, value: Any, hint: str = '') -> FieldError:
     shown = f'array of dtype {value.dtype} and shape {value.shape}' if isinstance(value, np.ndarray) \
         else f'{type(value).__name__} {value!r}'[:120]
-    return MessageError(f"field '{field}' of {owner} expects {expected}; got {shown}{hint}")
+    return FieldError(f"field '{field}' of {owner} expects {expected}; got {shown}{hint}")
+
+
+_BYTE_HINT = ' (a byte field holds bytes of length 1, as in rclpy: write bytes([n]) or b\'\\x01\')'
 
 
 def _scalar_converter(owner: str, field: str, base: str, bound: int) -> tuple[Callable, Any]:
+    if base == 'byte':
+        def conv_byte(v: Any) -> bytes:
+            if type(v) is bytes and len(v) == 1:
+                return v
+            if isinstance(v, (bytes, bytearray)) and len(v) == 1:  # rclpy takes a bytearray too
+                return OCTETS[v[0]]
+            raise _fail(owner, field, 'bytes of length 1 (byte)', v, _BYTE_HINT)
+        return conv_byte, OCTETS[0]
     if base in _INT_RANGES:
         lo, hi = _INT_RANGES[base]
 
@@ -308,6 +324,30 @@ def _bool_list_converter(owner: str, field: str, length: int | None, bound: int)
     return conv_bools, default
 
 
+def _octets_converter(owner: str, field: str, length: int | None, bound: int) -> tuple[Callable, Callable]:
+    """A ``byte[N]``, ``byte[]`` or ``byte[<=N]`` field: a list of ``bytes`` of length 1 each, as rclpy has it
+    (rclpy's checks refuse a ``bytes``, a numpy array or ints there: write ``[bytes([n]) for n in data]``)."""
+    what = (f'a list of {length} bytes of length 1 (byte[{length}])' if length
+            else 'a list of bytes of length 1 (byte[])')
+
+    def conv_octets(v: Any) -> list:
+        if isinstance(v, (str, bytes, bytearray, dict, np.ndarray, array.array)) or not hasattr(v, '__iter__'):
+            raise _fail(owner, field, what, v, '; write [bytes([n]) for n in data]')
+        out = list(v)
+        for item in out:
+            if type(item) is not bytes or len(item) != 1:
+                raise _fail(owner, field, what, v, f'; an item is {type(item).__name__} {item!r}'[:80] + _BYTE_HINT)
+        if length is not None and len(out) != length:
+            raise _fail(owner, field, what, v)
+        if bound and len(out) > bound:
+            raise _fail(owner, field, f'a list of at most {bound} bytes', v)
+        return out
+
+    def default() -> list:
+        return [OCTETS[0]] * (length or 0)
+    return conv_octets, default
+
+
 def _list_converter(owner: str, field: str, item_conv: Callable, item_default: Callable,
                     length: int | None, bound: int, what: str) -> tuple[Callable, Callable]:
     def conv_list(v: Any) -> list:
@@ -386,6 +426,8 @@ def _field_converter(owner: str, field: str, desc: tuple) -> tuple[Callable, Cal
             return conv, default, _idl_array(item_type, length, bound)
         if base == 'bool':
             conv, default = _bool_list_converter(owner, field, length, bound)
+        elif base == 'byte':
+            conv, default = _octets_converter(owner, field, length, bound)
         elif length is None and base in _TYPECODES:
             conv, default = _sequence_converter(owner, field, base, bound)
         else:
@@ -428,8 +470,8 @@ def _make_class(typename: str) -> type[Message]:
         '_msg_field_types': {name: _msg_type_str(desc) for name, desc in fields},
         '__init__': env['__init__'], '__module__': f'{pkg}.{kind}', '__qualname__': short,
     }
-    for cname, _ctype, cvalue in consts:
-        attrs[cname] = cvalue
+    for cname, ctype, cvalue in consts:
+        attrs[cname] = OCTETS[cvalue % 256] if ctype == 'byte' else cvalue  # rclpy: b'\x01' (rosbags: 1)
     cls = type(short, (Message,), attrs)
     for n in names:
         slot = cls.__dict__[f'_f_{n}']
@@ -444,13 +486,34 @@ def _setter(set_slot: Callable[[Any, Any], None], conv: Callable[[Any], Any]) ->
     return fset
 
 
+def _byte_kind(desc: tuple) -> str | None:
+    """'scalar' for a ``byte`` field, 'list' for ``byte[N]``/``byte[]``, else None."""
+    kind, detail = desc
+    if kind == Nodetype.BASE:
+        return 'scalar' if detail[0] == 'byte' else None
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) and detail[0] == (Nodetype.BASE, ('byte', 0)):
+        return 'list'
+    return None
+
+
+def _from_rosbags(kind: str | None, v: Any) -> Any:
+    """A value rosbags decoded as rclpy has it: bools as lists, ``byte`` ints and arrays as bytes."""
+    if kind == 'scalar' and isinstance(v, (int, np.integer)):
+        return OCTETS[int(v) % 256]
+    if kind == 'list' and isinstance(v, np.ndarray):
+        return [OCTETS[n] for n in v.astype(np.uint8).tobytes()]
+    return v.tolist() if isinstance(v, np.ndarray) and v.dtype == np.bool_ else v
+
+
 def _rosbags_builder(cls: type[Message]) -> Callable[..., Message]:
-    """What rosbags calls with a decoded message's values: numpy bool arrays become lists, as ours decode."""
-    def plain(v: Any) -> Any:
-        return v.tolist() if isinstance(v, np.ndarray) and v.dtype == np.bool_ else v
+    """What rosbags calls with a decoded message's values: numpy bool arrays become lists and ``byte`` ints
+    and arrays bytes, as ours decode."""
+    kinds = {name: _byte_kind(desc) for name, desc in typestore.fielddefs[cls.__msgtype__][1]}
+    order = list(kinds.values())
 
     def build(*values: Any, **fields: Any) -> Message:
-        return cls(*map(plain, values), **{k: plain(v) for k, v in fields.items()})
+        return cls(*(_from_rosbags(k, v) for k, v in zip(order, values, strict=False)),
+                   **{n: _from_rosbags(kinds.get(n), v) for n, v in fields.items()})
     return build
 
 
@@ -541,12 +604,17 @@ def deserialize(data: bytes | bytearray | memoryview, typename: str) -> Message:
 
 def for_rosbags(message: Message) -> Message:
     """A copy of ``message`` with its sequences and bool lists as the numpy arrays rosbags' serialiser
-    takes (fields' slots written directly, past the converting properties)."""
+    takes, and ``byte`` values as its ints (fields' slots written directly, past the converting properties)."""
     out = object.__new__(type(message))
     for name, desc in typestore.fielddefs[message.__msgtype__][1]:
         value = getattr(message, name)
         kind, detail = desc
-        if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        byte_kind = _byte_kind(desc)
+        if byte_kind == 'scalar':
+            value = value[0] - 256 * (value[0] > 127)  # rosbags packs a byte signed: the same octet on the wire
+        elif byte_kind == 'list':
+            value = np.frombuffer(b''.join(value), dtype=np.uint8)
+        elif kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
             (sub_kind, sub_detail), _size = detail
             if sub_kind == Nodetype.NAME:
                 value = [for_rosbags(v) for v in value]
@@ -592,7 +660,8 @@ def _read_only(value: Any) -> Any:
 
 
 def to_dict(message: Message) -> dict[str, Any]:
-    """Plain Python (dict, list, int, float, str, bool) form of a message, for echo and YAML."""
+    """Plain Python (dict, list, int, float, str, bool) form of a message, for echo and YAML; a ``byte``
+    (``bytes`` of length 1 in the message) is its int, 0-255, which :func:`from_dict` takes back."""
     out = {}
     for name in message._fields:
         out[name] = _plain(getattr(message, name))
@@ -606,6 +675,8 @@ def _plain(value: Any) -> Any:
         return value.tolist()
     if isinstance(value, list):
         return [_plain(v) for v in value]
+    if type(value) is bytes:  # a byte field's value (strings are str)
+        return value[0]
     return value
 
 
@@ -648,6 +719,21 @@ def _from_plain(desc: tuple, value: Any, strict: bool, where: str) -> Any:
         if not isinstance(value, list):
             raise MessageError(f'{where} must be a list; got {value!r}')
         return [from_dict(detail[0][1], v, strict=strict) for v in value]
+    byte_kind = _byte_kind(desc)
+    if byte_kind == 'scalar':
+        return _octet(value, where)
+    if byte_kind == 'list' and isinstance(value, list):
+        return [_octet(v, where) for v in value]
+    return value
+
+
+def _octet(value: Any, where: str) -> Any:
+    """A ``byte`` given as an int 0-255 (as :func:`to_dict` writes it) -> ``bytes`` of length 1; else as given,
+    for the field's converter to take or refuse."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        if not 0 <= value <= 255:
+            raise FieldError(f'{where} is a byte: expects an int in [0, 255] or bytes of length 1; got {value}')
+        return OCTETS[value]
     return value
 
 

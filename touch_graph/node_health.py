@@ -27,14 +27,23 @@ import traceback
 from collections.abc import Callable
 from typing import Any
 
-from .compat import USING_ROS, get_message
+from .compat import get_message
 from .frame_screen import FrameScreen
 from .subscriber_drops import DropReporter, dropped_by_topic
 
-__all__ = ['NodeHealth']
+__all__ = ['NodeHealth', 'level_number']
 
 _OK, _WARN, _ERROR = 0, 1, 2
 _UNSET = object()
+
+
+def level_number(status: Any) -> int:
+    """The level of a ``diagnostic_msgs/DiagnosticStatus`` as a number: 0 OK, 1 WARN, 2 ERROR, 3 STALE.
+
+    The field is a ``byte``, which rclpy (and so our runtime) holds as ``bytes`` of length 1
+    (``DiagnosticStatus.WARN == b'\\x01'``); write it with ``bytes([n])``, read it with this.
+    """
+    return status.level[0]
 
 
 class NodeHealth:
@@ -128,6 +137,6 @@ class NodeHealth:
         level, text, counters = self.status()
         KeyValue = get_message('diagnostic_msgs/msg/KeyValue')
         status = get_message('diagnostic_msgs/msg/DiagnosticStatus')(
-            level=bytes([level]) if USING_ROS else level, name=f'social_touch: {self.node.get_fully_qualified_name()}',
+            level=bytes([level]), name=f'social_touch: {self.node.get_fully_qualified_name()}',
             message=text, hardware_id='', values=[KeyValue(key=k, value=str(v)) for k, v in counters.items()])
         self._pub.publish(get_message('diagnostic_msgs/msg/DiagnosticArray')(status=[status]))

@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from touch_graph.node_health import level_number
+
 __all__ = ['SENSORS', 'SensorActivity', 'ViewState', 'encode_map']
 
 #: sensor -> its frame topic; a sensor is in the scene when its frame topic has a publisher.
@@ -232,7 +234,7 @@ class ViewState:
         with self._lock:
             t = self._graph_s(msg.header)
             for status in msg.status:
-                level = status.level[0] if isinstance(status.level, (bytes, bytearray)) else int(status.level)
+                level = level_number(status)
                 before = self._drivers.get(status.name)
                 if before is None and len(self._drivers) >= MAX_DRIVERS:
                     continue

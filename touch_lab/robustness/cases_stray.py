@@ -68,6 +68,7 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
     from touch_driver.skin.node import SkinDriverNode
     from touch_gestures.skin.node import HapticCommandsNode
     from touch_graph.messages import get_message
+    from touch_graph.node_health import level_number
     from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
     from touch_sim.skin.device import forget_stimuli, register_stimulus
     from touch_sim.virtual_port import forget_devices
@@ -107,7 +108,7 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
         return {'commands': [c.command for c in commands], 'outcomes': dict(node.outcomes),
                 'stray_before_scene': before, 'screened': dict(node.screen.screened),
                 'malformed': dict(node.screen.malformed_), 'admitted': node.screen.admitted,
-                'restarts': node.stream.restarts, 'statuses': [(int(s.level), s.message) for s in statuses],
+                'restarts': node.stream.restarts, 'statuses': [(level_number(s), s.message) for s in statuses],
                 'callback_errors': node.callback_errors}
     finally:
         ctx.try_shutdown()

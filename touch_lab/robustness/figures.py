@@ -43,6 +43,7 @@ def unplug(unplug_at_s: float = 2.0, replug_at_s: float = 4.0, seconds: float = 
     from the replug to the first frame published again, frames lost, and what the status said meanwhile."""
     from touch_driver.skin.node import SkinDriverNode
     from touch_graph.messages import get_message
+    from touch_graph.node_health import level_number
     from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
     from touch_sim.virtual_port import forget_devices
     forget_devices()
@@ -58,9 +59,7 @@ def unplug(unplug_at_s: float = 2.0, replug_at_s: float = 4.0, seconds: float = 
                                      lambda m: stamps.append(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9),
                                      QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT))  # as the driver
         listener.create_subscription(get_message('diagnostic_msgs/msg/DiagnosticArray'), '/diagnostics',
-                                     lambda m: levels.append(int.from_bytes(m.status[0].level, 'little')
-                                                             if isinstance(m.status[0].level, bytes)
-                                                             else int(m.status[0].level)), 100)
+                                     lambda m: levels.append(level_number(m.status[0])), 100)
         executor = SingleThreadedExecutor(context=ctx)
         executor.add_node(node)
         executor.add_node(listener)

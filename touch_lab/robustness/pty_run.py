@@ -16,6 +16,7 @@ from touch_driver.bear.protocol import BEAR_ID, encode_payload
 from touch_driver.framing import crc16, encode_frame
 from touch_graph.compat import sensor_data_qos
 from touch_graph.messages import get_message
+from touch_graph.node_health import level_number
 from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
 from touch_lab.bench.replay import PtyPort
 
@@ -50,9 +51,8 @@ def v1_frame(seq: int) -> bytes:
 
 
 def level_of(diagnostic: Any) -> int:
-    """A DiagnosticStatus level as an int (a ``byte`` is bytes under rclpy)."""
-    level = diagnostic.level
-    return level[0] if isinstance(level, bytes) else int(level)
+    """A DiagnosticStatus level as an int (see :func:`touch_graph.node_health.level_number`)."""
+    return level_number(diagnostic)
 
 
 def run_bear(wire: bytes, seconds: float = 2.5, node_class: type = BearDriverNode,
