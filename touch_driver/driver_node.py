@@ -48,7 +48,6 @@ reason instead of being accepted and ignored.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, Generic
 
 from touch_graph.compat import (
@@ -57,7 +56,6 @@ from touch_graph.compat import (
     Node,
     ParameterDescriptor,
     SetParametersResult,
-    Time,
     get_message,
 )
 from touch_graph.errors import ParameterError
@@ -73,6 +71,9 @@ DriverStatus = get_message('social_touch_msgs/msg/DriverStatus')
 DiagnosticArray = get_message('diagnostic_msgs/msg/DiagnosticArray')
 DiagnosticStatus = get_message('diagnostic_msgs/msg/DiagnosticStatus')
 KeyValue = get_message('diagnostic_msgs/msg/KeyValue')
+Header = get_message('std_msgs/msg/Header')
+TimeMsg = get_message('builtin_interfaces/msg/Time')
+_NS_PER_S = 1_000_000_000
 
 _OK, _WARN, _ERROR = 0, 1, 2
 #: Bad or lost frames counted in a status period's error fraction (DriverStatus fields).
@@ -230,10 +231,10 @@ class SerialDriverNode(Node, Generic[ScanT]):
         """A header with this driver's frame id, stamped with ``frame``'s stamp (see :meth:`_poll`), or
         now without a frame or before the frame is stamped."""
         if frame is None or frame.stamp_ns is None:
-            stamp = self.get_clock().now()
-        else:
-            stamp = Time(nanoseconds=frame.stamp_ns, clock_type=self.get_clock().clock_type)
-        return get_message('std_msgs/msg/Header')(stamp=stamp.to_msg(), frame_id=self.frame_id)
+            return Header(stamp=self.get_clock().now().to_msg(), frame_id=self.frame_id)
+        # Time(nanoseconds=...).to_msg() without the Time: every frame's path (stamps are >= 0)
+        sec, nanosec = divmod(frame.stamp_ns, _NS_PER_S)
+        return Header(stamp=TimeMsg(sec=sec, nanosec=nanosec), frame_id=self.frame_id)
 
     # ------------------------------------------------------------------ internals
     def _on_set_parameters(self, params: list[Any]) -> Any:
@@ -362,7 +363,7 @@ class SerialDriverNode(Node, Generic[ScanT]):
         self._last_stamp_ns = stamps[-1]
         for frame, stamp_ns in zip(frames, stamps, strict=True):
             try:
-                self.handle_frame(dataclasses.replace(frame, stamp_ns=stamp_ns))
+                self.handle_frame(DecodedFrame(frame.scan, frame.received_s, stamp_ns))
             except Exception as err:  # a frame the node cannot handle is counted and reported, never fatal
                 self.handle_errors += 1
                 self.last_error = f'cannot handle a frame: {type(err).__name__}: {err}'

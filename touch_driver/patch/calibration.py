@@ -88,7 +88,8 @@ class ScanAverager:
 
     def reset(self) -> None:
         self._ring = np.zeros((self.window, *self.grid), dtype=np.float64)  # bounded: window scans
-        self._valid = np.zeros((self.window, *self.grid), dtype=bool)
+        self._valid = np.ones((self.window, *self.grid), dtype=bool)  # slots not filled yet are never read
+        self._invalid_slots: set[int] = set()   # slots holding a scan with a non-finite sample
         self._pushed = 0
 
     def update(self, scan: np.ndarray) -> np.ndarray | None:
@@ -96,19 +97,33 @@ class ScanAverager:
 
         Non-finite samples are left out of the average; a cell with none in the window is NaN.
         """
-        values = np.asarray(scan, dtype=np.float64)
-        if values.shape != self.grid:
-            raise ValueError(f'a patch scan has shape {self.grid}; got {values.shape}')
+        scan = np.asarray(scan)
+        if scan.shape != self.grid:
+            raise ValueError(f'a patch scan has shape {self.grid}; got {scan.shape}')
         slot = self._pushed % self.window
-        valid = np.isfinite(values)
-        self._ring[slot] = np.where(valid, values, 0.0)
-        self._valid[slot] = valid
+        if scan.dtype.kind in 'iub':   # integer counts (the decoder's uint16) are all finite
+            self._ring[slot] = scan
+            if self._invalid_slots:
+                self._valid[slot] = True
+                self._invalid_slots.discard(slot)
+        else:
+            values = scan.astype(np.float64, copy=False)
+            valid = np.isfinite(values)
+            self._ring[slot] = np.where(valid, values, 0.0)
+            self._valid[slot] = valid
+            if valid.all():
+                self._invalid_slots.discard(slot)
+            else:
+                self._invalid_slots.add(slot)
         self._pushed += 1
         if self._pushed % self.decimation:
             return None
         filled = min(self._pushed, self.window)
-        count = self._valid[:filled].sum(axis=0)
         total = self._ring[:filled].sum(axis=0)
+        if not self._invalid_slots:    # every sample of the window counts: the count is ``filled``
+            total /= filled
+            return total.astype(np.float32)
+        count = self._valid[:filled].sum(axis=0)
         with np.errstate(invalid='ignore', divide='ignore'):
             return np.where(count > 0, total / count, np.nan).astype(np.float32)
 

@@ -76,7 +76,8 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
         scan = frame.scan
         activation = self.calibrator.update_scan(scan.cells) if scan.raw_scan else self.calibrator.update(scan.cells)
         state = self._panel_calibrator(scan.raw_scan).update(scan.panels)
-        changed = self._last_contact is None or not np.array_equal(state.contact, self._last_contact)
+        # (bytes compared, cheaper than np.array_equal on every scan: same shape and dtype)
+        changed = self._last_contact is None or state.contact.tobytes() != self._last_contact.tobytes()
         self._last_contact = state.contact
         if not (changed or activation is not None):
             return

@@ -159,10 +159,12 @@ class PanelCalibrator:
 
     def update(self, signal: np.ndarray) -> PanelState:
         """One sample of every panel: (n_panels,) counts (any numeric dtype)."""
-        x = np.asarray(signal, dtype=np.float64)
+        x = np.asarray(signal)
+        finite = x.dtype.kind in 'iub'   # integer counts (the decoder's uint16) need no check
+        x = x.astype(np.float64, copy=False)
         if x.shape != (self.n_panels,):
             raise ValueError(f'expected ({self.n_panels},) panel signals; got shape {x.shape}')
-        if not (self._all_started and np.isfinite(x).all()):
+        if not (self._all_started and (finite or np.isfinite(x).all())):
             return self._update_general(x)
         q = self._sum / self.window
         delta = x - q if self.polarity == 1 else q - x

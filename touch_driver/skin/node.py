@@ -47,9 +47,9 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
     def handle_frame(self, frame: DecodedFrame[SkinScan]) -> None:
         scan = frame.scan
         state = self.calibrator.update(scan.raw)
-        x, y = (float(v) for v in state.contact_xy_mm) if state.contact else (math.nan, math.nan)
+        x, y = state.contact_xy_mm.tolist() if state.contact else (math.nan, math.nan)   # Python floats
         z = 0.0 if state.contact else math.nan
-        fx, fy, _ = (float(v) for v in state.force.sum(axis=0, dtype=np.float64))
+        fx, fy, _ = state.force.sum(axis=0, dtype=np.float64).tolist()
         self.frame_pub.publish(SkinFrame(
             header=self.header(frame), sequence=scan.seq, raw=scan.raw, pressure=state.pressure.ravel(),
             contact=bool(state.contact), contact_x=x, contact_y=y, force=state.force.ravel(),
