@@ -88,9 +88,26 @@ def test_subtype_scoring_takes_the_dominant_label_and_first_hit_latency() -> Non
     codes[5:10, 1] = 1       # then pet for 2.5 s
     truth = np.zeros((16, 64), dtype=np.int8)
     truth[2:10, 1] = 1
-    run = type('Run', (), {'times': times, 'truth': truth})()
+    active = truth > 0
+    run = type('Run', (), {'times': times, 'truth': truth, 'active': active})()
     score = score_subtypes(scene, run, codes, body.fitted_mask(), body, 2.0)
     assert score['accuracy'] == 1.0 and score['median_latency_s'] == 1.5
+    assert score['reached_threshold']['pet'] == 1.0 and score['reached_threshold']['tap'] is None
+
+
+def test_a_touch_the_scan_never_saw_over_the_threshold_is_not_reached():
+    from touch_driver.bear.body_map import BodyMap
+
+    body = BodyMap.default()
+    labels = [Label(1.0, 1.2, 'subtype', 'tap', ('head2',), 0, 1), Label(3.0, 3.2, 'subtype', 'tap', ('head2',), 0, 2)]
+    scene = BearScene([Contact(1, 1.0, 1.2, 'tap', 0.6), Contact(1, 3.0, 3.2, 'tap', 0.6)], labels, 5.0)
+    times = np.arange(0, 5, 0.5)
+    active = np.zeros((10, 64), dtype=bool)
+    active[6, 1] = True      # the second tap was read over the threshold at 3.0 s; the first never was
+    run = type('Run', (), {'times': times, 'truth': np.zeros((10, 64), dtype=np.int8), 'active': active})()
+    score = score_subtypes(scene, run, np.zeros((10, 64), dtype=np.int8), body.fitted_mask(), body, 2.0)
+    assert score['reached_threshold']['tap'] == 0.5
+    assert score['per_class']['tap']['recall'] == 0.0
 
 
 def test_cli_json_and_text(capsys) -> None:

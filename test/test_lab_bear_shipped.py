@@ -77,7 +77,8 @@ def test_the_report_section_names_each_family_and_the_shipped_model():
     labels = list(SUBTYPES)
     confusion = [[0] * len(labels) for _ in labels]
     confusion[1][1] = 3
-    one = {'subtype_accuracy': 0.5, 'lowest_class_recall': 0.0, 'recall': {'pet': 1.0}, 'median_subtype_latency_s': 0.9,
+    one = {'subtype_accuracy': 0.5, 'lowest_class_recall': 0.0, 'recall': {'pet': 1.0},
+           'reached_threshold': {'pet': 1.0, 'tap': 0.25}, 'median_subtype_latency_s': 0.9,
            'symbolic_detected': 0.75, 'symbolic_labelled': 4, 'symbolic_false_alarms': 2,
            'symbolic_false_alarms_by_gesture': {'head_pat': 0, 'shoulder_tap': 2},
            'symbolic_starts_during_subtype_touches': 1, 'median_symbolic_latency_s': 2.4,
@@ -90,3 +91,4 @@ def test_the_report_section_names_each_family_and_the_shipped_model():
     assert '### Shipped model on the `hands` family' in text and '### Shipped model on the `script` family' in text
     assert '| shoulder_tap | 2 | 0.50 | 2 |' in text and '| all | 4 | 0.75 | 2 |' in text
     assert '| shipped model | 0.50 | 0.00 | 0.75 | 2 | 0.50 | 0.00 | 0.75 | 2 |' in text
+    assert 'no-touch gate can name' in text and 'pet 1.00, tap 0.25.' in text

@@ -13,7 +13,10 @@ Scoring (documented here because the numbers mean nothing without it):
   non-'none' subtype the sensor carried for the most cycles between the touch's start and one cycle
   after its end ('none' if it never carried one). ``subtype_accuracy`` is the fraction correct;
   precision and recall per subtype come from that confusion matrix. Detection latency: from the
-  touch's start to the first cycle carrying the true subtype.
+  touch's start to the first cycle carrying the true subtype. ``reached_threshold`` per subtype: the
+  share of its interactions whose sensor read at or above the activation threshold in at least one
+  cycle of that window; behind ``NoTouchGate`` no classifier can name the others, so it bounds the
+  recall (a brief tap between two reads of its sensor is never seen).
 - *Subtype, per cycle*: the (9 x 9) confusion of every fitted sensor on every cycle against the
   contact under way on it ('none' when none), tails included: a buffer still full of a finished touch
   is an error, which is the cost of a long buffer (knight2009 V.A).
@@ -249,12 +252,14 @@ def score_subtypes(scene: BearScene, run: SceneRun, codes: np.ndarray, fitted: n
                    rate_hz: float) -> dict:
     """Per-interaction and per-cycle subtype scores of one recogniser (see the module docstring)."""
     truth_names, pred_names, latencies = [], [], {s: [] for s in TOUCH_SUBTYPES}
+    reached = {s: [] for s in TOUCH_SUBTYPES}
     for label in scene.labels:
         if label.kind != 'subtype':
             continue
         ch = body_map.by_name(label.sensors[0]).channel
         window = (run.times >= label.start_s) & (run.times < label.end_s + 1.0 / rate_hz)
         seen = codes[window, ch]
+        reached[label.label].append(bool(run.active[window, ch].any()))
         counts = np.bincount(seen[seen > 0], minlength=len(SUBTYPES))
         pred = SUBTYPES[int(counts.argmax())] if counts.any() else 'none'
         truth_names.append(label.label)
@@ -278,6 +283,7 @@ def score_subtypes(scene: BearScene, run: SceneRun, codes: np.ndarray, fitted: n
         'frame_confusion': frame.tolist(),
         'median_latency_s': float(np.median(all_latencies)) if all_latencies else None,
         'median_latency_by_subtype_s': {k: (float(np.median(v)) if v else None) for k, v in latencies.items()},
+        'reached_threshold': {k: (float(np.mean(v)) if v else None) for k, v in reached.items()},
     }
 
 

@@ -216,6 +216,10 @@ def populations_md(cross: dict, shipped_name: str) -> list[str]:
         s = shipped[f]
         lines += ['', f'### Shipped model on the `{f}` family: subtypes per interaction', '',
                   _matrix_md(s['labels'], s['confusion']), '',
+                  'Share of each subtype\'s interactions whose sensor read at or above the 30 % activation threshold '
+                  'in at least one scan cycle (the most any model behind the no-touch gate can name; the rest the '
+                  '3.4 Hz scan never saw): ' + ', '.join(f'{k} {_fmt(v)}' for k, v in
+                                                         s.get('reached_threshold', {}).items()) + '.', '',
                   f"Median subtype latency (over all detected interactions): {_fmt(s['median_subtype_latency_s'])} s.",
                   '', f'Symbolic gestures on the `{f}` family (shipped model\'s subtypes): detections and false '
                   'starts (STARTs in pauses or during another gesture) per gesture; STARTs during single-sensor '

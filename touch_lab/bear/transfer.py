@@ -86,7 +86,8 @@ def _summary(scores: dict) -> dict:
     sub, sym = scores['subtype'], scores['symbolic']
     recall = {k: v['recall'] for k, v in sub['per_class'].items() if v['recall'] is not None}
     return {'subtype_accuracy': sub['accuracy'], 'lowest_class_recall': min(recall.values()) if recall else None,
-            'recall': recall, 'median_subtype_latency_s': sub['median_latency_s'],
+            'recall': recall, 'reached_threshold': sub['reached_threshold'],
+            'median_subtype_latency_s': sub['median_latency_s'],
             'symbolic_detected': sym['accuracy'], 'symbolic_labelled': sym['labelled'],
             'symbolic_false_alarms': sym['false_alarms'],
             'symbolic_false_alarms_by_gesture': dict(zip(sym['labels'][:-1], sym['confusion'][-1][:-1], strict=True)),
