@@ -30,7 +30,16 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.bear.protocol import encode_scan
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.patch.model_io import load_model
+from touch_gestures.skin.codebook import load_codebook
 from touch_graph.errors import SocialTouchError
+from touch_graph.launch.safe_eval import safe_eval
+from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.robustness import pty_run as p
+from touch_lab.robustness.bear_levels import feed_levels
+from touch_sim.harness import Harness, node_class
 
 from .cases_input import input_cases
 from .cases_stray import stray_cases
@@ -107,7 +116,6 @@ def run_cli(area: str, case: str, argv: list[str], timeout_s: float = 120.0) -> 
 # ---------------------------------------------------------------------- the cases
 def _driver(sensor: str, parameters: dict) -> Callable[[], Any]:
     def start() -> Any:
-        from touch_sim.harness import Harness, node_class
         with Harness() as harness:
             node = harness.add_node(node_class(f'{sensor}_driver'), namespace=sensor, parameters=parameters)
             return f'started, port {"open" if node.driver.is_open else "absent: reconnect loop"}'
@@ -147,7 +155,6 @@ def _panels_file(text: str) -> Callable[[], Any]:
 
 def _bear_model(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_lab.bear.subtype_training import SubtypeClassifier
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'model.npz'
             rng = np.random.default_rng(0)
@@ -171,7 +178,6 @@ def _bear_model(damage: str) -> Callable[[], Any]:
 
 def _codebook(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_gestures.skin.codebook import load_codebook
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'codebook.npz'
             np.savez(path, format=np.array('x'), data=np.arange(1000))
@@ -184,7 +190,6 @@ def _codebook(damage: str) -> Callable[[], Any]:
 
 def _patch_model(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_gestures.patch.model_io import load_model
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'model.npz'
             path.write_bytes(b'' if damage == 'empty' else b'PK\x03\x04' + os.urandom(200))
@@ -195,7 +200,6 @@ def _patch_model(damage: str) -> Callable[[], Any]:
 
 def _bear_level(level: float) -> Callable[[], Any]:
     def feed() -> Any:
-        from touch_lab.robustness.bear_levels import feed_levels
         skipped, events = feed_levels(level)
         return f'{skipped} frames skipped as out of range, {events} events' if events == 0 and skipped else False
     return feed
@@ -204,8 +208,6 @@ def _bear_level(level: float) -> Callable[[], Any]:
 def _pty(kind: str) -> Callable[[], Any]:
     """A bear driver on a real pty fed one kind of faulty stream; the check is what its diagnostics say."""
     def run() -> Any:
-        from touch_driver.bear.protocol import encode_scan
-        from touch_lab.robustness import pty_run as p
         good = [encode_scan(i, p.RAW) for i in range(40)]
         node_class = p.FailingBearDriver if kind == 'handler raises' else p.BearDriverNode
         wire = {
@@ -232,8 +234,6 @@ def _pty(kind: str) -> Callable[[], Any]:
 def _skin_pty(kind: str) -> Callable[[], Any]:
     """A skin driver on a real pty fed frames that must each be data once; the check is its accounting."""
     def run() -> Any:
-        from touch_driver.skin.node import SkinDriverNode
-        from touch_lab.robustness import pty_run as p
         rate = SkinDriverNode.frame_rate_hz
         if kind == 'one frame replayed 733 times':
             writes, expected, lost = p.paced(p.skin_frames([4711]) * 733, rate), 1, 0
@@ -275,7 +275,6 @@ EVAL_EXPRESSIONS = ("str([[0]*99999]*99999)", "'%*d' % (2000000000, 1)", "max([[
 
 def _eval(expression: str) -> Callable[[], Any]:
     def run() -> Any:
-        from touch_graph.launch.safe_eval import safe_eval
         safe_eval(expression)
         return False                # evaluating any of these is wrong: each hangs, exhausts memory or escapes
     return run
