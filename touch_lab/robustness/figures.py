@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from mcap.reader import make_reader
+from mcap.records import Chunk
+from mcap.stream_reader import StreamReader
 from rosbags.rosbag2 import Reader
 
 from touch_driver.skin.node import SkinDriverNode
@@ -27,7 +29,6 @@ from touch_graph.bag.reindex import scan_mcap
 from touch_graph.messages import deserialize, get_message, serialize
 from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
 from touch_lab.bench.framing import FLOODS, run_flood
-from touch_lab.robustness.mcap_chunks import chunk_spans
 from touch_sim.virtual_port import forget_devices
 
 __all__ = ['bag_corruption', 'flood', 'recorder_kill', 'unplug', 'unplug_recovery']
@@ -154,7 +155,7 @@ def bag_corruption(places: int = 8) -> dict[str, Any]:
             rec.flush()
         rec.close()
         mcap = clean / 'clean.mcap'
-        spans = chunk_spans(mcap)
+        spans = _chunk_spans(mcap)
         original = mcap.read_bytes()
         for k in range(places):
             offset, length = spans[k % len(spans)]
@@ -178,3 +179,13 @@ def bag_corruption(places: int = 8) -> dict[str, Any]:
                 except Exception:
                     seen[key] += 1
     return {'corruptions': places, 'detected': seen}
+
+
+def _chunk_spans(path: Path) -> list[tuple[int, int]]:
+    """``(offset, length)`` of the records inside every chunk of an MCAP file, in file order."""
+    out = []
+    with path.open('rb') as f:
+        for record in StreamReader(f, emit_chunks=True).records:
+            if isinstance(record, Chunk):
+                out.append((f.tell() - len(record.data), len(record.data)))
+    return out
