@@ -33,7 +33,7 @@ from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
 
 __all__ = ['GOAL_US', 'bench_frame', 'bench_node']
 
-#: Goal of issue 5: features and posterior within 50 us per frame.
+#: The goal: features and posterior within 50 us per frame.
 GOAL_US = 50.0
 
 

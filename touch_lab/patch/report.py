@@ -22,7 +22,6 @@ from pathlib import Path
 
 from touch_graph.cli.options import add_output, positive_int, seed
 from touch_graph.files import write_text
-from touch_lab.figures.patch import patch_figures
 from touch_lab.patch.bench import bench_frame
 from touch_lab.patch.cli import _matrix
 from touch_lab.patch.datasets import render_session
@@ -71,6 +70,7 @@ def write_report(path: str | Path = 'docs/patch-evaluation.md', people: int = 8,
     bench = bench_frame(repeats=5)
     frames = sum(s.n_frames for s in sessions)
     say('figures')
+    from touch_lab.figures.patch import patch_figures  # matplotlib: loaded only to write the report
 
     figures = patch_figures(Path(path).parent, best, rows, sessions, say)
     lines = [

@@ -1,4 +1,4 @@
-"""Robustness cases of issue 25: YAML a user can write, numbers typed on a command line, a full disk.
+"""Robustness cases: YAML a user can write, numbers typed on a command line, a full disk.
 
 Each case is ``(area, case, callable or CLI argv)`` as in :mod:`touch_lab.robustness.cases`. A YAML
 case raises the stack's error (a clear error), and is ``wrong`` when that took a second or more; a

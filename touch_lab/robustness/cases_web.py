@@ -1,4 +1,4 @@
-"""Robustness cases of issue 25: the web view and the Foxglove server against a page of another site.
+"""Robustness cases: the web view and the Foxglove server against a page of another site.
 
 Each case sends one real request on loopback with the headers a hostile page (or a DNS-rebound
 name) makes the browser send. A refusal is ``handled`` (with the answer's status); a hostile request
