@@ -20,6 +20,8 @@ import sys
 from touch_graph.cli.options import clock_rate, port, seconds
 from touch_graph.errors import LaunchError
 from touch_graph.launch import LaunchRunner, evaluate_launch
+from touch_graph.launch.cli import parse_launch_arguments, use_checkout_files
+from touch_graph.launch.preflight import check_config_files
 from touch_graph.paths import share_file
 
 
@@ -49,7 +51,6 @@ def run(args: argparse.Namespace) -> int:
     rate = math.inf if args.fast else args.rate
     if not rate > 0:
         raise LaunchError(f'--rate must be > 0, got {args.rate}')
-    from touch_graph.launch.cli import parse_launch_arguments, use_checkout_files
     use_checkout_files('demo')     # tuning a checkout's config/ counts in the demo as in launch
     arguments = parse_launch_arguments(args.arguments)
     if args.view:
@@ -57,7 +58,6 @@ def run(args: argparse.Namespace) -> int:
     if args.foxglove:
         arguments.update(foxglove='true', foxglove_port=str(args.foxglove_port))
     plan = evaluate_launch(share_file('launch', 'demo.launch.yaml'), arguments)
-    from touch_graph.launch.preflight import check_config_files
     check_config_files(plan.nodes)  # gestures:=./mine.yaml: a missing or broken file stops here, named
     print(f'social_touch demo: {len(plan.nodes)} nodes, {args.duration:g} s of a simulated scene '
           f'({"as fast as possible" if args.fast else f"{rate:g}x real time"}); all sensor data is synthetic.',

@@ -25,6 +25,7 @@ import itertools
 import math
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
+from importlib.metadata import entry_points
 from typing import Any
 
 from touch_graph.messages import get_message
@@ -36,6 +37,9 @@ from touch_graph.runtime import (
     ReliabilityPolicy,
     SingleThreadedExecutor,
 )
+from touch_sim import scenes
+from touch_sim.skin import device as skin_device
+from touch_sim.virtual_port import device_state, forget_device
 
 __all__ = ['SCHEMES', 'DeviceRun', 'Harness', 'driver_counters', 'node_class', 'stamp_ns', 'wire_frames_before']
 
@@ -155,7 +159,6 @@ class Harness:
         if self.closed:
             return
         self.closed = True
-        from touch_sim.virtual_port import forget_device
         try:
             for node in reversed(self.nodes):
                 node.destroy_node()
@@ -180,11 +183,7 @@ class _Listener(Node):
 
 def _registry(sensor: str) -> Any:
     """The module holding ``register_stimulus``/``unregister_stimulus`` for ``sensor``'s URLs."""
-    if sensor == 'skin':
-        from touch_sim.skin import device
-        return device
-    from touch_sim import scenes
-    return scenes
+    return skin_device if sensor == 'skin' else scenes
 
 
 class DeviceRun:
@@ -233,7 +232,6 @@ class DeviceRun:
         Raises:
             ValueError: the driver cannot open its virtual device (a bad option).
         """
-        from touch_sim.virtual_port import device_state
         with Harness(log_level=self.log_level) as harness:
             url = harness.device(self.sensor, self.stimulus, seed=self.seed, options=self.url_options)
             driver = harness.add_node(node_class(f'{self.sensor}_driver'), namespace=self.sensor,
@@ -274,7 +272,6 @@ class DeviceRun:
 def node_class(executable: str) -> type:
     """The node class installed as ``executable`` (``bear_driver``, ``haptic_commands``, ...): the
     ``social_touch.nodes`` entry points, the names launch files use."""
-    from importlib.metadata import entry_points
     found = {ep.name: ep for ep in entry_points(group='social_touch.nodes')}
     if executable not in found:
         raise ValueError(f'no node {executable!r} is installed; installed: {", ".join(sorted(found)) or "none"}')

@@ -19,7 +19,7 @@ A class with rclpy's plain constructor (``__init__(self)`` calling ``super().__i
 no keyword arguments) is called with none and receives the same arguments through
 :func:`touch_graph.runtime.node.node_arguments`, as an rclpy node receives them from ``ros2 launch``.
 
-so the node parses its own parameter files and raises its own parameter errors; those come
+Each node parses its own parameter files and raises its own parameter errors; those come
 back as a :class:`~touch_graph.errors.LaunchError` naming the launch file and the node's
 line. Every class is resolved before any node starts, and a node that fails to start stops
 the ones already started. A callback that raises ends its node, as in rclpy (the exception

@@ -19,6 +19,10 @@ import sys
 import time
 from pathlib import Path
 
+from touch_graph.daemon import client
+from touch_graph.daemon.address import daemon_address
+from touch_lab.robustness.cases_stray import hold_test_domain
+
 __all__ = ['bench_cli', 'bench_graph_queries', 'help_command', 'social_touch_command']
 
 
@@ -47,9 +51,6 @@ def _median_s(argv: list[str], repeats: int, env: dict[str, str] | None = None, 
 
 def bench_graph_queries(repeats: int, settle_s: float = 3.0) -> dict:
     """Medians (s) of the graph queries on an empty domain of their own, with and without the graph daemon."""
-    from touch_graph.daemon import client
-    from touch_graph.daemon.address import daemon_address
-    from touch_lab.robustness.cases_stray import hold_test_domain
     command = social_touch_command()
     names = ('topic list, first call', 'topic list, second call', 'topic list, daemon settled',
              'node list, daemon settled', 'topic list --no-daemon')

@@ -27,6 +27,9 @@ from typing import Any
 from touch_graph.cli.options import positive_int
 from touch_graph.errors import ConfigError
 from touch_graph.files import write_text
+from touch_lab.bench.codec import bench_codec
+from touch_lab.bench.replay import record_scene
+from touch_lab.bench.stack import run_stack
 
 __all__ = ['SECTIONS', 'add_arguments', 'render', 'run']
 
@@ -60,8 +63,6 @@ def _stack_percent(duration_s: float) -> float:
 
 def _message_rates(duration_s: float) -> dict[str, float]:
     """Messages per second of each kind at the sensors' real rates (the demo's people scenes, synthetic)."""
-    from touch_lab.bench.replay import record_scene
-    from touch_lab.bench.stack import run_stack
     recordings = {sensor: record_scene(sensor, duration_s) for sensor in ('bear', 'patch', 'skin')}
     outputs = run_stack(list(recordings.values()))['outputs']
     rates = {f'{sensor}_frame': 1.0 / rec.period for sensor, rec in recordings.items()}
@@ -82,7 +83,6 @@ def measure_cdr(repeats: int) -> dict[str, Any]:
     The compiled twin's figures, measured while it was built (``compiled_measured``), are kept from the
     figures file: the command that took them is that commit's version of this one.
     """
-    from touch_lab.bench.codec import bench_codec
     load = os.getloadavg()[0]  # before the measuring adds its own
     codec = bench_codec(repeats=repeats)
     duration_s = 20.0

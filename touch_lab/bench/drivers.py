@@ -9,7 +9,7 @@ median over repeats. Beside it, the same node's own decoder and ``handle_frame``
 message, publication) are timed on the same bytes, so the three parts add up to the whole
 (``io_us``: reads, timers and the executor).
 
-The goal of issue 3 holds for the node: at most 1 % of the frame period on one core.
+The goal the node is held to: at most 1 % of the frame period on one core.
 """
 
 from __future__ import annotations

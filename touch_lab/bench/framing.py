@@ -5,8 +5,7 @@ A flood is a stream of fake headers with real frames scattered between them, fed
 decoder, so the most headers look plausible). Three floods, from the crudest to the worst a
 stream can hold (all synthetic, seeded):
 
-- ``v1_headers``: sync + a plausible id and length in the version-1 layout (issue 12's flood,
-  where CRC-16 accepted 2 bogus frames in 4 MB);
+- ``v1_headers``: sync + a plausible id and length in the version-1 layout (CRC-16);
 - ``v2_headers``: sync + version 2 + a plausible id and length + random sequence and header check
   (a firmware's or a cable's garbage that happens to start like a header);
 - ``checked_headers``: whole fake frames whose header passes its check, with random payload and

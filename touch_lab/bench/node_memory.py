@@ -40,9 +40,9 @@ ROOT = Path(__file__).resolve().parents[2]
 REPORT = ROOT / 'docs' / 'node-memory.md'
 #: The shipped single-sensor scenes, launched with their default arguments.
 SCENES = ('launch/skin.launch.yaml', 'launch/patch.launch.yaml', 'launch/bear.launch.yaml')
-#: Seconds after the launch at which the processes' RSS is read (issue 27's "after 10 s").
+#: Seconds after the launch at which the processes' RSS is read.
 SETTLE_S = 10.0
-#: The goal each node process is held to (issue 27), MB.
+#: The goal each node process is held to, MB.
 GOAL_MB = 100.0
 #: Packages a node process should load only where it needs them (reported per node module).
 HEAVY = ('sklearn', 'scipy', 'matplotlib', 'touch_lab', 'touch_sim', 'mcap', 'rosbags.rosbag2', 'cyclonedds',

@@ -27,6 +27,7 @@ from typing import Any
 import serial
 
 from touch_graph.paths import share_file
+from touch_sim.virtual_port import forget_device
 
 __all__ = ['SCENES', 'PtyPort', 'Recording', 'Replay', 'record', 'record_scene']
 
@@ -62,7 +63,6 @@ class Recording:
 
 def record(sensor: str, url: str, duration_s: float) -> Recording:
     """The bytes the virtual device behind ``url`` sends over ``duration_s`` seconds (synthetic)."""
-    import touch_sim  # noqa: F401  (the lab uses the simulation: its URL handlers)
     now = [0.0]
     port: Any = serial.serial_for_url(url, do_not_open=True)
     port.attach_clock(lambda: now[0])
@@ -80,7 +80,6 @@ def record(sensor: str, url: str, duration_s: float) -> Recording:
 
 def record_scene(sensor: str, duration_s: float = 60.0, seed: int = 1) -> Recording:
     """:func:`record` of the sensor's people scene (the demo's), a fresh device of its own."""
-    from touch_sim.virtual_port import forget_device
     scheme, scene = SCENES[sensor]
     name = f'bench-record-{sensor}-{os.getpid()}'
     try:

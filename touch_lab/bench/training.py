@@ -14,6 +14,8 @@ held-out person and the suggested gesture settings checked leave-one-person-out.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import statistics
 import sys
@@ -21,9 +23,20 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
+from touch_gestures.bear.symbolic import GestureLibrary
+from touch_gestures.patch.features import window_features
+from touch_lab.bear.sessions import fit_model, load_runs
+from touch_lab.cli.main import main as cli_main
+from touch_lab.collect.coverage import read_checked
 from touch_lab.collect.protocol import DEFAULT_GESTURES, Protocol
 from touch_lab.collect.session_bag import read_session
 from touch_lab.collect.simulate import simulate_session
+from touch_lab.patch.session_bags import trial_sessions
+from touch_lab.patch.training import PatchGestureClassifier
+from touch_lab.skin.sessions import fit_codebook, load_trials
+from touch_sim.bear.people import symbolic_label
 
 __all__ = ['bench_training']
 
@@ -35,12 +48,6 @@ def _say(msg: str) -> None:
 
 
 def _train_patch(bags: list[str]) -> None:
-    import numpy as np
-
-    from touch_gestures.patch.features import window_features
-    from touch_lab.collect.coverage import read_checked
-    from touch_lab.patch.session_bags import trial_sessions
-    from touch_lab.patch.training import PatchGestureClassifier
     sessions = trial_sessions(read_checked(bags, 'patch', lambda _m: None))
     window = round(3.0 * sessions[0].rate_hz)
     X = np.concatenate([window_features(s.activations, window) for s in sessions])
@@ -49,20 +56,14 @@ def _train_patch(bags: list[str]) -> None:
 
 
 def _train_bear(bags: list[str]) -> None:
-    from touch_lab.bear.sessions import fit_model, load_runs
     fit_model(load_runs(bags, 3.4, 20, lambda _m: None), drop_thin=lambda _m: None)
 
 
 def _train_skin(bags: list[str]) -> None:
-    from touch_lab.skin.sessions import fit_codebook, load_trials
     fit_codebook(load_trials(bags, lambda _m: None)[0], 'trace')
 
 
 def _train_bear_symbolic(bags: list[str]) -> None:
-    import contextlib
-    import io
-
-    from touch_lab.cli.main import main as cli_main
     with tempfile.TemporaryDirectory(prefix='bench-training-model-') as out, \
             contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         code = cli_main(['train', 'bear', '--bags', *bags, '--output', str(Path(out) / 'bear.npz')])
@@ -77,8 +78,6 @@ def _protocol_gestures(sensor: str) -> tuple[str, ...]:
     subtypes = tuple(g for g in DEFAULT_GESTURES['bear'] if g != 'tap')
     if sensor == 'bear':
         return subtypes
-    from touch_gestures.bear.symbolic import GestureLibrary
-    from touch_sim.bear.people import symbolic_label
     return subtypes + tuple(symbolic_label(g.name) for g in GestureLibrary.default().detectable)
 
 

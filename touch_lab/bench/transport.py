@@ -41,11 +41,24 @@ import subprocess
 import sys
 import threading
 import time
+from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
 import numpy as np
+from cyclonedds._clayer import ddspy_take, ddspy_write
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
 
 from touch_graph import messages
+from touch_graph.dds.cdds import WaitSet, delete_entity
+from touch_graph.dds.config import read_discovery
+from touch_graph.dds.domain import acquire_domain, release_domain
+from touch_graph.dds.idl import idl_struct
+from touch_graph.dds.qos import dds_qos
+from touch_graph.runtime import Context, ExternalShutdownException, Node, SingleThreadedExecutor
 from touch_lab.bench.load import MachineLoad
 from touch_lab.bench.timing import gc_paused
 from touch_lab.bench.transport_echo import BENCH_QOS, KINDS
@@ -107,7 +120,6 @@ class _OursPath:
     """The runtime: a node publishing pings and counting pongs, its executor in a thread."""
 
     def __init__(self, kind: str, cdr: bool) -> None:
-        from touch_graph.runtime import Context, Node, SingleThreadedExecutor
         self.context = Context('wall', network=True)
         self.context.init()
         node = Node(f'bench_{kind}{"_cdr" if cdr else ""}', context=self.context)
@@ -130,7 +142,6 @@ class _OursPath:
         self.arrived.set()
 
     def _spin(self) -> None:
-        from touch_graph.runtime import ExternalShutdownException
         try:
             while self.context.ok():
                 self.executor.spin_once(0.05)
@@ -156,14 +167,6 @@ class _RawPath:
     """
 
     def __init__(self, participant: Any, kind: str, codec: bool = False) -> None:
-        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
-        from cyclonedds.pub import DataWriter
-        from cyclonedds.sub import DataReader
-        from cyclonedds.topic import Topic
-
-        from touch_graph.dds.cdds import WaitSet
-        from touch_graph.dds.idl import idl_struct
-        from touch_graph.dds.qos import dds_qos
         cls = idl_struct(KINDS[kind])
         qos = dds_qos(BENCH_QOS)
         prefix = 'bench_codec' if codec else 'bench_raw'
@@ -184,7 +187,6 @@ class _RawPath:
         self.thread.start()
 
     def _receive(self) -> None:
-        from cyclonedds._clayer import ddspy_take
         while not self.stopping:
             if self.waitset.wait(50_000_000):
                 samples = ddspy_take(self.reader._ref, self.mask, 256)
@@ -201,7 +203,6 @@ class _RawPath:
         return len(self.writer.get_matched_subscriptions()) > 0
 
     def send(self) -> None:
-        from cyclonedds._clayer import ddspy_write
         ddspy_write(self.writer._ref, self.payload if self.typename is None else messages.serialize(self.message))
 
     def close(self) -> None:
@@ -263,11 +264,6 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
     ``repeats`` rounds of ``pings`` pings per path; ``kinds`` (default all of
     :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a short run (tests).
     """
-    from cyclonedds.domain import DomainParticipant
-
-    from touch_graph.dds.cdds import delete_entity
-    from touch_graph.dds.config import read_discovery
-    from touch_graph.dds.domain import acquire_domain, release_domain
     domain = int(os.environ.get('SOCIAL_TOUCH_BENCH_DOMAIN', DEFAULT_DOMAIN))
     saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
     os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
@@ -302,7 +298,6 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
 
 
 def _versions() -> dict[str, str]:
-    from importlib.metadata import PackageNotFoundError, version
     out = {}
     for package in ('cyclonedds', 'numpy', 'rosbags'):
         try:

@@ -18,8 +18,20 @@ from __future__ import annotations
 import sys
 import threading
 
+from cyclonedds._clayer import ddspy_take, ddspy_write
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+
 from touch_graph import messages
-from touch_graph.runtime import QoSProfile
+from touch_graph.dds.cdds import WaitSet, delete_entity
+from touch_graph.dds.config import domain_id, read_discovery
+from touch_graph.dds.domain import acquire_domain, release_domain
+from touch_graph.dds.idl import idl_struct
+from touch_graph.dds.qos import dds_qos
+from touch_graph.runtime import Context, Node, QoSProfile, SingleThreadedExecutor
 from touch_lab.bench.timing import gc_paused
 
 #: The kinds of message the bench measures -> their type.
@@ -34,7 +46,6 @@ BENCH_QOS = QoSProfile(depth=1000)
 
 
 def _ours(kinds: list[str], stop: threading.Event) -> None:
-    from touch_graph.runtime import Context, Node, SingleThreadedExecutor
     context = Context('wall', network=True)
     context.init()
     node = Node('bench_echo', context=context)
@@ -53,18 +64,6 @@ def _ours(kinds: list[str], stop: threading.Event) -> None:
 
 
 def _raw(kinds: list[str], stop: threading.Event) -> None:
-    from cyclonedds._clayer import ddspy_take, ddspy_write
-    from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
-    from cyclonedds.domain import DomainParticipant
-    from cyclonedds.pub import DataWriter
-    from cyclonedds.sub import DataReader
-    from cyclonedds.topic import Topic
-
-    from touch_graph.dds.cdds import WaitSet, delete_entity
-    from touch_graph.dds.config import domain_id, read_discovery
-    from touch_graph.dds.domain import acquire_domain, release_domain
-    from touch_graph.dds.idl import idl_struct
-    from touch_graph.dds.qos import dds_qos
     domain = domain_id()
     acquire_domain(domain, read_discovery())
     participant = DomainParticipant(domain)

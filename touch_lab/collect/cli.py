@@ -25,13 +25,18 @@ driver node, in simulated time, writing ``OUT/<sensor>_pNN`` for each.
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.cli.options import add_output, non_negative_seconds, positive_int, rate_hz, seed
+from touch_sim.bear.people import symbolic_label
 
+from .live import LiveSessionError, live_session
 from .protocol import DEFAULT_GESTURES, SENSORS, Protocol
+from .simulate import person_name, simulate_session
 
 __all__ = ['add_arguments', 'run']
 
@@ -95,7 +100,6 @@ def run(args: argparse.Namespace) -> int:
         raise SystemExit(f'collect {args.sensor}: {err}') from None
     if args.simulate is None:
         return _live(args, protocol, say)
-    from .simulate import person_name, simulate_session
     out = Path(args.output)
     bags = [out / f'{args.sensor}_{person_name(i)}' for i in range(args.simulate)]
     taken = [b for b in bags if b.exists()]
@@ -116,8 +120,6 @@ def _symbolic(sensor: str, text: str) -> tuple[str, ...]:
     """The bear's symbolic gestures to prompt, as session labels ``symbolic/NAME`` (ValueError otherwise)."""
     if sensor != 'bear':
         raise ValueError('--symbolic is for the bear (its symbolic gestures of config/bear_gestures.yaml)')
-    from touch_gestures.bear.symbolic import GestureLibrary
-    from touch_sim.bear.people import symbolic_label
     known = [g.name for g in GestureLibrary.default().detectable]
     names = known if text == 'all' else list(_names(text))
     unknown = [n for n in names if n not in known]
@@ -129,9 +131,6 @@ def _symbolic(sensor: str, text: str) -> tuple[str, ...]:
 
 def _live(args: argparse.Namespace, protocol: Protocol, say: Callable[[str], None]) -> int:
     """A live session of ``args.person`` on the running graph (:mod:`.live`)."""
-    import shutil
-
-    from .live import LiveSessionError, live_session
     person = (args.person or '').strip()
     if not person:
         raise SystemExit(f'collect {args.sensor}: name the person performing with --person NAME '

@@ -33,6 +33,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from touch_graph import messages
+from touch_graph.dds.qos import adapted_profile
+from touch_graph.dds.tool import GraphTool
+from touch_graph.messages import get_message
+from touch_graph.node_main import StopSignals
+from touch_graph.runtime.qos import DurabilityPolicy, QoSProfile
+
 from .protocol import Protocol, Trial
 from .session_bag import FRAME_TOPIC, SENSOR_TOPICS, SessionWriter
 
@@ -106,8 +113,6 @@ class _Recorder:
         self.stopped = False
 
     def update(self) -> None:
-        from touch_graph.dds.qos import adapted_profile
-        from touch_graph.messages import get_message
         for topic, info in self.tool.graph().published_topics().items():
             if topic in self.subscriptions or topic not in SENSOR_TOPICS[self.sensor]:
                 continue
@@ -117,7 +122,6 @@ class _Recorder:
                 get_message(type_name), topic, self._writer(topic), adapted_profile(offered, depth=1000), raw=True)
 
     def _writer(self, topic: str) -> Callable[[bytes, dict], None]:
-        from touch_graph import messages
         is_frame = topic == FRAME_TOPIC[self.sensor]
         type_name = SENSOR_TOPICS[self.sensor][topic]
 
@@ -155,11 +159,6 @@ def live_session(sensor: str, protocol: Protocol, person: str, out: str | Path, 
     Raises:
         LiveSessionError: no publisher of the sensor's frames, or no frame, within ``wait_s``.
     """
-    from touch_graph.dds.tool import GraphTool
-    from touch_graph.messages import get_message
-    from touch_graph.node_main import StopSignals
-    from touch_graph.runtime.qos import DurabilityPolicy, QoSProfile
-
     frame_topic = FRAME_TOPIC[sensor]
     with GraphTool(f'collect_{sensor}', discovery_timeout_s=min(wait_s, 2.0)) as tool:
         if not tool.wait_until(lambda v: frame_topic in v.published_topics(), wait_s):

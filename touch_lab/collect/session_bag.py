@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from rosbags.rosbag2 import Reader
 
 from touch_graph import messages
 from touch_graph.bag import BagRecorder
@@ -161,7 +162,6 @@ class SessionRecording:
 
 
 def _open(path: Path):
-    from rosbags.rosbag2 import Reader
     if not path.exists():
         raise SessionError(f'session bag {path} not found')
     try:

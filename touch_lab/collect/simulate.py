@@ -14,7 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from touch_sim.bear.people import trial_scene
+from touch_sim.bear.render import url_options
 from touch_sim.harness import DeviceRun, stamp_ns, wire_frames_before
+from touch_sim.patch import people as patch_people
+from touch_sim.skin.people import traced_scene
+from touch_sim.skin.synthetic import synthetic_traces
 
 from .protocol import Protocol, Trial
 from .session_bag import SENSOR_TOPICS, SessionWriter
@@ -45,7 +50,6 @@ class SimulatedSession:
 
 
 def _bear(index: int, n_people: int, trials: list[Trial], protocol: Protocol, seed: int) -> SimulatedSession:
-    from touch_sim.bear.people import trial_scene
     scene = trial_scene(index, [(t.gesture, protocol.scale(t.variant)) for t in trials], seed=seed,
                         pause_s=(protocol.pause_s / 2, protocol.pause_s))
     return SimulatedSession(scene, [(t, lab.start_s, lab.end_s) for t, lab in zip(trials, scene.labels, strict=True)],
@@ -53,19 +57,16 @@ def _bear(index: int, n_people: int, trials: list[Trial], protocol: Protocol, se
 
 
 def _patch(index: int, n_people: int, trials: list[Trial], protocol: Protocol, seed: int) -> SimulatedSession:
-    from touch_sim.patch.people import make_people, trial_scene
-    person = make_people(n_people, seed)[index]
+    person = patch_people.make_people(n_people, seed)[index]
     # The paper's recordings pause at least 4 s between gestures (sympartner2018 6.3).
     pause = max(4.0, protocol.pause_s)
-    scene = trial_scene(person, [(t.gesture, protocol.scale(t.variant)) for t in trials],
+    scene = patch_people.trial_scene(person, [(t.gesture, protocol.scale(t.variant)) for t in trials],
                         seed=seed * 1009 + index, pause_s=(pause, pause + 2.0))
     return SimulatedSession(scene, [(t, e.onset_s, e.offset_s) for t, e in zip(trials, scene.events, strict=True)],
                             scene.duration_s)
 
 
 def _skin(index: int, n_people: int, trials: list[Trial], protocol: Protocol, seed: int) -> SimulatedSession:
-    from touch_sim.skin.people import traced_scene
-    from touch_sim.skin.synthetic import synthetic_traces
     samples = {}
     for variant in protocol.variants:   # the variant scales the tracing speed (slow / normal / fast)
         for s in synthetic_traces(list(protocol.gestures), performers=n_people, repetitions=protocol.repetitions,
@@ -109,7 +110,6 @@ def simulate_session(sensor: str, protocol: Protocol, index: int, n_people: int,
     options = dict(device_options or {})
     driver_parameters: dict[str, Any] = {}
     if sensor == 'bear':
-        from touch_sim.bear.render import url_options
         rate = float(options.pop('rate', 3.4))
         options = {**url_options(rate, {'scan': 'sequential' if rate <= 3.57 else 'parallel'}), **options}
         driver_parameters['expected_rate_hz'] = rate

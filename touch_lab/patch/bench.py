@@ -24,13 +24,16 @@ import numpy as np
 
 from touch_gestures.patch.classifier import EventDetector
 from touch_gestures.patch.features import WindowFeatures, window_features
+from touch_gestures.patch.node import PatchGesturesNode
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter
 from touch_lab.patch.training import PatchGestureClassifier
 from touch_sim.patch.people import demo_scene, simulate_people
 from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
 
 __all__ = ['GOAL_US', 'bench_frame', 'bench_node']
 
-#: Goal of issue 5: features and posterior within 50 us per frame.
+#: The goal: features and posterior within 50 us per frame.
 GOAL_US = 50.0
 
 
@@ -139,9 +142,6 @@ def bench_node(repeats: int = 7, frames: int = 2000, seed: int = 0, model: str |
         dict with ``us_node`` (callback per frame), ``us_recogniser`` (features + direct posterior +
         event rule on the same frames), ``node_overhead`` (ratio), ``events``, ``frames`` and ``synthetic``.
     """
-    from touch_gestures.patch.node import PatchGesturesNode
-    from touch_graph.messages import get_message
-    from touch_graph.runtime import Context, Node, Parameter
     patch_frame, header_type = get_message('social_touch_msgs/msg/PatchFrame'), get_message('std_msgs/msg/Header')
     time_type = get_message('builtin_interfaces/msg/Time')
     acts = render_scene(demo_scene(seed=seed + 1, n_events=max(4, frames // 160)), seed=seed + 1).activations

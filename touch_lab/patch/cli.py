@@ -16,13 +16,18 @@ one JSON object). Progress goes to stderr.
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import math
+import shlex
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from touch_gestures.model_card import attach_card, make_card
+from touch_gestures.patch.features import window_features
+from touch_gestures.patch.model_io import PatchModel, load_model, save_model
 from touch_graph.cli.options import (
     non_negative_seconds,
     positive_float,
@@ -34,8 +39,12 @@ from touch_graph.cli.options import (
 )
 from touch_lab.cards import session_data
 from touch_lab.cli.targets import Target
+from touch_lab.collect.coverage import read_checked
 from touch_lab.patch.datasets import Session, parse_grid, read_bag_manifest, read_cost_csv, render_session
-from touch_lab.patch.session_bags import common_rate
+from touch_lab.patch.evaluate import leave_one_subject_out, score_model
+from touch_lab.patch.session_bags import common_rate, trial_sessions
+from touch_lab.patch.training import PatchGestureClassifier
+from touch_sim.patch import people as patch_people
 
 __all__ = ['EVAL', 'TRAIN', 'add_eval_arguments', 'add_train_arguments', 'load_sessions', 'run_eval', 'run_train']
 
@@ -122,14 +131,11 @@ def load_sessions(args: argparse.Namespace, progress=None) -> list[Session]:
         say(f'reading bags listed in {args.bags[0]}')
         return read_bag_manifest(args.bags[0], grid=args.grid or (16, 16))
     if args.bags:
-        from touch_lab.collect.coverage import read_checked
-        from touch_lab.patch.session_bags import trial_sessions
         return trial_sessions(read_checked(args.bags, 'patch', say), say)
-    from touch_sim.patch.people import simulate_people
     if args.simulate < 2:
         raise SystemExit('--simulate needs at least 2 people (leave-one-subject-out)')
     out = []
-    data = simulate_people(args.simulate, args.events, seed=args.seed)
+    data = patch_people.simulate_people(args.simulate, args.events, seed=args.seed)
     for i, (person, gesture, scene) in enumerate(data):
         say(f'simulating {person.name} {gesture} ({i + 1}/{len(data)}, SYNTHETIC)')
         out.append(render_session(scene, person.name, gesture, seed=args.seed * 7919 + i))
@@ -157,10 +163,6 @@ def add_train_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_train(args: argparse.Namespace) -> int:
     """Fit on every frame of every session and write the model file; returns the exit code."""
-    from touch_gestures.patch.features import window_features
-    from touch_gestures.patch.model_io import PatchModel, save_model
-    from touch_lab.patch.training import PatchGestureClassifier
-
     say = _progress(args)
     sessions = load_sessions(args, say)
     try:
@@ -195,7 +197,6 @@ def run_train(args: argparse.Namespace) -> int:
                         source=model.metadata['data'] if not args.bags else '')
     evaluation = None
     if args.evaluate:
-        from touch_lab.patch.evaluate import leave_one_subject_out
         result = leave_one_subject_out(sessions, n_components=[args.components], thresholds=[args.threshold],
                                        dwells_s=[args.dwell_s], window_s=args.window_s, release=args.release,
                                        covariance_type=args.covariance, reg_covar=args.reg_covar,
@@ -214,9 +215,6 @@ def run_train(args: argparse.Namespace) -> int:
 
 def _training_metadata(args: argparse.Namespace, sessions: list[Session], n_frames: int) -> dict:
     """What a model file records about how it was made (model_io's optional ``metadata``)."""
-    import datetime
-    import shlex
-    from pathlib import Path
     if args.csv or args.bags:
         data = f"{'CSV' if args.csv else 'bags'} {args.csv or ' '.join(args.bags)}"
     else:
@@ -251,8 +249,6 @@ def add_eval_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_eval(args: argparse.Namespace) -> int:
     """Leave-one-subject-out evaluation with grid search; prints a report or JSON."""
-    from touch_lab.patch.evaluate import leave_one_subject_out
-
     say = _progress(args)
     sessions = load_sessions(args, say)
     if args.model:
@@ -276,8 +272,6 @@ def run_eval(args: argparse.Namespace) -> int:
 
 def _eval_model(args: argparse.Namespace, sessions) -> int:
     """``eval patch --model FILE``: :func:`~touch_lab.patch.evaluate.score_model`."""
-    from touch_gestures.patch.model_io import load_model
-    from touch_lab.patch.evaluate import score_model
     try:
         report = score_model(sessions, load_model(args.model))
     except ValueError as err:   # ModelFileError is one too

@@ -35,9 +35,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from rosbags.rosbag2 import Reader
 
-from touch_graph.errors import ConfigError
+from touch_graph.errors import ConfigError, MessageError
+from touch_graph.messages import deserialize
 from touch_graph.yamlconf import check_keys, load_yaml, typed
+from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
 
 __all__ = ['DatasetError', 'Session', 'activation_from_raw', 'parse_grid', 'read_bag_manifest', 'read_cost_csv',
            'render_session']
@@ -248,10 +251,6 @@ def read_bag_manifest(path: str | Path, grid: tuple[int, int] = (16, 16)) -> lis
 
 
 def _read_bag(bag: Path, topic: str, grid: tuple[int, int], item) -> tuple[np.ndarray, float, int]:
-    from rosbags.rosbag2 import Reader
-
-    from touch_graph.errors import MessageError
-    from touch_graph.messages import deserialize
     if not bag.exists():
         raise item.error(f'bag {bag} not found', 'bag')
     try:
@@ -294,7 +293,6 @@ def render_session(scene: Any, subject: str, gesture: str, seed: int = 0) -> Ses
     """A labelled :class:`Session` (SYNTHETIC) of a simulated ``scene`` as the robot's graph renders it
     (virtual patch -> ``patch_driver``, :func:`touch_sim.patch.render.render_scene`), with its
     ground-truth events."""
-    from touch_sim.patch.render import FRAME_RATE_HZ, render_scene
     out = render_scene(scene, seed=seed)
     events = [(e.onset_s, e.offset_s) for e in scene.events]
     return Session(subject=subject, gesture=gesture, activations=out.activations, rate_hz=FRAME_RATE_HZ,

@@ -30,7 +30,19 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.bear.body_map import BodyMap
+from touch_driver.bear.protocol import encode_scan
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.bear.node import BearGesturesNode
+from touch_gestures.patch.model_io import load_model
+from touch_gestures.skin.codebook import load_codebook
 from touch_graph.errors import SocialTouchError
+from touch_graph.launch.safe_eval import safe_eval
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.robustness import pty_run as p
+from touch_sim.harness import Harness, node_class
 
 from .cases_input import input_cases
 from .cases_stray import stray_cases
@@ -107,7 +119,6 @@ def run_cli(area: str, case: str, argv: list[str], timeout_s: float = 120.0) -> 
 # ---------------------------------------------------------------------- the cases
 def _driver(sensor: str, parameters: dict) -> Callable[[], Any]:
     def start() -> Any:
-        from touch_sim.harness import Harness, node_class
         with Harness() as harness:
             node = harness.add_node(node_class(f'{sensor}_driver'), namespace=sensor, parameters=parameters)
             return f'started, port {"open" if node.driver.is_open else "absent: reconnect loop"}'
@@ -147,7 +158,6 @@ def _panels_file(text: str) -> Callable[[], Any]:
 
 def _bear_model(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_lab.bear.subtype_training import SubtypeClassifier
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'model.npz'
             rng = np.random.default_rng(0)
@@ -171,7 +181,6 @@ def _bear_model(damage: str) -> Callable[[], Any]:
 
 def _codebook(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_gestures.skin.codebook import load_codebook
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'codebook.npz'
             np.savez(path, format=np.array('x'), data=np.arange(1000))
@@ -184,7 +193,6 @@ def _codebook(damage: str) -> Callable[[], Any]:
 
 def _patch_model(damage: str) -> Callable[[], Any]:
     def load() -> Any:
-        from touch_gestures.patch.model_io import load_model
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / 'model.npz'
             path.write_bytes(b'' if damage == 'empty' else b'PK\x03\x04' + os.urandom(200))
@@ -193,10 +201,50 @@ def _patch_model(damage: str) -> Callable[[], Any]:
     return load
 
 
+BEAR_RATE_HZ = 3.4
+BEAR_EPOCH_S = 1_700_000_000
+
+
+def _feed_levels(level: float, seconds: float = 2.0, channel: int = 5) -> tuple[int, int]:
+    """``level`` on ``channel`` for ``seconds`` of bear frames at 3.4 Hz, between two quiet frames.
+    Returns (frames the node skipped, /touch/subtype and /touch/symbolic messages it published)."""
+    BearFrame = get_message('BearFrame')
+    Header = get_message('std_msgs/msg/Header')
+    Time = get_message('builtin_interfaces/msg/Time')
+    fitted = BodyMap.default().fitted_mask().tolist()  # bool[64]: Python bools, as rclpy needs
+    ctx = Context('sim')
+    ctx.init()
+    try:
+        node = BearGesturesNode(context=ctx, namespace='bear',
+                                parameter_overrides=[Parameter('subtype_classifier', value='rule')])
+        feeder = Node('feeder', context=ctx)
+        pub = feeder.create_publisher(BearFrame, '/bear/frame', 100)
+        events: list = []
+        for topic, kind in (('subtype', 'TouchSubtype'), ('symbolic', 'SymbolicGesture')):
+            feeder.create_subscription(get_message(kind), f'/touch/{topic}', events.append, 1000)
+        executor = SingleThreadedExecutor(context=ctx)
+        executor.add_node(node)
+        executor.add_node(feeder)
+        n = int(seconds * BEAR_RATE_HZ) + 2
+        for i in range(n):
+            levels = np.zeros(64, np.float32)
+            if 0 < i < n - 1:
+                levels[channel] = level
+            ns = round(i / BEAR_RATE_HZ * 1e9)
+            header = Header(stamp=Time(sec=BEAR_EPOCH_S + ns // 10**9, nanosec=ns % 10**9), frame_id='bear_link')
+            pub.publish(BearFrame(header=header, sequence=i, level=levels, active=(levels >= 0.3).tolist(),
+                                  fitted=fitted, faults=np.zeros(64, np.uint8)))
+            executor.spin_for(0.0)
+        skipped = sum(node.skipped.values())
+        node.destroy_node()
+    finally:
+        ctx.shutdown()
+    return skipped, len(events)
+
+
 def _bear_level(level: float) -> Callable[[], Any]:
     def feed() -> Any:
-        from touch_lab.robustness.bear_levels import feed_levels
-        skipped, events = feed_levels(level)
+        skipped, events = _feed_levels(level)
         return f'{skipped} frames skipped as out of range, {events} events' if events == 0 and skipped else False
     return feed
 
@@ -204,8 +252,6 @@ def _bear_level(level: float) -> Callable[[], Any]:
 def _pty(kind: str) -> Callable[[], Any]:
     """A bear driver on a real pty fed one kind of faulty stream; the check is what its diagnostics say."""
     def run() -> Any:
-        from touch_driver.bear.protocol import encode_scan
-        from touch_lab.robustness import pty_run as p
         good = [encode_scan(i, p.RAW) for i in range(40)]
         node_class = p.FailingBearDriver if kind == 'handler raises' else p.BearDriverNode
         wire = {
@@ -232,8 +278,6 @@ def _pty(kind: str) -> Callable[[], Any]:
 def _skin_pty(kind: str) -> Callable[[], Any]:
     """A skin driver on a real pty fed frames that must each be data once; the check is its accounting."""
     def run() -> Any:
-        from touch_driver.skin.node import SkinDriverNode
-        from touch_lab.robustness import pty_run as p
         rate = SkinDriverNode.frame_rate_hz
         if kind == 'one frame replayed 733 times':
             writes, expected, lost = p.paced(p.skin_frames([4711]) * 733, rate), 1, 0
@@ -275,7 +319,6 @@ EVAL_EXPRESSIONS = ("str([[0]*99999]*99999)", "'%*d' % (2000000000, 1)", "max([[
 
 def _eval(expression: str) -> Callable[[], Any]:
     def run() -> Any:
-        from touch_graph.launch.safe_eval import safe_eval
         safe_eval(expression)
         return False                # evaluating any of these is wrong: each hangs, exhausts memory or escapes
     return run

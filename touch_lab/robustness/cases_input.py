@@ -1,4 +1,4 @@
-"""Robustness cases of issue 25: YAML a user can write, numbers typed on a command line, a full disk.
+"""Robustness cases: YAML a user can write, numbers typed on a command line, a full disk.
 
 Each case is ``(area, case, callable or CLI argv)`` as in :mod:`touch_lab.robustness.cases`. A YAML
 case raises the stack's error (a clear error), and is ``wrong`` when that took a second or more; a
@@ -14,11 +14,30 @@ import errno
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+
+from touch_driver.bear.body_map import BodyMap
+from touch_gestures.bear.subtype_model import SubtypeModel
+from touch_gestures.bear.symbolic import GestureLibrary
+from touch_gestures.skin.codebook import load_codebook, save_codebook
+from touch_gestures.skin.commands import load_command_map
+from touch_graph import messages
+from touch_graph.bag import BagRecorder
+from touch_graph.bag.player import bag_info
+from touch_graph.bag.reindex import reindex
+from touch_graph.cli.export_interfaces import export_interfaces
+from touch_graph.errors import BagError
+from touch_graph.files import write_text
+from touch_graph.launch.parser import parse_launch_file
+from touch_graph.paths import share_file
+from touch_graph.runtime.param_yaml import ParameterOverrides
 
 from .outcomes import DataLost
 
@@ -49,21 +68,15 @@ YAML_TEXTS = {
 def _loader(kind: str) -> Callable[[Path], Any]:
     """The function that reads a ``kind`` of file, its module imported (so a timing counts only the read)."""
     if kind == 'gestures:=':
-        from touch_gestures.bear.symbolic import GestureLibrary
         return GestureLibrary.load
     if kind == 'launch file':
-        from touch_graph.launch.parser import parse_launch_file
         return parse_launch_file
     if kind == 'body map':
-        from touch_driver.bear.body_map import BodyMap
         return BodyMap.load
     if kind == 'skin commands':
-        from touch_gestures.skin.commands import load_command_map
         return load_command_map
     if kind == 'parameter file':
-        from touch_graph.runtime.param_yaml import ParameterOverrides
         return ParameterOverrides.from_file
-    from touch_graph.bag.player import bag_info
 
     def bag(path: Path) -> Any:
         bag_dir = path.parent / 'bag'
@@ -93,7 +106,6 @@ def _yaml_file(kind: str, text: str) -> Callable[[], Any]:
 
 def _typed_check_excerpt() -> Any:
     """A million-item value where a mapping is expected: the error quotes an excerpt, not the value."""
-    from touch_gestures.bear.symbolic import GestureLibrary
     text = 'gestures: [' + ','.join(['1'] * 50_000) + ']\nformat: [' + ','.join(['1'] * 50_000) + ']\n'
     try:
         GestureLibrary.loads(text, source='big.yaml')
@@ -142,9 +154,6 @@ def small_disk(kib: int = 200) -> Iterator[Path]:
 
 def _fill_with_bag(disk: Path) -> tuple[Any, str]:
     """Record 1 kB messages on ``disk`` until it is full; the recorder and the first error it raised."""
-    from touch_graph import messages
-    from touch_graph.bag import BagRecorder
-    from touch_graph.errors import BagError
     data = messages.serialize(messages.get_message('std_msgs/msg/String')(data='x' * 1000), 'std_msgs/msg/String')
     bag = BagRecorder(disk / 'bag', flush_period_s=None).open()
     for i in range(10_000):
@@ -160,7 +169,6 @@ def _fill_with_bag(disk: Path) -> tuple[Any, str]:
 
 
 def _recorder_on_full_disk() -> Any:
-    from touch_graph.bag.reindex import reindex
     with small_disk() as disk, tempfile.TemporaryDirectory() as elsewhere:
         bag, said = _fill_with_bag(disk)
         if 'ENOSPC' not in said or 'bag reindex' not in said:
@@ -173,8 +181,6 @@ def _recorder_on_full_disk() -> Any:
 
 
 def _reindex_on_full_disk() -> Any:
-    from touch_graph.bag.reindex import reindex
-    from touch_graph.errors import BagError
     with small_disk() as disk:
         _fill_with_bag(disk)
         before = (disk / 'bag' / 'bag.mcap').read_bytes()
@@ -190,7 +196,6 @@ def _reindex_on_full_disk() -> Any:
 
 
 def _reindex_command_on_full_disk() -> Any:
-    import sys
     with small_disk() as disk:
         _fill_with_bag(disk)
         run = subprocess.run([sys.executable, '-c', 'from touch_lab.cli.main import main; raise SystemExit(main())',
@@ -218,9 +223,6 @@ def _patched(owner: Any, name: str) -> Iterator[None]:
 def _injected(kind: str) -> Callable[[], Any]:
     """A writer whose write meets OSError(ENOSPC): a clear error, the previous file kept, nothing partial."""
     def write() -> Any:
-        import numpy as np
-
-        from touch_graph.paths import share_file
         with tempfile.TemporaryDirectory() as tmp:
             tmp = Path(tmp)
             target = tmp / ('report.md' if kind == 'report' else 'model.npz')
@@ -232,20 +234,16 @@ def _injected(kind: str) -> Callable[[], Any]:
             before = target.read_bytes() if target.exists() else None
             try:
                 if kind == 'report':
-                    from touch_graph.files import write_text
                     with _patched(Path, 'write_text'):
                         write_text(target, 'new\n')
                 elif kind == 'export-interfaces':
-                    from touch_graph.cli.export_interfaces import export_interfaces
                     with _patched(Path, 'write_text'):
                         export_interfaces(tmp)
                 elif kind == 'codebook':
-                    from touch_gestures.skin.codebook import load_codebook, save_codebook
                     recogniser = load_codebook(target)
                     with _patched(np.lib.format, 'write_array'):
                         save_codebook(target, recogniser)
                 else:
-                    from touch_gestures.bear.subtype_model import SubtypeModel
                     model = SubtypeModel.load(target)
                     with _patched(np.lib.format, 'write_array'):
                         model.save(target)

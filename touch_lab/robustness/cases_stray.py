@@ -32,6 +32,20 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.bear.node import BearGesturesNode
+from touch_gestures.patch.node import PatchGesturesNode
+from touch_gestures.skin.node import HapticCommandsNode
+from touch_graph.messages import get_message
+from touch_graph.node_health import level_number
+from touch_graph.paths import share_file
+from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
+from touch_sim.skin.device import forget_stimuli, register_stimulus
+from touch_sim.skin.stimuli import load_scene
+from touch_sim.virtual_port import forget_devices
+
 __all__ = ['LOCK_DIR', 'STRAY_PUBLISHER', 'TEST_DOMAINS', 'hold_test_domain', 'skin_flood', 'stray_cases']
 
 #: The stray process: joins the domain on our runtime (Cyclone DDS) and publishes ``SkinFrame()`` (144 zero
@@ -65,14 +79,6 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
     With ``stray``, the recogniser first waits (spinning, before the driver starts: at most 60 s of wall
     time) until the stray's frames arrive, so the whole scene runs under the flood. ``screening=False`` hands
     every frame to the recogniser as before screening existed (to measure what the screen buys)."""
-    from touch_driver.skin.node import SkinDriverNode
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_graph.messages import get_message
-    from touch_graph.node_health import level_number
-    from touch_graph.runtime import Context, Node, Parameter, SingleThreadedExecutor
-    from touch_sim.skin.device import forget_stimuli, register_stimulus
-    from touch_sim.virtual_port import forget_devices
-
     forget_devices()
     forget_stimuli()
     register_stimulus('skin-stray-flood', scene)
@@ -125,9 +131,6 @@ def skin_flood(hz: float = 300.0, rate: float = 1.0, frame_id: str = '', screeni
     ``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Needs a DDS domain of its own
     (``ROS_DOMAIN_ID``; the caller sets it). Returns both runs' results, ``'ok'`` saying whether the flooded run
     recognised within one command of the undisturbed one and its /diagnostics named the cause."""
-    from touch_graph.paths import share_file
-    from touch_sim.skin.stimuli import load_scene
-
     scene = load_scene(share_file('config', 'scenes', 'skin_people.yaml'))
     calm = _scene_run(scene, None, rate=float('inf'), network=False)
     env = {**os.environ}
@@ -153,8 +156,6 @@ def skin_flood(hz: float = 300.0, rate: float = 1.0, frame_id: str = '', screeni
 # --------------------------------------------------------------------------- parameter cases
 
 def _skin_node() -> tuple[Any, Any]:
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_graph.runtime import Context
     ctx = Context('sim', network=False)
     ctx.init()
     return ctx, HapticCommandsNode(context=ctx, namespace='skin', cli_args=['--ros-args', '--log-level', 'error'])
@@ -163,7 +164,6 @@ def _skin_node() -> tuple[Any, Any]:
 def _refused(name: str, value: Any, fragment: str = 'out of range') -> Callable[[], Any]:
     """``param set /skin/haptic_commands name value`` (as the parameter service does it) is refused, naming why."""
     def run() -> Any:
-        from touch_graph.runtime import Parameter
         ctx, node = _skin_node()
         try:
             before = node.recogniser
@@ -177,7 +177,6 @@ def _refused(name: str, value: Any, fragment: str = 'out of range') -> Callable[
 
 
 def _change_logged_and_counted() -> Any:
-    from touch_graph.runtime import Parameter
     ctx, node = _skin_node()
     try:
         [result] = node.set_parameters([Parameter('min_margin', value=0.3)])
@@ -191,8 +190,6 @@ def _change_logged_and_counted() -> Any:
 
 
 def _patch_threshold_refused() -> Any:
-    from touch_gestures.patch.node import PatchGesturesNode
-    from touch_graph.runtime import Context, Parameter
     ctx = Context('sim', network=False)
     ctx.init()
     try:
@@ -206,7 +203,6 @@ def _patch_threshold_refused() -> Any:
 # --------------------------------------------------------------------------- screening cases
 
 def _header(t_s: float, frame_id: str) -> Any:
-    from touch_graph.messages import get_message
     sec, nanosec = divmod(round(t_s * 1e9), 1_000_000_000)
     return get_message('std_msgs/msg/Header')(stamp=get_message('builtin_interfaces/msg/Time')(
         sec=sec, nanosec=nanosec), frame_id=frame_id)
@@ -214,11 +210,6 @@ def _header(t_s: float, frame_id: str) -> Any:
 
 def _patch_interleaved() -> Any:
     """The patch driver's 20 Hz frames with a stray's, stamped 0, between every two: all driver frames used."""
-    import numpy as np
-
-    from touch_gestures.patch.node import PatchGesturesNode
-    from touch_graph.messages import get_message
-    from touch_graph.runtime import Context
     PatchFrame = get_message('PatchFrame')
     ctx = Context('sim', network=False)
     ctx.init()
@@ -237,11 +228,6 @@ def _patch_interleaved() -> Any:
 
 def _bear_stale_same_frame_id() -> Any:
     """A stray replaying old bear frames under the driver's frame_id: screened by stamp, all driver frames used."""
-    import numpy as np
-
-    from touch_gestures.bear.node import BearGesturesNode
-    from touch_graph.messages import get_message
-    from touch_graph.runtime import Context
     BearFrame = get_message('BearFrame')
     ctx = Context('sim', network=False)
     ctx.init()
@@ -263,9 +249,6 @@ def _bear_stale_same_frame_id() -> Any:
 
 def _skin_nothing_usable() -> Any:
     """Only NaN frames arrive: ERROR on /diagnostics naming the cause."""
-    import numpy as np
-
-    from touch_graph.messages import get_message
     SkinFrame = get_message('SkinFrame')
     ctx, node = _skin_node()
     try:

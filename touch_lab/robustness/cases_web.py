@@ -1,4 +1,4 @@
-"""Robustness cases of issue 25: the web view and the Foxglove server against a page of another site.
+"""Robustness cases: the web view and the Foxglove server against a page of another site.
 
 Each case sends one real request on loopback with the headers a hostile page (or a DNS-rebound
 name) makes the browser send. A refusal is ``handled`` (with the answer's status); a hostile request
@@ -10,9 +10,15 @@ from __future__ import annotations
 
 import contextlib
 import http.client
+import json
 import socket
 from collections.abc import Callable, Iterator
 from typing import Any
+
+import foxglove
+
+from touch_view.server import ViewServer
+from touch_view.ws_front import SubprotocolFront
 
 __all__ = ['web_cases']
 
@@ -21,7 +27,6 @@ SECRET = 'what the robot senses'
 
 @contextlib.contextmanager
 def _view() -> Iterator[Any]:
-    from touch_view.server import ViewServer
     server = ViewServer(lambda: {'secret': SECRET}, {}, port=0).start()
     try:
         yield server
@@ -31,9 +36,6 @@ def _view() -> Iterator[Any]:
 
 @contextlib.contextmanager
 def _foxglove() -> Iterator[Any]:
-    import foxglove
-
-    from touch_view.ws_front import SubprotocolFront
     server = foxglove.start_server(name='robustness', host='127.0.0.1', port=0, context=foxglove.Context())
     front = SubprotocolFront('127.0.0.1', 0, server.port)
     try:
@@ -129,9 +131,7 @@ FOXGLOVE_CASES: list[tuple[str, Callable[[int], list[tuple[str, str]]], bool]] =
 
 def _no_client_capabilities() -> Any:
     """The Foxglove server offers nothing a client could change the graph with."""
-    import json
-
-    from websockets.sync.client import connect
+    from websockets.sync.client import connect  # a test dependency only: loaded when this case runs
     with _foxglove() as front, connect(f'ws://127.0.0.1:{front.port}', subprotocols=['foxglove.sdk.v1'],
                                        open_timeout=10) as ws:
         info = json.loads(ws.recv(timeout=10))

@@ -15,6 +15,9 @@ import textwrap
 import time
 from typing import Any
 
+from touch_graph.messages import get_message
+from touch_graph.runtime import Context, Node, SingleThreadedExecutor
+
 __all__ = ['INTRUDER_UID', 'dds_injection']
 
 INTRUDER_UID = 65534
@@ -63,8 +66,6 @@ def _run_intruder(executor: Any, env: dict[str, str], messages: int, timeout_s: 
 def dds_injection(domain: int | None = None, messages: int = 40, timeout_s: float = 30.0) -> dict[str, Any]:
     """Run the intruder as uid 65534 (as root; otherwise, or when that user cannot run the interpreter, a
     process of our own uid stands in, and the result says so) and count what our subscription receives."""
-    from touch_graph.messages import get_message
-    from touch_graph.runtime import Context, Node, SingleThreadedExecutor
     domain = domain if domain is not None else 150 + os.getpid() % 60
     env = {**os.environ, 'ROS_DOMAIN_ID': str(domain), 'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'HOME': '/tmp'}
     env.pop('CYCLONEDDS_URI', None)

@@ -18,12 +18,25 @@ import time
 from pathlib import Path
 from typing import Any
 
+from mcap.reader import make_reader
+from mcap.records import Chunk
+from mcap.stream_reader import StreamReader
+from rosbags.rosbag2 import Reader
+
+from touch_driver.skin.node import SkinDriverNode
+from touch_graph.bag import BagRecorder, reindex
+from touch_graph.bag.reindex import scan_mcap
+from touch_graph.messages import deserialize, get_message, serialize
+from touch_graph.node_health import level_number
+from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
+from touch_lab.bench.framing import FLOODS, run_flood
+from touch_sim.virtual_port import forget_devices
+
 __all__ = ['bag_corruption', 'flood', 'recorder_kill', 'unplug', 'unplug_recovery']
 
 
 def flood(megabytes: float = 4.0) -> dict[str, Any]:
     """Each flood of :data:`touch_lab.bench.framing.FLOODS`, ``megabytes`` MB, seed 0."""
-    from touch_lab.bench.framing import FLOODS, run_flood
     return {kind: run_flood(kind, megabytes, seed=0) for kind in FLOODS}
 
 
@@ -41,11 +54,6 @@ def unplug_recovery(replug_phases: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75)) -
 def unplug(unplug_at_s: float = 2.0, replug_at_s: float = 4.0, seconds: float = 7.0) -> dict[str, Any]:
     """A skin driver on ``skinsim://`` unplugged between the two times (device seconds), simulated time:
     from the replug to the first frame published again, frames lost, and what the status said meanwhile."""
-    from touch_driver.skin.node import SkinDriverNode
-    from touch_graph.messages import get_message
-    from touch_graph.node_health import level_number
-    from touch_graph.runtime import Context, Node, Parameter, QoSProfile, ReliabilityPolicy, SingleThreadedExecutor
-    from touch_sim.virtual_port import forget_devices
     forget_devices()
     ctx = Context('sim')
     ctx.init()
@@ -106,10 +114,6 @@ def recorder_kill(run_s: float = 3.0, flush_period_s: float = 1.0) -> dict[str, 
     """A real recording process (a 200 Hz talker and the recorder node) killed with SIGKILL ``run_s`` after it
     starts publishing;
     ``reindex`` recovers the bag. Lost = published - recovered; the recovered ones must be a gapless prefix."""
-    from rosbags.rosbag2 import Reader
-
-    from touch_graph.bag import reindex
-    from touch_graph.messages import deserialize
     with tempfile.TemporaryDirectory() as tmp:
         script = Path(tmp) / 'scene.py'
         script.write_text(RECORDING_SCENE)
@@ -139,13 +143,6 @@ def bag_corruption(places: int = 8) -> dict[str, Any]:
     """A closed bag of 3 chunks x 10 messages; one bit flipped at ``places`` spots across the chunks' records.
     Counts the corruptions each of reindex, the rosbags reader and the mcap reader (CRC check on, and off,
     its default) notices."""
-    from mcap.reader import make_reader
-    from rosbags.rosbag2 import Reader
-
-    from touch_graph.bag import BagRecorder
-    from touch_graph.bag.reindex import scan_mcap
-    from touch_graph.messages import get_message, serialize
-    from touch_lab.robustness.mcap_chunks import chunk_spans
     String = get_message('std_msgs/msg/String')
     seen = {'reindex': 0, 'rosbags_reader': 0, 'mcap_reader_crc_on': 0, 'mcap_reader_default': 0}
     with tempfile.TemporaryDirectory() as tmp:
@@ -157,7 +154,7 @@ def bag_corruption(places: int = 8) -> dict[str, Any]:
             rec.flush()
         rec.close()
         mcap = clean / 'clean.mcap'
-        spans = chunk_spans(mcap)
+        spans = _chunk_spans(mcap)
         original = mcap.read_bytes()
         for k in range(places):
             offset, length = spans[k % len(spans)]
@@ -181,3 +178,13 @@ def bag_corruption(places: int = 8) -> dict[str, Any]:
                 except Exception:
                     seen[key] += 1
     return {'corruptions': places, 'detected': seen}
+
+
+def _chunk_spans(path: Path) -> list[tuple[int, int]]:
+    """``(offset, length)`` of the records inside every chunk of an MCAP file, in file order."""
+    out = []
+    with path.open('rb') as f:
+        for record in StreamReader(f, emit_chunks=True).records:
+            if isinstance(record, Chunk):
+                out.append((f.tell() - len(record.data), len(record.data)))
+    return out

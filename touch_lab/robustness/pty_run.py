@@ -14,6 +14,7 @@ import numpy as np
 from touch_driver.bear.node import BearDriverNode
 from touch_driver.bear.protocol import BEAR_ID, encode_payload
 from touch_driver.framing import crc16, encode_frame
+from touch_driver.skin.protocol import encode_skin_frame
 from touch_graph.compat import sensor_data_qos
 from touch_graph.messages import get_message
 from touch_graph.node_health import level_number
@@ -68,7 +69,6 @@ def run_bear(wire: bytes, seconds: float = 2.5, node_class: type = BearDriverNod
 
 def skin_frames(seqs: Any, taxels: np.ndarray | None = None) -> list[bytes]:
     """Skin wire frames with the sequence numbers ``seqs`` (taken mod 65536) of an untouched skin (synthetic)."""
-    from touch_driver.skin.protocol import encode_skin_frame
     raw = SKIN_RAW if taxels is None else taxels
     return [encode_skin_frame(s & 0xFFFF, raw) for s in seqs]
 
