@@ -14,12 +14,14 @@ from test_skin_codebook_people import LETTERS, drawn, stroke
 
 from touch_gestures.skin import load_codebook, make_recogniser, save_codebook
 from touch_gestures.skin.base import acceptance_score
+from touch_gestures.skin.doubt import DOUBT_FEATURES, PRODUCT_WEIGHTS, doubt, doubt_features
 from touch_lab.skin.acceptance import (
     MAX_RANDOM_FIRING,
     HeldOut,
     calibrate_acceptance,
     class_scales,
     cross_person_outcomes,
+    fit_weights,
     held_out_opinions,
     max_score,
     scores,
@@ -177,7 +179,11 @@ def test_the_report_names_the_command_of_every_row(tmp_path):
     text = format_report(runs)
     assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json --max-wrong-rate 0.005`' in text
     assert '`social-touch eval skin --traces a.csv.gz --recognisers trace --json`' in text
-    assert '| a (10 samples, 2 people) | trace | calibrated, 0.5 % | 99.00 % | **97.00 %** |' in text
+    assert ('| a (10 samples, 2 people) | trace | calibrated, 0.5 %, product score, random touches (same generator) '
+            '| 99.00 % | **97.00 %** |') in text
+    logistic = {**runs[0], 'recognisers': {'trace': {**result, 'acceptance': [
+        {'wrong': 0.004, 'right': 0.96, 'score': 'odds of no right command (logistic)'}]}}}
+    assert 'calibrated, 0.5 %, logistic score, stray touches |' in format_report([logistic])
     assert '0.50 % / 97.00 %' in text   # the held-out estimate, mean over folds
     # 97 % right misses the single-stroke goal; the rest is met.
     assert sum(line.endswith('| right |') for line in text.splitlines()) == 2
@@ -191,3 +197,82 @@ def test_an_edited_codebook_drops_its_calibration():
     assert model.acceptance_ is not None and edited.acceptance_ is None
     # The old rule decides again: no 'score' rejection.
     assert all(m.rejected != 'score' for m in edited.predict_many(scribbles(rng, 30)))
+
+
+def test_the_product_weights_give_the_old_score():
+    rng = np.random.default_rng(1)
+    scales = rng.uniform(0.5, 2.0, 5)
+    for _ in range(20):
+        d = rng.uniform(0.1, 3.0, 5)
+        best = int(np.argmin(d))
+        margin = float(np.sort(d)[1] - d[best])
+        assert doubt(d, best, scales, PRODUCT_WEIGHTS) == pytest.approx(acceptance_score(d[best], margin, scales[best]))
+    assert doubt(np.array([1.0, 0.5]), 0, np.ones(2), PRODUCT_WEIGHTS) == math.inf   # the runner-up is nearer
+    assert doubt(np.array([0.0, 0.5]), 0, np.ones(2), (3.0, 1.0, 1.0, 1.0, 1.0)) == 0.0   # an exact match
+    features, usable = doubt_features(np.array([[1.0, 2.0, 4.0]]), np.array([0]), np.array([0.5, 1.0, 1.0]))
+    assert features.shape == (1, len(DOUBT_FEATURES)) and usable.all()
+    assert features[0] == pytest.approx(np.log([2.0, 0.5, 2.0, 1 / 3]))
+
+
+def test_the_fitted_score_ranks_right_readings_below_touches_that_are_no_gesture():
+    # Hand-made opinions, 3 classes: right readings near their class and far from the others; random touches
+    # about as far from every class (what a distance alone does not tell).
+    rng = np.random.default_rng(2)
+    n = 200
+    true = rng.integers(0, 3, n)
+    d = rng.uniform(2.0, 4.0, (n, 3))
+    d[np.arange(n), true] = rng.uniform(0.5, 1.5, n)
+    held = HeldOut(d, true, true, np.array(['a', 'b'] * (n // 2)))
+    r = rng.uniform(1.0, 2.0, (n, 3))
+    randoms = HeldOut(r, np.argmin(r, axis=1), np.full(n, -1), np.full(n, ''))
+    scales = np.ones(3)
+    weights = fit_weights(held, randoms, scales)
+    assert weights.shape == (len(PRODUCT_WEIGHTS),) and np.all(np.isfinite(weights))
+    right, random = scores(held, scales, weights), scores(randoms, scales, weights)
+    assert np.mean(right[:, None] < random[None, :]) > 0.95
+    # No touch that is no gesture: nothing to fit against, the product score.
+    none = HeldOut(np.empty((0, 3)), np.empty(0, dtype=np.intp), np.empty(0, dtype=np.intp), np.empty(0, dtype=str))
+    assert fit_weights(HeldOut(d, true, true, held.people), none, scales).tolist() == list(PRODUCT_WEIGHTS)
+
+
+def test_a_calibration_keeps_its_weights_and_the_robot_decides_by_them(tmp_path):
+    model, rng = people_codebook()
+    calibrate_acceptance(model, 0.005, scribbles(rng, 120))
+    record = model.acceptance_
+    assert record['score_features'] == list(DOUBT_FEATURES) and len(record['score_weights']) == 5
+    loaded = load_codebook(save_codebook(tmp_path / 'c.npz', model))
+    assert loaded.acceptance_['score_weights'] == record['score_weights']
+    touches = scribbles(rng, 40)
+    assert [m.rejected for m in loaded.predict_many(touches)] == [m.rejected for m in model.predict_many(touches)]
+    # The decision is the record's score against its limit.
+    for g in touches:
+        per_class = model.class_distances(g)
+        best = int(np.argmin(per_class))
+        score = doubt(per_class, best, np.asarray(record['class_scales']), record['score_weights'])
+        match = model.predict(g)
+        if match.rejected in (None, 'score'):
+            assert (match.rejected is None) == (score <= (record['max_score'] or math.inf))
+    n = len(model.classes_)
+    with pytest.raises(ValueError, match='score_weights'):
+        model.set_acceptance({'class_scales': [1.0] * n, 'max_score': 1.0, 'score_weights': [1.0, float('nan')]})
+    product, _ = people_codebook()
+    calibrate_acceptance(product, 0.005, scribbles(rng, 120), model=False)
+    assert 'score_weights' not in product.acceptance_
+
+
+def test_stray_touches_are_another_kind_of_touch_that_is_no_gesture():
+    from touch_gestures.skin.gesture import ACTIVE_MM
+    from touch_sim.skin.stray import STRAY_KINDS, stray_touches
+    touches = stray_touches(50, seed=3)
+    assert len(touches) == 50 and {t.gesture for t in touches} == {f'stray_{k}' for k in STRAY_KINDS}
+    for t in touches:
+        assert np.all((t.x >= 4.0 - 1e-6) & (t.x <= ACTIVE_MM - 4.0 + 1e-6))
+        assert np.all((t.y >= 4.0 - 1e-6) & (t.y <= ACTIVE_MM - 4.0 + 1e-6))
+        assert np.all(np.diff(t.stroke) >= 0) and np.all(np.diff(t.t_ms) >= 0)
+    taps = [t for t in touches if t.gesture == 'stray_taps']
+    assert all(2 <= t.n_strokes <= 4 for t in taps)
+    assert all(t.n_strokes == 1 for t in touches if t.gesture != 'stray_taps')
+    again = stray_touches(50, seed=3)
+    assert all(np.array_equal(a.x, b.x) for a, b in zip(touches, again, strict=True))
+    with pytest.raises(ValueError, match='count'):
+        stray_touches(-1)

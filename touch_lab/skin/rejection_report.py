@@ -57,6 +57,13 @@ def _goals(run: dict, r: dict) -> str:
     return ', '.join(missed) or 'none'
 
 
+def _score(held: list[dict]) -> str:
+    """Which score a calibrated run limited: the logistic odds (calibrated on stray touches), or the product
+    score of runs made before it (calibrated on random touches of the evaluation's own generator)."""
+    return ('logistic score, stray touches' if held and all(a.get('score') for a in held)
+            else 'product score, random touches (same generator)')
+
+
 def format_report(runs: list[dict]) -> str:
     """The markdown of the report from eval JSON objects (module doc)."""
     rows, commands = [], []
@@ -68,9 +75,9 @@ def format_report(runs: list[dict]) -> str:
                            else "the recognisers' own thresholds") + f': {_command(run, names)}')
         for name in names:
             r = run['recognisers'][name]
-            rule = (f"calibrated, {100 * run['max_wrong_rate']:g} %" if run.get('max_wrong_rate') is not None
-                    else 'own thresholds')
             held = r.get('acceptance') or []
+            rule = (f"calibrated, {100 * run['max_wrong_rate']:g} %, {_score(held)}"
+                    if run.get('max_wrong_rate') is not None else 'own thresholds')
             estimate = (f"{_pct(sum(a['wrong'] for a in held) / len(held))} / "
                         f"{_pct(sum(a['right'] for a in held) / len(held))}") if held else ''
             per_gesture = run.get('templates_per_gesture', 'all')
@@ -96,16 +103,23 @@ def format_report(runs: list[dict]) -> str:
         "each person's templates with a codebook of everyone else's, and sets:",
         '',
         f'- each class\'s scale: the {SCALE_QUANTILE:g} quantile of its held-out templates\' distances to it;',
-        "- a touch's score: its distance to the named class over that scale, times its distance over the runner-up "
-        "class's (both in the codebook's own units, so the score means the same on any vocabulary);",
-        '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and synthetic random '
-        f'touches (another seed than the evaluation\'s) firing at {100 * MAX_RANDOM_FIRING:g} %.',
+        "- a touch's score (*logistic score*, touch_gestures.skin.doubt): the odds that it fires no right command, "
+        'by a logistic model on four features in the codebook\'s own units (log of: the distance to the named '
+        "class over its scale; over the runner-up's distance; the runner-up's distance over its scale; over the "
+        'median distance to the other classes), fit on the held-out templates named right against those named '
+        'wrong and synthetic touches that are no gesture (`touch_sim.skin.stray.stray_touches`: presses, swipes, '
+        'spirals, rubbing, taps). Runs made before it (*product score*) limited the distance over the scale times '
+        "the ratio to the runner-up's distance;",
+        '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and the synthetic touches '
+        f'that are no gesture firing at {100 * MAX_RANDOM_FIRING:g} %.',
         '',
-        'The codebook file keeps the scales, the limit and the calibration record (`acceptance`); the robot '
-        'computes one score per touch. The design (the score, the quantile, the random-touch share) was chosen on '
-        'the unistroke file and is measured unchanged on the multistroke one: nothing is fitted to a vocabulary '
-        'but its own codebook. The random-touch figures are not independent of the calibration: both draw from '
-        'the same generator (other seeds).',
+        'The codebook file keeps the scales, the weights, the limit and the calibration record (`acceptance`); the '
+        'robot computes one score per touch. The design (the features, the quantile, the random-touch share) was '
+        'chosen on the unistroke file and is measured unchanged on the multistroke one: nothing is fitted to a '
+        'vocabulary but its own codebook. *Random touches firing* counts `random_touches` (scribbles, zigzags, '
+        'dabs). The logistic runs calibrate on another generator (stray touches), so their random-touch figure is '
+        'a measurement on touches of a kind the calibration never saw; the product-score runs calibrated on '
+        '`random_touches` itself (another seed), so theirs is not independent.',
         '',
         '## Figures',
         '',
