@@ -212,6 +212,14 @@ def test_the_product_weights_give_the_old_score():
     features, usable = doubt_features(np.array([[1.0, 2.0, 4.0]]), np.array([0]), np.array([0.5, 1.0, 1.0]))
     assert features.shape == (1, len(DOUBT_FEATURES)) and usable.all()
     assert features[0] == pytest.approx(np.log([2.0, 0.5, 2.0, 1 / 3]))
+    # The robot's plain-Python score is the lab's vectorised one, edge cases included (no runner-up, inf, NaN, 0).
+    from touch_gestures.skin.doubt import scores_of
+    weights = rng.normal(0, 2, 5)
+    for d in ([1.5], [0.3, np.inf, 0.2], [np.inf, 2.0, 1.0], [0.0, 1.0, 2.0], [1.0, np.nan, 2.0], [1.0, 1.0, 3.0]):
+        d = np.asarray(d, dtype=np.float64)
+        best = int(np.nanargmin(d))
+        f, usable = doubt_features(d[None, :], np.array([best]), np.ones(len(d)))
+        assert doubt(d, best, np.ones(len(d)), weights) == pytest.approx(scores_of(f, usable, weights)[0], rel=1e-9)
 
 
 def test_the_fitted_score_ranks_right_readings_below_touches_that_are_no_gesture():

@@ -273,7 +273,7 @@ class TemplateRecogniser(Params):
                              f'{record.get("score_weights")!r}')
         self.acceptance_ = dict(record)
         self._acceptance_scales = scales.tolist()
-        self._acceptance_weights = None if 'score_weights' not in record else weights
+        self._acceptance_weights = None if 'score_weights' not in record else weights.tolist()
         self._acceptance_limit = math.inf if limit is None else float(limit)
 
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
@@ -367,7 +367,7 @@ class TemplateRecogniser(Params):
         if scales is not None:
             weights = getattr(self, '_acceptance_weights', None)
             score = (acceptance_score(d1, margin, scales[best]) if weights is None
-                     else doubt(per_class, best, np.asarray(scales), weights))
+                     else doubt(distances, best, scales, weights))
             if margin >= 0 and not score > self._acceptance_limit:
                 return Match(nearest, d1, margin, nearest, None), best
             ruled_out = margin < 0 and allowed is not None and not allowed[int(np.argmin(per_class))]

@@ -20,6 +20,7 @@ an exact match and inf where the runner-up is nearer than the named class or a v
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -31,6 +32,8 @@ DOUBT_FEATURES = ('distance', 'runner_up', 'runner_up_distance', 'crowd')
 #: runner-up's distance.
 PRODUCT_WEIGHTS = (0.0, 1.0, 1.0, 0.0, 0.0)
 _TINY = float(np.finfo(np.float64).tiny)
+#: Features are clipped to +-this (a log ratio: e^50 is farther than any distance means).
+FEATURE_BOUND = 50.0
 
 
 def doubt_features(distances: np.ndarray, named: np.ndarray, scales: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -43,7 +46,8 @@ def doubt_features(distances: np.ndarray, named: np.ndarray, scales: np.ndarray)
 
     Returns:
         (N, 4) float64 features (:data:`DOUBT_FEATURES`), and (N,) bool: the touch can be accepted at all (the
-        runner-up is no nearer, the distance is a number). Rows with a zero distance are all -inf (an exact match).
+        runner-up is no nearer, no distance is NaN). Rows with a zero distance are all -inf (an exact match);
+        the others are clipped to +-:data:`FEATURE_BOUND`.
     """
     d = np.asarray(distances, dtype=np.float64)
     d = d.reshape(len(named), d.shape[-1] if d.ndim else 0)
@@ -60,12 +64,13 @@ def doubt_features(distances: np.ndarray, named: np.ndarray, scales: np.ndarray)
     else:
         runner = np.zeros(len(named), dtype=np.intp)
         d2 = crowd = np.full(len(named), np.inf)
-    usable = ~np.isnan(d1) & (d2 >= d1)
+    usable = ~np.isnan(d).any(axis=1) & (d2 >= d1)
     with np.errstate(divide='ignore', invalid='ignore'):
-        log_d1 = np.log(np.maximum(d1, 0.0))
-        out = np.column_stack([log_d1 - np.log(scales[named]), log_d1 - np.log(np.maximum(d2, _TINY)),
-                               np.log(np.maximum(d2, _TINY)) - np.log(scales[runner]),
+        log_d1 = np.log(np.maximum(d1, _TINY))
+        log_d2 = np.log(np.maximum(d2, _TINY))
+        out = np.column_stack([log_d1 - np.log(scales[named]), log_d1 - log_d2, log_d2 - np.log(scales[runner]),
                                log_d1 - np.log(np.maximum(crowd, _TINY))])
+    out = np.clip(out, -FEATURE_BOUND, FEATURE_BOUND)   # no runner-up (inf): as far as a feature goes
     out[d1 == 0] = -np.inf
     return out, usable
 
@@ -77,11 +82,44 @@ def _others(d: np.ndarray, named: np.ndarray) -> np.ndarray:
     return d[keep].reshape(len(named), d.shape[1] - 1)
 
 
-def doubt(distances: np.ndarray, best: int, scales: np.ndarray, weights: np.ndarray) -> float:
+def doubt(distances: Sequence[float] | np.ndarray, best: int, scales: Sequence[float] | np.ndarray,
+          weights: Sequence[float] | np.ndarray) -> float:
     """The score of one touch: ``distances`` (C,) to each class, ``best`` the named class, ``scales`` (C,),
-    ``weights`` (5,) intercept first (module doc)."""
-    f, usable = doubt_features(np.asarray(distances, dtype=np.float64)[None, :], np.array([best]), scales)
-    return float(scores_of(f, usable, weights)[0])
+    ``weights`` (5,) intercept first (module doc). Plain Python over the C numbers: one call per touch on the
+    robot, where numpy's per-call overhead would cost more than the arithmetic (the same as :func:`scores_of`
+    of :func:`doubt_features`)."""
+    d = distances.tolist() if isinstance(distances, np.ndarray) else [float(v) for v in distances]
+    if any(v != v for v in d):   # NaN
+        return math.inf
+    d1 = d[best]
+    others = d[:best] + d[best + 1:]
+    if others:
+        d2 = min(others)
+        runner = others.index(d2)
+        runner += runner >= best   # back to an index of d
+        ranked = sorted(others)
+        half = len(ranked) // 2
+        crowd = ranked[half] if len(ranked) % 2 else 0.5 * (ranked[half - 1] + ranked[half])
+    else:
+        d2 = crowd = math.inf
+        runner = 0
+    if not d2 >= d1:
+        return math.inf
+    if d1 == 0:
+        return 0.0
+    w = weights
+    log_d1 = math.log(d1)
+    log_d2 = math.log(max(d2, _TINY))
+    z = (w[0] + w[1] * _clip(log_d1 - math.log(float(scales[best]))) + w[2] * _clip(log_d1 - log_d2)
+         + w[3] * _clip(log_d2 - math.log(float(scales[runner])))
+         + w[4] * _clip(log_d1 - math.log(max(crowd, _TINY))))
+    if math.isnan(z):
+        return math.inf
+    return math.exp(z) if z < 709.0 else math.inf
+
+
+def _clip(x: float) -> float:
+    return x if math.isnan(x) else max(-FEATURE_BOUND, min(FEATURE_BOUND, x))
 
 
 def scores_of(features: np.ndarray, usable: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -90,7 +128,7 @@ def scores_of(features: np.ndarray, usable: np.ndarray, weights: np.ndarray) -> 
     w = np.asarray(weights, dtype=np.float64)
     with np.errstate(invalid='ignore', over='ignore'):
         exact = np.isneginf(features).all(axis=1)
-        z = w[0] + np.where(np.isneginf(features), 0.0, features) @ w[1:]
+        z = w[0] + np.where(exact[:, None], 0.0, features) @ w[1:]
         out = np.exp(z)
     out[exact] = 0.0
     out[~usable | np.isnan(out)] = math.inf
