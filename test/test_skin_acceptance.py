@@ -284,3 +284,42 @@ def test_stray_touches_are_another_kind_of_touch_that_is_no_gesture():
     assert all(np.array_equal(a.x, b.x) for a, b in zip(touches, again, strict=True))
     with pytest.raises(ValueError, match='count'):
         stray_touches(-1)
+
+
+def test_the_transfer_check_measures_each_score_on_the_same_folds():
+    from touch_lab.skin.acceptance_transfer import Fold, measure
+    rng = np.random.default_rng(4)
+
+    def opinions(n, near, people=('a', 'b')):
+        true = rng.integers(0, 3, n)
+        d = rng.uniform(2.0, 4.0, (n, 3))
+        if near:
+            d[np.arange(n), true] = rng.uniform(0.5, 1.5, n)
+        named = np.argmin(d, axis=1)
+        return HeldOut(d, named, true if near else np.full(n, -1), np.resize(np.array(people), n))
+
+    fold = Fold(held=opinions(120, True), stray=opinions(60, False), stray_made=60, test=opinions(40, True),
+                open=np.ones(40, dtype=bool), samples=40, randoms=opinions(30, False),
+                random_open=np.ones(30, dtype=bool), random_made=30)
+    results = {name: measure([fold], 0.005, w) for name, w in
+               (('own', 'own'), ('product', 'product'), ('fixed', np.asarray(PRODUCT_WEIGHTS)))}
+    assert results['fixed'] == results['product']
+    for r in results.values():
+        assert r['right'] + r['wrong'] + r['rejected'] == pytest.approx(1.0)
+        assert 0 <= r['random_fired'] <= 1
+    assert results['own']['right'] > 0.9   # right readings lie far nearer their class than any random touch
+    closed = Fold(**{**vars(fold), 'open': np.zeros(40, dtype=bool)})   # every sample rejected by another rule
+    assert measure([closed], 0.005, 'own')['rejected'] == 1.0
+
+
+def test_the_report_shows_the_cross_vocabulary_runs_with_their_command():
+    from touch_lab.skin.rejection_report import format_report
+    transfer = {'fit': '/d/unistroke_dev.csv.gz', 'fit_recogniser': 'trace', 'fit_templates_per_gesture': 'all',
+                'measure': '/d/multistroke_dev.csv.gz', 'measure_recogniser': 'fused', 'templates_per_gesture': 30,
+                'max_wrong_rate': 0.005, 'transferred_weights': [0.0] * 5,
+                'scores': {'own': {'right': 0.95, 'wrong': 0.004, 'rejected': 0.046, 'random_fired': 0.02}}}
+    text = format_report([transfer])
+    assert '| multistroke_dev (fused) | unistroke_dev (trace) | own | **95.00 %** | 4.60 % | **0.40 %** |' in text
+    assert ('`python -m touch_lab.skin.acceptance_transfer --fit /d/unistroke_dev.csv.gz --fit-recogniser trace '
+            '--measure /d/multistroke_dev.csv.gz --measure-recogniser fused --templates-per-gesture 30 '
+            '--max-wrong-rate 0.005 --json`') in text

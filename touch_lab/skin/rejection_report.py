@@ -66,6 +66,8 @@ def _score(held: list[dict]) -> str:
 
 def format_report(runs: list[dict]) -> str:
     """The markdown of the report from eval JSON objects (module doc)."""
+    transfers = [r for r in runs if 'transferred_weights' in r]
+    runs = [r for r in runs if 'transferred_weights' not in r]
     rows, commands = [], []
     for run in sorted(runs, key=lambda r: (r['vocabulary'], str(r.get('templates_per_gesture')),
                                            r.get('max_wrong_rate') or 0)):
@@ -141,7 +143,49 @@ def format_report(runs: list[dict]) -> str:
         '',
         *commands,
         '',
+        *_transfer_section(transfers),
     ])
+
+
+def _transfer_command(t: dict) -> str:
+    per = t.get('templates_per_gesture', 'all')
+    return (f"`python -m touch_lab.skin.acceptance_transfer --fit {t['fit']} --fit-recogniser {t['fit_recogniser']}"
+            + ('' if t.get('fit_templates_per_gesture', 'all') == 'all'
+               else f" --fit-templates-per-gesture {t['fit_templates_per_gesture']}")
+            + f" --measure {t['measure']} --measure-recogniser {t['measure_recogniser']}"
+            + ('' if per == 'all' else f' --templates-per-gesture {per}')
+            + f" --max-wrong-rate {t['max_wrong_rate']:g} --json`")
+
+
+def _transfer_section(transfers: list[dict]) -> list[str]:
+    """The cross-vocabulary table (touch_lab.skin.acceptance_transfer runs), empty without such runs."""
+    if not transfers:
+        return []
+    rows, commands = [], []
+    for t in sorted(transfers, key=lambda t: (t['measure'], t['fit'])):
+        fit, measured = Path(t['fit']).name.split('.')[0], Path(t['measure']).name.split('.')[0]
+        commands.append(f'- {measured}, weights fit on {fit}: {_transfer_command(t)}')
+        for name, r in t['scores'].items():
+            rows.append(f"| {measured} ({t['measure_recogniser']}) | {fit} ({t['fit_recogniser']}) | {name} | "
+                        f"**{_pct(r['right'])}** | {_pct(r['rejected'])} | **{_pct(r['wrong'])}** | "
+                        f"**{_pct(r['random_fired'])}** |")
+    return [
+        '## Across vocabularies',
+        '',
+        "The score's weights fit on one development file and used on the other, both ways "
+        '(touch_lab.skin.acceptance_transfer): leave-one-person-out over the measured file, each fold\'s limit set '
+        'on its own codebook for the same `max_wrong_rate`, with the weights fit on the fold\'s codebook (*own*, '
+        'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*). '
+        'Held-out samples are cut at the longest lift a gesture may have (not the end-of-gesture rule of `eval '
+        "skin`): compare the rows with each other, the table above gives the absolute figures.",
+        '',
+        '| measured on | weights fit on | score | right | rejected | wrong | random touches firing |',
+        '|---|---|---|---|---|---|---|',
+        *rows,
+        '',
+        *commands,
+        '',
+    ]
 
 
 def run(args: argparse.Namespace) -> int:
