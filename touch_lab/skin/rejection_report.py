@@ -72,8 +72,10 @@ def format_report(runs: list[dict]) -> str:
     for run in sorted(runs, key=lambda r: (r['vocabulary'], str(r.get('templates_per_gesture')),
                                            r.get('max_wrong_rate') or 0)):
         names = sorted(run['recognisers'])
+        held_any = next((r.get('acceptance') or [] for r in run['recognisers'].values()), [])
         commands.append(f"- {run['vocabulary']}, "
-                        + (f"calibrated for {run['max_wrong_rate']:g}" if run.get('max_wrong_rate') is not None
+                        + (f"calibrated for {run['max_wrong_rate']:g} ({_score(held_any)})"
+                           if run.get('max_wrong_rate') is not None
                            else "the recognisers' own thresholds") + f': {_command(run, names)}')
         for name in names:
             r = run['recognisers'][name]
@@ -110,8 +112,9 @@ def format_report(runs: list[dict]) -> str:
         "class over its scale; over the runner-up's distance; the runner-up's distance over its scale; over the "
         'median distance to the other classes), fit on the held-out templates named right against those named '
         'wrong and synthetic touches that are no gesture (`touch_sim.skin.stray.stray_touches`: presses, swipes, '
-        'spirals, rubbing, taps). Runs made before it (*product score*) limited the distance over the scale times '
-        "the ratio to the runner-up's distance;",
+        'spirals, rubbing, taps). Runs made before it (*product score*, made with main at 600e2cf; the same '
+        'command now calibrates the logistic score) limited the distance over the scale times the ratio to the '
+        "runner-up's distance, calibrated on `random_touches` of another seed;",
         '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and the synthetic touches '
         f'that are no gesture firing at {100 * MAX_RANDOM_FIRING:g} %.',
         '',
@@ -175,7 +178,8 @@ def _transfer_section(transfers: list[dict]) -> list[str]:
         "The score's weights fit on one development file and used on the other, both ways "
         '(touch_lab.skin.acceptance_transfer): leave-one-person-out over the measured file, each fold\'s limit set '
         'on its own codebook for the same `max_wrong_rate`, with the weights fit on the fold\'s codebook (*own*, '
-        'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*). '
+        'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*); '
+        'all three calibrated on the stray touches. '
         'Held-out samples are cut at the longest lift a gesture may have (not the end-of-gesture rule of `eval '
         "skin`): compare the rows with each other, the table above gives the absolute figures.",
         '',
