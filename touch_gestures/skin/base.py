@@ -26,8 +26,9 @@ what the codebook alone determines).
 - for a codebook whose acceptance was calibrated (``acceptance_``, :meth:`TemplateRecogniser.set_acceptance`,
   kept in the codebook file; made by :func:`touch_lab.skin.acceptance.calibrate_acceptance` from the codebook
   itself, leave-one-person-out, for a wrong-command rate the user states), the two rules above are one:
-  no command when :func:`acceptance_score` (the distance over the class's scale, times the ratio to the
-  runner-up) exceeds ``acceptance_['max_score']`` (``'score'``) or the margin is negative; or
+  no command when the score (:func:`.doubt.doubt` with the record's ``score_weights``; without them
+  :func:`acceptance_score`, the distance over the class's scale times the ratio to the runner-up) exceeds
+  ``acceptance_['max_score']`` (``'score'``) or the margin is negative; or
 - the touch's strokes or duration are none the nearest class shows in the codebook
   (:mod:`.evidence`; where the codebook knows its templates' strokes and contact times); or
 - for an order-free recogniser (``direction_aware`` False), a touch of one stroke whose
@@ -66,6 +67,7 @@ from typing import Any
 import numpy as np
 
 from ..estimator import NotFittedError, Params
+from .doubt import PRODUCT_WEIGHTS, doubt
 from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
@@ -265,8 +267,13 @@ class TemplateRecogniser(Params):
         if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float))
                                   or not 0 <= limit < math.inf):
             raise ValueError(f'an acceptance needs a max_score >= 0 (or None); got {limit!r}')
+        weights = np.asarray(record.get('score_weights', PRODUCT_WEIGHTS), dtype=np.float64).reshape(-1)
+        if weights.shape != (len(PRODUCT_WEIGHTS),) or not np.all(np.isfinite(weights)):
+            raise ValueError(f'an acceptance needs {len(PRODUCT_WEIGHTS)} finite score_weights (.doubt); got '
+                             f'{record.get("score_weights")!r}')
         self.acceptance_ = dict(record)
         self._acceptance_scales = scales.tolist()
+        self._acceptance_weights = None if 'score_weights' not in record else weights.tolist()
         self._acceptance_limit = math.inf if limit is None else float(limit)
 
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
@@ -358,7 +365,10 @@ class TemplateRecogniser(Params):
         nearest = str(self.classes_[best])
         scales = getattr(self, '_acceptance_scales', None)
         if scales is not None:
-            if margin >= 0 and not acceptance_score(d1, margin, scales[best]) > self._acceptance_limit:
+            weights = getattr(self, '_acceptance_weights', None)
+            score = (acceptance_score(d1, margin, scales[best]) if weights is None
+                     else doubt(distances, best, scales, weights))
+            if margin >= 0 and not score > self._acceptance_limit:
                 return Match(nearest, d1, margin, nearest, None), best
             ruled_out = margin < 0 and allowed is not None and not allowed[int(np.argmin(per_class))]
             return Match(None, d1, margin, nearest, 'strokes' if ruled_out else

@@ -7,15 +7,16 @@ recogniser names. From those:
 
 - each class's **scale**: the :data:`SCALE_QUANTILE` quantile of its held-out templates' distances to
   it (how far a new person's gesture of the class lies: a star varies more than a line);
-- a touch's **score** (:func:`touch_gestures.skin.base.acceptance_score`): its distance to the named
-  class over that class's scale, times its ratio to the distance of the nearest other class. Both
-  factors are the codebook's own units, so the score means the same on any vocabulary: far from the
-  class or close to another one both raise it;
+- a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command, by a
+  logistic model (:func:`fit_weights`) on the touch's distances in the codebook's own units (to the named class
+  over its scale, over the runner-up's, the runner-up's over its scale, over the median of the other classes),
+  fit on the held-out templates named right against the held-out ones named wrong and synthetic touches that are
+  no gesture. The features are the codebook's own units, so the score means the same on any vocabulary;
 - the **limit**: the largest score that keeps the held-out templates' wrong commands at most
-  ``max_wrong_rate`` of them, and random touches that fire at most :data:`MAX_RANDOM_FIRING` of
-  synthetic ones (:func:`null_touches`, touches that are no gesture, read by the whole codebook).
+  ``max_wrong_rate`` of them, and touches that are no gesture that fire at most :data:`MAX_RANDOM_FIRING` of
+  synthetic ones (:func:`null_touches`, read by the whole codebook).
 
-The scales and the limit go into the recogniser (``acceptance_``; its distance rule is replaced by the
+The scales, the weights and the limit go into the recogniser (``acceptance_``; its distance rule is replaced by the
 score, its margin rule keeps a negative margin out) and the codebook file keeps them. Nothing is tuned
 on the people or the vocabulary it is used on: a new vocabulary calibrates itself when its codebook is
 made. The record also holds the held-out estimate of right / wrong / rejected, each person's templates
@@ -27,8 +28,10 @@ thresholds and drops the calibration: calibrate again (``social-touch codebook c
 
 The held-out estimate reads templates, not touches: the evidence of strokes (which classes a stroke
 count allows) is applied, the duration and one-stroke order checks are not (they only reject more).
-The random touches come from the generator the evaluation uses (:func:`touch_sim.skin.synthetic.random_touches`,
-another seed): the evaluation's random-touch figure is therefore not independent of the calibration.
+The touches that are no gesture come from another generator than the evaluation's random touches
+(:func:`touch_sim.skin.stray.stray_touches`: presses, swipes, spirals, rubbing, taps; the evaluation counts
+:func:`touch_sim.skin.synthetic.random_touches`: scribbles, zigzags, dabs), so the evaluation's random-touch figure
+measures touches of a kind the calibration never saw.
 """
 
 from __future__ import annotations
@@ -40,7 +43,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from touch_gestures.skin.base import TemplateRecogniser, acceptance_score, nearest_allowed
+from touch_gestures.skin.base import TemplateRecogniser, nearest_allowed
+from touch_gestures.skin.doubt import DOUBT_FEATURES, PRODUCT_WEIGHTS, doubt_features, scores_of
 from touch_gestures.skin.fused import FusedRecogniser, sum_rule_nearest
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
@@ -48,7 +52,8 @@ from touch_gestures.skin.segmentation import default_gap_s
 from touch_graph.cli.options import number
 
 __all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calibrate_acceptance', 'class_scales',
-           'cross_person_outcomes', 'held_out_opinions', 'max_score', 'null_touches', 'touch_opinions', 'wrong_rate']
+           'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches', 'scores',
+           'touch_opinions', 'wrong_rate']
 
 #: A class's scale is this quantile of its held-out templates' distances to it.
 SCALE_QUANTILE = 0.9
@@ -186,16 +191,46 @@ def class_scales(held: HeldOut, n_classes: int) -> np.ndarray:
     return np.maximum(out, np.finfo(np.float64).tiny)
 
 
-def scores(held: HeldOut, scales: np.ndarray) -> np.ndarray:
-    """(N,) :func:`~touch_gestures.skin.base.acceptance_score` of each touch; inf where the named class is not
-    the nearest (a negative margin is rejected whatever the score)."""
-    idx = np.arange(len(held.named))
-    d1 = held.distances[idx, held.named]
-    others = held.distances.copy()
-    others[idx, held.named] = np.inf
-    d2 = others.min(axis=1) if others.shape[1] else np.full(len(d1), np.inf)
-    return np.array([acceptance_score(a, b - a, s) if b >= a else np.inf
-                     for a, b, s in zip(d1.tolist(), d2.tolist(), scales[held.named].tolist(), strict=True)])
+def scores(held: HeldOut, scales: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """(N,) :func:`~touch_gestures.skin.doubt.doubt` of each touch with ``weights`` (default
+    :data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`); inf where the named class is not the nearest (a negative
+    margin is rejected whatever the score)."""
+    features, usable = doubt_features(held.distances, held.named, scales)
+    return scores_of(features, usable, PRODUCT_WEIGHTS if weights is None else weights)
+
+
+#: The L2 penalty of :func:`fit_weights` (on the weights of the features, not the intercept).
+L2_PENALTY = 1e-2
+
+
+def fit_weights(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations: int = 30) -> np.ndarray:
+    """(5,) the score's logistic weights, intercept first (:data:`~touch_gestures.skin.doubt.DOUBT_FEATURES`): the
+    odds of no right command, the held-out templates named right (0) against those named wrong and ``randoms``
+    (1), each side weighing half (Newton's method, :data:`L2_PENALTY`). The product's weights
+    (:data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`) when either side has no touch that can be accepted."""
+    fh, uh = doubt_features(held.distances, held.named, scales)
+    fr, ur = doubt_features(randoms.distances, randoms.named, scales)
+    right = uh & (held.named == held.true)
+    bad = np.r_[uh & ~right, ur]
+    x = np.vstack([fh[right], np.vstack([fh, fr])[bad]])
+    y = np.r_[np.zeros(right.sum()), np.ones(bad.sum())]
+    finite = np.isfinite(x).all(axis=1)
+    x, y = x[finite], y[finite]
+    if not (y == 0).any() or not (y == 1).any():
+        return np.asarray(PRODUCT_WEIGHTS, dtype=np.float64)
+    w = np.where(y == 0, 0.5 / np.sum(y == 0), 0.5 / np.sum(y == 1))
+    design = np.column_stack([np.ones(len(x)), x])
+    penalty = np.diag([0.0] + [L2_PENALTY] * x.shape[1])
+    beta = np.zeros(design.shape[1])
+    for _ in range(iterations):
+        p = 1.0 / (1.0 + np.exp(-np.clip(design @ beta, -500, 500)))
+        gradient = design.T @ (w * (p - y)) + penalty @ beta
+        hessian = (design * (w * p * (1 - p))[:, None]).T @ design + penalty + 1e-9 * np.eye(len(beta))
+        step = np.linalg.solve(hessian, gradient)
+        beta -= step
+        if np.abs(step).max() < 1e-8:
+            break
+    return beta
 
 
 def _limit(values: np.ndarray, allowed: int) -> float:
@@ -206,48 +241,50 @@ def _limit(values: np.ndarray, allowed: int) -> float:
 
 
 def max_score(held: HeldOut, randoms: HeldOut, scales: np.ndarray, max_wrong_rate: float,
-              random_touches: int | None = None) -> float:
-    """The limit of the score (module doc): the wrong commands of ``held`` at most ``max_wrong_rate`` of its
-    templates, the random touches ``randoms`` firing at most :data:`MAX_RANDOM_FIRING` of ``random_touches``
-    (all that were made, screened ones included; default: ``randoms``' count)."""
-    s = scores(held, scales)
+              random_touches: int | None = None, weights: np.ndarray | None = None) -> float:
+    """The limit of the score (module doc, with ``weights`` as :func:`scores`): the wrong commands of ``held`` at
+    most ``max_wrong_rate`` of its templates, the random touches ``randoms`` firing at most
+    :data:`MAX_RANDOM_FIRING` of ``random_touches`` (all that were made, screened ones included; default:
+    ``randoms``' count)."""
+    s = scores(held, scales, weights)
     wrong = s[held.named != held.true]
     limit = _limit(wrong, math.floor(max_wrong_rate * len(held.true)))
     if len(randoms.named):
         total = len(randoms.named) if random_touches is None else random_touches
-        limit = min(limit, _limit(scores(randoms, scales), math.floor(MAX_RANDOM_FIRING * total)))
+        limit = min(limit, _limit(scores(randoms, scales, weights), math.floor(MAX_RANDOM_FIRING * total)))
     return limit
 
 
 def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float,
-                          random_touches: int | None = None) -> np.ndarray:
-    """(N,) what each held-out template gets, judged by scales and a limit set from everyone else's: 1 the
-    right command, -1 a wrong one, 0 rejected."""
+                          random_touches: int | None = None, model: bool = True) -> np.ndarray:
+    """(N,) what each held-out template gets, judged by scales, weights (``model``; else the product's) and a
+    limit set from everyone else's: 1 the right command, -1 a wrong one, 0 rejected."""
     n_classes = held.distances.shape[1]
     accepted = np.zeros(len(held.true), dtype=bool)
     for person in np.unique(held.people):
         mine = held.people == person
         rest = held.subset(~mine)
         scales = class_scales(rest, n_classes)
-        accepted[mine] = scores(held.subset(mine), scales) <= max_score(rest, randoms, scales, max_wrong_rate,
-                                                                        random_touches)
+        weights = fit_weights(rest, randoms, scales) if model else None
+        accepted[mine] = scores(held.subset(mine), scales, weights) <= max_score(
+            rest, randoms, scales, max_wrong_rate, random_touches, weights)
     return np.where(accepted, np.where(held.named == held.true, 1, -1), 0)
 
 
 def null_touches(count: int = 300, seed: int = 7, gap_s: float = 0.15) -> list[TouchGesture]:
-    """``count`` synthetic touches that are no gesture (:func:`touch_sim.skin.synthetic.random_touches`) through
-    the virtual skin, cut where a lift lasts ``gap_s``."""
+    """``count`` synthetic touches that are no gesture (:func:`touch_sim.skin.stray.stray_touches`, not the
+    evaluation's generator) through the virtual skin, cut where a lift lasts ``gap_s``."""
     from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
     from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
-    from touch_sim.skin.synthetic import random_touches
-    rendered = render_samples(random_touches(count, seed=seed), RenderSettings(
+    from touch_sim.skin.stray import stray_touches
+    rendered = render_samples(stray_touches(count, seed=seed), RenderSettings(
         mode='sensor', placement='mm', seed=seed + 10**6, gap_s=PIECE_GAP_S, min_frames=1), default_cache_dir())
     return [g for r in rendered for g in join_pieces(r.gestures, gap_s)[0] if not g.truncated]
 
 
 def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
                          randoms: Sequence[TouchGesture] = (), per_class: int | None = None,
-                         held: HeldOut | None = None) -> TemplateRecogniser:
+                         held: HeldOut | None = None, model: bool = True) -> TemplateRecogniser:
     """Set ``recogniser``'s acceptance for at most ``max_wrong_rate`` wrong commands (module doc); returns it.
 
     Args:
@@ -257,6 +294,8 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
             the wrong commands set the limit.
         per_class: as :func:`held_out_opinions`.
         held: opinions already computed for this codebook (skips :func:`held_out_opinions`).
+        model: fit the score's weights (:func:`fit_weights`); False: the product score (distance over scale
+            times the ratio to the runner-up), as codebooks calibrated before the model.
 
     Raises:
         ValueError: a rate out of range, or a codebook without two people.
@@ -269,11 +308,15 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
         held = held_out_opinions(target, per_class)
     null = touch_opinions(target, randoms)
     scales = class_scales(held, len(target.classes_))
-    limit = max_score(held, null, scales, max_wrong_rate, len(randoms))
-    outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms))
-    fired = float(np.sum(scores(null, scales) <= limit) / len(randoms)) if len(randoms) else None
+    weights = fit_weights(held, null, scales) if model else None
+    limit = max_score(held, null, scales, max_wrong_rate, len(randoms), weights)
+    outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms), model)
+    fired = float(np.sum(scores(null, scales, weights) <= limit) / len(randoms)) if len(randoms) else None
     record = {'max_wrong_rate': float(max_wrong_rate), 'max_score': limit if math.isfinite(limit) else None,
               'class_scales': scales.tolist(), 'scale_quantile': SCALE_QUANTILE,
+              **({} if weights is None else {'score': 'odds of no right command (logistic)',
+                                             'score_features': list(DOUBT_FEATURES),
+                                             'score_weights': weights.tolist()}),
               'max_random_firing': MAX_RANDOM_FIRING, 'random_touches': len(randoms), 'random_fired': fired,
               'held_out': len(held.true), 'people': len(np.unique(held.people)),
               'right': float(np.mean(outcome == 1)), 'wrong': float(np.mean(outcome == -1)),

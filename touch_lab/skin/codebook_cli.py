@@ -53,8 +53,9 @@ def _info(args: argparse.Namespace) -> int:
         print(f'  {name:18s} {counts[name]:4d} templates, {rule}')
     if book.acceptance_:
         a = book.acceptance_
-        print(f"acceptance calibrated for {a.get('max_wrong_rate')} wrong commands: max score {a.get('max_score')}; "
-              f"leave-one-person-out estimate {a.get('right')} right, {a.get('wrong')} wrong")
+        score = a.get('score') or 'distance over scale x ratio to the runner-up'
+        print(f"acceptance calibrated for {a.get('max_wrong_rate')} wrong commands: max score {a.get('max_score')} "
+              f"({score}); leave-one-person-out estimate {a.get('right')} right, {a.get('wrong')} wrong")
     print(format_card(card) if card else 'no model card (a codebook made before cards)')
     return 0
 

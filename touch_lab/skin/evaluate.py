@@ -111,12 +111,16 @@ class RecogniserResult:
             'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
             'screened': self.screened, 'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
             **({'latency_s': _summary(self.latencies_s)} if self.latencies_s else {}),
-            **({'acceptance': [{k: a.get(k) for k in ('max_wrong_rate', 'max_score', 'right', 'wrong', 'rejected',
-                                                       'random_fired', 'people')} for a in self.acceptance]}
+            **({'acceptance': [{k: a.get(k) for k in _ACCEPTANCE_KEYS} for a in self.acceptance]}
                if self.acceptance else {}),
         }
 
     gestures_per_sample: dict[str, int] = field(default_factory=dict)
+
+
+#: What the JSON keeps of each fold's calibration record (:mod:`.acceptance`).
+_ACCEPTANCE_KEYS = ('max_wrong_rate', 'max_score', 'right', 'wrong', 'rejected', 'random_fired', 'people', 'score',
+                    'score_weights')
 
 
 def _summary(values: Sequence[float]) -> dict[str, float]:

@@ -57,20 +57,31 @@ def _goals(run: dict, r: dict) -> str:
     return ', '.join(missed) or 'none'
 
 
+def _score(held: list[dict]) -> str:
+    """Which score a calibrated run limited: the logistic odds (calibrated on stray touches), or the product
+    score of runs made before it (calibrated on random touches of the evaluation's own generator)."""
+    return ('logistic score, stray touches' if held and all(a.get('score') for a in held)
+            else 'product score, random touches (same generator)')
+
+
 def format_report(runs: list[dict]) -> str:
     """The markdown of the report from eval JSON objects (module doc)."""
+    transfers = [r for r in runs if 'transferred_weights' in r]
+    runs = [r for r in runs if 'transferred_weights' not in r]
     rows, commands = [], []
     for run in sorted(runs, key=lambda r: (r['vocabulary'], str(r.get('templates_per_gesture')),
                                            r.get('max_wrong_rate') or 0)):
         names = sorted(run['recognisers'])
+        held_any = next((r.get('acceptance') or [] for r in run['recognisers'].values()), [])
         commands.append(f"- {run['vocabulary']}, "
-                        + (f"calibrated for {run['max_wrong_rate']:g}" if run.get('max_wrong_rate') is not None
+                        + (f"calibrated for {run['max_wrong_rate']:g} ({_score(held_any)})"
+                           if run.get('max_wrong_rate') is not None
                            else "the recognisers' own thresholds") + f': {_command(run, names)}')
         for name in names:
             r = run['recognisers'][name]
-            rule = (f"calibrated, {100 * run['max_wrong_rate']:g} %" if run.get('max_wrong_rate') is not None
-                    else 'own thresholds')
             held = r.get('acceptance') or []
+            rule = (f"calibrated, {100 * run['max_wrong_rate']:g} %, {_score(held)}"
+                    if run.get('max_wrong_rate') is not None else 'own thresholds')
             estimate = (f"{_pct(sum(a['wrong'] for a in held) / len(held))} / "
                         f"{_pct(sum(a['right'] for a in held) / len(held))}") if held else ''
             per_gesture = run.get('templates_per_gesture', 'all')
@@ -96,16 +107,24 @@ def format_report(runs: list[dict]) -> str:
         "each person's templates with a codebook of everyone else's, and sets:",
         '',
         f'- each class\'s scale: the {SCALE_QUANTILE:g} quantile of its held-out templates\' distances to it;',
-        "- a touch's score: its distance to the named class over that scale, times its distance over the runner-up "
-        "class's (both in the codebook's own units, so the score means the same on any vocabulary);",
-        '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and synthetic random '
-        f'touches (another seed than the evaluation\'s) firing at {100 * MAX_RANDOM_FIRING:g} %.',
+        "- a touch's score (*logistic score*, touch_gestures.skin.doubt): the odds that it fires no right command, "
+        'by a logistic model on four features in the codebook\'s own units (log of: the distance to the named '
+        "class over its scale; over the runner-up's distance; the runner-up's distance over its scale; over the "
+        'median distance to the other classes), fit on the held-out templates named right against those named '
+        'wrong and synthetic touches that are no gesture (`touch_sim.skin.stray.stray_touches`: presses, swipes, '
+        'spirals, rubbing, taps). Runs made before it (*product score*, made with main at 600e2cf; the same '
+        'command now calibrates the logistic score) limited the distance over the scale times the ratio to the '
+        "runner-up's distance, calibrated on `random_touches` of another seed;",
+        '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and the synthetic touches '
+        f'that are no gesture firing at {100 * MAX_RANDOM_FIRING:g} %.',
         '',
-        'The codebook file keeps the scales, the limit and the calibration record (`acceptance`); the robot '
-        'computes one score per touch. The design (the score, the quantile, the random-touch share) was chosen on '
-        'the unistroke file and is measured unchanged on the multistroke one: nothing is fitted to a vocabulary '
-        'but its own codebook. The random-touch figures are not independent of the calibration: both draw from '
-        'the same generator (other seeds).',
+        'The codebook file keeps the scales, the weights, the limit and the calibration record (`acceptance`); the '
+        'robot computes one score per touch. The design (the features, the quantile, the random-touch share) was '
+        'chosen on the unistroke file and is measured unchanged on the multistroke one: nothing is fitted to a '
+        'vocabulary but its own codebook. *Random touches firing* counts `random_touches` (scribbles, zigzags, '
+        'dabs). The logistic runs calibrate on another generator (stray touches), so their random-touch figure is '
+        'a measurement on touches of a kind the calibration never saw; the product-score runs calibrated on '
+        '`random_touches` itself (another seed), so theirs is not independent.',
         '',
         '## Figures',
         '',
@@ -127,7 +146,50 @@ def format_report(runs: list[dict]) -> str:
         '',
         *commands,
         '',
+        *_transfer_section(transfers),
     ])
+
+
+def _transfer_command(t: dict) -> str:
+    per = t.get('templates_per_gesture', 'all')
+    return (f"`python -m touch_lab.skin.acceptance_transfer --fit {t['fit']} --fit-recogniser {t['fit_recogniser']}"
+            + ('' if t.get('fit_templates_per_gesture', 'all') == 'all'
+               else f" --fit-templates-per-gesture {t['fit_templates_per_gesture']}")
+            + f" --measure {t['measure']} --measure-recogniser {t['measure_recogniser']}"
+            + ('' if per == 'all' else f' --templates-per-gesture {per}')
+            + f" --max-wrong-rate {t['max_wrong_rate']:g} --json`")
+
+
+def _transfer_section(transfers: list[dict]) -> list[str]:
+    """The cross-vocabulary table (touch_lab.skin.acceptance_transfer runs), empty without such runs."""
+    if not transfers:
+        return []
+    rows, commands = [], []
+    for t in sorted(transfers, key=lambda t: (t['measure'], t['fit'])):
+        fit, measured = Path(t['fit']).name.split('.')[0], Path(t['measure']).name.split('.')[0]
+        commands.append(f'- {measured}, weights fit on {fit}: {_transfer_command(t)}')
+        for name, r in t['scores'].items():
+            rows.append(f"| {measured} ({t['measure_recogniser']}) | {fit} ({t['fit_recogniser']}) | {name} | "
+                        f"**{_pct(r['right'])}** | {_pct(r['rejected'])} | **{_pct(r['wrong'])}** | "
+                        f"**{_pct(r['random_fired'])}** |")
+    return [
+        '## Across vocabularies',
+        '',
+        "The score's weights fit on one development file and used on the other, both ways "
+        '(touch_lab.skin.acceptance_transfer): leave-one-person-out over the measured file, each fold\'s limit set '
+        'on its own codebook for the same `max_wrong_rate`, with the weights fit on the fold\'s codebook (*own*, '
+        'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*); '
+        'all three calibrated on the stray touches. '
+        'Held-out samples are cut at the longest lift a gesture may have (not the end-of-gesture rule of `eval '
+        "skin`): compare the rows with each other, the table above gives the absolute figures.",
+        '',
+        '| measured on | weights fit on | score | right | rejected | wrong | random touches firing |',
+        '|---|---|---|---|---|---|---|',
+        *rows,
+        '',
+        *commands,
+        '',
+    ]
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,0 +1,73 @@
+"""Benchmark: what the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
+
+    python -m touch_lab.skin.acceptance_bench --json
+
+One ``predict`` on a codebook of ``n_gestures x templates_per_gesture`` synthetic templates
+(:func:`.bench.synthetic_codebook`) for ``recogniser``, three ways in one run, interleaved, medians of
+``repeats``: the recogniser's own thresholds, a calibrated acceptance with the product score, and one with the
+logistic score (:mod:`touch_gestures.skin.doubt`). The acceptance records are set by hand (scales 1, limit 1):
+the cost of a decision does not depend on the numbers. ``social-touch bench skin-latency`` gives the time from
+the gesture's end to the command, of which one recognition is a part.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+
+from .bench import synthetic_codebook
+from .recognisers import MULTISTROKE_RECOGNISER, make_recogniser
+
+__all__ = ['bench_acceptance', 'main']
+
+
+def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int = 16, templates_per_gesture: int = 30,
+                     queries: int = 64, repeats: int = 7, seed: int = 0) -> dict:
+    """Median us per ``predict`` with each rule (module doc); a JSON-ready dict."""
+    gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
+    probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
+    probe = probe[:queries]
+    models = {}
+    for rule in ('thresholds', 'product', 'logistic'):
+        model = make_recogniser(recogniser).fit(gestures, labels)
+        n = len(model.classes_)
+        if rule != 'thresholds':
+            model.set_acceptance({'class_scales': [1.0] * n, 'max_score': 1.0,
+                                  **({'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5]} if rule == 'logistic' else {})})
+        models[rule] = model
+    times: dict[str, list[float]] = {rule: [] for rule in models}
+    for _ in range(repeats):
+        for rule, model in models.items():   # interleaved: the machine's load falls on all three alike
+            t0 = time.perf_counter()
+            for g in probe:
+                model.predict(g)
+            times[rule].append((time.perf_counter() - t0) / len(probe) * 1e6)
+    us = {rule: float(np.median(v)) for rule, v in times.items()}
+    return {'data': 'synthetic gestures (SYNTHETIC)', 'recogniser': recogniser, 'gestures': n_gestures,
+            'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
+            'us_per_recognition': us, 'ratio_logistic_to_thresholds': us['logistic'] / us['thresholds'],
+            'ratio_logistic_to_product': us['logistic'] / us['product']}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.acceptance_bench', description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--recogniser', default=MULTISTROKE_RECOGNISER)
+    parser.add_argument('--repeats', type=int, default=7)
+    parser.add_argument('--json', action='store_true')
+    args = parser.parse_args(argv)
+    result = bench_acceptance(args.recogniser, repeats=args.repeats)
+    if args.json:
+        print(json.dumps(result, indent=1))
+    else:
+        for rule, us in result['us_per_recognition'].items():
+            print(f'{rule:10s} {us:9.1f} us per recognition')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,203 @@
+"""Does the acceptance score's model transfer across vocabularies? (issue 26, item 2: fit on one file, measure
+on the other)
+
+    python -m touch_lab.skin.acceptance_transfer --fit unistroke_dev.csv.gz --fit-recogniser trace \\
+        --measure multistroke_dev.csv.gz --measure-recogniser fused --templates-per-gesture 30 --json
+
+Leave-one-person-out over the ``--measure`` file, each fold's codebook calibrated for ``--max-wrong-rate`` three
+ways, the rest of the pipeline the same:
+
+- **own**: the score's weights fit on the fold's own codebook (what ``social-touch eval skin --max-wrong-rate``
+  does, :func:`.acceptance.calibrate_acceptance`);
+- **transferred**: the weights fit once on the whole ``--fit`` file's codebook (its people read by each other,
+  against the same stray touches), only the limit set on the fold's codebook;
+- **product**: the score before the model (distance over scale times the ratio to the runner-up).
+
+Each held-out sample is the gesture the virtual skin cut at the longest lift a gesture may have (as the
+codebook's samples; not the end-of-gesture rule ``eval skin`` cuts held-out samples with), so the figures
+compare the three scores with each other; ``eval skin`` gives the absolute ones. Random touches are the
+evaluation's (:func:`touch_sim.skin.synthetic.random_touches`), the calibration's the stray touches
+(:func:`.acceptance.null_touches`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.screening import screen_gesture
+from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
+
+from .acceptance import (
+    HeldOut,
+    class_scales,
+    fit_weights,
+    held_out_opinions,
+    max_score,
+    null_touches,
+    scores,
+    wrong_rate,
+)
+
+__all__ = ['Fold', 'folds', 'main', 'measure', 'whole_file_weights']
+
+
+@dataclass
+class Fold:
+    """One leave-one-person-out fold's opinions (:class:`.acceptance.HeldOut`): the codebook's own held-out
+    templates, the calibration's stray touches, the held-out person's samples (``true`` their class, ``named``
+    the recogniser's; ``open`` (N,) bool: neither screened nor rejected by a rule but the score's), the
+    evaluation's random touches (``random_open`` likewise, of ``random_made`` touches made)."""
+
+    held: HeldOut
+    stray: HeldOut
+    stray_made: int
+    test: HeldOut
+    open: np.ndarray
+    samples: int
+    randoms: HeldOut
+    random_open: np.ndarray
+    random_made: int
+
+
+def _render(path: str, random_count: int = 150):
+    from touch_lab.skin.cli import _joined
+    from touch_lab.skin.datasets import read_traces
+    from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
+    from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+    from touch_sim.skin.synthetic import random_touches
+    samples = read_traces(path).samples
+    multi = max(s.n_strokes for s in samples) > 1
+    gap = ENDING_GAP_S if multi else SINGLE_STROKE_GAP_S   # as ``eval skin``
+    cache = default_cache_dir()
+    rendered = _joined(render_samples(samples, RenderSettings(mode='sensor', seed=0, gap_s=PIECE_GAP_S,
+                                                              min_frames=1), cache), ENDING_WAIT_S if multi else gap)
+    made = render_samples(random_touches(random_count, seed=1), RenderSettings(
+        mode='sensor', placement='mm', seed=10**6, gap_s=PIECE_GAP_S, min_frames=1), cache)
+    randoms = [g for r in made for g in join_pieces(r.gestures, gap)[0] if not g.truncated]
+    return rendered, randoms, gap
+
+
+def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: list[int] | None = None
+              ) -> tuple[HeldOut, np.ndarray]:
+    """The whole codebook's opinions of ``gestures`` and which are open to the score (module doc)."""
+    n = len(model.classes_)
+    model.set_acceptance({'class_scales': [1.0] * n, 'max_score': None})   # only the other rules reject
+    rows, named, true, open_ = [], [], [], []
+    for k, g in enumerate(gestures):
+        query = model._query_features(g)
+        if query is None:
+            continue
+        match = model.predict(g)
+        rows.append(model.query_class_distances(query))
+        named.append(int(np.searchsorted(model.classes_, match.nearest)) if match.nearest is not None else 0)
+        true.append(-1 if labels is None else labels[k])
+        open_.append(screen_gesture(g) is None and match.label is not None)
+    held = HeldOut(np.array(rows).reshape(-1, n), np.array(named, dtype=np.intp), np.array(true, dtype=np.intp),
+                   np.full(len(named), ''))
+    return held, np.array(open_, dtype=bool)
+
+
+def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=print) -> list[Fold]:
+    """Every leave-one-person-out fold of ``path`` read by ``recogniser`` (module doc)."""
+    from touch_lab.skin.evaluate import choose_codebook
+    from touch_lab.skin.recognisers import make_recogniser
+    rendered, randoms, gap = _render(path)
+    stray = null_touches(gap_s=gap)
+    subjects = sorted({r.subject for r in rendered})
+    out = []
+    for k, subject in enumerate(subjects):
+        train = [r for r in rendered if r.subject != subject]
+        test = [r for r in rendered if r.subject == subject and len(r.gestures) == 1]
+        book = choose_codebook(train, templates_per_gesture, np.random.default_rng([0, k]))
+        model = make_recogniser(recogniser).fit([r.gestures[0] for r in book], [r.label for r in book],
+                                                [r.subject for r in book])
+        model = getattr(model, 'chosen_', model)
+        held = held_out_opinions(model)
+        classes = model.classes_.tolist()
+        test_held, test_open = _opinions(model, [r.gestures[0] for r in test], [classes.index(r.label) for r in test])
+        stray_held, stray_open = _opinions(model, stray)
+        random_held, random_open = _opinions(model, randoms)
+        out.append(Fold(held, stray_held.subset(stray_open), len(stray), test_held, test_open,
+                        sum(r.subject == subject for r in rendered), random_held, random_open, 150))
+        say(f'fold {k + 1}/{len(subjects)} (subject {subject}) read')
+    return out
+
+
+def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | None) -> np.ndarray:
+    """The score's weights fit on ``path``'s whole codebook (everyone, read by each other) against stray touches."""
+    from touch_lab.skin.evaluate import choose_codebook
+    from touch_lab.skin.recognisers import make_recogniser
+    rendered, _, gap = _render(path)
+    book = choose_codebook(rendered, templates_per_gesture, np.random.default_rng(0))
+    model = make_recogniser(recogniser).fit([r.gestures[0] for r in book], [r.label for r in book],
+                                            [r.subject for r in book])
+    model = getattr(model, 'chosen_', model)
+    held = held_out_opinions(model)
+    stray, stray_open = _opinions(model, null_touches(gap_s=gap))
+    return fit_weights(held, stray.subset(stray_open), class_scales(held, len(model.classes_)))
+
+
+def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndarray) -> dict:
+    """Right, wrong, rejected over the held-out samples and random touches firing, each fold's limit set on its
+    codebook with ``weights``: 'own' (fit per fold), 'product', or (5,) fixed weights."""
+    right = wrong = samples = fired = made = 0
+    for f in all_folds:
+        scales = class_scales(f.held, f.held.distances.shape[1])
+        w = (fit_weights(f.held, f.stray, scales) if isinstance(weights, str) and weights == 'own'
+             else None if isinstance(weights, str) else weights)
+        limit = max_score(f.held, f.stray, scales, max_wrong_rate, f.stray_made, w)
+        accepted = f.open & (scores(f.test, scales, w) <= limit)
+        right += int(np.sum(accepted & (f.test.named == f.test.true)))
+        wrong += int(np.sum(accepted & (f.test.named != f.test.true)))
+        samples += f.samples
+        fired += int(np.sum(f.random_open & (scores(f.randoms, scales, w) <= limit)))
+        made += f.random_made
+    return {'right': right / samples, 'wrong': wrong / samples, 'rejected': 1 - (right + wrong) / samples,
+            'random_fired': fired / made if made else math.nan}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.acceptance_transfer', description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--fit', required=True, help='trace file the transferred weights are fit on')
+    parser.add_argument('--fit-recogniser', default='trace')
+    parser.add_argument('--fit-templates-per-gesture', type=int, default=0)
+    parser.add_argument('--measure', required=True, help='trace file measured leave-one-person-out')
+    parser.add_argument('--measure-recogniser', default='fused')
+    parser.add_argument('--templates-per-gesture', type=int, default=0, help='codebook size of --measure (0: all)')
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, default=0.005)
+    parser.add_argument('--json', action='store_true')
+    args = parser.parse_args(argv)
+
+    def say(line: str) -> None:
+        print(f'[acceptance transfer] {line}', file=sys.stderr, flush=True)
+
+    transferred = whole_file_weights(args.fit, args.fit_recogniser, args.fit_templates_per_gesture or None)
+    say(f'weights fit on {args.fit}: {np.round(transferred, 3).tolist()}')
+    measured = folds(args.measure, args.measure_recogniser, args.templates_per_gesture or None, say)
+    result = {'fit': args.fit, 'fit_recogniser': args.fit_recogniser, 'measure': args.measure,
+              'measure_recogniser': args.measure_recogniser,
+              'fit_templates_per_gesture': args.fit_templates_per_gesture or 'all',
+              'templates_per_gesture': args.templates_per_gesture or 'all',
+              'max_wrong_rate': args.max_wrong_rate, 'transferred_weights': transferred.tolist(),
+              'scores': {name: measure(measured, args.max_wrong_rate, w)
+                         for name, w in (('own', 'own'), ('transferred', transferred), ('product', 'product'))}}
+    if args.json:
+        print(json.dumps(result, indent=1))
+    else:
+        for name, r in result['scores'].items():
+            print(f"{name:12s} right {r['right']:.2%} wrong {r['wrong']:.2%} rejected {r['rejected']:.2%} "
+                  f"random touches firing {r['random_fired']:.2%}")
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
