@@ -30,6 +30,8 @@ EVAL_TARGETS: dict[str, Command] = {
                                                                 'contacts (SYNTHETIC): confusion and latency'),
     'skin-ending': Command('touch_lab.skin.ending_cli', 'why multi-stroke samples are cut into other than one '
                                                         'gesture, per class; the end-of-gesture rules compared'),
+    'skin-transfer': Command('touch_lab.skin.acceptance_transfer', 'the calibrated acceptance score across '
+                             'vocabularies: weights fit on one trace file, measured on another'),
     'adapt': Command('touch_lab.adapt_measure', 'accuracy for a new person after adapting to 0, 1, 3, 5 examples per '
                                                 'class (simulated people, SYNTHETIC)'),
 }

@@ -1,6 +1,6 @@
 """Benchmark: what the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
 
-    python -m touch_lab.skin.acceptance_bench --json
+    social-touch bench skin-acceptance --json
 
 One ``predict`` on a codebook of ``n_gestures x templates_per_gesture`` synthetic templates
 (:func:`.bench.synthetic_codebook`) for ``recogniser``, three ways in one run, interleaved, medians of
@@ -12,9 +12,6 @@ the gesture's end to the command, of which one recognition is a part.
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 import time
 
 import numpy as np
@@ -22,7 +19,7 @@ import numpy as np
 from .bench import synthetic_codebook
 from .recognisers import MULTISTROKE_RECOGNISER, make_recogniser
 
-__all__ = ['bench_acceptance', 'main']
+__all__ = ['bench_acceptance']
 
 
 def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int = 16, templates_per_gesture: int = 30,
@@ -51,23 +48,3 @@ def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int =
             'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
             'us_per_recognition': us, 'ratio_logistic_to_thresholds': us['logistic'] / us['thresholds'],
             'ratio_logistic_to_product': us['logistic'] / us['product']}
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.acceptance_bench', description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--recogniser', default=MULTISTROKE_RECOGNISER)
-    parser.add_argument('--repeats', type=int, default=7)
-    parser.add_argument('--json', action='store_true')
-    args = parser.parse_args(argv)
-    result = bench_acceptance(args.recogniser, repeats=args.repeats)
-    if args.json:
-        print(json.dumps(result, indent=1))
-    else:
-        for rule, us in result['us_per_recognition'].items():
-            print(f'{rule:10s} {us:9.1f} us per recognition')
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -1,7 +1,7 @@
 """Does the acceptance score's model transfer across vocabularies? (issue 26, item 2: fit on one file, measure
 on the other)
 
-    python -m touch_lab.skin.acceptance_transfer --fit unistroke_dev.csv.gz --fit-recogniser trace \\
+    social-touch eval skin-transfer --fit unistroke_dev.csv.gz --fit-recogniser trace \\
         --measure multistroke_dev.csv.gz --measure-recogniser fused --templates-per-gesture 30 --json
 
 Leave-one-person-out over the ``--measure`` file, each fold's codebook calibrated for ``--max-wrong-rate`` three
@@ -34,6 +34,7 @@ from touch_gestures.skin.base import TemplateRecogniser
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
+from touch_graph.cli.options import non_negative_int
 
 from .acceptance import (
     HeldOut,
@@ -46,7 +47,7 @@ from .acceptance import (
     wrong_rate,
 )
 
-__all__ = ['Fold', 'folds', 'main', 'measure', 'whole_file_weights']
+__all__ = ['Fold', 'add_arguments', 'folds', 'measure', 'run', 'whole_file_weights']
 
 
 @dataclass
@@ -164,19 +165,23 @@ def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndar
             'random_fired': fired / made if made else math.nan}
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.skin.acceptance_transfer', description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch eval skin-transfer``."""
     parser.add_argument('--fit', required=True, help='trace file the transferred weights are fit on')
-    parser.add_argument('--fit-recogniser', default='trace')
-    parser.add_argument('--fit-templates-per-gesture', type=int, default=0)
+    parser.add_argument('--fit-recogniser', default='trace', help='recogniser of the --fit codebook (trace)')
+    parser.add_argument('--fit-templates-per-gesture', type=non_negative_int, default=0,
+                        help='codebook size per gesture of --fit (0: all)')
     parser.add_argument('--measure', required=True, help='trace file measured leave-one-person-out')
-    parser.add_argument('--measure-recogniser', default='fused')
-    parser.add_argument('--templates-per-gesture', type=int, default=0, help='codebook size of --measure (0: all)')
-    parser.add_argument('--max-wrong-rate', type=wrong_rate, default=0.005)
-    parser.add_argument('--json', action='store_true')
-    args = parser.parse_args(argv)
+    parser.add_argument('--measure-recogniser', default='fused', help='recogniser measured (fused)')
+    parser.add_argument('--templates-per-gesture', type=non_negative_int, default=0,
+                        help='codebook size per gesture of --measure (0: all)')
+    parser.add_argument('--max-wrong-rate', type=wrong_rate, default=0.005, metavar='RATE',
+                        help='share of wrong commands each fold is calibrated for (0.005)')
+    parser.add_argument('--json', action='store_true', help='print one JSON object instead of text')
 
+
+def run(args: argparse.Namespace) -> int:
+    """``social-touch eval skin-transfer``: the module doc's comparison of the three scores."""
     def say(line: str) -> None:
         print(f'[acceptance transfer] {line}', file=sys.stderr, flush=True)
 
@@ -197,7 +202,3 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name:12s} right {r['right']:.2%} wrong {r['wrong']:.2%} rejected {r['rejected']:.2%} "
                   f"random touches firing {r['random_fired']:.2%}")
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -152,7 +152,7 @@ def format_report(runs: list[dict]) -> str:
 
 def _transfer_command(t: dict) -> str:
     per = t.get('templates_per_gesture', 'all')
-    return (f"`python -m touch_lab.skin.acceptance_transfer --fit {t['fit']} --fit-recogniser {t['fit_recogniser']}"
+    return (f"`social-touch eval skin-transfer --fit {t['fit']} --fit-recogniser {t['fit_recogniser']}"
             + ('' if t.get('fit_templates_per_gesture', 'all') == 'all'
                else f" --fit-templates-per-gesture {t['fit_templates_per_gesture']}")
             + f" --measure {t['measure']} --measure-recogniser {t['measure_recogniser']}"
