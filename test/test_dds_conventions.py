@@ -85,8 +85,11 @@ def to_idl(msg):
             value = to_idl(value)
         elif isinstance(value, (np.ndarray, array.array)):
             value = value.tolist()
+        elif isinstance(value, bytes):   # a byte field: rclpy's bytes of length 1, cyclonedds' int
+            value = value[0]
         elif isinstance(value, list):
-            value = [to_idl(v) if isinstance(v, messages.Message) else v for v in value]
+            value = [to_idl(v) if isinstance(v, messages.Message) else v[0] if isinstance(v, bytes) else v
+                     for v in value]
         kwargs[field] = value
     return idl_struct(msg.__msgtype__)(**kwargs)
 
