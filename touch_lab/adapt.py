@@ -23,14 +23,27 @@ from __future__ import annotations
 import argparse
 import sys
 from collections import Counter
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
+from touch_gestures.bear.subtype_labels import SUBTYPES
+from touch_gestures.bear.subtype_model import _transform
+from touch_gestures.model_card import attach_card, make_card, read_card
+from touch_gestures.patch.classifier import precision_cholesky
+from touch_gestures.patch.features import window_features
+from touch_gestures.patch.model_io import load_model, save_model
+from touch_gestures.skin.codebook import load_codebook, save_codebook
 from touch_graph.cli.options import non_negative_float, positive_float
+from touch_graph.errors import SocialTouchError
+from touch_lab.bear.sessions import load_runs, train_rows
 from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.collect.coverage import read_checked
+from touch_lab.patch.session_bags import trial_sessions
 from touch_lab.patch.training import PatchGestureClassifier
+from touch_lab.skin.sessions import fit_codebook, load_trials, usable
 
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
@@ -38,9 +51,6 @@ __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
 def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):
     """A new ``PatchGestureClassifier`` whose component means are MAP-adapted to ``X`` (n, d) labelled ``y``."""
-    from dataclasses import replace
-
-    from touch_gestures.patch.classifier import precision_cholesky
     if not relevance > 0:
         raise ValueError(f'relevance must be > 0 frames; got {relevance}')
     p = clf.params_
@@ -72,8 +82,6 @@ def adapt_bear(model, X: np.ndarray, y: np.ndarray, lam: float = 1.0, max_iter: 
 
     Classes of ``y`` the model does not know are left out (a few examples cannot found a class).
     """
-    from touch_gestures.bear.subtype_labels import SUBTYPES
-    from touch_gestures.bear.subtype_model import _transform
     if not lam > 0:
         raise ValueError(f'lam must be > 0; got {lam}')
     names = list(model.classes_)
@@ -123,9 +131,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Adapt and write; 2 with one line on stderr on bad input."""
-    from touch_gestures.model_card import attach_card, make_card, read_card
-    from touch_graph.errors import SocialTouchError
-
     def say(msg: str) -> None:
         print(f'[adapt {args.sensor}] {msg}', file=sys.stderr, flush=True)
 
@@ -152,12 +157,6 @@ def _taken(labels, synthetic: bool) -> dict:
 
 
 def _adapt_patch(args: argparse.Namespace, say) -> dict:
-    from dataclasses import replace
-
-    from touch_gestures.patch.features import window_features
-    from touch_gestures.patch.model_io import load_model, save_model
-    from touch_lab.collect.coverage import read_checked
-    from touch_lab.patch.session_bags import trial_sessions
     deployed = load_model(args.model)
     sessions = trial_sessions(read_checked(args.bags, 'patch', say), say)
     X = np.concatenate([window_features(s.activations, deployed.window) for s in sessions])
@@ -168,8 +167,6 @@ def _adapt_patch(args: argparse.Namespace, say) -> dict:
 
 
 def _adapt_bear(args: argparse.Namespace, say) -> dict:
-    from touch_lab.bear.sessions import load_runs, train_rows
-    from touch_lab.bear.subtype_training import SubtypeClassifier
     model = SubtypeClassifier.load(args.model)
     runs = load_runs(args.bags, model.trained_rate_hz_ or 3.4, model.trained_buffer_len_ or 20, say)
     X, y = train_rows(runs)
@@ -179,8 +176,6 @@ def _adapt_bear(args: argparse.Namespace, say) -> dict:
 
 
 def _adapt_skin(args: argparse.Namespace, say) -> dict:
-    from touch_gestures.skin.codebook import load_codebook, save_codebook
-    from touch_lab.skin.sessions import fit_codebook, load_trials, usable
     base = load_codebook(args.model)
     trials, synthetic = load_trials(args.bags, say)
     save_codebook(args.output, fit_codebook(trials, base.name, base=base),

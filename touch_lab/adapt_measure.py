@@ -19,14 +19,24 @@ import json
 import sys
 import tempfile
 from collections import defaultdict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from touch_gestures.bear.gate import NoTouchGate
+from touch_gestures.patch.classifier import decide
+from touch_gestures.patch.features import window_features
 from touch_graph.cli.options import positive_int, seed
+from touch_lab.bear.sessions import bear_trials, fit_model, score_trials
 from touch_lab.collect.protocol import DEFAULT_GESTURES, Protocol
 from touch_lab.collect.session_bag import read_session
 from touch_lab.collect.simulate import simulate_session
+from touch_lab.patch.evaluate import onset_ages, run_detector, score
+from touch_lab.patch.session_bags import trial_sessions
+from touch_lab.patch.training import PatchGestureClassifier
+
+from .adapt import adapt_bear, adapt_patch
 
 __all__ = ['KS', 'add_arguments', 'measure', 'run']
 
@@ -49,13 +59,6 @@ def _split(labels, k: int) -> tuple[list[int], list[int]]:
 
 
 def _patch(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
-    from touch_gestures.patch.classifier import decide
-    from touch_gestures.patch.features import window_features
-    from touch_lab.patch.evaluate import onset_ages, run_detector, score
-    from touch_lab.patch.session_bags import trial_sessions
-    from touch_lab.patch.training import PatchGestureClassifier
-
-    from .adapt import adapt_patch
     train = trial_sessions([read_session(b, 'patch') for b in base_bags])
     rate = train[0].rate_hz
     window = round(3.0 * rate)
@@ -87,10 +90,6 @@ def _patch(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
 
 
 def _bear(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
-    from touch_gestures.bear.gate import NoTouchGate
-    from touch_lab.bear.sessions import bear_trials, fit_model, score_trials
-
-    from .adapt import adapt_bear
     base = fit_model([bear_trials(read_session(b, 'bear'), 3.4, 20) for b in base_bags], seed=seed,
                      drop_thin=say)
     out: dict[int, list[float]] = {k: [] for k in KS}
@@ -114,7 +113,6 @@ def _bear(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
 
 
 def _subset(run, idx):
-    from dataclasses import replace
     return replace(run, labels=[run.labels[i] for i in idx], touched=[run.touched[i] for i in idx])
 
 

@@ -14,9 +14,15 @@ import argparse
 import sys
 
 from touch_gestures.bear.candidates import MAX_LEVEL, CandidateConfidence
+from touch_gestures.bear.gate import NoTouchGate
+from touch_gestures.bear.node import default_model_path
+from touch_gestures.bear.pipeline import BearRecogniser
+from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
+from touch_gestures.bear.subtype_model import SubtypeModel
 from touch_gestures.bear.symbolic import CANDIDATE, START, WITHDRAWN, GestureLibrary
 from touch_graph.cli.options import add_output, positive_int, seed
 from touch_graph.files import write_text
+from touch_lab.bear.evaluate import EvalConfig, bear_cycles, family_scene, run_scene
 
 __all__ = ['COMMAND', 'add_arguments', 'count_candidates', 'measure', 'run']
 
@@ -44,13 +50,6 @@ def count_candidates(events: list, library: GestureLibrary, data: str = '') -> C
 def measure(n_people: int = 8, seed: int = 1000, family: str = 'script', rate_hz: float = 3.4,
             progress=None) -> CandidateConfidence:
     """Run the scene and count (module doc)."""
-    from touch_gestures.bear.gate import NoTouchGate
-    from touch_gestures.bear.node import default_model_path
-    from touch_gestures.bear.pipeline import BearRecogniser
-    from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
-    from touch_gestures.bear.subtype_model import SubtypeModel
-    from touch_lab.bear.evaluate import EvalConfig, bear_cycles, family_scene, run_scene
-
     config = EvalConfig(rate_hz=rate_hz, family=family)
     scene = family_scene(family, n_people, seed, 2, 2)
     classifier = NoTouchGate(SubtypeModel.load(default_model_path()), ACTIVATION_THRESHOLD)

@@ -11,9 +11,19 @@ import argparse
 import json
 import sys
 
+from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.bear.symbolic import GestureLibrary
 from touch_graph.cli.options import deprecated_alias, positive_float, positive_int, seed
+from touch_graph.errors import SocialTouchError
+from touch_graph.paths import share_file
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, percent_text, seconds_text, stderr_progress
+from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.collect.session_bag import SessionError
+
+from .sessions import fold_models, load_runs
+from .shipped import format_scores, score_model
+from .transfer import cross_population, format_cross
 
 __all__ = ['add_arguments', 'format_text', 'run']
 
@@ -116,8 +126,6 @@ def format_text(result: dict) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the evaluation; 0 on success, 2 on a configuration error (message on stderr)."""
-    from touch_graph.errors import SocialTouchError
-
     if args.bags:
         return _run_bags(args)
     if args.gestures:
@@ -142,14 +150,6 @@ def run(args: argparse.Namespace) -> int:
 def _run_bags(args: argparse.Namespace) -> int:
     """``eval bear --bags``: the given ``--model`` scored on recorded sessions as it ships, or leave-one-person-out
     (:mod:`.sessions`, :mod:`.shipped`); symbolic gestures with the model's subtype codes either way."""
-    from touch_driver.bear.body_map import BodyMap
-    from touch_gestures.bear.symbolic import GestureLibrary
-    from touch_graph.errors import SocialTouchError
-    from touch_graph.paths import share_file
-    from touch_lab.collect.session_bag import SessionError
-
-    from .sessions import fold_models, load_runs
-    from .shipped import format_scores, score_model
     say = (lambda _m: None) if args.quiet else stderr_progress
     try:
         body_map = BodyMap.default()
@@ -182,9 +182,6 @@ def _run_bags(args: argparse.Namespace) -> int:
 
 def _run_cross(args: argparse.Namespace) -> int:
     """``eval bear --cross``: :func:`~.transfer.cross_population`."""
-    from touch_graph.errors import SocialTouchError
-
-    from .transfer import cross_population, format_cross
     try:
         models = {f'given {args.model}': _load_model(args)} if args.model else None
         result = cross_population(_config(args), models, progress=None if args.quiet else stderr_progress)
@@ -197,7 +194,6 @@ def _run_cross(args: argparse.Namespace) -> int:
 
 def _load_model(args: argparse.Namespace):
     """The ``--model`` file; ValueError when it was trained at another scan rate or buffer length."""
-    from touch_lab.bear.subtype_training import SubtypeClassifier
     model = SubtypeClassifier.load(args.model)
     rate, buffer = model.trained_rate_hz_, model.trained_buffer_len_
     if rate is not None and abs(rate / args.rate - 1) > 0.05:

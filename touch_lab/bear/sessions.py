@@ -28,6 +28,7 @@ from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import SUBTYPES, subtype_index
 from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.collect.coverage import read_checked
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
 from touch_sim.bear.people import split_label
 
@@ -222,7 +223,6 @@ def pool_scores(per_person: dict[str, dict]) -> dict:
 # ----------------------------------------------------------------------------- commands
 def load_runs(paths: list[str], rate_hz: float, buffer_len: int, progress: Callable[[str], None]) -> list[BearTrials]:
     """Read, check and run every session bag (warnings through ``progress``)."""
-    from touch_lab.collect.coverage import read_checked
     sessions = read_checked(paths, 'bear', progress)
     runs = []
     for i, session in enumerate(sessions):

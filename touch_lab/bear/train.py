@@ -18,14 +18,21 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from touch_driver.bear.body_map import BodyMap
+from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
+from touch_gestures.bear.symbolic import GestureLibrary
 from touch_gestures.model_card import attach_card, make_card
 from touch_graph.cli.options import add_output, deprecated_alias, positive_float, positive_int, seed
+from touch_graph.errors import SocialTouchError
+from touch_graph.paths import share_file
 from touch_lab.cards import session_data
 from touch_lab.collect.session_bag import SessionError
 
 from .cli import train_families
 from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
+from .sessions import fit_model, fold_models, load_runs
+from .suggest_report import card_entry, default_output, format_table, run_suggestions, write_config
 
 #: What each family of simulated people is, for the model card.
 FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 Table II statistics',
@@ -100,14 +107,6 @@ def run(args: argparse.Namespace) -> int:
 def _run_bags(args: argparse.Namespace) -> int:
     """``train bear --bags``: the subtype model from recorded sessions (:mod:`.sessions`), and suggested
     symbolic-gesture settings from their symbolic trials (:mod:`.suggest`)."""
-    from touch_driver.bear.body_map import BodyMap
-    from touch_gestures.bear.gate import NoTouchGate
-    from touch_gestures.bear.symbolic import GestureLibrary
-    from touch_graph.errors import SocialTouchError
-    from touch_graph.paths import share_file
-
-    from .sessions import fit_model, fold_models, load_runs
-    from .suggest_report import card_entry, default_output, format_table, run_suggestions, write_config
     try:
         body_map = BodyMap.default()
         config = args.gestures_config or share_file('config', 'bear_gestures.yaml')

@@ -50,6 +50,9 @@ from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import default_gap_s
 from touch_graph.cli.options import number
+from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.stray import stray_touches
 
 __all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calibrate_acceptance', 'class_scales',
            'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches', 'scores',
@@ -274,9 +277,6 @@ def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float
 def null_touches(count: int = 300, seed: int = 7, gap_s: float = 0.15) -> list[TouchGesture]:
     """``count`` synthetic touches that are no gesture (:func:`touch_sim.skin.stray.stray_touches`, not the
     evaluation's generator) through the virtual skin, cut where a lift lasts ``gap_s``."""
-    from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
-    from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
-    from touch_sim.skin.stray import stray_touches
     rendered = render_samples(stray_touches(count, seed=seed), RenderSettings(
         mode='sensor', placement='mm', seed=seed + 10**6, gap_s=PIECE_GAP_S, min_frames=1), default_cache_dir())
     return [g for r in rendered for g in join_pieces(r.gestures, gap_s)[0] if not g.truncated]

@@ -35,6 +35,13 @@ from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.cli.options import non_negative_int
+from touch_lab.skin.cli import _joined
+from touch_lab.skin.datasets import read_traces
+from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
+from touch_lab.skin.evaluate import choose_codebook
+from touch_lab.skin.recognisers import make_recogniser
+from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
+from touch_sim.skin.synthetic import random_touches
 
 from .acceptance import (
     HeldOut,
@@ -69,11 +76,6 @@ class Fold:
 
 
 def _render(path: str, random_count: int = 150):
-    from touch_lab.skin.cli import _joined
-    from touch_lab.skin.datasets import read_traces
-    from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
-    from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
-    from touch_sim.skin.synthetic import random_touches
     samples = read_traces(path).samples
     multi = max(s.n_strokes for s in samples) > 1
     gap = ENDING_GAP_S if multi else SINGLE_STROKE_GAP_S   # as ``eval skin``
@@ -108,8 +110,6 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
 
 def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=print) -> list[Fold]:
     """Every leave-one-person-out fold of ``path`` read by ``recogniser`` (module doc)."""
-    from touch_lab.skin.evaluate import choose_codebook
-    from touch_lab.skin.recognisers import make_recogniser
     rendered, randoms, gap = _render(path)
     stray = null_touches(gap_s=gap)
     subjects = sorted({r.subject for r in rendered})
@@ -134,8 +134,6 @@ def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=pri
 
 def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | None) -> np.ndarray:
     """The score's weights fit on ``path``'s whole codebook (everyone, read by each other) against stray touches."""
-    from touch_lab.skin.evaluate import choose_codebook
-    from touch_lab.skin.recognisers import make_recogniser
     rendered, _, gap = _render(path)
     book = choose_codebook(rendered, templates_per_gesture, np.random.default_rng(0))
     model = make_recogniser(recogniser).fit([r.gestures[0] for r in book], [r.label for r in book],

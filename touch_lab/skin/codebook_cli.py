@@ -24,6 +24,7 @@ from touch_lab.skin.acceptance import calibrate, wrong_rate
 from touch_lab.skin.recognisers import load_codebook, save_codebook
 
 from .codebook_tools import merge_codebooks, remove_gestures, template_labels
+from .sessions import _say, fit_codebook, load_trials, usable
 
 __all__ = ['ADD', 'CALIBRATE', 'INFO', 'MERGE', 'REMOVE']
 
@@ -81,7 +82,6 @@ def _add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _add(args: argparse.Namespace) -> int:
-    from .sessions import _say, fit_codebook, load_trials, usable
     try:
         base = load_codebook(args.file)
         trials, synthetic = load_trials(args.bags, _say('codebook add'))

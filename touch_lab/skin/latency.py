@@ -33,9 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from touch_gestures.skin.node import SAFETY_RANGES, max_distance_bound
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.skin.node import SAFETY_RANGES, HapticCommandsNode, max_distance_bound
 from touch_gestures.skin.segmentation import MULTISTROKE_GAP_S
 from touch_lab.skin.recognisers import MULTISTROKE_RECOGNISER, make_recogniser, save_codebook
+from touch_sim.harness import Harness
 from touch_sim.skin.people import traced_scene
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
@@ -59,10 +61,6 @@ def _session(scene: Any, params: dict[str, Any], seed: int) -> tuple[dict[int, f
     Returns: frame stamp (ns) -> wall time the driver published it, in publishing order; (wall time,
     HapticCommand) as each command reached a subscriber; the node's outcomes.
     """
-    from touch_driver.skin.node import SkinDriverNode
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_sim.harness import Harness
-
     published: dict[int, float] = {}
     delivered: list[tuple[float, Any]] = []
     with Harness(log_level='error') as harness:

@@ -48,12 +48,18 @@ from typing import Any
 
 from touch_gestures.model_card import attach_card, make_card
 from touch_gestures.skin.codebook import CodebookRecorder
+from touch_gestures.skin.commands import load_command_map
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
+from touch_gestures.skin.node import default_commands_path
 from touch_gestures.skin.registry import RECOGNISERS as RUNTIME_RECOGNISERS
 from touch_gestures.skin.segmentation import GestureSegmenter
 from touch_graph.cli.options import non_negative_seconds, positive_int, seed
+from touch_graph.dds.tool import GraphTool
 from touch_graph.errors import SocialTouchError
+from touch_graph.messages import get_message
+from touch_graph.node_main import StopSignals
+from touch_graph.runtime import QoSProfile, ReliabilityPolicy
 from touch_lab.skin.acceptance import calibrate, wrong_rate
 from touch_lab.skin.recognisers import (
     DEFAULT_RECOGNISER,
@@ -62,6 +68,10 @@ from touch_lab.skin.recognisers import (
     make_recogniser,
     save_codebook,
 )
+from touch_lab.skin.recording import load_recording, save_recording
+from touch_sim.skin.people import traced_scene
+from touch_sim.skin.render import graph_gestures
+from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
 __all__ = ['LiveSession', 'add_arguments', 'partial_path', 'record_simulated', 'run']
 
@@ -124,8 +134,6 @@ def _gesture_names(args: argparse.Namespace) -> list[str]:
         if not names:
             raise ValueError('--gestures needs at least one name')
         return names
-    from touch_gestures.skin.commands import load_command_map
-    from touch_gestures.skin.node import default_commands_path
     return list(load_command_map(args.commands or default_commands_path()).commands)
 
 
@@ -146,10 +154,6 @@ def record_simulated(gestures: Sequence[str], repetitions: int, performers: int,
     Raises:
         ValueError: unknown shape names, bad counts, or too few usable traces for some gesture.
     """
-    from touch_sim.skin.people import traced_scene
-    from touch_sim.skin.render import graph_gestures
-    from touch_sim.skin.synthetic import SHAPES, synthetic_traces
-
     unknown = [g for g in gestures if g not in SHAPES]
     if unknown:
         raise ValueError(f'--simulate can trace only the synthetic shapes ({", ".join(SHAPES)}); unknown: '
@@ -264,11 +268,6 @@ def live_stream(gap_s: float | None) -> SkinFrameStream:
 
 def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
     """Record from the running graph; True when the recorder is complete, False when stopped early."""
-    from touch_graph.dds.tool import GraphTool
-    from touch_graph.messages import get_message
-    from touch_graph.node_main import StopSignals
-    from touch_graph.runtime import QoSProfile, ReliabilityPolicy
-
     type_name = 'social_touch_msgs/msg/SkinFrame'
     session = LiveSession(recorder, live_stream(args.gap))
     with GraphTool('codebook_record') as tool:
@@ -305,8 +304,6 @@ def _record_live(args: argparse.Namespace, recorder: CodebookRecorder) -> bool:
 # ----------------------------------------------------------------------------- entry point
 def run(args: argparse.Namespace) -> int:
     """Entry point of ``social-touch codebook record``; returns the exit status."""
-    from touch_lab.skin.recording import load_recording, save_recording
-
     try:
         make_recogniser(args.recogniser)
         if args.repetitions < 1:

@@ -22,6 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.skin.node import HapticCommandsNode
+from touch_graph.runtime import Context
+from touch_sim.harness import Harness
 from touch_sim.skin.people import SkinScene, people_scene
 
 __all__ = ['SCENE_OPTIONS', 'add_arguments', 'bench_frames', 'bench_node', 'evaluate_sessions', 'run',
@@ -43,10 +47,6 @@ def run_session(scene: SkinScene, seed: int = 0, frames: list | None = None, **n
     Returns: the node (its counters) and the commands as (scene time s, HapticCommand);
     with ``frames`` a list, the ``SkinFrame`` messages are appended to it too.
     """
-    from touch_driver.skin.node import SkinDriverNode
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_sim.harness import Harness
-
     with Harness(log_level='error') as harness:
         node = harness.add_node(HapticCommandsNode, namespace='skin', parameters=node_params)
         commands = harness.collect('/touch/haptic_command', 'HapticCommand', 100)
@@ -96,9 +96,6 @@ def evaluate_sessions(seeds: list[int], codebook: str = '', **scene_options: Any
 def bench_frames(seed: int = 1, repeat: int = 7) -> dict[str, float]:
     """Median wall time (us) of the node's frame callback over a simulated session's frames, for
     frames with and without contact (recognition runs on the frame that ends a gesture)."""
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_graph.runtime import Context
-
     frames: list[Any] = []
     run_session(people_scene(seed=seed, **SCENE_OPTIONS), seed=seed, frames=frames)
     contact = np.array([bool(f.contact) for f in frames])

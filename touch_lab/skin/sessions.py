@@ -16,6 +16,8 @@ compute time, measured).
 
 from __future__ import annotations
 
+import json
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -25,7 +27,10 @@ import numpy as np
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
+from touch_graph.errors import SocialTouchError
+from touch_lab.collect.coverage import read_checked
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
+from touch_lab.skin.codebook_tools import extend_codebook
 from touch_lab.skin.recognisers import make_recogniser
 
 __all__ = ['GRACE_S', 'SkinTrial', 'leave_one_person_out', 'score', 'skin_trials']
@@ -104,7 +109,6 @@ def fit_codebook(trials: list[SkinTrial], recogniser: str, base=None):
     labels = [t.label.gesture for t in keep]
     if base is None:
         return model.fit(gestures, labels)
-    from touch_lab.skin.codebook_tools import extend_codebook
     return extend_codebook(model, gestures, labels)
 
 
@@ -189,7 +193,6 @@ def format_lopo(result: dict, synthetic: bool) -> str:
 
 def load_trials(paths: list[str], progress: Callable[[str], None]) -> tuple[list[SkinTrial], bool]:
     """Read, check and segment every session bag; (trials, synthetic)."""
-    from touch_lab.collect.coverage import read_checked
     sessions = read_checked(paths, 'skin', progress)
     trials = []
     for i, session in enumerate(sessions):
@@ -200,16 +203,11 @@ def load_trials(paths: list[str], progress: Callable[[str], None]) -> tuple[list
 
 # ----------------------------------------------------------------------------- commands
 def _say(prefix: str, quiet: bool = False) -> Callable[[str], None]:
-    import sys
     return (lambda _m: None) if quiet else (lambda m: print(f'[{prefix}] {m}', file=sys.stderr, flush=True))
 
 
 def run_eval_bags(args, recogniser: str) -> int:
     """``social-touch eval skin --bags BAG...``: leave-one-person-out on session bags."""
-    import json
-    import sys
-
-    from touch_graph.errors import SocialTouchError
     say = _say('eval skin')
     try:
         trials, synthetic = load_trials(args.bags, say)

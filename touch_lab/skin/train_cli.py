@@ -14,8 +14,11 @@ import argparse
 import sys
 
 from touch_gestures.model_card import attach_card, make_card
+from touch_graph.errors import SocialTouchError
 from touch_lab.cards import session_data
-from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS
+from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, load_codebook, save_codebook
+
+from .sessions import _say, fit_codebook, load_trials, usable
 
 __all__ = ['add_arguments', 'run']
 
@@ -35,10 +38,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Build the codebook and write it; 2 on bad input (message on stderr)."""
-    from touch_graph.errors import SocialTouchError
-    from touch_lab.skin.recognisers import load_codebook, save_codebook
-
-    from .sessions import _say, fit_codebook, load_trials, usable
     say = _say('train skin', args.quiet)
     try:
         trials, synthetic = load_trials(args.bags, say)
