@@ -53,10 +53,11 @@ from touch_graph.cli.options import number
 from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.stray import stray_touches
+from touch_sim.skin.traces import TraceSample
 
 __all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calibrate_acceptance', 'class_scales',
            'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches', 'scores',
-           'touch_opinions', 'wrong_rate']
+           'skin_touches', 'touch_opinions', 'wrong_rate']
 
 #: A class's scale is this quantile of its held-out templates' distances to it.
 SCALE_QUANTILE = 0.9
@@ -277,8 +278,14 @@ def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float
 def null_touches(count: int = 300, seed: int = 7, gap_s: float = 0.15) -> list[TouchGesture]:
     """``count`` synthetic touches that are no gesture (:func:`touch_sim.skin.stray.stray_touches`, not the
     evaluation's generator) through the virtual skin, cut where a lift lasts ``gap_s``."""
-    rendered = render_samples(stray_touches(count, seed=seed), RenderSettings(
-        mode='sensor', placement='mm', seed=seed + 10**6, gap_s=PIECE_GAP_S, min_frames=1), default_cache_dir())
+    return skin_touches(stray_touches(count, seed=seed), seed + 10**6, gap_s)
+
+
+def skin_touches(samples: Sequence[TraceSample], render_seed: int, gap_s: float) -> list[TouchGesture]:
+    """Synthetic touches (traces in mm on the skin) through the virtual skin with sensor noise seed
+    ``render_seed``, cut where a lift lasts ``gap_s``; a touch cut short by the trace's end is left out."""
+    rendered = render_samples(samples, RenderSettings(
+        mode='sensor', placement='mm', seed=render_seed, gap_s=PIECE_GAP_S, min_frames=1), default_cache_dir())
     return [g for r in rendered for g in join_pieces(r.gestures, gap_s)[0] if not g.truncated]
 
 

@@ -37,7 +37,7 @@ from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE
 from touch_graph.cli.options import non_negative_int
 from touch_lab.skin.cli import _joined
 from touch_lab.skin.datasets import read_traces
-from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
+from touch_lab.skin.ending_eval import PIECE_GAP_S
 from touch_lab.skin.evaluate import choose_codebook
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
@@ -51,8 +51,12 @@ from .acceptance import (
     max_score,
     null_touches,
     scores,
+    skin_touches,
     wrong_rate,
 )
+
+#: Random touches made for each file (the evaluation's generator, touch_sim.skin.synthetic.random_touches).
+RANDOM_TOUCHES = 150
 
 __all__ = ['Fold', 'add_arguments', 'folds', 'measure', 'run', 'whole_file_weights']
 
@@ -75,16 +79,14 @@ class Fold:
     random_made: int
 
 
-def _render(path: str, random_count: int = 150):
+def _render(path: str):
     samples = read_traces(path).samples
     multi = max(s.n_strokes for s in samples) > 1
     gap = ENDING_GAP_S if multi else SINGLE_STROKE_GAP_S   # as ``eval skin``
-    cache = default_cache_dir()
     rendered = _joined(render_samples(samples, RenderSettings(mode='sensor', seed=0, gap_s=PIECE_GAP_S,
-                                                              min_frames=1), cache), ENDING_WAIT_S if multi else gap)
-    made = render_samples(random_touches(random_count, seed=1), RenderSettings(
-        mode='sensor', placement='mm', seed=10**6, gap_s=PIECE_GAP_S, min_frames=1), cache)
-    randoms = [g for r in made for g in join_pieces(r.gestures, gap)[0] if not g.truncated]
+                                                              min_frames=1), default_cache_dir()),
+                       ENDING_WAIT_S if multi else gap)
+    randoms = skin_touches(random_touches(RANDOM_TOUCHES, seed=1), 10**6, gap)
     return rendered, randoms, gap
 
 
@@ -127,7 +129,7 @@ def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=pri
         stray_held, stray_open = _opinions(model, stray)
         random_held, random_open = _opinions(model, randoms)
         out.append(Fold(held, stray_held.subset(stray_open), len(stray), test_held, test_open,
-                        sum(r.subject == subject for r in rendered), random_held, random_open, 150))
+                        sum(r.subject == subject for r in rendered), random_held, random_open, RANDOM_TOUCHES))
         say(f'fold {k + 1}/{len(subjects)} (subject {subject}) read')
     return out
 
