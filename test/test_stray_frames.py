@@ -4,9 +4,12 @@ The flood is SYNTHETIC: the people scene (config/scenes/skin_people.yaml) on the
 real second process on our runtime publishing over Cyclone DDS on the test's own domain.
 """
 
+import itertools
 from types import SimpleNamespace as NS
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from touch_graph.frame_screen import ERROR, WARN, FrameScreen
 from touch_graph.node_health import NodeHealth
@@ -66,6 +69,52 @@ def test_a_counter_out_of_step_is_screened_once_the_driver_is_seen_counting():
     assert screen.admit(frame(200.0, 3)) == []                 # stamped now, but counting from elsewhere
     assert screen.admit(frame(201.0, 40_060))                  # the driver lost 50 frames: still its own
     assert screen.screened == {'sequence_jump': 1}
+
+
+@settings(max_examples=200, deadline=None)
+@given(kept=st.lists(st.booleans(), min_size=2, max_size=400), start=st.integers(0, (1 << 16) - 1))
+def test_frames_the_counter_skipped_are_counted_as_missed(kept, start):
+    # The driver's uint16 counter from any start (so across its wrap); the node is handed only the kept frames.
+    sequence = [(start + i) % (1 << 16) for i in range(len(kept))]
+    taken = [i for i, keep in enumerate(kept) if keep]
+    screen = FrameScreen('/skin/frame')
+    for i in taken:
+        assert screen.admit(frame(100 + i / 150, sequence[i]))
+    # Counting starts at the first +1 step; from there every index skipped is one frame missed.
+    steps = list(itertools.pairwise(taken))
+    first = next((n for n, (a, b) in enumerate(steps) if b == a + 1), None)
+    expected = 0 if first is None else sum(b - a - 1 for a, b in steps[first + 1:])
+    assert screen.missed == expected and screen.counters()['frames_missed'] == expected
+
+
+def test_missed_frames_are_a_warning_and_repeats_or_restarts_are_not_missed():
+    screen = FrameScreen('/skin/frame')
+    for i in (0, 1, 2, 6, 7):                                  # 3, 4, 5 never arrived
+        screen.admit(frame(100 + i / 150, i))
+    screen.admit(frame(100 + 7.5 / 150, 7))                    # a repeat of 7, later stamp: nothing skipped
+    assert screen.missed == 3
+    level, text = screen.status()
+    assert level == WARN and text.startswith('3 frames on /skin/frame missed (6 taken)')
+    assert screen.status() is None                             # nothing new since
+    for i in range(5):                                         # the driver restarts from 0: a new source, no gap
+        screen.admit(frame(10 + i / 150, i))
+    assert screen.missed == 3 and screen.source_changes == 1
+
+
+def test_node_health_puts_the_missed_frames_on_diagnostics():
+    context = Context()
+    context.init()
+    try:
+        node = Node('recogniser', context=context)
+        health = NodeHealth(node)
+        screen = health.screen('/skin/frame')
+        for i in (0, 1, 2, 5):
+            screen.admit(frame(100 + i / 150, i))
+        level, text, counters = health.status()
+        assert level == WARN and '2 frames on /skin/frame missed' in text and counters['frames_missed'] == 2
+        assert health.status()[0] == 0 and health.status()[2]['frames_missed'] == 2
+    finally:
+        context.shutdown()
 
 
 def test_nothing_usable_is_an_error_naming_the_cause():

@@ -11,7 +11,11 @@ and the driver's wire ``sequence`` counter. It follows one *source* and screens 
 - ``'sequence_jump'``: once the source's ``sequence`` is seen counting (+1 per frame), a frame whose
   counter is behind the last one or more than ``max_sequence_gap`` ahead of it.
 
-Frames with the same stamp pass: the node's own checks decide about repeats. A frame the node
+Frames with the same stamp pass: the node's own checks decide about repeats. A counting source's
+forward step of more than one counts the frames in between as *missed*: sent by the sensor, never
+handed to this node (lost on the way, or dropped from the queue of a node that falls behind). Real
+rclpy has no counter of a subscription's queue drops, so this is how a starved recogniser says so
+on either backend. A frame the node
 itself finds unusable (wrong sizes, NaN) is reported with :meth:`FrameScreen.malformed` and never
 becomes the source's last frame, so garbage cannot move the reference either.
 
@@ -87,11 +91,14 @@ class _Source:
         stamp, seq = _stamp_ns(msg), int(getattr(msg, 'sequence', 0))
         return stamp > self.stamp_ns or (stamp == self.stamp_ns and seq == (self.sequence + 1) % _SEQ_MOD)
 
-    def take(self, msg: Any) -> None:
+    def take(self, msg: Any) -> int:
+        """Make ``msg`` this source's last frame; the frames its counter skipped (0 unless counting)."""
         seq = int(getattr(msg, 'sequence', 0))
+        skipped = (seq - self.sequence - 1) % _SEQ_MOD if self.counting else 0
         if seq == (self.sequence + 1) % _SEQ_MOD:
             self.counting = True
         self.frame_id, self.stamp_ns, self.sequence = str(msg.header.frame_id), _stamp_ns(msg), seq
+        return skipped if skipped < _SEQ_MOD - 1 else 0   # the same counter again (a repeat) skips nothing
 
 
 class FrameScreen:
@@ -108,6 +115,7 @@ class FrameScreen:
 
     Attributes:
         admitted: frames handed to the node. screened: reason -> frames screened out (CAUSES).
+        missed: frames the followed source's counter skipped (sent, never handed to the node).
         malformed: reason -> frames the node found unusable (:meth:`malformed`).
         source_changes: times a new source was followed (a restart, a looped bag).
     """
@@ -122,13 +130,14 @@ class FrameScreen:
         self.switch_after = int(switch_after)
         self.max_sequence_gap = int(max_sequence_gap)
         self.admitted = 0
+        self.missed = 0
         self.screened: Counter[str] = Counter()
         self.malformed_: Counter[str] = Counter()
         self.source_changes = 0
         self._source: _Source | None = None
         self._candidate: _Source | None = None
         self._held: list[Any] = []
-        self._seen = (0, Counter(), Counter(), 0)   # admitted, screened, malformed, changes at the last status()
+        self._seen = (0, Counter(), Counter(), 0)   # admitted, screened, malformed, missed at the last status()
 
     @property
     def source(self) -> str:
@@ -152,7 +161,7 @@ class FrameScreen:
         if reason is None:
             if src.continued_by(msg):   # the followed source moves on: whatever was building up is a stray
                 self._candidate, self._held = None, []
-            src.take(msg)
+            self.missed += src.take(msg)
             self.admitted += 1
             return [msg]
         self.screened[reason] += 1
@@ -179,23 +188,27 @@ class FrameScreen:
         return [m for m, _ in held]
 
     def counters(self) -> dict[str, int]:
-        """Totals for /diagnostics: ``frames_admitted``, ``frames_screened_<reason>``,
+        """Totals for /diagnostics: ``frames_admitted``, ``frames_missed``, ``frames_screened_<reason>``,
         ``frames_malformed_<reason>``, ``frame_source_changes``."""
-        return {'frames_admitted': self.admitted,
+        return {'frames_admitted': self.admitted, 'frames_missed': self.missed,
                 **{f'frames_screened_{k}': v for k, v in sorted(self.screened.items())},
                 **{f'frames_malformed_{k}': v for k, v in sorted(self.malformed_.items())},
                 'frame_source_changes': self.source_changes}
 
     def status(self) -> tuple[int, str] | None:
         """(level, message) about the frames since the previous call, or None when all were usable."""
-        admitted0, screened0, malformed0, _ = self._seen
+        admitted0, screened0, malformed0, missed0 = self._seen
         admitted = self.admitted - admitted0
         screened = self.screened - screened0
         malformed = self.malformed_ - malformed0
-        self._seen = (self.admitted, Counter(self.screened), Counter(self.malformed_), self.source_changes)
+        missed = self.missed - missed0
+        self._seen = (self.admitted, Counter(self.screened), Counter(self.malformed_), self.missed)
         bad = sum(screened.values()) + sum(malformed.values())
         if not bad:
-            return None
+            if not missed:
+                return None
+            return WARN, (f'{missed} frames on {self.topic} missed ({admitted} taken): the sensor sent them and this '
+                          'node never had them (lost on the way, or dropped by a node that falls behind)')
         parts = [f'{n} {k} ({CAUSES[k]})' for k, n in sorted(screened.items())]
         parts += [f'{n} malformed: {k}' for k, n in sorted(malformed.items())]
         causes = ', '.join(parts)
@@ -203,5 +216,6 @@ class FrameScreen:
             return ERROR, f'no usable frame on {self.topic}: {bad} received, {causes}'
         who = ('another publisher on the topic interleaves its frames with the driver\'s' if screened
                else 'the driver sends unusable frames')
+        lost = f'; {missed} more missed' if missed else ''
         return WARN, (f'{bad} of {bad + admitted} frames on {self.topic} not used: {causes}; {who}; '
-                      f'following {self.source}')
+                      f'following {self.source}{lost}')
