@@ -20,9 +20,12 @@ seconds; the node processes mark the same window on their own counters (frames p
 The virtual devices play their scripted people in step: the node processes start with
 ``SOCIAL_TOUCH_SIM_EPOCH`` far ahead (the devices send nothing), and once every node is up and
 matched the counter sends them one device time zero (``epoch T`` on their stdin,
-:func:`touch_sim.virtual_port.set_wall_epoch`) ``EPOCH_LEAD_S`` ahead; the window starts
-``WINDOW_AFTER_EPOCH_S`` after it. So two runs count the same stretch of every scene from its
-start, and their events compare topic by topic.
+:func:`touch_sim.virtual_port.set_wall_epoch`) ``EPOCH_LEAD_S`` ahead and one end ``--duration``
+seconds after it (``end T``, :func:`touch_sim.virtual_port.set_wall_end`). The window opens before
+the time zero, while the graph is idle, and closes once the graph has drained: no message on any
+topic but the timers' for ``QUIET_S``. So every run counts what the graph made of the same stretch
+of every scene, however far behind a starved node ran, and their events compare topic by topic;
+the timers' topics (status, /diagnostics) count over the wall seconds of the window.
 
 ``--drivers BACKEND`` runs the three drivers on another backend than the rest (a mixed graph),
 and ``--graph-checks N`` runs ``social-touch node list``, ``topic list`` and ``topic info -v
@@ -30,7 +33,9 @@ and ``--graph-checks N`` runs ``social-touch node list``, ``topic list`` and ``t
 
 Prints (``--out``: writes) one JSON object: the backend, the nodes, the messages per topic in the
 window (a latched topic: every message received), each driver's counters over the window (and the
-``/touch/state`` messages touch_state published in it), and the
+``/touch/state`` messages touch_state published in it), each recogniser's input frames over the
+window (``inputs``: taken, and missed: its driver's sequence skipped them), which nodes publish each
+topic, and the
 callbacks that raised (our runtime counts them and goes on; real rclpy's spin ends at the first,
 which is then the ``error``).
 
@@ -62,12 +67,21 @@ NOT_COUNTED = ('/rosout', '/parameter_events')
 #: Wall seconds for every node process to come up, and for the counter to match every publisher.
 START_TIMEOUT_S = 120.0
 MATCH_TIMEOUT_S = 60.0
-#: Wall seconds from the counter's ``epoch`` line to the devices' time zero (every node process reads it).
-EPOCH_LEAD_S = 1.0
+#: Wall seconds from the counter's ``epoch`` line to the devices' time zero: every node process reads it and
+#: marks the window's start before its first frame.
+EPOCH_LEAD_S = 2.0
 #: The devices' time zero until the counter sends one: far ahead (they send nothing).
 HELD_S = 1e6
-#: Wall seconds from the devices' time zero to the window (the first frames reach every node).
-WINDOW_AFTER_EPOCH_S = 0.5
+#: The graph has drained when no topic but the timers' carried a message for this many wall seconds: longer than
+#: the bear recogniser's watchdog, which ends what is under way within 1.5 max_gap_s (5 s) of the last frame.
+QUIET_S = 8.0
+#: Wall seconds after the devices' end within which the graph must drain.
+DRAIN_TIMEOUT_S = 60.0
+
+
+def timed(topic: str) -> bool:
+    """A topic a timer publishes (a driver's status, /diagnostics, touch_state's ``rate_hz``): it never drains."""
+    return topic in ('/diagnostics', '/touch/state') or topic.endswith('/status')
 #: The start of a node process's report lines on its stdout.
 REPORT = 'scene-report '
 
@@ -91,12 +105,14 @@ def _type_name(cls: type) -> str:
 
 # ---------------------------------------------------------------------------------------------- one node
 def _stdin_commands(marks: list[threading.Event], stop: threading.Event) -> None:
-    """Read ``epoch T``, ``mark`` and ``stop`` lines from the counter process (end of input: stop)."""
-    from touch_sim.virtual_port import set_wall_epoch
+    """Read ``epoch T``, ``end T``, ``mark`` and ``stop`` lines from the counter process (end of input: stop)."""
+    from touch_sim.virtual_port import set_wall_end, set_wall_epoch
     for line in sys.stdin:
         command = line.strip()
         if command.startswith('epoch '):
             set_wall_epoch(float(command.split()[1]))
+        elif command.startswith('end '):
+            set_wall_end(float(command.split()[1]))
         elif command == 'mark':
             next(event for event in marks if not event.is_set()).set()
         elif command == 'stop':
@@ -159,11 +175,15 @@ def run_node(backend: str, index: int) -> int:
 
 
 def _node_counters(node: object) -> dict[str, int]:
-    """A driver's counters (frames published...), touch_state's ``/touch/state`` messages published, or nothing."""
+    """A driver's counters (frames published...), touch_state's ``/touch/state`` messages published, a
+    recogniser's input frames (taken, and missed: sent by its driver, never handed to it), or nothing."""
     if hasattr(node, 'counters'):
         return node.counters()
     if hasattr(node, 'published'):
         return {'published': node.published}
+    screen = getattr(node, 'screen', None)
+    if screen is not None:
+        return {'frames_admitted': screen.admitted, 'frames_missed': screen.missed}
     return {}
 
 
@@ -252,6 +272,21 @@ class _NodeProcess:
         return json.loads(line)
 
 
+def _drain(executor: object, counts: dict[str, int]) -> float | None:
+    """Spin until no topic but the timers' has carried a message for :data:`QUIET_S`: the wall seconds that
+    took, or None when the graph kept publishing for :data:`DRAIN_TIMEOUT_S`."""
+    start = last_change = time.monotonic()
+    seen = {topic: n for topic, n in counts.items() if not timed(topic)}
+    while time.monotonic() - last_change < QUIET_S:
+        if time.monotonic() - start > DRAIN_TIMEOUT_S:
+            return None
+        executor.spin_once(timeout_sec=0.05)
+        now = {topic: n for topic, n in counts.items() if not timed(topic)}
+        if now != seen:
+            seen, last_change = now, time.monotonic()
+    return round(last_change - start, 2)
+
+
 def is_driver(spec: object) -> bool:
     return spec.exec.endswith('_driver')
 
@@ -314,22 +349,18 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
                     f'{topic} {counter.count_publishers(topic)} of {n}' for topic, n in publishers.items()))
             executor.spin_once(timeout_sec=0.05)
         ready_s = time.monotonic() - started
+        executor.spin_once(timeout_sec=0.0)  # take what arrived while matching, before the window
         epoch = time.time() + EPOCH_LEAD_S
+        # The window opens now, before the devices' time zero (the graph idle), for the counter and the nodes.
         for proc in procs:
-            proc.tell(f'epoch {epoch!r}')
-        window_at = epoch + WINDOW_AFTER_EPOCH_S
-        while time.time() < window_at:  # take what arrived while matching, before the window
-            executor.spin_once(timeout_sec=min(0.05, max(0.0, window_at - time.time())))
-        # The window: the same wall seconds for the counter and the node processes' counters.
-        for proc in procs:
-            proc.tell('mark')
+            proc.tell(f'epoch {epoch!r}', f'end {epoch + duration!r}', 'mark')
         for topic in counts:
             if topic not in latched:  # a latched message comes once per subscription, whenever it matched
                 counts[topic] = 0
         kept.clear()
-        end = time.monotonic() + duration
-        while time.monotonic() < end:
+        while time.time() < epoch + duration:
             executor.spin_once(timeout_sec=0.05)
+        drained = _drain(executor, counts)
         for proc in procs:
             proc.tell('mark')
         kept = decoded(list(kept), types, backend)
@@ -347,7 +378,7 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
         reports = [proc.report(deadline) for proc in procs]
     except Exception:
         error = traceback.format_exc()
-        ready_s = None
+        ready_s = drained = None
     finally:
         for proc in procs:
             with contextlib.suppress(OSError):
@@ -362,11 +393,18 @@ def run_scene(backend: str, duration: float, drivers: str | None = None, graph_c
     windows = {up['node']: report['driver'] for up, report in zip(ups, reports, strict=False)
                if report['driver'] is not None}
     drivers = {node: window for node, window in windows.items() if 'frames' in window}
-    published = {node: window['published'] for node, window in windows.items() if 'frames' not in window}
+    published = {node: window['published'] for node, window in windows.items() if 'published' in window}
+    inputs = {node: window for node, window in windows.items() if 'frames_admitted' in window}
+    publishers_of: dict[str, list[str]] = {}
+    for up in ups:
+        for topic, *_ in up['publishers']:
+            publishers_of.setdefault(topic, []).append(up['node'])
     errors = [report['callback_errors'] for report in reports]
     error = error or next((report['error'] for report in reports if report['error']), None)
     return {'backend': backend, 'duration_s': duration, 'start_s': None if ready_s is None else round(ready_s, 2),
+            'drained_s': drained,
             'nodes': names, 'counts': dict(sorted(counts.items())), 'drivers': drivers, 'published': published,
+            'inputs': inputs, 'publishers': {topic: sorted(nodes) for topic, nodes in sorted(publishers_of.items())},
             'callback_errors': None if None in errors else sum(errors), 'graph_checks': checks, 'error': error,
             **({'messages': kept} if dump else {})}
 
@@ -411,7 +449,8 @@ def _shows(argv: tuple[str, ...], stdout: str, rclpy_nodes: list[str]) -> bool:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--backend', choices=('ours', 'rclpy'), required=True)
-    parser.add_argument('--duration', type=float, default=8.0, help='wall seconds to count (default 8)')
+    parser.add_argument('--duration', type=float, default=8.0,
+                        help='seconds of the scenes to play and count (default 8)')
     parser.add_argument('--out', help='write the JSON report to this file (the monitor prints to stdout too)')
     parser.add_argument('--node', type=int, help='run only the N-th node of the scene (the script starts these)')
     parser.add_argument('--drivers', choices=('ours', 'rclpy'), help='the drivers\' backend (default: --backend)')

@@ -84,6 +84,28 @@ def test_set_wall_epoch_starts_held_devices_together(ports, monkeypatch):
     assert in_step(port, epoch) and in_step(later, epoch)
 
 
+def test_set_wall_end_stops_every_device_at_one_moment_with_its_port_open(ports, monkeypatch):
+    from touch_sim.virtual_port import set_wall_end
+    epoch = time.time() - 1.0
+    monkeypatch.setenv(EPOCH_ENV, repr(epoch))
+    port = ports('end_a')
+    port.read(100000)
+    end = time.time() + 0.2
+    set_wall_end(end)
+    try:
+        time.sleep(0.5)
+        port.read(100000)
+        later = ports('end_b')                   # opened after the end: nothing of the scene past it either
+        # Frames 0 .. the last due at the end, at 150 Hz; none after, though the devices' clocks run on.
+        last = int((end - epoch) * 150) + 1
+        assert port.device.next_index == last and port.read(100000) == b'' and port.is_open
+        assert later.read(100000) == b''
+    finally:
+        set_wall_end(None)
+    time.sleep(0.05)
+    assert port.read(100000) != b''              # None plays on
+
+
 class NodeClock:
     """A driver node's clock as the driver attaches it (seconds of ROS time): here the Unix time, or a simulated
     clock from ``start``."""

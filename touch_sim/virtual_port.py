@@ -9,7 +9,8 @@ three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_
 - **time**: by default the device runs on the wall clock from the moment it is opened, or, with
   ``SOCIAL_TOUCH_SIM_EPOCH=T`` in the environment (a Unix time, s), from ``T`` on: devices in
   several processes then play their scenes in step, and one opened before ``T`` sends nothing
-  until then (:func:`set_wall_epoch` moves it). ``port.attach_clock(fn)`` (``fn() -> seconds``)
+  until then (:func:`set_wall_epoch` moves it; :func:`set_wall_end` ends the stretch they play).
+  ``port.attach_clock(fn)`` (``fn() -> seconds``)
   puts it on another clock, such as a graph's simulated clock, so a scene runs faster than real
   time and deterministically. A driver node attaches its own clock; when that clock reads the
   Unix time (ROS time without sim time), the common time zero holds on it too.
@@ -40,7 +41,7 @@ from typing import Any, Protocol
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
 __all__ = ['EPOCH_ENV', 'DeviceModel', 'DeviceState', 'PortOptionError', 'VirtualSerial', 'device_state',
-           'forget_device', 'forget_devices', 'parse_url', 'set_wall_epoch']
+           'forget_device', 'forget_devices', 'parse_url', 'set_wall_end', 'set_wall_epoch']
 
 
 class DeviceModel(Protocol):
@@ -226,6 +227,8 @@ class VirtualSerial(SerialBase):
             self.is_open = False
             raise SerialException('device reports readiness to read but returned no data '
                                   '(device disconnected or multiple access on port?)')
+        if _wall_end is not None and (self._clock is None or _reads_unix_time(self._clock)):
+            t = min(t, t - (time.time() - _wall_end))   # the stretch of the scene played ends there
         model = state.model
         period = model.frame_period
         due = math.floor(t / period) + 1  # frames 0..due-1 are due (none before device time 0)
@@ -321,6 +324,17 @@ def set_wall_epoch(epoch: float) -> None:
                 state.epoch = _wall_epoch()
             elif _reads_unix_time(state.clock):
                 state.epoch = _epoch_on(state.clock)
+
+
+_wall_end: float | None = None
+
+
+def set_wall_end(end: float | None) -> None:
+    """From Unix time ``end`` (s) on, every wall-clock device of this process sends no more frames (its port
+    stays open and plugged): processes that play a scene in step stop at one moment too, and whatever the
+    graph does after it works on that stretch alone. None plays on."""
+    global _wall_end
+    _wall_end = end
 
 
 #: How far an attached clock may read from ``time.time()`` and still count as the wall clock, s (a node's ROS
