@@ -1,19 +1,11 @@
 """Rebuild a readable rosbag2 from MCAP files whose writer died (``social-touch bag reindex BAG``).
 
-A recorder killed with SIGKILL leaves an MCAP file with its header, the chunks it flushed
-(each followed by its message indexes), perhaps a torn last record, and no summary, footer
-or ``metadata.yaml``. :func:`scan_mcap` reads such a file record by record with the ``mcap``
-library's stream reader, checking every chunk's CRC, and stops at the first record that is
-torn or unreadable. :func:`reindex` then writes the file again with the ``mcap`` writer from
-what survived (schemas, channels and the messages of every whole chunk whose CRC checks; a
-corrupted chunk is dropped and counted), which gives it its summary, indexes and footer, and
-writes ``metadata.yaml``. A complete file whose chunks all check is left as it is and only
-gets its ``metadata.yaml`` regenerated. Running it twice is safe.
-
-A rewrite needs room for one more copy of the file beside it. On a full disk (the recorder stopped
-for lack of space) it is refused before anything is written, the original left as it was, and
-``output`` (``social-touch bag reindex BAG -o OTHER``) rebuilds the bag on another disk instead;
-a disk that fills during the rewrite removes the partial copy and says the same.
+:func:`scan_mcap` reads a file record by record with ``mcap``'s stream reader, checking each
+chunk's CRC, up to the first torn or unreadable record. :func:`reindex` writes each damaged
+file again with the ``mcap`` writer from what survived (corrupt chunks dropped and counted),
+giving it summary, indexes and footer, and writes ``metadata.yaml``; a complete file is left
+as it is. Safe to run twice. A rewrite needs room for one more copy of the file; without it
+nothing is written, and ``output`` rebuilds the bag on another disk instead.
 """
 
 from __future__ import annotations

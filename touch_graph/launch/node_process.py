@@ -1,15 +1,7 @@
-"""A launched node in a process of its own, started by the launcher.
+"""One launched node in a process of its own: ``python -c "$NODE_PROCESS_MAIN" SPEC_JSON PARENT_PID [--strict-params]``.
 
-``python -c "$NODE_PROCESS_MAIN" SPEC_JSON PARENT_PID [--strict-params]`` (:data:`NODE_PROCESS_MAIN`).
-
-The launcher (:mod:`.processes`) starts one of these per node that runs alone. It builds the
-node from its :class:`~.specs.NodeSpec` exactly as the launcher would in its own process (a
-:class:`~.runner.LaunchRunner` of one node, on the DDS domain; on real rclpy when
-``touch_graph.compat`` uses it, i.e. ROS 2 is sourced and ``SOCIAL_TOUCH_SHIM`` is unset), spins it until SIGINT or
-SIGTERM, and exits with 0 after a clean stop, or 1 when the node cannot start or a callback of
-it raised (the error on stderr; a raising callback ends an rclpy node too). It also dies with
-the launcher: Linux sends it SIGTERM when the launcher's process ends, however that happens
-(``prctl(PR_SET_PDEATHSIG)``), so no node outlives its launch.
+Exits 0 after a clean stop, 1 when the node cannot start or a callback raised; dies with
+the launcher (``prctl(PR_SET_PDEATHSIG)``).
 """
 
 from __future__ import annotations

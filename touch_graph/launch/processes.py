@@ -1,22 +1,10 @@
-"""Nodes in processes of their own: start them, watch them, restart them, stop them, as ros2 launch does.
+"""Nodes in processes of their own: start, watch, restart and stop them as ros2 launch does.
 
-Each node that runs alone is a Python process running :func:`.node_process.main` (:mod:`.node_process`)
-with its spec; they and the launcher meet on the DDS domain. ros2 launch's conventions:
-
-- a process is named ``<name>-<n>`` (the node's name, else its executable; ``n`` counts the
-  launch's processes), its output lines are prefixed with ``[<name>-<n>] ``, and its life is
-  reported: ``process started with pid [P]``, ``process has finished cleanly [pid P]``,
-  ``process has died [pid P, exit code C, cmd '...']``;
-- ``respawn: true`` restarts a process that exits, after ``respawn_delay`` seconds, at most
-  ``respawn_max_retries`` times (-1: no limit). Unlike ros2 launch, a process that keeps
-  dying soon after it starts (within :data:`STABLE_S`) is not restarted in a busy loop: the
-  delay doubles from :data:`FIRST_BACKOFF_S` with every such death, up to
-  :data:`MAX_BACKOFF_S`, and each restart says how long it waits and why; a process that
-  ran for a while is restarted after ``respawn_delay`` again;
-- shutdown: SIGINT to every process, SIGTERM after ``sigterm_timeout``, SIGKILL after
-  ``sigkill_timeout`` more; each is waited for, so none is left running. Processes run in
-  sessions of their own (a Ctrl-C reaches the launcher only, which stops them in order) and
-  die with the launcher if it is killed (:func:`.node_process.die_with_parent`).
+Process names (``<name>-<n>``), output prefixes and life reports follow ros2 launch.
+``respawn`` restarts after ``respawn_delay`` at most ``respawn_max_retries`` times (-1: no
+limit); a process that dies within :data:`STABLE_S` of starting waits longer each time
+(from :data:`FIRST_BACKOFF_S`, doubling, up to :data:`MAX_BACKOFF_S`). Shutdown: SIGINT,
+SIGTERM after ``sigterm_timeout``, SIGKILL after ``sigkill_timeout`` more.
 """
 
 from __future__ import annotations

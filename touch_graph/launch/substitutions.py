@@ -1,12 +1,11 @@
 """ROS 2 launch substitutions: ``$(var x)``, ``$(env X default)``, ``$(eval ...)``, ...
 
-A string in a launch file is a *template*: literal text mixed with substitutions
-``$(name arg1 arg2 ...)``, parsed once (so a syntax error is reported at load time with the
-file and line) and evaluated when the launch file runs, against a :class:`Scope` (the
-launch configurations, the current file, the environment). The grammar follows ros2/launch
-(``launch/frontend/grammar.lark``): arguments are separated by spaces, an argument may be
-quoted with ``'`` or ``"`` (and then hold spaces and other substitutions), substitutions
-nest, and a backslash escapes the next character.
+A string in a launch file is a *template* of literal text and substitutions ``$(name args...)``,
+parsed once (a syntax error names file and line before anything runs) and evaluated against
+a :class:`Scope`. The grammar is ros2/launch's (``launch/frontend/grammar.lark``): arguments
+separated by spaces, quoted with ``'`` or ``"`` to hold spaces and substitutions, nested
+substitutions, a backslash escaping the next character. :data:`SUBSTITUTIONS` lists the
+supported ones (those of ros2/launch and launch_ros, minus ``command``, which runs a program).
 
 >>> t = parse_template("$(var ns)/skin_$(eval '2 * 3')")
 >>> evaluate(t, Scope(configurations={'ns': '/robot'}), Location('demo.yaml', 3))
@@ -18,25 +17,6 @@ Traceback (most recent call last):
 ...
 touch_graph.launch.substitutions.TemplateSyntaxError: in '$(vra x)' at column 1: unknown substitution \
 '$(vra ...)' (did you mean 'var'?); supported: all, and, ...
-
-Supported substitutions (the names ros2/launch and launch_ros expose; others such as
-``$(command ...)``, which would run a program, are an error):
-
-=====================  ===============================================================
-``var NAME``           a launch argument or ``let`` value; an error if it is not set
-``env NAME [DEFAULT]`` an environment variable; an error if unset and no default
-``optenv NAME [DEF]``  an environment variable, ``DEF`` (or empty) if unset
-``find-pkg-share PKG`` the package's share directory (:func:`touch_graph.paths.package_share`)
-``dirname``            the directory of the launch file being read
-``filename``           the path of the launch file being read
-``anon NAME``          ``NAME`` plus a random suffix, the same for the same NAME in one launch
-``eval EXPR``          a restricted expression (:mod:`touch_graph.launch.safe_eval`), as text
-``not X``              ``'true'``/``'false'``; X is a boolean (true/false/yes/no/on/off/1/0)
-``and A B``/``or A B`` logical and/or of two booleans
-``any A ...``/``all``  logical any/all of one or more booleans
-``equals A B``         ``'true'`` when equal as booleans, as numbers (``isclose``) or as text
-``notequals A B``      the negation of ``equals``
-=====================  ===============================================================
 """
 
 from __future__ import annotations
