@@ -52,11 +52,6 @@ SLICE_S = 0.1
 Registry = Mapping[tuple[str, str], Any]
 
 
-def _tuple(exceptions: Any) -> tuple[type[BaseException], ...]:
-    """An ``except`` clause's classes as a tuple (one class, a tuple, or none)."""
-    return exceptions if isinstance(exceptions, tuple) else (exceptions,)
-
-
 def _normalize(name: str) -> str:
     return name.replace('-', '_').lower()
 
@@ -347,22 +342,21 @@ class LaunchRunner:
             raise LaunchError('spin() before start(): call start() first (or use the runner as a context manager)')
         if duration is not None and not (duration >= 0):
             raise ValueError(f'duration must be >= 0 seconds, got {duration!r}')
-        external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())
+        external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())  # a class, or none
+        external_shutdown = external_shutdown if isinstance(external_shutdown, tuple) else (external_shutdown,)
+        ros_time = hasattr(self.executor, 'spin_until_time')  # ours; real rclpy's executor spins in wall time
+        now = self.context.now_ns if ros_time else time.monotonic
+        end = None if duration is None else now() + (round(duration * 1e9) if ros_time else duration)
         previous = self._install_signal_handlers() if handle_signals else {}
         try:
-            if not hasattr(self.executor, 'spin_until_time'):  # real rclpy's executor: slices of wall time
-                self._spin_wall(duration, every_slice)
-                return
-            end = None if duration is None else self.context.now_ns() + round(duration * 1e9)
-            while not self._stop.is_set() and self.context.ok():
-                now = self.context.now_ns()
-                if end is not None and now >= end:
-                    break
-                # Spin in short slices of ROS time so a stop request is seen between callbacks.
-                slice_end = now + round(SLICE_S * 1e9)
+            while not self._stop.is_set() and self.context.ok() and (end is None or now() < end):
                 try:
-                    self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
-                except (KeyboardInterrupt, SystemExit, *_tuple(external_shutdown)):
+                    if ros_time:  # short slices of ROS time, so a stop request is seen between callbacks
+                        slice_end = now() + round(SLICE_S * 1e9)
+                        self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+                    else:
+                        self.executor.spin_once(timeout_sec=SLICE_S)
+                except (KeyboardInterrupt, SystemExit, *external_shutdown):
                     raise
                 except Exception as err:
                     if not self._node_died(err):
@@ -374,20 +368,6 @@ class LaunchRunner:
         finally:
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
-
-    def _spin_wall(self, duration: float | None, every_slice: Callable[[], None] | None) -> None:
-        end = None if duration is None else time.monotonic() + duration
-        external_shutdown = _tuple(getattr(self.runtime, 'ExternalShutdownException', ()))
-        while not self._stop.is_set() and self.context.ok() and (end is None or time.monotonic() < end):
-            try:
-                self.executor.spin_once(timeout_sec=SLICE_S)
-            except (KeyboardInterrupt, SystemExit, *external_shutdown):
-                raise
-            except Exception as err:
-                if not self._node_died(err):
-                    return
-            if every_slice is not None:
-                every_slice()
 
     def _node_died(self, err: Exception) -> bool:
         """Report the node whose callback raised ``err`` as dead and destroy it; False when none is left.

@@ -114,8 +114,9 @@ def _syntax(text: str, i: int, message: str) -> TemplateSyntaxError:
     return TemplateSyntaxError(f'in {text!r} at column {i + 1}: {message}')
 
 
-def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
-    """Parts until ``stop`` (a closing quote, or '' for the end of the text)."""
+def _parse_sequence(text: str, i: int, stop: str, name: str = '') -> tuple[Template, int]:
+    """Parts until ``stop``: a closing quote, '' for the end of the text, or ' )' for the end of the
+    unquoted argument of ``$(name ...)``."""
     parts: list[Text | Call] = []
     buffer: list[str] = []
 
@@ -126,7 +127,7 @@ def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
 
     while i < len(text):
         char = text[i]
-        if stop and char == stop:
+        if stop and char in stop:
             flush()
             return tuple(parts), i
         if char == '\\' and i + 1 < len(text):
@@ -136,10 +137,13 @@ def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
             flush()
             call, i = _parse_call(text, i)
             parts.append(call)
+        elif stop == ' )' and char in '(\'"':
+            raise _syntax(text, i, f"{char!r} inside an unquoted argument of '$({name} ...)'; quote the whole "
+                          "argument ('...' or \"...\") or escape it with a backslash")
         else:
             buffer.append(char)
             i += 1
-    if stop:
+    if stop and stop != ' )':
         raise _syntax(text, i, f'missing closing {stop} of a quoted substitution argument')
     flush()
     return tuple(parts), i
@@ -177,28 +181,7 @@ def _parse_argument(text: str, i: int, name: str) -> tuple[Template, int]:
     if i < len(text) and text[i] in '\'"':
         parts, i = _parse_sequence(text, i + 1, stop=text[i])
         return parts, i + 1
-    parts: list[Text | Call] = []
-    buffer: list[str] = []
-    while i < len(text) and text[i] not in ' )':
-        char = text[i]
-        if char == '\\' and i + 1 < len(text):
-            buffer.append(text[i + 1])
-            i += 2
-        elif text.startswith('$(', i):
-            if buffer:
-                parts.append(Text(''.join(buffer)))
-                buffer.clear()
-            call, i = _parse_call(text, i)
-            parts.append(call)
-        elif char in '(\'"':
-            raise _syntax(text, i, f"{char!r} inside an unquoted argument of '$({name} ...)'; quote the whole "
-                          "argument ('...' or \"...\") or escape it with a backslash")
-        else:
-            buffer.append(char)
-            i += 1
-    if buffer:
-        parts.append(Text(''.join(buffer)))
-    return tuple(parts), i
+    return _parse_sequence(text, i, ' )', name)
 
 
 def _check_call(name: str, n_args: int, text: str, i: int) -> None:
