@@ -31,6 +31,7 @@ from .metadata import (
     TopicRecord,
     bag_metadata,
     qos_text,
+    serialized_metadata,
     to_bag_qos,
     type_hash,
     write_metadata,
@@ -124,7 +125,7 @@ class BagRecorder:
             if writer is not None:
                 try:
                     info = self._metadata()
-                    writer.add_metadata('rosbag2', {'serialized_metadata': _yaml(info['rosbag2_bagfile_information'])})
+                    writer.add_metadata('rosbag2', {'serialized_metadata': serialized_metadata(info)})
                     writer.finish()
                     self._file.flush()
                     os.fsync(self._file.fileno())
@@ -298,7 +299,3 @@ class BagRecorder:
 def _no_space(err: OSError) -> bool:
     return err.errno in (errno.ENOSPC, errno.EDQUOT)
 
-
-def _yaml(data: Any) -> str:
-    import yaml
-    return yaml.safe_dump(data, sort_keys=False).strip()

@@ -59,7 +59,6 @@ class NodeProcess:
     restarts: int = 0
     quick_deaths: int = 0
     exit_codes: list[int] = field(default_factory=list)
-    gave_up: bool = False
     reported: bool = False  # its last exit was handled (reported, restart planned)
     _reader: threading.Thread | None = None
 
@@ -149,10 +148,8 @@ class ProcessSupervisor:
                  self.stream)
         options = process.options
         if not options.respawn:
-            process.gave_up = True
             return
         if 0 <= options.respawn_max_retries <= process.restarts:
-            process.gave_up = True
             _log('ERROR', process.label, f'not restarting it again: it was restarted {process.restarts} times '
                                          f'(respawn_max_retries)', self.stream)
             return
