@@ -188,12 +188,11 @@ class _Evaluator:
         try:
             text = self.text(action.file, action.where)
         except LaunchError:
-            if self.dry_run:
-                self.unresolved_includes.append(action.where)
-                return
-            raise
+            if not self.dry_run:
+                raise
+            text = ''  # a dry run: not known before the launch runs
         path = Path(text)
-        if not path.is_file():
+        if not text or not path.is_file():
             if self.dry_run:
                 self.unresolved_includes.append(action.where)
                 return
