@@ -10,7 +10,7 @@ import signal
 
 import pytest
 
-from touch_graph.launch import node_process, runner
+from touch_graph.launch import processes, runner
 from touch_graph.launch.specs import NodeSpec, spec_to_json
 from touch_graph.node_main import StopSignals, run_node
 from touch_graph.runtime import Node
@@ -45,7 +45,7 @@ def test_a_launched_node_process_stops_cleanly_on_a_signal_during_start(dds_doma
     monkeypatch.setattr(runner.LaunchRunner, 'start', start_and_get_signalled)
     spec = NodeSpec(pkg='social_touch', exec='touch_monitor', name='early_stop', namespace=None, params=(),
                     remaps=(), file='<test>', line=None)
-    assert node_process.main([spec_to_json(spec), str(os.getppid())]) == 0
+    assert processes.node_process_main([spec_to_json(spec), str(os.getppid())]) == 0
 
 
 def test_a_second_signal_raises_keyboard_interrupt():

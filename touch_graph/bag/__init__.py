@@ -1,13 +1,4 @@
-"""rosbag2 record and replay: MCAP bags that ``ros2 bag``, Foxglove and rosbags open.
-
-- :class:`BagRecorder`: writes a bag with the ``mcap`` writer, chunks with CRCs, flushed once a second
-  (survives SIGKILL, see :func:`reindex`);
-- :class:`BagPlayer`: reads one for replay, checking message definitions against ours;
-- :class:`RecorderNode`, :class:`PlayerNode`: the ``recorder`` / ``player`` nodes for launch files;
-- :func:`reindex`: rebuilds (with the ``mcap`` reader and writer) a bag whose recorder died, dropping
-  chunks whose CRC does not check;
-- :mod:`.metadata`: the bag's ``metadata.yaml``, written by both.
-"""
+"""rosbag2 record and replay: MCAP bags that ``ros2 bag``, Foxglove and rosbags open."""
 
 from .definitions import DefinitionCheck, check_definition
 from .player import BagPlayer, BagTopic, bag_info

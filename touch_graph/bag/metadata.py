@@ -23,7 +23,7 @@ from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, Qo
 from rosbags.rosbag2.metadata import dump_qos_v9, parse_qos
 
 __all__ = ['DEFAULT_ROS_DISTRO', 'SCHEMA_ENCODING', 'FileRecord', 'TopicRecord', 'bag_metadata', 'qos_text',
-           'ros_distro', 'to_bag_qos', 'type_hash', 'write_metadata']
+           'ros_distro', 'serialized_metadata', 'to_bag_qos', 'type_hash', 'write_metadata']
 
 #: MCAP schema encoding of a ROS 2 ``.msg`` definition (with its nested types), as rosbag2 writes it.
 SCHEMA_ENCODING = 'ros2msg'
@@ -141,6 +141,11 @@ def bag_metadata(files: list[FileRecord], topics: list[TopicRecord],
         'files': [{'path': f.path, 'starting_time': {'nanoseconds_since_epoch': f.span[0]},
                    'duration': {'nanoseconds': f.span[1]}, 'message_count': f.message_count} for f in files],
         'custom_data': dict(custom_data) if custom_data else None, 'ros_distro': ros_distro()}}
+
+
+def serialized_metadata(info: dict) -> str:
+    """The bag information of ``metadata.yaml`` content as rosbag2 stores it in the MCAP file's ``rosbag2`` metadata."""
+    return yaml.safe_dump(info['rosbag2_bagfile_information'], sort_keys=False).strip()
 
 
 def write_metadata(bag: Path, info: dict) -> None:

@@ -1,12 +1,4 @@
-"""Read a rosbag2 for replay: topics, definition checks, messages in time order, replay timing.
-
-:class:`BagPlayer` opens a bag with ``rosbags.rosbag2.Reader`` (MCAP or SQLite3, any
-rosbag2 version rosbags reads), keeps the topics asked for, checks their message
-definitions against ours (:mod:`touch_graph.bag.definitions`) and yields their messages
-in time order. :meth:`BagPlayer.play_time` maps a recorded stamp to the ROS time at which
-to publish it: ``origin + (stamp - first) / rate``. The graph side (publishers, timers) is
-:class:`touch_graph.bag.player_node.PlayerNode`.
-"""
+"""Read a rosbag2 for replay (rosbags' Reader: MCAP or SQLite3): topics, definition checks, messages in time order."""
 
 from __future__ import annotations
 

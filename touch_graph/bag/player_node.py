@@ -1,11 +1,7 @@
 """The ``player`` node: replays a rosbag2 into the process's graph, e.g. from a launch file.
 
-It republishes ``bag`` with its recorded timing on the context's clock (``rate``), or in
-``fast`` mode one message per ``fast_period`` of ROS time; ``loop``, ``topics``,
-``start_offset``; it waits up to ``wait_for_subscribers`` seconds for a subscription on
-every topic before the first message. On a fast simulated clock replay takes no wall time
-and loses nothing: time jumps to the next message only when every callback has run. On a
-ROS 2 machine use ``ros2 bag play``, which reads the same bags.
+On a fast simulated clock replay takes no wall time and loses nothing: time jumps to the
+next message only when every callback has run.
 """
 
 from __future__ import annotations

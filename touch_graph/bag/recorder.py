@@ -1,26 +1,14 @@
 """Write rosbag2 bags (MCAP storage, metadata version 9) that survive a crash of their writer.
 
-:class:`BagRecorder` writes the MCAP file with the ``mcap`` library's writer, in rosbag2's ROS 2
-profile: each topic is a channel (CDR messages, its offered QoS in ``offered_qos_profiles``) whose
-schema is the type's full ``.msg`` definition from :data:`touch_graph.messages.typestore`, so
-``ros2 bag``, Foxglove and the rosbags reader can decode it. Every chunk carries the CRC-32 of
-its records, so a reader detects a corrupted chunk instead of decoding garbage.
+The file is written with the ``mcap`` writer in rosbag2's ROS 2 profile: a channel per topic
+(CDR, its offered QoS in ``offered_qos_profiles``) whose schema is the type's full ``.msg``
+definition; chunks carry CRCs. A message's log time is when it was received, its publish time
+when it was sent (rosbag2 Jazzy's ``recv_timestamp``/``send_timestamp``).
 
-Times as rosbag2 (Jazzy) writes them: a message's MCAP log time is when the recorder received
-it (``recv_timestamp``; replay timing and the bag's duration follow it), its publish time when
-its publisher sent it (``send_timestamp``), so a latched sample sent long before the recording
-started does not stretch the bag.
-
-Durability: the writer keeps messages in an in-memory chunk until it holds 1 MiB or the bag
-closes. A background thread closes the pending chunk (the writer's public ``flush()``) and
-fsyncs the file every ``flush_period_s`` (default 1 s), so a recorder killed with SIGKILL loses
-at most about that much; :func:`touch_graph.bag.reindex.reindex` then rebuilds the summary and
-``metadata.yaml``. :meth:`BagRecorder.close` writes both.
-
-A full disk (ENOSPC, or a quota: EDQUOT) stops the recording at once and for good: the file keeps
-what reached the disk, nothing more is written to it (a half-written chunk is never followed by
-more bytes), every later message is refused and counted in ``dropped``, and the error names the
-messages kept and the command that makes the bag readable again.
+A background thread closes the pending chunk and fsyncs every ``flush_period_s``, so a
+recorder killed with SIGKILL loses at most that much (:func:`touch_graph.bag.reindex.reindex`
+rebuilds the rest). A full disk (ENOSPC, EDQUOT) stops the recording for good: the file keeps
+what reached the disk, later messages are refused and counted in ``dropped``.
 """
 
 from __future__ import annotations
@@ -43,6 +31,7 @@ from .metadata import (
     TopicRecord,
     bag_metadata,
     qos_text,
+    serialized_metadata,
     to_bag_qos,
     type_hash,
     write_metadata,
@@ -136,7 +125,7 @@ class BagRecorder:
             if writer is not None:
                 try:
                     info = self._metadata()
-                    writer.add_metadata('rosbag2', {'serialized_metadata': _yaml(info['rosbag2_bagfile_information'])})
+                    writer.add_metadata('rosbag2', {'serialized_metadata': serialized_metadata(info)})
                     writer.finish()
                     self._file.flush()
                     os.fsync(self._file.fileno())
@@ -310,7 +299,3 @@ class BagRecorder:
 def _no_space(err: OSError) -> bool:
     return err.errno in (errno.ENOSPC, errno.EDQUOT)
 
-
-def _yaml(data: Any) -> str:
-    import yaml
-    return yaml.safe_dump(data, sort_keys=False).strip()

@@ -1,13 +1,7 @@
 """The ``recorder`` node: records topics of the process's graph to a rosbag2, e.g. from a launch file.
 
-A node of the in-process graph (it uses raw subscriptions and the graph listener of
-:mod:`touch_graph.runtime`); on a ROS 2 machine use ``ros2 bag record``, which writes the
-same bags. It records ``topics`` (all topics published in the process when empty) to
-``output`` with raw subscriptions. A message's log time is the context's ROS time when its
-callback runs (the receive time, as ``ros2 bag record`` stamps it; on a fast simulated clock
-the publish time exactly, as time does not move while callbacks are pending), its publish
-time the time its publisher sent it. The bag is flushed once a second and closed when the node is destroyed
-or the context shuts down. To record other processes' topics use ``social-touch record``.
+A message's log time is the context's ROS time when its callback runs, its publish time when
+it was sent. To record other processes' topics use ``social-touch record`` (or ``ros2 bag record``).
 """
 
 from __future__ import annotations

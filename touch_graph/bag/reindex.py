@@ -1,19 +1,11 @@
 """Rebuild a readable rosbag2 from MCAP files whose writer died (``social-touch bag reindex BAG``).
 
-A recorder killed with SIGKILL leaves an MCAP file with its header, the chunks it flushed
-(each followed by its message indexes), perhaps a torn last record, and no summary, footer
-or ``metadata.yaml``. :func:`scan_mcap` reads such a file record by record with the ``mcap``
-library's stream reader, checking every chunk's CRC, and stops at the first record that is
-torn or unreadable. :func:`reindex` then writes the file again with the ``mcap`` writer from
-what survived (schemas, channels and the messages of every whole chunk whose CRC checks; a
-corrupted chunk is dropped and counted), which gives it its summary, indexes and footer, and
-writes ``metadata.yaml``. A complete file whose chunks all check is left as it is and only
-gets its ``metadata.yaml`` regenerated. Running it twice is safe.
-
-A rewrite needs room for one more copy of the file beside it. On a full disk (the recorder stopped
-for lack of space) it is refused before anything is written, the original left as it was, and
-``output`` (``social-touch bag reindex BAG -o OTHER``) rebuilds the bag on another disk instead;
-a disk that fills during the rewrite removes the partial copy and says the same.
+:func:`scan_mcap` reads a file record by record with ``mcap``'s stream reader, checking each
+chunk's CRC, up to the first torn or unreadable record. :func:`reindex` writes each damaged
+file again with the ``mcap`` writer from what survived (corrupt chunks dropped and counted),
+giving it summary, indexes and footer, and writes ``metadata.yaml``; a complete file is left
+as it is. Safe to run twice. A rewrite needs room for one more copy of the file; without it
+nothing is written, and ``output`` rebuilds the bag on another disk instead.
 """
 
 from __future__ import annotations
@@ -32,7 +24,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
 from ..errors import BagError
-from .metadata import FileRecord, TopicRecord, bag_metadata, type_hash, write_metadata
+from .metadata import FileRecord, TopicRecord, bag_metadata, serialized_metadata, type_hash, write_metadata
 
 __all__ = ['McapScan', 'ReindexReport', 'reindex', 'scan_mcap']
 
@@ -190,40 +182,32 @@ def _space_error(bag: Path, err: OSError | None, need: int, free: int) -> BagErr
                     f'social-touch bag reindex {bag} -o OTHER_DIR/{bag.name}')
 
 
-def _rewrite(path: Path, scan: McapScan, info: dict, dest: Path | None = None) -> None:
-    """Write ``path`` again (to ``dest``, default ``path`` itself) from its whole, checked records, with
-    summary and footer, atomically: a temporary file renamed over the target; removed on failure."""
-    dest = dest or path
+def _rewrite(path: Path, scan: McapScan, info: dict, dest: Path) -> None:
+    """Write ``path`` again to ``dest`` from its whole, checked records, with summary and footer, atomically:
+    a temporary file renamed over ``dest``, removed on failure."""
     tmp = dest.with_name(dest.name + '.reindex')
     try:
-        _write_copy(path, scan, info, tmp)
+        with tmp.open('wb') as out:
+            writer = Writer(out, compression=CompressionType.NONE)
+            writer.start(profile=scan.profile or 'ros2', library='social_touch reindex')
+            schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in scan.schemas.items()}
+            channel_ids = {cid: writer.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
+                                                        dict(c.metadata)) for cid, c in scan.channels.items()}
+
+            def write(found: list[Message]) -> None:
+                for m in found:
+                    if m.channel_id in channel_ids:
+                        writer.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
+
+            _records(path, McapScan(path, scan.size), write)
+            writer.add_metadata('rosbag2', {'serialized_metadata': serialized_metadata(info)})
+            writer.finish()
+            out.flush()
+            os.fsync(out.fileno())
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     tmp.replace(dest)
-
-
-def _write_copy(path: Path, scan: McapScan, info: dict, tmp: Path) -> None:
-    import yaml
-    with tmp.open('wb') as out:
-        writer = Writer(out, compression=CompressionType.NONE)
-        writer.start(profile=scan.profile or 'ros2', library='social_touch reindex')
-        schema_ids = {sid: writer.register_schema(s.name, s.encoding, s.data) for sid, s in scan.schemas.items()}
-        channel_ids = {cid: writer.register_channel(c.topic, c.message_encoding, schema_ids.get(c.schema_id, 0),
-                                                    dict(c.metadata)) for cid, c in scan.channels.items()}
-
-        def write(found: list[Message]) -> None:
-            for m in found:
-                if m.channel_id in channel_ids:
-                    writer.add_message(channel_ids[m.channel_id], m.log_time, m.data, m.publish_time, m.sequence)
-
-        again = McapScan(path, scan.size)
-        _records(path, again, write)
-        writer.add_metadata('rosbag2', {'serialized_metadata': yaml.safe_dump(
-            info['rosbag2_bagfile_information'], sort_keys=False).strip()})
-        writer.finish()
-        out.flush()
-        os.fsync(out.fileno())
 
 
 @dataclass

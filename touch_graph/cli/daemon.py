@@ -1,9 +1,4 @@
-"""``social-touch daemon start | stop | status``: the graph daemon of this domain, as ``ros2 daemon``.
-
-The graph commands (``topic list``, ``node list``, ``service list`` ...) ask the daemon of their
-``ROS_DOMAIN_ID`` and discovery setting, and start it on first use; it stays in the domain until
-stopped (or two hours without a question). :mod:`touch_graph.daemon` explains the design.
-"""
+"""``social-touch daemon start | stop | status``: this domain's graph daemon (:mod:`touch_graph.daemon`)."""
 
 from __future__ import annotations
 

@@ -1,13 +1,8 @@
 """``social-touch``: the command runner, and the table of the runtime's own commands.
 
-A command is a module (or an object, ``module:object``) with ``add_arguments(parser)`` and
-``run(args) -> int``. Each layer declares its commands in a table, ``name -> (target, one-line help)``,
-read by a person ("go to definition" follows the dotted path) and by this runner: the top-level
-``--help`` prints the table's help strings, and a command's module is imported only when that
-command is run or its own ``--help`` is asked for. The runtime knows only its own table
-(:data:`COMMANDS`); the ``social-touch`` console script is ``touch_lab.cli.main``, the top layer,
-which hands this runner the tables of every layer, so the runtime imports nothing of the
-simulation or the lab.
+A command is a module (or ``module:object``) with ``add_arguments(parser)`` and ``run(args) -> int``,
+imported only when it runs. Each layer has a table ``name -> Command``; the console script
+(``touch_lab.cli.main``) hands this runner every layer's table, so the runtime imports nothing above it.
 """
 
 from __future__ import annotations

@@ -1,10 +1,4 @@
-"""``social-touch node list | info NODE``, as ``ros2 node`` prints them: every node of the DDS domain.
-
-Nodes come from ``ros_discovery_info`` (ours and any ROS 2 node's); endpoints from DDS
-discovery: publishers, subscriptions, service servers and clients (``rq/``/``rr/`` topics).
-Hidden nodes (a name starting with ``_``, such as these commands' own) are listed with ``-a``.
-The graph comes from the domain's graph daemon (:mod:`touch_graph.daemon`) unless ``--no-daemon``.
-"""
+"""``social-touch node list | info NODE``, as ``ros2 node`` prints them: every node of the DDS domain."""
 
 from __future__ import annotations
 

@@ -1,14 +1,9 @@
 """Options spelt the same in every ``social-touch`` command, and old spellings kept as hidden aliases.
 
-``-o/--output`` names the file or directory a command writes (``--output-dir`` where it writes
-several files); ``--json`` prints one JSON object; ``--repeats`` is how many runs a median is
-taken of; ``--timeout`` is in seconds. An old spelling (``--out``, ``--out-dir``) still works,
-is left out of ``--help`` and warns on stderr.
-
-Every number a command takes is read by one of the argparse types here (:func:`number`,
-:data:`positive_float`, :data:`seconds`, :data:`port`, ...), so ``nan``, ``inf``, zero, a negative
-number or ``1e308`` is one ``error: argument --x: expected ...`` line (exit 2), never a traceback,
-an endless wait or a timer that overflows.
+``-o/--output`` names what a command writes (``--output-dir`` for several files); an old
+spelling (``--out``, ``--out-dir``) still works, hidden, with a warning. Every number a command
+takes is read by an argparse type here, so ``nan``, ``inf``, zero, a negative number or ``1e308``
+is one ``error: argument --x: expected ...`` line (exit 2), never a traceback or an endless wait.
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
 """``social-touch param list | get | set | describe | dump | load | delete``, as ``ros2 param`` prints them.
 
-Every call goes through a node's parameter services (``/<node>/get_parameters`` ...), so
-it works on our nodes and on any ROS 2 node of the domain alike. A value given on the
-command line is typed by rcl's rules (``25`` an integer, ``25.0`` a double, ``[1, 2]`` an
-integer array, ``true`` a bool, anything else a string); our nodes accept an integer for a
-double. Whether a new value takes effect at once is the node's to decide: a parameter it
-cannot apply live is read-only, or its on-set-parameters callback refuses it with a reason.
-Examples::
-
-    social-touch param list /patch/patch_gestures --param-type
-    social-touch param set /patch/patch_gestures threshold 0.95
-    social-touch param dump /bear/bear_gestures > bear.yaml
-    social-touch param load /bear/bear_gestures bear.yaml
+Every call goes through the node's parameter services, so it works on any ROS 2 node of the
+domain too. A value given on the command line is typed by rcl's rules (``25`` an integer,
+``25.0`` a double, ``[1, 2]`` an integer array, ``true`` a bool, anything else a string).
 """
 
 from __future__ import annotations

@@ -1,12 +1,6 @@
 """``social-touch service list | type | find | call``, as ``ros2 service`` prints them: every service of the domain.
 
-Services come from DDS discovery (``rq/<name>Request`` and ``rr/<name>Reply`` topics), so
-a ROS 2 node's services are listed and callable as ours are; like ``ros2 service list``,
-a service with only clients is listed too. Examples::
-
-    social-touch service list -t
-    social-touch service call /bear/bear_gestures/get_parameters rcl_interfaces/srv/GetParameters "{names: [threshold]}"
-    social-touch service find std_srvs/srv/Trigger
+Services come from DDS discovery (``rq/``/``rr/`` topics); a service with only clients is listed too.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
 """``social-touch topic list | echo | hz | info | pub``, as the ros2 CLI prints them, over DDS.
 
-The commands join the DDS domain (``ROS_DOMAIN_ID``) as a hidden node, so they see the
-topics of a ``social-touch launch`` in another terminal or on another machine, and of
-any ROS 2 node. ``echo``, ``hz`` and ``record`` subscribe with a QoS every publisher
-matches (reliable only if all publishers are, transient-local only if all are, as ``ros2
-topic echo`` chooses it; remade when a publisher joins that it would not match); ``hz``
-measures the rate in the publishing graph's ROS time (the samples' source timestamps:
-simulated time in a simulated scene of ours), or in wall time of arrival with
-``--wall-time``.
+``echo``, ``hz`` and ``record`` subscribe with a QoS every publisher matches, as ``ros2 topic
+echo`` chooses it; ``hz`` measures in the publishing graph's ROS time (source timestamps), or
+in arrival wall time with ``--wall-time``.
 """
 
 from __future__ import annotations
@@ -209,19 +204,10 @@ def _info(tool: Any, args: argparse.Namespace) -> int:
 _GRAPH_QUERIES = {'list': _list, 'info': _info}
 
 
-def _subscribe(tool: Any, topic: str, type_name: str, callback: Any, *, raw: bool = False, depth: int = 100) -> Any:
-    """A subscription of the tool's node with the QoS the publishers of ``topic`` offer (remade if one joins
-    that it cannot match)."""
-    from .. import messages
-    return tool.subscribe(messages.get_message(type_name), topic, callback, depth, raw=raw)
-
-
 def _echo(tool: Any, args: argparse.Namespace) -> int:
     from .. import messages
     from ..node_main import StopSignals
     limit = 1 if args.once else args.count
-    if limit is not None and limit < 1:
-        raise ValueError(f'-n/--count must be >= 1, got {limit}')
     type_name = messages.normalize_type_name(args.type) if args.type else None
     if type_name is None:
         type_name = next(iter(tool.require_topic(args.topic).types))
@@ -250,7 +236,7 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
         printed[0] += 1
         last[0] = time.monotonic()
 
-    sub = _subscribe(tool, args.topic, type_name, show)
+    sub = tool.subscribe(messages.get_message(type_name), args.topic, show, 100)
     reported = [0, time.monotonic()]       # drops reported, when
 
     def report_drops(final: bool = False) -> None:
@@ -273,6 +259,7 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _hz(tool: Any, args: argparse.Namespace) -> int:
+    from ..messages import get_message
     from ..node_main import StopSignals
     info = tool.require_topic(args.topic)
     monitor = HzMonitor(args.window)
@@ -290,7 +277,7 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
         rate, lo, hi, std, n = stats
         print(f'average rate: {rate:.3f}\n\tmin: {lo:.3f}s max: {hi:.3f}s std dev: {std:.5f}s window: {n}', flush=True)
 
-    _subscribe(tool, args.topic, next(iter(info.types)), on_sample, raw=True, depth=1000)
+    tool.subscribe(get_message(next(iter(info.types))), args.topic, on_sample, 1000, raw=True)
     with StopSignals(tool.executor.wake) as stop:
         tool.spin_until(lambda: False, args.duration, stop=stop, every=report)
     report()
@@ -308,10 +295,6 @@ def _pub(tool: Any, args: argparse.Namespace) -> int:
         raise MessageError(f'cannot parse {err}') from err
     msg = messages.from_dict(type_name, values if values is not None else {})
     times = 1 if args.once else args.times
-    if times is not None and times < 1:
-        raise ValueError(f'-t/--times must be >= 1, got {times}')
-    if not args.rate > 0:
-        raise ValueError(f'--rate must be > 0, got {args.rate}')
     view = tool.graph()
     if not view.remote_participants():
         if times is not None:

@@ -1,12 +1,9 @@
 """What a graph command uses: the daemon's graph, the daemon started on first use, or a participant of its own.
 
-:func:`graph_source` is the one entry (a context manager): ``--no-daemon`` (or
-``SOCIAL_TOUCH_DAEMON=0``) gives a :class:`~touch_graph.dds.tool.GraphTool`; otherwise the
-daemon's graph (:class:`DaemonGraph`). When no daemon answers, one is started in the background
-and asked once it answers (ros2cli's first call joins the domain itself instead: here the daemon
-joining meanwhile would make that call wait for it); a daemon of another code version leaves and
-is replaced in the same way (a newer one stays). When the daemon does not come up, the command joins the domain
-itself. Imports nothing of Cyclone or the runtime unless it falls back to a participant.
+:func:`graph_source` is the entry. When no daemon answers, or one of another code version
+does (it leaves), one is started in the background and asked once it answers; when it does
+not come up, the command joins the domain itself. Imports nothing of Cyclone or the runtime
+unless it falls back to a participant.
 """
 
 from __future__ import annotations

@@ -1,10 +1,4 @@
-"""ROS 2 YAML launch files for the in-process graph.
-
-``parser`` reads a ``*.launch.yaml`` (ros2/launch's YAML frontend: ``arg``, ``let``,
-``include``, ``group``, ``push_ros_namespace``, ``node``) into a checked parse tree;
-``substitutions`` parses and performs ``$(...)``; ``entities`` evaluates the tree into
-:class:`NodeSpec` s (``specs``); ``runner`` starts them in one process; ``cli`` is
-``social-touch launch``. From Python::
+"""ROS 2 YAML launch files for the in-process graph::
 
     plan = evaluate_launch('launch/demo.launch.yaml', {'rate': '30.0'})
     with LaunchRunner(plan.nodes, sim_time=True) as runner:

@@ -1,38 +1,11 @@
 """``social-touch launch FILE [name:=value ...]``: start a scene's nodes, in this process or in processes of their own.
 
-By default every node runs in this process (as in a ROS 2 component container): messages
-between them stay in memory, nothing is serialised. ``--processes`` runs each node in a
-process of its own, as ``ros2 launch`` runs ``node`` entries, and a node with a process
-attribute in the launch file (``respawn``, ``respawn_delay``, ``respawn_max_retries``,
-``sigterm_timeout``, ``sigkill_timeout``) always does: those processes and this one meet on
-the DDS domain. A node process that dies is reported with its exit code and, with
-``respawn: true``, restarted (:mod:`touch_graph.launch.processes`); Ctrl-C stops every
-process and waits for each. A node in this process whose callback raises dies as it would
-under rclpy, and is reported with its exception; the others go on. The launch exits with 1
-when a node died, 0 otherwise.
-
-The graph joins the DDS domain (``ROS_DOMAIN_ID``; ``--no-network`` keeps it in the
-process), also with ``--sim-time``: other processes and ROS 2 machines see its nodes
-and topics, and its nodes hear theirs.
-
-Run inside a source checkout of social_touch, the checkout's ``config/`` and ``launch/`` are
-used instead of the installed copy (and the launch says so), so an edited threshold counts
-without ``pip install .`` again. Every config file is also a launch argument (``gestures:=``,
-``body_map:=``, ``panels:=``, ``commands:=``, ``codebook:=``, ``model:=``); a config file that
-does not exist or does not parse stops the launch with one error naming it before any node
-starts (:mod:`touch_graph.launch.preflight`).
-
-Like ``ros2 launch``, FILE may be a path or ``PKG FILE`` (looked up in the package's share
-directory, under ``launch/`` first). Launch arguments are ``name:=value``; a name the file
-does not declare is an error listing the declared ones.
-
-Examples::
-
-    social-touch launch launch/demo.launch.yaml rate:=30.0
-    social-touch launch social_touch demo.launch.yaml --show-args
-    social-touch launch social_touch demo.launch.yaml --print-description
-    social-touch launch launch/demo.launch.yaml --sim-time --rate 10 --duration 5
-    social-touch launch launch/bear.launch.yaml --processes
+As ``ros2 launch``: FILE is a path or ``PKG FILE``; arguments are ``name:=value``, and a name the
+file does not declare is an error. Every node runs in this process unless ``--processes`` or a
+process attribute (``respawn``...) gives it a process of its own (:mod:`.processes`). The graph
+joins the DDS domain unless ``--no-network``. In a source checkout, its ``config/`` and
+``launch/`` are used. Config files that nodes are given are checked before any node starts
+(:mod:`.preflight`). Exit code 1 when a node died, else 0.
 """
 
 from __future__ import annotations

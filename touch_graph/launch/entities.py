@@ -1,13 +1,9 @@
-"""Run a parsed launch file's logic: arguments, scopes, namespaces, includes -> node specs.
+"""Evaluate a parsed launch file as ros2/launch does: arguments, scopes, namespaces, includes -> node specs.
 
-Evaluation follows ros2/launch: ``arg`` keeps a value already set (command line or include)
-and otherwise takes its default; ``let`` sets a configuration; a ``group`` is scoped by
-default (configurations and the pushed namespace are restored after it); an ``include`` is
-*not* scoped (what it sets stays set, as in ROS 2); ``push_ros_namespace`` prefixes the
-namespace of the nodes after it (stored, as in ROS, in the ``ros_namespace`` configuration);
-``if``/``unless`` take ``true``/``false``/``1``/``0``. Parameter values from substitutions
-are read with YAML rules (``'3'`` -> 3) unless the ``param`` has a ``type``; literal strings
-stay strings. The result is a list of :class:`NodeSpec`, with nothing started.
+``arg`` keeps a value already set; a ``group`` is scoped by default, an ``include`` is not;
+``push_ros_namespace`` sets the ``ros_namespace`` configuration. Parameter values from
+substitutions are read as YAML (``'3'`` -> 3) unless the ``param`` has a ``type``; literal
+strings stay strings. Nothing is started.
 """
 
 from __future__ import annotations
@@ -192,12 +188,11 @@ class _Evaluator:
         try:
             text = self.text(action.file, action.where)
         except LaunchError:
-            if self.dry_run:
-                self.unresolved_includes.append(action.where)
-                return
-            raise
+            if not self.dry_run:
+                raise
+            text = ''  # a dry run: not known before the launch runs
         path = Path(text)
-        if not path.is_file():
+        if not text or not path.is_file():
             if self.dry_run:
                 self.unresolved_includes.append(action.where)
                 return

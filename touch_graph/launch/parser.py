@@ -1,31 +1,10 @@
-"""Read a ROS 2 YAML launch file into a checked parse tree that knows file and line.
+"""Read a ROS 2 YAML launch file (ros2/launch's ``launch_yaml`` + ``launch_ros`` frontend) into a checked parse tree.
 
-The file format is ros2/launch's YAML frontend (``launch_yaml`` + ``launch_ros``), so the same
-file runs with ``ros2 launch``::
-
-    launch:
-    - arg: {name: rate, default: '20.0', description: frame rate in Hz}
-    - group:
-        scoped: true
-        children:
-        - push_ros_namespace: {namespace: bear}
-        - node:
-            pkg: social_touch
-            exec: bear_driver
-            name: driver
-            param:
-            - {name: rate, value: $(var rate)}
-            - {from: $(find-pkg-share social_touch)/config/bear.yaml}
-            remap:
-            - {from: frame, to: /bear/frame}
-
-Supported elements and attributes are listed in :data:`ELEMENTS`; a node's process
-attributes (:data:`PROCESS_ATTRIBUTES`: ``respawn``, ``respawn_delay``...) make it a process of
-its own. Anything else, including real ROS 2 elements the launcher does not run
-(``executable``, ``timer``, ``composable_node_container``...), is a
-:class:`~touch_graph.errors.LaunchError` naming the file, the line, what was found and what is
-supported, never silently ignored. Every string is parsed as a
-substitution template here, so a typo in ``$(...)`` is reported before anything runs.
+Supported elements and attributes are :data:`ELEMENTS`; anything else, including ROS 2
+elements the launcher does not run (``executable``, ``timer``...), is a
+:class:`~touch_graph.errors.LaunchError` naming file, line, what was found and what is
+supported. Every string is parsed as a substitution template here, so a typo in ``$(...)``
+is reported before anything runs.
 """
 
 from __future__ import annotations

@@ -1,12 +1,4 @@
-"""Check the config files a launch passes to its nodes before any node starts.
-
-A node parameter whose value names a config file (a string ending in ``.yaml``, ``.yml`` or
-``.npz``, as ``gestures:=./my.yaml`` puts it) must name an existing file, and a YAML one must
-parse. Otherwise the launch stops with one error naming the file (and the line of a YAML syntax
-error) and the launch file line that passed it, before any node is constructed. What a file
-*means* (unknown keys, values out of range) is the node's to check when it loads the file; that
-too happens before the graph spins, and its error names the file and line.
-"""
+"""Check the config files (``.yaml``, ``.yml``, ``.npz`` values) a launch gives its nodes, before any node starts."""
 
 from __future__ import annotations
 

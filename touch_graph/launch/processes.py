@@ -1,27 +1,17 @@
-"""Nodes in processes of their own: start them, watch them, restart them, stop them, as ros2 launch does.
+"""Nodes in processes of their own: start, watch, restart and stop them as ros2 launch does.
 
-Each node that runs alone is a Python process running :func:`.node_process.main` (:mod:`.node_process`)
-with its spec; they and the launcher meet on the DDS domain. ros2 launch's conventions:
-
-- a process is named ``<name>-<n>`` (the node's name, else its executable; ``n`` counts the
-  launch's processes), its output lines are prefixed with ``[<name>-<n>] ``, and its life is
-  reported: ``process started with pid [P]``, ``process has finished cleanly [pid P]``,
-  ``process has died [pid P, exit code C, cmd '...']``;
-- ``respawn: true`` restarts a process that exits, after ``respawn_delay`` seconds, at most
-  ``respawn_max_retries`` times (-1: no limit). Unlike ros2 launch, a process that keeps
-  dying soon after it starts (within :data:`STABLE_S`) is not restarted in a busy loop: the
-  delay doubles from :data:`FIRST_BACKOFF_S` with every such death, up to
-  :data:`MAX_BACKOFF_S`, and each restart says how long it waits and why; a process that
-  ran for a while is restarted after ``respawn_delay`` again;
-- shutdown: SIGINT to every process, SIGTERM after ``sigterm_timeout``, SIGKILL after
-  ``sigkill_timeout`` more; each is waited for, so none is left running. Processes run in
-  sessions of their own (a Ctrl-C reaches the launcher only, which stops them in order) and
-  die with the launcher if it is killed (:func:`.node_process.die_with_parent`).
+Process names (``<name>-<n>``), output prefixes and life reports follow ros2 launch.
+``respawn`` restarts after ``respawn_delay`` at most ``respawn_max_retries`` times (-1: no
+limit); a process that dies within :data:`STABLE_S` of starting waits longer each time
+(from :data:`FIRST_BACKOFF_S`, doubling, up to :data:`MAX_BACKOFF_S`). Shutdown: SIGINT,
+SIGTERM after ``sigterm_timeout``, SIGKILL after ``sigkill_timeout`` more. Each node process runs
+:func:`node_process_main` and dies with the launcher (``prctl(PR_SET_PDEATHSIG)``).
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import itertools
 import os
 import shlex
@@ -33,10 +23,11 @@ import time
 from dataclasses import dataclass, field
 from typing import TextIO
 
-from .node_process import NODE_PROCESS_MAIN
-from .specs import NodeSpec, ProcessOptions, spec_to_json
+from ..errors import SocialTouchError
+from .specs import NodeSpec, ProcessOptions, spec_from_json, spec_to_json
 
-__all__ = ['FIRST_BACKOFF_S', 'MAX_BACKOFF_S', 'STABLE_S', 'NodeProcess', 'ProcessSupervisor']
+__all__ = ['FIRST_BACKOFF_S', 'MAX_BACKOFF_S', 'NODE_PROCESS_MAIN', 'STABLE_S', 'NodeProcess', 'ProcessSupervisor',
+           'node_process_main']
 
 #: A process that ran at least this long before exiting is restarted after its plain respawn_delay, s.
 STABLE_S = 10.0
@@ -71,7 +62,6 @@ class NodeProcess:
     restarts: int = 0
     quick_deaths: int = 0
     exit_codes: list[int] = field(default_factory=list)
-    gave_up: bool = False
     reported: bool = False  # its last exit was handled (reported, restart planned)
     _reader: threading.Thread | None = None
 
@@ -161,10 +151,8 @@ class ProcessSupervisor:
                  self.stream)
         options = process.options
         if not options.respawn:
-            process.gave_up = True
             return
         if 0 <= options.respawn_max_retries <= process.restarts:
-            process.gave_up = True
             _log('ERROR', process.label, f'not restarting it again: it was restarted {process.restarts} times '
                                          f'(respawn_max_retries)', self.stream)
             return
@@ -213,3 +201,57 @@ class ProcessSupervisor:
     def _signal(process: NodeProcess, signum: int) -> None:
         with contextlib.suppress(ProcessLookupError):  # exited in the meantime
             process.proc.send_signal(signum)
+
+
+#: What the launcher runs with ``python -c`` (no module of ours has a ``__main__`` of its own).
+NODE_PROCESS_MAIN = ('import sys; from touch_graph.launch.processes import node_process_main; '
+                     'sys.exit(node_process_main())')
+
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Ask Linux for SIGTERM when the parent dies; exit now if it already has (the race before the call)."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):  # not Linux: the launcher's shutdown still stops it
+        pass
+    if os.getppid() != parent_pid:
+        sys.exit(1)
+
+
+def node_process_main(argv: list[str] | None = None) -> int:
+    """One launched node in a process of its own: ``python -c "$NODE_PROCESS_MAIN" SPEC_JSON PARENT_PID
+    [--strict-params]``. Exits 0 after a clean stop, 1 when the node cannot start or a callback raised."""
+    argv = sys.argv[1:] if argv is None else argv
+    strict = '--strict-params' in argv
+    argv = [a for a in argv if a != '--strict-params']
+    if len(argv) != 2:
+        sys.stderr.write('usage: node_process_main SPEC_JSON PARENT_PID [--strict-params] (the launcher starts it)\n')
+        return 2
+    die_with_parent(int(argv[1]))
+    from ..node_main import StopSignals
+    from .runner import LaunchRunner
+    spec = spec_from_json(argv[0])
+    from .. import compat
+    if compat.USING_ROS:  # a sourced ROS 2 and no SOCIAL_TOUCH_SHIM: the node is an rclpy node
+        from .runner import rclpy_runtime
+        runner = LaunchRunner([spec], runtime=rclpy_runtime(), strict_params=strict)
+    else:
+        runner = LaunchRunner([spec], network=True, strict_params=strict)
+    # Handlers from the first line on: the launcher may stop us while the node is still starting
+    # (a SIGINT then must still end in a clean shutdown and exit code 0, not a KeyboardInterrupt).
+    with StopSignals(wake=runner.request_stop):
+        try:
+            runner.start()
+        except SocialTouchError as err:
+            sys.stderr.write(f'error: {err}\n')
+            return 1
+        try:
+            runner.spin(handle_signals=False)  # returns at once when a stop came during start()
+        except KeyboardInterrupt:  # a second signal: stop now
+            pass
+        finally:
+            runner.shutdown()
+    return 1 if runner.died else 0  # a callback raised: the node died, as under rclpy

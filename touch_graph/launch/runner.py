@@ -1,38 +1,15 @@
 """Start the nodes of a launch plan in this process and spin them until shutdown.
 
-Each :class:`~touch_graph.launch.specs.NodeSpec` names a package and an executable; the
-class comes from, in this order:
+A :class:`~touch_graph.launch.specs.NodeSpec`'s class comes from the ``social_touch.nodes``
+entry points (name = ``exec``, distribution = ``pkg``) or an explicit registry, else from
+``exec: module.path:Class``, else from ``pkg: module.path`` with ``exec: Class``. Nodes are
+built as rclpy component containers build them (``cls(context=, cli_args=, parameter_overrides=)``);
+a class with rclpy's plain ``__init__(self)`` gets the same arguments through
+:func:`touch_graph.runtime.node.node_arguments`.
 
-1. the ``social_touch.nodes`` entry-point group of any installed distribution (entry point
-   name = ``exec``, the distribution's name = ``pkg``; ``-`` and ``_`` are the same), or an
-   explicit registry (tests);
-2. ``exec: module.path:Class`` (``pkg`` is then only a label);
-3. ``pkg: module.path`` with ``exec: Class``, a class of that importable module.
-
-Nodes are constructed the way rclpy component containers do it::
-
-    cls(context=ctx, cli_args=['--ros-args', '-r', '__node:=driver', '-r', '__ns:=/bear',
-                               '-r', 'frame:=/touch/bear_frame', '--params-file', F],
-        parameter_overrides=[Parameter('rate', value=25.0)])
-
-A class with rclpy's plain constructor (``__init__(self)`` calling ``super().__init__('name')``,
-no keyword arguments) is called with none and receives the same arguments through
-:func:`touch_graph.runtime.node.node_arguments`, as an rclpy node receives them from ``ros2 launch``.
-
-Each node parses its own parameter files and raises its own parameter errors; those come
-back as a :class:`~touch_graph.errors.LaunchError` naming the launch file and the node's
-line. Every class is resolved before any node starts, and a node that fails to start stops
-the ones already started. A callback that raises ends its node, as in rclpy (the exception
-ends the spin; the node's process would exit): the runner reports that node as ros2 launch
-reports a dead process (``[ERROR] [launch]: node /x has died: ...``, with the traceback),
-destroys it and spins the others on; :attr:`LaunchRunner.died` names the dead, and the
-launch ends when no node is left. The first SIGINT/SIGTERM asks for a clean stop (the executor
-finishes its current callback, nodes are destroyed in reverse order, the context shuts
-down); a second one raises :class:`KeyboardInterrupt`.
-
-Note: in-process, ``param`` values go as ``parameter_overrides`` and therefore win over
-``from:`` files whatever their order in the node (rclpy's precedence); ros2 launch applies
-them in file order.
+A callback that raises ends its node, as in rclpy: the runner reports it as ros2 launch
+reports a dead process and spins the others on. In-process, ``param`` values are
+``parameter_overrides`` and so win over ``from:`` files whatever their order (rclpy's precedence).
 """
 
 from __future__ import annotations
@@ -73,11 +50,6 @@ SLICE_S = 0.1
 
 #: ``(pkg, exec) -> node class`` or something with ``load() -> class`` (an EntryPoint).
 Registry = Mapping[tuple[str, str], Any]
-
-
-def _tuple(exceptions: Any) -> tuple[type[BaseException], ...]:
-    """An ``except`` clause's classes as a tuple (one class, a tuple, or none)."""
-    return exceptions if isinstance(exceptions, tuple) else (exceptions,)
 
 
 def _normalize(name: str) -> str:
@@ -370,22 +342,21 @@ class LaunchRunner:
             raise LaunchError('spin() before start(): call start() first (or use the runner as a context manager)')
         if duration is not None and not (duration >= 0):
             raise ValueError(f'duration must be >= 0 seconds, got {duration!r}')
-        external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())
+        external_shutdown = getattr(self.runtime, 'ExternalShutdownException', ())  # a class, or none
+        external_shutdown = external_shutdown if isinstance(external_shutdown, tuple) else (external_shutdown,)
+        ros_time = hasattr(self.executor, 'spin_until_time')  # ours; real rclpy's executor spins in wall time
+        now = self.context.now_ns if ros_time else time.monotonic
+        end = None if duration is None else now() + (round(duration * 1e9) if ros_time else duration)
         previous = self._install_signal_handlers() if handle_signals else {}
         try:
-            if not hasattr(self.executor, 'spin_until_time'):  # real rclpy's executor: slices of wall time
-                self._spin_wall(duration, every_slice)
-                return
-            end = None if duration is None else self.context.now_ns() + round(duration * 1e9)
-            while not self._stop.is_set() and self.context.ok():
-                now = self.context.now_ns()
-                if end is not None and now >= end:
-                    break
-                # Spin in short slices of ROS time so a stop request is seen between callbacks.
-                slice_end = now + round(SLICE_S * 1e9)
+            while not self._stop.is_set() and self.context.ok() and (end is None or now() < end):
                 try:
-                    self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
-                except (KeyboardInterrupt, SystemExit, *_tuple(external_shutdown)):
+                    if ros_time:  # short slices of ROS time, so a stop request is seen between callbacks
+                        slice_end = now() + round(SLICE_S * 1e9)
+                        self.executor.spin_until_time(slice_end if end is None else min(slice_end, end))
+                    else:
+                        self.executor.spin_once(timeout_sec=SLICE_S)
+                except (KeyboardInterrupt, SystemExit, *external_shutdown):
                     raise
                 except Exception as err:
                     if not self._node_died(err):
@@ -397,20 +368,6 @@ class LaunchRunner:
         finally:
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
-
-    def _spin_wall(self, duration: float | None, every_slice: Callable[[], None] | None) -> None:
-        end = None if duration is None else time.monotonic() + duration
-        external_shutdown = _tuple(getattr(self.runtime, 'ExternalShutdownException', ()))
-        while not self._stop.is_set() and self.context.ok() and (end is None or time.monotonic() < end):
-            try:
-                self.executor.spin_once(timeout_sec=SLICE_S)
-            except (KeyboardInterrupt, SystemExit, *external_shutdown):
-                raise
-            except Exception as err:
-                if not self._node_died(err):
-                    return
-            if every_slice is not None:
-                every_slice()
 
     def _node_died(self, err: Exception) -> bool:
         """Report the node whose callback raised ``err`` as dead and destroy it; False when none is left.

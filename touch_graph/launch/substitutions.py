@@ -1,12 +1,11 @@
 """ROS 2 launch substitutions: ``$(var x)``, ``$(env X default)``, ``$(eval ...)``, ...
 
-A string in a launch file is a *template*: literal text mixed with substitutions
-``$(name arg1 arg2 ...)``, parsed once (so a syntax error is reported at load time with the
-file and line) and evaluated when the launch file runs, against a :class:`Scope` (the
-launch configurations, the current file, the environment). The grammar follows ros2/launch
-(``launch/frontend/grammar.lark``): arguments are separated by spaces, an argument may be
-quoted with ``'`` or ``"`` (and then hold spaces and other substitutions), substitutions
-nest, and a backslash escapes the next character.
+A string in a launch file is a *template* of literal text and substitutions ``$(name args...)``,
+parsed once (a syntax error names file and line before anything runs) and evaluated against
+a :class:`Scope`. The grammar is ros2/launch's (``launch/frontend/grammar.lark``): arguments
+separated by spaces, quoted with ``'`` or ``"`` to hold spaces and substitutions, nested
+substitutions, a backslash escaping the next character. :data:`SUBSTITUTIONS` lists the
+supported ones (those of ros2/launch and launch_ros, minus ``command``, which runs a program).
 
 >>> t = parse_template("$(var ns)/skin_$(eval '2 * 3')")
 >>> evaluate(t, Scope(configurations={'ns': '/robot'}), Location('demo.yaml', 3))
@@ -18,25 +17,6 @@ Traceback (most recent call last):
 ...
 touch_graph.launch.substitutions.TemplateSyntaxError: in '$(vra x)' at column 1: unknown substitution \
 '$(vra ...)' (did you mean 'var'?); supported: all, and, ...
-
-Supported substitutions (the names ros2/launch and launch_ros expose; others such as
-``$(command ...)``, which would run a program, are an error):
-
-=====================  ===============================================================
-``var NAME``           a launch argument or ``let`` value; an error if it is not set
-``env NAME [DEFAULT]`` an environment variable; an error if unset and no default
-``optenv NAME [DEF]``  an environment variable, ``DEF`` (or empty) if unset
-``find-pkg-share PKG`` the package's share directory (:func:`touch_graph.paths.package_share`)
-``dirname``            the directory of the launch file being read
-``filename``           the path of the launch file being read
-``anon NAME``          ``NAME`` plus a random suffix, the same for the same NAME in one launch
-``eval EXPR``          a restricted expression (:mod:`touch_graph.launch.safe_eval`), as text
-``not X``              ``'true'``/``'false'``; X is a boolean (true/false/yes/no/on/off/1/0)
-``and A B``/``or A B`` logical and/or of two booleans
-``any A ...``/``all``  logical any/all of one or more booleans
-``equals A B``         ``'true'`` when equal as booleans, as numbers (``isclose``) or as text
-``notequals A B``      the negation of ``equals``
-=====================  ===============================================================
 """
 
 from __future__ import annotations
@@ -134,8 +114,9 @@ def _syntax(text: str, i: int, message: str) -> TemplateSyntaxError:
     return TemplateSyntaxError(f'in {text!r} at column {i + 1}: {message}')
 
 
-def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
-    """Parts until ``stop`` (a closing quote, or '' for the end of the text)."""
+def _parse_sequence(text: str, i: int, stop: str, name: str = '') -> tuple[Template, int]:
+    """Parts until ``stop``: a closing quote, '' for the end of the text, or ' )' for the end of the
+    unquoted argument of ``$(name ...)``."""
     parts: list[Text | Call] = []
     buffer: list[str] = []
 
@@ -146,7 +127,7 @@ def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
 
     while i < len(text):
         char = text[i]
-        if stop and char == stop:
+        if stop and char in stop:
             flush()
             return tuple(parts), i
         if char == '\\' and i + 1 < len(text):
@@ -156,10 +137,13 @@ def _parse_sequence(text: str, i: int, stop: str) -> tuple[Template, int]:
             flush()
             call, i = _parse_call(text, i)
             parts.append(call)
+        elif stop == ' )' and char in '(\'"':
+            raise _syntax(text, i, f"{char!r} inside an unquoted argument of '$({name} ...)'; quote the whole "
+                          "argument ('...' or \"...\") or escape it with a backslash")
         else:
             buffer.append(char)
             i += 1
-    if stop:
+    if stop and stop != ' )':
         raise _syntax(text, i, f'missing closing {stop} of a quoted substitution argument')
     flush()
     return tuple(parts), i
@@ -197,28 +181,7 @@ def _parse_argument(text: str, i: int, name: str) -> tuple[Template, int]:
     if i < len(text) and text[i] in '\'"':
         parts, i = _parse_sequence(text, i + 1, stop=text[i])
         return parts, i + 1
-    parts: list[Text | Call] = []
-    buffer: list[str] = []
-    while i < len(text) and text[i] not in ' )':
-        char = text[i]
-        if char == '\\' and i + 1 < len(text):
-            buffer.append(text[i + 1])
-            i += 2
-        elif text.startswith('$(', i):
-            if buffer:
-                parts.append(Text(''.join(buffer)))
-                buffer.clear()
-            call, i = _parse_call(text, i)
-            parts.append(call)
-        elif char in '(\'"':
-            raise _syntax(text, i, f"{char!r} inside an unquoted argument of '$({name} ...)'; quote the whole "
-                          "argument ('...' or \"...\") or escape it with a backslash")
-        else:
-            buffer.append(char)
-            i += 1
-    if buffer:
-        parts.append(Text(''.join(buffer)))
-    return tuple(parts), i
+    return _parse_sequence(text, i, ' )', name)
 
 
 def _check_call(name: str, n_args: int, text: str, i: int) -> None:
