@@ -1,21 +1,13 @@
 """A graph a stray process cannot silently blind: robustness cases for frame screening and bounded parameters.
 
-Any process in the DDS domain may publish on ``/skin/frame`` or set a recogniser's parameters
-(docs/network.md). These cases try it and check what the recognisers do:
+- :func:`skin_flood`: the people scene (SYNTHETIC) through ``skin_driver`` + ``haptic_commands`` while a
+  separate process floods ``/skin/frame`` with empty frames over Cyclone DDS; the commands must match
+  an undisturbed run and ``/diagnostics`` must name the cause;
+- stale, foreign or empty frames among the driver's, on the patch and bear recognisers;
+- parameters that would switch a check off, refused with the reason; an accepted change logged at
+  WARN and counted in the node's diagnostics.
 
-- :func:`skin_flood`: the people scene (config/scenes/skin_people.yaml, SYNTHETIC) through
-  ``skin_driver`` + ``haptic_commands`` in this process, while a *separate process* joins the domain
-  over Cyclone DDS and floods ``/skin/frame`` with empty frames stamped 0 (``SkinFrame()``) at
-  ``hz``; the commands recognised are compared with an undisturbed run of the same scene, and the
-  recogniser's ``/diagnostics`` must name the cause;
-- stale or foreign frames interleaved with the driver's on the patch and bear recognisers, and
-  frames with nothing usable (ERROR on /diagnostics);
-- parameters that would switch a check off (``max_distance 1000000.0``, ``min_margin 0.0``, collision
-  limits, the patch event threshold) refused with the reason, and an accepted change logged at WARN
-  and counted in the node's diagnostics.
-
-Simulated time throughout; no case depends on how fast the machine is (the flood's own rate only
-decides how many stray frames arrive, which the case reports but does not require beyond "some").
+Simulated time throughout: no case depends on the machine's speed.
 """
 
 from __future__ import annotations

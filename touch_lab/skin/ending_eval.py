@@ -1,25 +1,15 @@
 """The end of a gesture, measured: samples rendered once into pieces, joined per rule and codebook.
 
-Whether a lift ends a gesture depends, with :class:`~touch_gestures.skin.ending.GestureEnd`,
-on the codebook of the fold, so a sample cannot be rendered once per rule and fold (rendering
-is the slow part). It is rendered once with a short gap (:data:`PIECE_GAP_S`, ``min_frames``
-1): every lift of that length or more splits it into *pieces*. :func:`join_pieces` then does
-what :class:`~touch_gestures.skin.segmentation.GestureSegmenter` does at each of those lifts:
-shorter than ``gap_s`` joins, ``gap_s`` or more ends a whole gesture, a prefix waits up to
-``wait_s``, strokes that can be no whole gesture (``UNFINISHED``) until ``max_duration_s`` after
-the gesture's start. Joining is exact for what the recognisers read (trajectory, times,
-strokes, the OR of the maps, the maximum of the peaks, frames, duration), the lifts are read
-at frame times as the segmenter reads them; ``multi_contact`` is approximate (any piece
-flagged), and so is the limit: a piece starting ``max_duration_s`` or more after the gesture's
-start ends it as truncated and is dropped (the segmenter cuts at that piece's first frame and
-ignores the rest of its stroke), a gesture longer than that without such a piece is marked truncated.
+Whether a lift ends a gesture depends on the fold's codebook
+(:class:`~touch_gestures.skin.ending.GestureEnd`), and rendering is the slow part: each sample is rendered
+once with a short gap (:data:`PIECE_GAP_S`) into *pieces*, and :func:`join_pieces` does at each lift what
+:class:`~touch_gestures.skin.segmentation.GestureSegmenter` does. Joining is exact for what recognisers
+read; ``multi_contact`` and the ``max_duration_s`` limit are approximate (a piece starting past the limit
+ends the gesture as truncated and is dropped).
 
-Each gesture comes with its **latency**: the lift after its last contact at which it ended
-(``gap_s`` for a whole one, ``wait_s`` for a prefix that never went on, the time left to
-``max_duration_s`` for unfinished strokes). :func:`ending_table` measures whole samples,
-accuracy and latency per (gap, bound, rule), the table the defaults of
-:mod:`touch_gestures.skin.segmentation` are chosen on; :func:`ending_causes` tells, per class,
-why the samples that are not one gesture were cut (``social-touch eval skin-ending``).
+Each gesture comes with its **latency**: the lift after its last contact at which it ended.
+:func:`ending_table` gives whole samples, accuracy and latency per (gap, bound, rule);
+:func:`ending_causes` tells per class why samples were not one gesture (``social-touch eval skin-ending``).
 """
 
 from __future__ import annotations
