@@ -1,15 +1,8 @@
 """Recorded sensor bytes replayed into the runtime through pseudo-terminals, for timing the runtime alone.
 
-A benchmark of what the robot runs must not time the simulator. So it goes in two steps:
-
-1. :func:`record` reads a virtual sensor's byte stream through its pyserial URL on a stepped clock,
-   frame period by frame period, as a serial capture of the device would (synthetic scenes of
-   simulated people, ``config/scenes/*_people.yaml``);
-2. :class:`Replay` plays those bytes into real pseudo-terminals (``os.openpty``): the driver
-   nodes open the ``/dev/pts/N`` paths as ordinary serial ports (``serial.Serial``: the same
-   reads and system calls as on ``/dev/ttyACM0``), and the graph runs in simulated time in a
-   :class:`~touch_sim.harness.Harness`. Only the graph's work is timed, in CPU seconds of this
-   process (``time.process_time``); writing the bytes into the terminals is not.
+:func:`record` reads a virtual sensor's byte stream on a stepped clock, as a serial capture would;
+:class:`Replay` plays it into ``os.openpty`` terminals that the driver nodes open as serial ports, the
+graph in simulated time. Only the graph's work is timed (``time.process_time``).
 """
 
 from __future__ import annotations
