@@ -1,13 +1,8 @@
 """Benchmark: what the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
 
-    social-touch bench skin-acceptance --json
-
-One ``predict`` on a codebook of ``n_gestures x templates_per_gesture`` synthetic templates
-(:func:`.bench.synthetic_codebook`) for ``recogniser``, three ways in one run, interleaved, medians of
-``repeats``: the recogniser's own thresholds, a calibrated acceptance with the product score, and one with the
-logistic score (:mod:`touch_gestures.skin.doubt`). The acceptance records are set by hand (scales 1, limit 1):
-the cost of a decision does not depend on the numbers. ``social-touch bench skin-latency`` gives the time from
-the gesture's end to the command, of which one recognition is a part.
+One ``predict`` on a synthetic codebook (:func:`.bench.synthetic_codebook`), three ways interleaved in
+one run, medians of ``repeats``: the recogniser's own thresholds, the product score, the logistic score
+(:mod:`touch_gestures.skin.doubt`); the acceptance records are set by hand (the cost does not depend on them).
 """
 
 from __future__ import annotations
