@@ -1,4 +1,5 @@
-"""Does the acceptance score's model transfer across vocabularies? (issue 26, item 2)
+"""Does the acceptance score's model transfer across vocabularies? (issue 26, item 2: fit on one file, measure
+on the other)
 
 Leave-one-person-out over the ``--measure`` file (``social-touch eval skin-transfer``), each fold's
 codebook calibrated for ``--max-wrong-rate`` three ways:

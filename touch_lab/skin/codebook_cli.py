@@ -1,4 +1,4 @@
-"""``social-touch codebook info|add|remove|merge|calibrate``: look into and edit skin codebooks.
+"""``social-touch codebook info|add|remove|merge``: look into and edit skin codebooks.
 
 Every edit writes a new file (``-o``) with a model card saying what was done to which file
 (:mod:`touch_gestures.model_card`); rejection thresholds are recomputed from the templates kept
