@@ -27,11 +27,11 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
 from touch_lab.bench.timing import gc_paused
-from touch_lab.skin.recognisers import RECOGNISERS, AutoRecogniser, make_recogniser
+from touch_lab.skin.recognisers import MULTISTROKE_RECOGNISER, RECOGNISERS, AutoRecogniser, make_recogniser
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
-__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recognition', 'in_strokes', 'predict_steps',
-           'synthetic_codebook']
+__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_acceptance', 'bench_recognition',
+           'in_strokes', 'predict_steps', 'synthetic_codebook']
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
@@ -167,3 +167,36 @@ def _median_us(call, items: list, repeats: int) -> tuple[float, float]:
             wall.append((time.perf_counter() - start) / len(items) * 1e6)
             cpu.append((time.thread_time() - start_cpu) / len(items) * 1e6)
     return statistics.median(wall), statistics.median(cpu)
+
+
+def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int = 16, templates_per_gesture: int = 30,
+                     queries: int = 64, repeats: int = 7, seed: int = 0) -> dict:
+    """What the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
+
+    Median us per ``predict`` on a synthetic codebook, three ways interleaved in one run: the recogniser's own
+    thresholds, the product score, the logistic score (:mod:`touch_gestures.skin.doubt`); the acceptance
+    records are set by hand (the cost does not depend on them). A JSON-ready dict.
+    """
+    gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
+    probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
+    probe = probe[:queries]
+    models = {}
+    for rule in ('thresholds', 'product', 'logistic'):
+        model = make_recogniser(recogniser).fit(gestures, labels)
+        n = len(model.classes_)
+        if rule != 'thresholds':
+            model.set_acceptance({'class_scales': [1.0] * n, 'max_score': 1.0,
+                                  **({'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5]} if rule == 'logistic' else {})})
+        models[rule] = model
+    times: dict[str, list[float]] = {rule: [] for rule in models}
+    for _ in range(repeats):
+        for rule, model in models.items():   # interleaved: the machine's load falls on all three alike
+            t0 = time.perf_counter()
+            for g in probe:
+                model.predict(g)
+            times[rule].append((time.perf_counter() - t0) / len(probe) * 1e6)
+    us = {rule: float(np.median(v)) for rule, v in times.items()}
+    return {'data': 'synthetic gestures (SYNTHETIC)', 'recogniser': recogniser, 'gestures': n_gestures,
+            'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
+            'us_per_recognition': us, 'ratio_logistic_to_thresholds': us['logistic'] / us['thresholds'],
+            'ratio_logistic_to_product': us['logistic'] / us['product']}
