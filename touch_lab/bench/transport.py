@@ -25,6 +25,7 @@ import threading
 import time
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 from cyclonedds._clayer import ddspy_take, ddspy_write
@@ -247,12 +248,12 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
     :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a short run (tests).
     """
     domain = int(os.environ.get('SOCIAL_TOUCH_BENCH_DOMAIN', DEFAULT_DOMAIN))
-    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
-    os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    env = {**os.environ}
     echoes = []
     results: dict[str, Any] = {}
     load = MachineLoad()
+    restore_environ = patch.dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    restore_environ.start()
+    env = {**os.environ}
     try:
         echoes = [_Echo('ours', env), _Echo('raw', env)]
         load.start(echo.proc.pid for echo in echoes)
@@ -268,11 +269,7 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
     finally:
         for echo in echoes:
             echo.close()
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        restore_environ.stop()
     return {'message': 'synthetic messages of the real sizes; latency is half the round trip to an echo process',
             'domain': domain, 'rounds': repeats,
             'pings_per_round': pings, 'block': BLOCK,

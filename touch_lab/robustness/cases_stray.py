@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 
@@ -282,20 +283,11 @@ def hold_test_domain() -> Iterator[int]:
 def _flood_case(frame_id: str) -> Callable[[], Any]:
     """:func:`skin_flood` on a domain of its own (LOCALHOST discovery), whatever ``ROS_DOMAIN_ID`` says."""
     def run() -> Any:
-        keys = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'CYCLONEDDS_URI')
-        saved = {k: os.environ.get(k) for k in keys}
-        try:
-            with hold_test_domain() as domain:
-                os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-                os.environ.pop('ROS_STATIC_PEERS', None)
-                os.environ.pop('CYCLONEDDS_URI', None)
-                r = skin_flood(frame_id=frame_id)
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        with hold_test_domain() as domain, patch.dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                                                      ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'):
+            os.environ.pop('ROS_STATIC_PEERS', None)
+            os.environ.pop('CYCLONEDDS_URI', None)
+            r = skin_flood(frame_id=frame_id)
         if not r['ok']:
             return False
         return (f"{r['flooded']} commands under the flood, {r['undisturbed']} undisturbed; "
