@@ -41,7 +41,6 @@ from touch_lab.skin.sessions import fit_codebook, load_trials, usable
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
 
 
-
 def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):
     """A new ``PatchGestureClassifier`` whose component means are MAP-adapted to ``X`` (n, d) labelled ``y``."""
     if not relevance > 0:

@@ -74,7 +74,6 @@ def seconds_text(value: float | None) -> str:
     return 'n/a' if value is None else f'{value:.2f} s'
 
 
-
 @dataclass
 class EvalConfig:
     """What to evaluate.

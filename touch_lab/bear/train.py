@@ -35,7 +35,6 @@ FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 
 __all__ = ['add_arguments', 'run']
 
 
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch train bear``."""
     add_output(parser, 'the .npz file to write', required=True)

@@ -84,11 +84,8 @@ def record_scene(sensor: str, duration_s: float = 60.0, seed: int = 1) -> Record
 
 class PtyPort:
     """A pseudo-terminal in raw mode: a driver opens :attr:`path` as a serial port; :meth:`write` puts
-    bytes on its wire. Close it after the driver is done.
-
-    The kernel hands bytes from the master to the terminal side in a work queue of its own, a
-    little later in wall time. A graph in simulated time would outrun it, so :meth:`write` waits
-    (without counting: the caller times only the graph) until the bytes are readable.
+    bytes on its wire, and waits until they are readable (the kernel hands them over a little later in wall
+    time, which a graph in simulated time would outrun). Close it after the driver is done.
     """
 
     def __init__(self, timeout_s: float = 5.0) -> None:

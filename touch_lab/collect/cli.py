@@ -31,7 +31,6 @@ from .simulate import person_name, simulate_session
 __all__ = ['add_arguments', 'run']
 
 
-
 def _names(text: str) -> tuple[str, ...]:
     names = tuple(v.strip() for v in text.split(',') if v.strip())
     if not names:

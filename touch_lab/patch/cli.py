@@ -329,6 +329,5 @@ def _matrix(title: str, table: dict) -> list[str]:
     return out
 
 
-
 TRAIN = Target(add_train_arguments, run_train, __doc__)
 EVAL = Target(add_eval_arguments, run_eval, __doc__)

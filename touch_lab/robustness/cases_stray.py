@@ -117,13 +117,12 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
 
 def skin_flood(hz: float = 300.0, rate: float = 1.0, frame_id: str = '', screening: bool = True,
                max_flood_s: float = 600.0) -> dict[str, Any]:
-    """The people scene undisturbed, then under a stray process's flood at ``hz`` (sim time at ``rate`` x real
-    time, so the scene lasts a known wall time and the flood overlaps all of it; real time by default, as on a
-    robot: at a faster clock a scheduling stall of a busy machine becomes a burst of driver frames beyond the
-    recogniser's queue, which loses gestures for a reason that is not the flood; its frames carry ``frame_id``:
-    ``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Needs a DDS domain of its own
-    (``ROS_DOMAIN_ID``; the caller sets it). Returns both runs' results, ``'ok'`` saying whether the flooded run
-    recognised within one command of the undisturbed one and its /diagnostics named the cause."""
+    """The people scene undisturbed, then under a stray process's flood of frames at ``hz`` carrying ``frame_id``
+    (``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Sim time runs at ``rate`` x
+    real time (real time by default, as on a robot: a faster clock turns a busy machine's stall into a burst
+    beyond the recogniser's queue). Needs a DDS domain of its own (``ROS_DOMAIN_ID``; the caller sets it).
+    Returns both runs' results; ``'ok'``: the flooded run recognised within one command of the undisturbed
+    one and its /diagnostics named the cause."""
     scene = load_scene(share_file('config', 'scenes', 'skin_people.yaml'))
     calm = _scene_run(scene, None, rate=float('inf'), network=False)
     env = {**os.environ}

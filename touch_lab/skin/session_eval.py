@@ -126,7 +126,6 @@ def _seeds(text: str) -> list[int]:
     return out
 
 
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval skin-sessions``."""
     parser.add_argument('--seeds', default='1-20', help="sessions to simulate, e.g. '1-20' (default)")

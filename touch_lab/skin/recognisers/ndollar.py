@@ -300,10 +300,9 @@ class NDollarRecogniser(TemplateRecogniser):
         """Cosine of the best rotation within ``max_rotation_deg`` for the unistrokes ``rows`` of ``vectors``
         (default: the codebook's sorted unistrokes; module doc, 4); ``queries`` is (2, 2 n) float32: the
         query and the query turned by 90 degrees (whose dot product with a unistroke is Protractor's b). Two
-        matrix-vector products on contiguous rows: a (2 n, 2) product or a strided vector takes numpy's slow
-        paths (3 to 5 times slower here). ``einsum``, not ``@``:
-        BLAS splits a long product over threads, which on a busy machine wait for each other and make a
-        recognition many times slower; einsum's loop stays in this thread at about one BLAS thread's speed."""
+        matrix-vector products on contiguous rows (a (2 n, 2) product or a strided vector takes numpy's slow
+        paths); ``einsum``, not ``@``: BLAS splits a long product over threads, which wait for each other on a
+        busy machine, while einsum's loop stays in this thread."""
         block = (self._vectors if vectors is None else vectors)[rows]
         a = np.einsum('ij,j->i', block, queries[0]).astype(np.float64)
         if self.max_rotation_deg <= 0:
