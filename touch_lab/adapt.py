@@ -1,21 +1,14 @@
 """Adapt a deployed model to one person from a few labelled examples (a short ``collect`` run).
 
-The deployed file holds no training data, so each recogniser is updated from the model itself and
-the new examples, the model acting as the prior (sympartner2018 notes that people adapt to the robot
-and that a consistent model "gives the robot a character": the update moves the model towards the
-person, it does not replace it):
+The deployed model is the prior; the update moves it towards the person:
 
-- **patch** (Gaussian mixtures): maximum a posteriori adaptation of the component means
-  (Reynolds, Quatieri and Dunn 2000, the GMM-UBM recipe): with responsibilities ``g_ik`` of
-  class ``c``'s components for that class's new frames, ``n_k = sum_i g_ik``, ``m_k`` their
-  weighted mean, ``a_k = n_k / (n_k + r)``, the mean becomes ``a_k m_k + (1 - a_k) mu_k``. Weights
-  and covariances stay. ``r`` (relevance, frames) sets how much evidence moves a component.
-- **bear** (logistic regression): the coefficients minimise the new rows' cross-entropy plus
-  ``lam / 2 * ||W - W0||^2``, a Gaussian prior centred on the deployed model (L-BFGS, few rows).
-- **skin** (codebook): the person's touches are added as templates (``codebook add``).
+- **patch** (Gaussian mixtures): MAP adaptation of the component means (Reynolds, Quatieri and Dunn
+  2000): ``a_k = n_k / (n_k + r)``, the mean becomes ``a_k m_k + (1 - a_k) mu_k`` (``n_k`` the summed
+  responsibilities, ``m_k`` the weighted mean of the new frames, ``r`` the relevance in frames).
+- **bear** (logistic regression): the new rows' cross-entropy plus ``lam / 2 * ||W - W0||^2`` (L-BFGS).
+- **skin** (codebook): the person's touches are added as templates.
 
-``social-touch adapt bear|patch|skin --model FILE --bags BAG... -o OUT`` writes the adapted file
-with a card naming the model it started from and the examples it took.
+The adapted file's card names the model it started from and the examples it took.
 """
 
 from __future__ import annotations
@@ -46,7 +39,6 @@ from touch_lab.patch.training import PatchGestureClassifier
 from touch_lab.skin.sessions import fit_codebook, load_trials, usable
 
 __all__ = ['adapt_bear', 'adapt_patch', 'add_arguments', 'run']
-
 
 
 def adapt_patch(clf, X: np.ndarray, y: np.ndarray, relevance: float = 16.0):

@@ -1,15 +1,8 @@
 """``social-touch eval adapt bear|patch|skin``: what adapting to a new person buys (SYNTHETIC).
 
-    social-touch eval adapt patch [--people 4] [--new-people 3] [--seed 0]
-
-A base model is trained on ``--people`` simulated people (``collect --simulate``, ``train --bags``).
-Each of ``--new-people`` other simulated people (another population seed) records one session of
-:data:`REPETITIONS` trials per class; the first ``k`` trials of each class adapt the base model
-(:mod:`touch_lab.adapt`), the last :data:`TEST_TRIALS` per class test it, for k = 0 (the base
-model), 1, 3 and 5. Accuracy per trial: the bear's subtype and the skin's command as their
-``eval --bags`` score them (:mod:`touch_lab.bear.sessions`, :mod:`touch_lab.skin.sessions`); the
-patch's gesture event detected in the trial (sympartner2018 Fig. 6's "correct", from
-:mod:`touch_lab.patch.evaluate`).
+A base model is trained on ``--people`` simulated people; each of ``--new-people`` others records
+:data:`REPETITIONS` trials per class: the first ``k`` per class adapt the model (:mod:`touch_lab.adapt`),
+the last :data:`TEST_TRIALS` test it, for k = 0, 1, 3, 5, scored as ``eval --bags`` scores them.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
 """``social-touch model info FILE`` and ``social-touch model card FILE --evaluation EVAL.json``.
 
-``info`` prints how a model or codebook file was made and what it scored (its card,
-:mod:`touch_gestures.model_card`), with what the file itself says (classes, templates, rate).
-``card`` records an evaluation's figures in the file's card: the JSON an ``eval ... --json`` printed,
-and the command that printed it, so anyone can re-run it::
-
-    social-touch eval patch --simulate 8 --seed 2026 --components 3 --thresholds 0.99 --json > eval.json
-    social-touch model card config/patch_gestures.npz --evaluation eval.json \\
-        --evaluation-command "social-touch eval patch --simulate 8 --seed 2026 ..."
+``info`` prints a model or codebook file's card (:mod:`touch_gestures.model_card`) and what the file
+holds; ``card`` records the figures of an ``eval ... --json`` run, and the command that printed them,
+in the file's card.
 """
 
 from __future__ import annotations

@@ -1,14 +1,8 @@
 """Benchmark of the bear recognisers: compute per scan cycle for all 56 sensors with every feature.
 
-``bench_cycle()`` feeds levels of a synthetic scene, calibrated by the driver node beforehand (so its cost is excluded),
-through a fresh :class:`~.pipeline.BearRecogniser` per repeat and takes, per repeat, the mean time of
-one ``update`` (ring buffer, all twelve features of 64 channels, subtype classification of the 56
-fitted sensors, change events, symbolic filters and priority logic, named outputs); the figure is the
-median over repeats. Goal (issue 4): at most 200 us per cycle on one core.
-
-    social-touch bench bear --json
-
-Timings are measured here and reported; tests never assert them.
+``bench_cycle()`` feeds calibrated levels of a synthetic scene through a fresh
+:class:`~.pipeline.BearRecogniser` per repeat: the mean time of one ``update`` per repeat, the median
+over repeats (``social-touch bench bear --json``). Goal (issue 4): at most 200 us per cycle on one core.
 """
 
 from __future__ import annotations

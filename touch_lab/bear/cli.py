@@ -28,7 +28,6 @@ from .transfer import cross_population, format_cross
 __all__ = ['add_arguments', 'format_text', 'run']
 
 
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch eval bear``."""
     parser.add_argument('--json', action='store_true', help='print one JSON object instead of the text report')
@@ -144,7 +143,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(format_text(result))
     return 0
-
 
 
 def _run_bags(args: argparse.Namespace) -> int:

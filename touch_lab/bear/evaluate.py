@@ -1,38 +1,22 @@
 """Evaluate the bear recognisers on labelled scenes (synthetic people) through the robot's own graph.
 
-``evaluate(EvalConfig(...))`` scripts a training scene and a test scene with different simulated
-people, plays both on a virtual bear read by the ``bear_driver`` node in simulated time
-(:class:`~touch_sim.bear.render.BearCycles`: the robot's decode and calibration, the driver's poll
-latency), trains the eight-subtype model on the first, and scores the paper's rule and the trained
-model on the second. All figures are on **synthetic** data. The trained model sits behind
-:class:`~touch_gestures.bear.gate.NoTouchGate` (``no_touch_gate``), as in the ``bear_gestures`` node.
+``evaluate(EvalConfig(...))`` plays a training scene and a test scene (different simulated people) on a
+virtual bear read by the ``bear_driver`` node in simulated time, trains the eight-subtype model on the
+first (behind :class:`~touch_gestures.bear.gate.NoTouchGate`, as in the node) and scores the paper's rule
+and the trained model on the second. All figures are on **synthetic** data. Scoring:
 
-Scoring (documented here because the numbers mean nothing without it):
-
-- *Subtype, per interaction*: for each single-sensor subtype interaction, the predicted label is the
-  non-'none' subtype the sensor carried for the most cycles between the touch's start and one cycle
-  after its end ('none' if it never carried one). ``subtype_accuracy`` is the fraction correct;
-  precision and recall per subtype come from that confusion matrix. Detection latency: from the
-  touch's start to the first cycle carrying the true subtype. ``reached_threshold`` per subtype: the
-  share of its interactions whose sensor read at or above the activation threshold in at least one
-  cycle of that window; behind ``NoTouchGate`` no classifier can name the others, so it bounds the
-  recall (a brief tap between two reads of its sensor is never seen).
-- *Subtype, per cycle*: the (9 x 9) confusion of every fitted sensor on every cycle against the
-  contact under way on it ('none' when none), tails included: a buffer still full of a finished touch
-  is an error, which is the cost of a long buffer (knight2009 V.A).
-- *Symbolic*: a labelled gesture is detected when a START of that gesture falls between its start
-  and 1 s after its end; otherwise the first other START there is its confusion ('none' if none).
-  A START outside every labelled gesture is a false alarm (row 'none'), except during single-sensor
-  subtype interactions, where filters such as head_pat legitimately fire on a long touch: those are
-  counted apart (``starts_during_subtype_touches``). ``symbolic_accuracy`` is detected / labelled.
-  Latency: START time minus the gesture's start (includes the dwell, 2 s by default). Only STARTs
-  count here: CANDIDATEs and WITHDRAWNs are scored apart (``first_word``, :mod:`.first_word`).
-- *Table III* (knight2009 VI.C), for the paper's four gestures: "activated on first try" = fraction of
-  people whose first attempt was detected; "activated with explanation" = detected on the first or the
-  second attempt (the second strays less, as after an explanation); "regional accuracy" = share of the
-  active sensor-cycles during the attempts that lie inside the gesture's locational filter.
-- *Compute*: median wall time of one recogniser step (all 56 sensors, every feature, subtype and
-  symbolic), microseconds, measured in the run.
+- *Subtype, per interaction*: the non-'none' subtype the sensor carried most cycles between the touch's
+  start and one cycle after its end. Latency: start to the first cycle carrying the true subtype.
+  ``reached_threshold``: share of interactions whose sensor reached the activation threshold (a bound
+  on recall behind the gate).
+- *Subtype, per cycle*: (9 x 9) confusion of every fitted sensor on every cycle, tails included.
+- *Symbolic*: detected when a START of the gesture falls between its start and 1 s after its end; else
+  the first other START is its confusion. A START outside every gesture is a false alarm, except during
+  subtype interactions (``starts_during_subtype_touches``). Latency includes the dwell. CANDIDATE and
+  WITHDRAWN are scored in :mod:`.first_word`.
+- *Table III* (knight2009 VI.C): activated on first try, with explanation (first or second attempt),
+  and regional accuracy (share of active sensor-cycles inside the gesture's locational filter).
+- *Compute*: median wall time of one recogniser step, microseconds.
 """
 
 from __future__ import annotations
@@ -88,7 +72,6 @@ def percent_text(value: float | None) -> str:
 def seconds_text(value: float | None) -> str:
     """A duration (s) as a report's seconds, ``'n/a'`` for None."""
     return 'n/a' if value is None else f'{value:.2f} s'
-
 
 
 @dataclass

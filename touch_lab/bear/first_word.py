@@ -1,17 +1,11 @@
 """The bear's first word: how soon, and how right, /touch/symbolic is before and after its decision.
 
-For every labelled symbolic gesture of a scene (window: its start to its end plus
-:func:`start_grace_s`), from the recogniser's events:
+Per labelled symbolic gesture (window: its start to its end plus :func:`start_grace_s`):
 
-- *first message*: the first CANDIDATE or START of the labelled gesture in the window; its latency is
-  its time minus the gesture's start. ``median_first_message_s`` is over the gestures that got one;
-  ``first_message_rate`` is the fraction that did.
-- *what the bear says at time tau after the start* (the curve): the gesture of the latest START in the
-  window up to then; before any START, the open CANDIDATE (announced, not yet withdrawn or
-  confirmed) with the highest confidence; else nothing. ``said`` is its accuracy against the label;
-  ``decided`` the same from STARTs alone (what code that waits for the decision knows).
-- *candidates*: CANDIDATEs in all, and how many were confirmed (a START of the same gesture before a
-  WITHDRAWN), per gesture.
+- *first message*: the first CANDIDATE or START of the gesture; latency from the gesture's start.
+- *what the bear says tau after the start*: the latest START, else the open CANDIDATE of highest
+  confidence; ``said`` is its accuracy, ``decided`` the same from STARTs alone.
+- *candidates*: CANDIDATEs, and those confirmed by a START before a WITHDRAWN, per gesture.
 """
 
 from __future__ import annotations

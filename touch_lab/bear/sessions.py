@@ -1,18 +1,10 @@
 """Train and evaluate the bear's subtype model from recorded sessions (``collect bear`` bags).
 
-A session's ``/bear/frame`` messages go through the recogniser's own buffer and feature extractor
-(:class:`~touch_gestures.bear.pipeline.BearRecogniser`) once; a labelled trial's *touched sensors* are
-the fitted sensors whose level reached the activation threshold (knight2009 V.A: 0.3) during it (or
-in the scan after it), and every cycle of the trial on those sensors carries the trial's subtype, as
-the simulated scenes' ground truth does for the contact under way (:mod:`.evaluate`).
-
-Scoring, per trial (as :func:`touch_lab.bear.evaluate.score_subtypes`): the prediction is the
-non-'none' subtype the touched sensors carried for the most cycles between the trial's start and one
-cycle after its end ('none' if never); latency is from the trial's start to the first cycle in which
-a touched sensor carries the true subtype. Leave-one-person-out: a model trained on everybody else
-classifies each person's trials, behind the ``NoTouchGate`` as in the ``bear_gestures`` node.
-Pooled figures are over all trials of all people: accuracy is correct / trials, and
-``median_latency_s`` the median over every detected trial (never a median of per-person medians).
+A session's ``/bear/frame`` messages go once through :class:`~touch_gestures.bear.pipeline.BearRecogniser`;
+a trial's *touched sensors* are the fitted sensors that reached the activation threshold during it (or
+the scan after), and every cycle of the trial on them carries the trial's subtype. Scoring per trial
+as :func:`touch_lab.bear.evaluate.score_subtypes`, leave-one-person-out behind the ``NoTouchGate``;
+pooled over all trials of all people (never a median of per-person medians).
 """
 
 from __future__ import annotations

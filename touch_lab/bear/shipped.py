@@ -1,20 +1,14 @@
 """Score a given subtype model on recorded sessions without retraining (``eval bear --bags ... --model FILE``).
 
-The model classifies every trial of every person in the bags as it ships (behind the ``NoTouchGate``,
-as in the ``bear_gestures`` node); the paper's rule is scored beside it. The symbolic gestures run
-through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser` with the given gesture
-library, fed the model's subtype codes, over each whole session.
+The model classifies every trial as it ships (behind the ``NoTouchGate``), the paper's rule beside it;
+the symbolic gestures run through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser` fed the
+model's subtype codes. Per symbolic gesture ``g``, pooled over all trials of all people:
 
-Symbolic scoring, per gesture ``g`` (every figure pooled over all trials of all people):
-
-- *detected*: trials labelled ``symbolic/g`` during which ``g`` STARTed (from the trial's start to
-  :func:`~.evaluate.start_grace_s` after its end), over the trials of ``g``;
-- *false starts*: STARTs of ``g`` that no trial of ``g`` explains: during another gesture's trial,
-  during a single-sensor subtype trial of another subtype than the one ``g`` is performed with (a pat
-  on the shoulder is not a shoulder tap; a pat on the crown is a head pat), or outside every trial.
-  Each START counts once; ``false_starts_by_cause`` splits them by where they fell;
-- *latency*: seconds from the trial's start to ``g``'s first START in it; ``median_latency_s`` is the
-  median over every detected trial.
+- *detected*: trials of ``g`` during which ``g`` STARTed (up to :func:`~.evaluate.start_grace_s` after
+  their end), over the trials of ``g``;
+- *false starts*: STARTs of ``g`` no trial of ``g`` explains (another gesture's trial, a subtype trial of
+  another subtype than ``g``'s, or outside every trial); ``false_starts_by_cause`` splits them;
+- *latency*: trial start to ``g``'s first START, s; ``median_latency_s`` over detected trials.
 """
 
 from __future__ import annotations

@@ -1,29 +1,16 @@
 """Suggested locational-filter settings (``min_active``, ``dwell_s``) of the bear's symbolic gestures, learnt
 from labelled trials (``social-touch collect bear --symbolic``, labels ``symbolic/<gesture>``).
 
-knight2009 V.E: "a minimum number of sensors within the locational filter must be active for at least
-two seconds, an increment informally chosen to parallel human recognition time". How many, and how
-long, depends on the bear and its people; this module measures both from what people did.
+Per gesture ``g`` and trial of ``g``, counted as :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`
+counts: *count* (the filter's active sensors in a cycle), *match m* (count >= m), *peak* (the largest
+count). ``min_active`` = the :data:`QUANTILE` quantile of the peaks (>= 1), raised while that loses
+fewer of ``g``'s trials than it stops matching other gestures' trials. For that ``m``: *reach* (start to
+first match, s) and *hold* (first to last match of that episode, s); ``dwell_s`` = min(QUANTILE quantile
+of the holds, :data:`REACTION_S` - (1 - QUANTILE) quantile of the reaches), >= 0, rounded down to
+:data:`DWELL_STEP_S`. Other settings stay as configured.
 
-Per gesture ``g`` of the library and per trial of ``g`` (its cycles from the label's start to one scan
-after its end), as :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser` counts:
-
-- *count*: the filter's sensors active in the cycle (carrying a required subtype, where ``g`` needs
-  one: the subtype model's codes), and *match m*: count >= m (and both sides, where ``g`` needs them);
-- *peak*: the trial's largest count. Suggested ``min_active`` = the :data:`QUANTILE` quantile of the
-  peaks (rounded down, >= 1): that share of trials at most peaks lower, so most trials can match;
-  raised while that loses fewer of the gesture's own trials than it stops matching trials of the
-  other gestures (the peaks of its filter during them), the first such maximum;
-- for that ``m``, *reach*: seconds from the trial's start to its first match, and *hold*: seconds from
-  the first match to the last match of that episode (gaps up to ``g``'s ``gap_s``). Suggested
-  ``dwell_s`` = min(QUANTILE quantile of the holds, :data:`REACTION_S` - (1 - QUANTILE) quantile of the
-  reaches), >= 0, rounded down to :data:`DWELL_STEP_S`: most trials hold the match long enough to
-  START, and most START within the paper's two seconds of the gesture's start.
-
-``gap_s``, ``both_sides``, ``subtype`` and ``supersedes`` stay as configured. :func:`leave_one_person_out`
-checks the suggestion on people it was not made from: per held-out person, settings suggested from
-the others run through the real recogniser (priority logic included) over the person's sessions,
-against the configured settings run the same way.
+:func:`leave_one_person_out` checks the suggestion on people it was not made from, through the real
+recogniser, against the configured settings.
 """
 
 from __future__ import annotations

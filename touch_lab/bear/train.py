@@ -1,14 +1,8 @@
 """``social-touch train bear``: train the eight-subtype model on simulated people and write it as .npz (no pickle).
 
-    social-touch train bear -o config/bear_subtype_model.npz [--family both] [--rate 3.4] [--buffer 20] [--people 8]
-    social-touch train bear --bags sessions/bear/* -o bear.npz   # + bear.gestures.yaml from symbolic trials
-
-The model is tied to the scan rate and buffer length it was trained at (its features are); both are
-stored in the file (``trained_rate_hz_`` and ``trained_buffer_len_`` after ``SubtypeModel.load``),
-so a node can refuse a model trained for another rate. The training data is synthetic: simulated
-people of one or both families (``--family``: the Table II level waveforms of touch_sim/bear/people.py,
-the hands over plates of touch_sim/bear/hand_people.py); retrain on labelled recordings of the real
-bear when there are some.
+The model is tied to the scan rate and buffer length it was trained at; both are stored in the file
+(``trained_rate_hz_``, ``trained_buffer_len_``) so a node can refuse a model trained for another rate.
+The training data is synthetic (``--family``) unless ``--bags`` gives recorded sessions.
 """
 
 from __future__ import annotations
@@ -39,7 +33,6 @@ FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 
                'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009'}
 
 __all__ = ['add_arguments', 'run']
-
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

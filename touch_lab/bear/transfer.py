@@ -1,14 +1,10 @@
 """Across populations: fit the subtype model on one family of simulated people, measure it on another.
 
-``social-touch eval bear --cross`` renders, for every family of :data:`~.evaluate.FAMILIES`, a
-training scene (seed + 1000) and a held-out test scene (seed) once through the virtual bear and the
-``bear_driver`` node, keeping every cycle's feature table and active sensors. Each model (one per
-training population: each family alone, all of them together, and any ``--model`` file) then
-classifies every test scene's rows behind the ``NoTouchGate``, and the symbolic gestures are replayed
-from those codes through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`: what the
-``bear_gestures`` node computes, cycle for cycle, without rendering the scene again per model.
-Scores are those of :mod:`.evaluate` (per interaction; symbolic detections, false alarms). All data
-is synthetic.
+``social-touch eval bear --cross`` renders a training and a test scene per family of
+:data:`~.evaluate.FAMILIES` once, keeping every cycle's features and active sensors; each model then
+classifies every test scene behind the ``NoTouchGate`` and the symbolic gestures are replayed from
+those codes through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`. Scores as in
+:mod:`.evaluate`. All data is synthetic.
 """
 
 from __future__ import annotations

@@ -1,14 +1,9 @@
 """``social-touch report compiled-code``: what each compiled twin saves at the robot's real message rates.
 
-``social-touch report compiled-code [SECTION ...]`` measures the named sections (all by default),
-keeps their figures in docs/compiled-code.json and renders docs/compiled-code.md from every section
-there. The design rule it serves: compiled code stays only where it saves >= 0.5 % of one core (or a
-latency a user feels) at the robot's real rates.
-
-One section per compiled twin, in :data:`SECTIONS`: ``measure(repeats) -> dict`` (JSON-able figures)
-and ``render(figures) -> str`` (markdown). A section measures what this tree has; where the twin has
-been removed, its section keeps the figures measured before (with their commit) and adds the ones it
-can still take, so the report says both what the twin saved and what runs now.
+Measures the named sections (all by default), keeps their figures in docs/compiled-code.json and renders
+docs/compiled-code.md from them. One section per compiled twin (:data:`SECTIONS`): ``measure(repeats)
+-> dict`` and ``render(figures) -> str``; a removed twin's section keeps the figures measured before
+(with their commit) beside what runs now.
 """
 
 from __future__ import annotations

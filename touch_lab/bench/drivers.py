@@ -1,15 +1,9 @@
 """``social-touch bench drivers``: what each driver node costs per frame, on recorded bytes.
 
-The bytes of each virtual sensor are recorded first (:func:`~touch_lab.bench.replay.record_scene`:
-the demo's people scenes, synthetic), then replayed through a pseudo-terminal into the sensor's
-driver node alone, in simulated time at the sensor's rate. The figure is what the node runs, no
-simulator in the loop: CPU time of the graph per wire frame (port reads at ``poll_rate_hz``, the
-stream decoder, calibration, the messages and their publication, status and diagnostics), the
-median over repeats. Beside it, the same node's own decoder and ``handle_frame`` (calibration,
-message, publication) are timed on the same bytes, so the three parts add up to the whole
-(``io_us``: reads, timers and the executor).
-
-The goal the node is held to: at most 1 % of the frame period on one core.
+Each sensor's recorded bytes (:func:`~touch_lab.bench.replay.record_scene`, synthetic) are replayed
+through a pseudo-terminal into its driver node alone, in simulated time: CPU time of the graph per wire
+frame, the median over repeats. The node's decoder and ``handle_frame`` are timed on the same bytes,
+``io_us`` is the rest. The goal: at most 1 % of the frame period on one core.
 """
 
 from __future__ import annotations

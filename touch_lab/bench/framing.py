@@ -1,20 +1,11 @@
 """``social-touch bench framing``: bogus frames per MB of a flood of fake headers (the framing's false-accept rate).
 
-A flood is a stream of fake headers with real frames scattered between them, fed to one
-:class:`~touch_driver.framing.FrameDecoder` that knows every sensor's id and length (the widest
-decoder, so the most headers look plausible). Three floods, from the crudest to the worst a
-stream can hold (all synthetic, seeded):
-
-- ``v1_headers``: sync + a plausible id and length in the version-1 layout (CRC-16);
-- ``v2_headers``: sync + version 2 + a plausible id and length + random sequence and header check
-  (a firmware's or a cable's garbage that happens to start like a header);
-- ``checked_headers``: whole fake frames whose header passes its check, with random payload and
-  CRC (e.g. a header replayed from a real frame, then noise): every one costs a CRC-32 over a
-  payload, so the false-accept rate here is the CRC-32's.
-
-A bogus frame is one returned that was never sent; a lost frame is one sent and not returned.
-The expected number of bogus frames is also given: failed payload checks x 2^-32 (each fake that
-reaches the CRC-32 passes it with probability 2^-32), which is what the measured zero bounds.
+Each flood (synthetic, seeded) mixes fake headers with real frames, fed to one
+:class:`~touch_driver.framing.FrameDecoder` that knows every sensor: ``v1_headers`` (version-1 layout),
+``v2_headers`` (random sequence and header check) and ``checked_headers`` (whole fake frames whose
+header passes its check: each costs a CRC-32 over a payload). A bogus frame is one returned that was
+never sent; a lost frame one sent and not returned. Also given: the expected bogus frames, failed
+payload checks x 2^-32, which the measured zero bounds.
 """
 
 from __future__ import annotations

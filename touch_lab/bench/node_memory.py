@@ -1,18 +1,9 @@
 """``social-touch bench node-memory``: what each node process holds, as a user launches it.
 
-Two figures per node, each the median of ``repeats`` runs:
-
-- **launched**: each shipped sensor scene (:data:`SCENES`, with its default arguments: the
-  simulated people, synthetic) is started as a user starts it, ``social-touch launch FILE
-  --processes`` on the wall clock, in a DDS domain of its own; after :data:`SETTLE_S` s the
-  resident set (``VmRSS`` of ``/proc/<pid>/status``) of every node process the launcher started
-  is read, then the launch is stopped with SIGINT.
-- **imported**: a bare interpreter imports the node's module (its ``social_touch.nodes`` entry
-  point) and reads its own ``VmRSS``: what the node's code costs before it starts, beside
-  ``python -c 'import numpy'``. Heavy packages it loaded (:data:`HEAVY`) are listed.
-
-``social-touch report node-memory`` runs the same and writes docs/node-memory.md. Linux only
-(``/proc``).
+Two figures per node, medians of ``repeats`` runs: **launched** (each scene of :data:`SCENES` started
+with ``social-touch launch FILE --processes`` in a DDS domain of its own; ``VmRSS`` of every node
+process after :data:`SETTLE_S` s) and **imported** (a bare interpreter importing the node's module,
+beside ``python -c 'import numpy'``; heavy packages loaded, :data:`HEAVY`, are listed). Linux only.
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """Recorded sensor bytes replayed into the runtime through pseudo-terminals, for timing the runtime alone.
 
-A benchmark of what the robot runs must not time the simulator. So it goes in two steps:
-
-1. :func:`record` reads a virtual sensor's byte stream through its pyserial URL on a stepped clock,
-   frame period by frame period, as a serial capture of the device would (synthetic scenes of
-   simulated people, ``config/scenes/*_people.yaml``);
-2. :class:`Replay` plays those bytes into real pseudo-terminals (``os.openpty``): the driver
-   nodes open the ``/dev/pts/N`` paths as ordinary serial ports (``serial.Serial``: the same
-   reads and system calls as on ``/dev/ttyACM0``), and the graph runs in simulated time in a
-   :class:`~touch_sim.harness.Harness`. Only the graph's work is timed, in CPU seconds of this
-   process (``time.process_time``); writing the bytes into the terminals is not.
+:func:`record` reads a virtual sensor's byte stream on a stepped clock, as a serial capture would;
+:class:`Replay` plays it into ``os.openpty`` terminals that the driver nodes open as serial ports, the
+graph in simulated time. Only the graph's work is timed (``time.process_time``).
 """
 
 from __future__ import annotations
@@ -91,11 +84,8 @@ def record_scene(sensor: str, duration_s: float = 60.0, seed: int = 1) -> Record
 
 class PtyPort:
     """A pseudo-terminal in raw mode: a driver opens :attr:`path` as a serial port; :meth:`write` puts
-    bytes on its wire. Close it after the driver is done.
-
-    The kernel hands bytes from the master to the terminal side in a work queue of its own, a
-    little later in wall time. A graph in simulated time would outrun it, so :meth:`write` waits
-    (without counting: the caller times only the graph) until the bytes are readable.
+    bytes on its wire, and waits until they are readable (the kernel hands them over a little later in wall
+    time, which a graph in simulated time would outrun). Close it after the driver is done.
     """
 
     def __init__(self, timeout_s: float = 5.0) -> None:

@@ -1,13 +1,8 @@
 """``social-touch bench training``: how long training on an hour of sessions takes, per sensor (SYNTHETIC data).
 
-Two simulated people record a session each (``collect --simulate``, default protocol, 3 repetitions);
-the session bags are then listed again and again until they hold an hour of sensor frames, and the
-whole training path of ``train SENSOR --bags`` runs on the list: reading and checking every bag,
-features (patch windows, bear buffers, skin segmentation), fitting (mixtures, logistic regression,
-codebook). The hour repeats two people's data, so it costs what an hour costs, not what an hour of
-many people would teach. ``bear+symbolic`` is the bear with its symbolic gestures in the sessions
-(``collect bear --symbolic``), trained by ``train bear --bags`` itself: the subtype model, a model per
-held-out person and the suggested gesture settings checked leave-one-person-out. Run it on one core::
+Two simulated people record a session each; their bags are listed again until they hold an hour of
+frames, and the whole path of ``train SENSOR --bags`` runs on the list (reading, features, fitting).
+``bear+symbolic`` adds the symbolic gestures and their suggested settings. Run it on one core::
 
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 taskset -c 0 social-touch bench training --repeats 1
 """

@@ -1,36 +1,18 @@
 """``social-touch bench transport``: our DDS path against raw cyclonedds, side by side, across processes.
 
-For each kind of message (bear frame, patch frame, skin frame, gesture event, synthetic
-content of the real sizes) the bench starts two echo processes (:mod:`touch_lab.bench.transport_echo`): one
-runs a runtime node that sends each message back, the other plain cyclonedds that sends
-each sample's bytes back. In this process a runtime node and a raw cyclonedds
-participant ping them. Both sides have the same processes, threads and waits; what
-differs is ours (the runtime's publish, executor, encoding and decoding):
+Per message kind, two echo processes (:mod:`touch_lab.bench.transport_echo`: a runtime node, plain
+cyclonedds) answer a runtime node and a raw participant in this process:
 
-- **latency**: one message in flight, half the round trip (``time.perf_counter``), from the
-  ping's publish (raw: write) to the pong's callback (raw: take), each timed in the thread
-  that runs it (the bench's hand-over to its main thread is not the transport's and is not
-  counted, for either path). ``ours`` is ``publish(msg)`` to the pong callback with decoded
-  messages on both ends (encoding and decoding twice per round trip); ``ours_cdr``
-  publishes CDR bytes and subscribes raw (the transport without (de)serialisation);
-  ``raw`` writes and takes bytes with cyclonedds; ``raw_codec`` is raw plus our codec
-  (encoded on send, decoded on take, decoded and encoded again by the echo: the codec
-  without the runtime). Together they split ours' overhead: the codec's share is
-  ``raw_codec`` over ``raw``, the runtime's ``ours_cdr`` over ``raw``. The paths take turns in blocks of
-  :data:`BLOCK` pings, in an order that rotates every round, so that all see the same
-  machine (a shared machine's speed changes within seconds). Reported: the median and 99th
-  percentile over every ping of every round, the lowest and highest round median, and
-  ``overhead_ratio`` = ours / raw of the medians (``overhead_ratio_cdr`` likewise for
-  ``ours_cdr``, ``overhead_ratio_codec`` for ``raw_codec``) with the lowest and highest ratio of a round.
-- **throughput**: one-second bursts paced at rising rates (from a quarter of the goal, 10x
-  the sensor's rate, doubling up to 8x the goal, ``rate_ramp_top_hz``) on a reliable topic
-  until a burst loses a message on the round trip (ping and pong) or cannot be sent at the
-  rate; the highest lossless rate is reported, per path.
-- **load**: what the machine did meanwhile (:class:`touch_lab.bench.load.MachineLoad`): its CPU
-  use, the bench's own, everyone else's, stolen time, load averages.
+- **latency**: half the round trip of one message in flight, timed in the threads that publish and
+  take. ``ours``: decoded messages both ends; ``ours_cdr``: CDR bytes (no (de)serialisation); ``raw``:
+  cyclonedds bytes; ``raw_codec``: raw plus our codec. The paths take turns in blocks of :data:`BLOCK`
+  pings, rotating each round. Reported: median, p99, lowest and highest round median, and
+  ``overhead_ratio`` = ours / raw (``_cdr``, ``_codec`` likewise) with its range over rounds.
+- **throughput**: one-second bursts at doubling rates up to ``rate_ramp_top_hz`` on a reliable topic
+  until one loses a message or cannot keep the rate; the highest lossless rate per path.
+- **load**: :class:`touch_lab.bench.load.MachineLoad` meanwhile.
 
-Runs in ``$SOCIAL_TOUCH_BENCH_DOMAIN`` (default 231) with discovery on this host only,
-so it never disturbs a robot's graph.
+Runs in ``$SOCIAL_TOUCH_BENCH_DOMAIN`` (default 231), discovery on this host only.
 """
 
 from __future__ import annotations
@@ -43,6 +25,7 @@ import threading
 import time
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 from cyclonedds._clayer import ddspy_take, ddspy_write
@@ -265,12 +248,12 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
     :data:`~touch_lab.bench.transport_echo.KINDS`) and ``ramp_steps`` make a short run (tests).
     """
     domain = int(os.environ.get('SOCIAL_TOUCH_BENCH_DOMAIN', DEFAULT_DOMAIN))
-    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
-    os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    env = {**os.environ}
     echoes = []
     results: dict[str, Any] = {}
     load = MachineLoad()
+    restore_environ = patch.dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    restore_environ.start()
+    env = {**os.environ}
     try:
         echoes = [_Echo('ours', env), _Echo('raw', env)]
         load.start(echo.proc.pid for echo in echoes)
@@ -286,11 +269,7 @@ def bench_transport(repeats: int = 5, pings: int = 400, kinds: list[str] | None 
     finally:
         for echo in echoes:
             echo.close()
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        restore_environ.stop()
     return {'message': 'synthetic messages of the real sizes; latency is half the round trip to an echo process',
             'domain': domain, 'rounds': repeats,
             'pings_per_round': pings, 'block': BLOCK,

@@ -1,16 +1,10 @@
 """The far end of ``social-touch bench transport``: a process that sends every ping back as a pong.
 
-``python -c "$ECHO_MAIN" ours|raw KIND...`` (:data:`touch_lab.bench.transport.ECHO_MAIN`) in the bench's domain:
-
-- ``ours``: a runtime node whose subscription to ``/bench/<kind>/ping`` republishes each
-  message on ``/bench/<kind>/pong`` (decoded and encoded again, as a node would), and a
-  raw subscription on ``/bench/<kind>/ping_cdr`` republishing the CDR bytes on ``.../pong_cdr``;
-- ``raw``: plain cyclonedds, a wait set on readers of ``rt/bench_raw/<kind>/ping`` that
-  writes the bytes it takes to ``rt/bench_raw/<kind>/pong``, and on readers of
-  ``rt/bench_codec/<kind>/ping`` that decode the bytes with our codec and write them encoded
-  again to ``rt/bench_codec/<kind>/pong`` (plain cyclonedds plus our codec, no runtime).
-
-It prints ``ready`` once its endpoints exist and exits when its stdin closes.
+``python -c "$ECHO_MAIN" ours|raw KIND...`` (:data:`touch_lab.bench.transport.ECHO_MAIN`): ``ours`` echoes
+``/bench/<kind>/ping`` to ``.../pong`` with a runtime node (decoded and encoded again) and
+``.../ping_cdr`` to ``.../pong_cdr`` as bytes; ``raw`` echoes ``rt/bench_raw/<kind>/ping`` bytes and
+``rt/bench_codec/<kind>/ping`` through our codec with plain cyclonedds. It prints ``ready`` once its
+endpoints exist and exits when its stdin closes.
 """
 
 from __future__ import annotations

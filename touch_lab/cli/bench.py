@@ -42,7 +42,7 @@ BENCHES: dict[str, Command] = {
     'wall-clock': Command('touch_lab.bench.wall_clock:bench_wall_clock',
                           'the graph as launched on the wall clock, sensors fed through ptys: CPU share'),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
-    'skin-acceptance': Command('touch_lab.skin.acceptance_bench:bench_acceptance',
+    'skin-acceptance': Command('touch_lab.skin.bench:bench_acceptance',
                                'one recognition with thresholds, the product score and the logistic score'),
 }
 

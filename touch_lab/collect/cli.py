@@ -1,25 +1,15 @@
 """``social-touch collect bear|patch|skin``: record labelled sessions, one bag per person.
 
-    social-touch launch launch/patch.launch.yaml                          # terminal 1: the scene
-    social-touch collect patch --person ada --out sessions/patch_ada      # terminal 2: a live session
+    social-touch collect patch --person ada --out sessions/patch_ada      # live, with the scene launched
     social-touch collect patch --simulate 8 --out sessions/patch          # SYNTHETIC, simulated time
-    social-touch collect bear --simulate 6 --repetitions 2 --variants gentle,normal,rough --out sessions/bear
-    social-touch collect bear --simulate 6 --symbolic --out sessions/bear     # + hug, head_pat, tickle, ...
+    social-touch collect bear --simulate 6 --symbolic --out sessions/bear # + the symbolic gestures
 
-Each bag holds the sensor driver's topics and ``/touch/label`` (``social_touch_msgs/msg/TouchLabel``:
-person, gesture, variant, sensor, start, end), so ``social-touch train SENSOR --bags BAG...`` and
-``social-touch eval SENSOR --bags BAG...`` read whole sessions. The protocol asks for every gesture
-in every variant ``--repetitions`` times, shuffled per person. The bear's ``--symbolic`` adds its
-symbolic gestures (config/bear_gestures.yaml), labelled ``symbolic/<gesture>`` (the subtype 'tickle'
-and the gesture 'tickle' differ); ``train bear --bags`` suggests their filter settings from them.
-
-A live session joins the running graph (the same ``ROS_DOMAIN_ID``), prompts each trial in the
-terminal and on ``/touch/collect_prompt`` (the live view shows it), and takes the operator's keys:
-Enter (start / end a trial), ``r`` (redo the last), ``d`` (drop the last), ``q`` (end); see
-:mod:`touch_lab.collect.live`.
-
-``--simulate N`` runs the protocol with N simulated people on the virtual device and the real
-driver node, in simulated time, writing ``OUT/<sensor>_pNN`` for each.
+Each bag holds the sensor driver's topics and ``/touch/label`` (``social_touch_msgs/msg/TouchLabel``),
+which ``train`` and ``eval SENSOR --bags`` read. The protocol asks for every gesture in every variant
+``--repetitions`` times, shuffled per person. The bear's ``--symbolic`` labels are
+``symbolic/<gesture>``. A live session is :mod:`touch_lab.collect.live`; ``--simulate N`` runs the
+protocol with N simulated people on the virtual device and the real driver node, writing
+``OUT/<sensor>_pNN`` for each.
 """
 
 from __future__ import annotations
@@ -39,7 +29,6 @@ from .protocol import DEFAULT_GESTURES, SENSORS, Protocol
 from .simulate import person_name, simulate_session
 
 __all__ = ['add_arguments', 'run']
-
 
 
 def _names(text: str) -> tuple[str, ...]:

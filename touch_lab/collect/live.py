@@ -1,22 +1,11 @@
 """``social-touch collect SENSOR --person NAME --out BAG``: a guided session with a real person on the running graph.
 
-The session joins the DDS domain (as ``social-touch record`` does), records the sensor
-driver's topics to one session bag (:class:`~.session_bag.SessionWriter`, the writer of the
-simulated sessions) and walks the protocol's shuffled trials, prompting in the terminal
-and on :data:`PROMPT_TOPIC` (``std_msgs/msg/String``, latched; the live view shows it).
-
-Keys, one line each (Enter after the key):
-
-- Enter: start the prompted trial; Enter again when it is done.
-- ``r``: redo the last trial (it is prompted again; its label is replaced).
-- ``d``: drop the last trial (its label is removed; the trial is *not* asked again).
-- ``q`` (or end of input): end the session; every kept trial and every frame is in the bag.
-
-Ctrl-C ends the session as ``q`` does (a trial under way is not kept). A trial's start and end
-are the graph's ROS time: the ``header.stamp`` of the newest frame of the sensor when the key
-arrives (so a trial starts at most one frame period early; the graph may run simulated time).
-A label is written when the next trial starts or the session ends: only the last trial can be
-redone or dropped, so labels go to the bag in start order and never have to be taken back.
+Records the sensor driver's topics to one session bag (:class:`~.session_bag.SessionWriter`) and walks
+the protocol's shuffled trials, prompting in the terminal and on :data:`PROMPT_TOPIC` (latched). Keys,
+each followed by Enter: Enter (start / end the trial), ``r`` (redo the last), ``d`` (drop the last,
+not asked again), ``q`` or end of input or Ctrl-C (end; every kept trial and frame is in the bag).
+A trial's start and end are the ``header.stamp`` of the sensor's newest frame when the key arrives.
+A label is written when the next trial starts, so only the last trial can be redone or dropped.
 """
 
 from __future__ import annotations

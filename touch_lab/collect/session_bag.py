@@ -1,13 +1,9 @@
 """A recording session on disk: one rosbag2 (MCAP) with the sensor's topics and ``/touch/label``.
 
-:class:`SessionWriter` records a session through :class:`touch_graph.bag.BagRecorder`: the sensor's
-messages as they were published, and one ``social_touch_msgs/msg/TouchLabel`` per kept trial on
-:data:`LABEL_TOPIC` (person, gesture, variant, sensor, start, end in ROS time). ``metadata.yaml``'s
-``custom_data`` says which sensor and whether the data is synthetic.
-
-:func:`read_session` reads one back for training and evaluation and checks it: a bag without
-labels, labels that overlap or lie outside the recording, labels of another sensor, a bag without
-the sensor's topic are a :class:`SessionError` naming the bag and the time (never a traceback).
+:class:`SessionWriter` records the sensor's messages and one ``social_touch_msgs/msg/TouchLabel`` per
+kept trial on :data:`LABEL_TOPIC`; ``metadata.yaml``'s ``custom_data`` names the sensor and whether the
+data is synthetic. :func:`read_session` reads one back and checks it: missing labels or sensor topic,
+overlapping or outlying labels, another sensor's labels are a :class:`SessionError` naming bag and time.
 """
 
 from __future__ import annotations

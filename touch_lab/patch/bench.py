@@ -1,17 +1,9 @@
 """Benchmark: cost per frame of the patch gesture recogniser (for ``social-touch bench patch``).
 
-One frame of work is what the node does at 20 Hz: update the window features from a
-(16, 16) activation map, evaluate the log posterior of every class's mixture, apply the
-event rule. Frames come from a simulated mixed scene (SYNTHETIC) rendered on the virtual
-patch by the ``patch_driver`` node, so the share of frames with contact is realistic; the
-classifier is fitted on simulated people first (not timed).
-
-For comparison the same run times scikit-learn's ``GaussianMixture.score_samples`` called
-once per class per frame (what a naive node would do), and reports the ratio.
-
-:func:`bench_node` times the ``patch_gestures`` node's frame callback (message in, event
-out) against the bare recogniser on the same frames with the same model: the node's share of
-the cost (message fields, stamps, publishing).
+One frame: update the window features from a (16, 16) activation map, the log posterior of every
+class, the event rule; frames of a simulated mixed scene (SYNTHETIC) through the ``patch_driver``
+node. Beside it, scikit-learn's ``score_samples`` once per class per frame, and the ratio.
+:func:`bench_node` times the ``patch_gestures`` node's frame callback against the bare recogniser.
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """``social-touch train patch`` and ``social-touch eval patch``.
 
-Sources (one of):
-
-- ``--csv FILE --grid RxC --rate HZ``: CoST-layout CSV (subject,variant,gesture,frame,ch1..chN);
-- ``--bags MANIFEST``: a YAML list of rosbag2 recordings of /patch/frame with subject and gesture;
-- ``--simulate N``: N simulated people (SYNTHETIC), one session per gesture, on the virtual patch read by
-  the ``patch_driver`` node (:func:`~touch_lab.patch.datasets.render_session`).
-
-``train`` fits one Gaussian mixture per class on every frame of every session and writes a
-model file (``.npz``, no pickle). ``eval`` runs leave-one-subject-out with a grid search over
-components, threshold and dwell, and prints Fig. 6 of sympartner2018 (or, with ``--json``,
-one JSON object). Progress goes to stderr.
+Sources (one of): ``--csv FILE --grid RxC --rate HZ`` (CoST-layout CSV), ``--bags`` (session bags or a
+YAML manifest of /patch/frame recordings), ``--simulate N`` (SYNTHETIC people on the virtual patch).
+``train`` fits one Gaussian mixture per class and writes a model file (``.npz``, no pickle); ``eval``
+runs leave-one-subject-out with a grid search over components, threshold and dwell and prints Fig. 6 of
+sympartner2018 (``--json``: one JSON object). Progress goes to stderr.
 """
 
 from __future__ import annotations
@@ -333,7 +327,6 @@ def _matrix(title: str, table: dict) -> list[str]:
     for row, values in table.items():
         out.append(f'{row:<16}' + ''.join(f'{values[c]:>{width}}' for c in cols))
     return out
-
 
 
 TRAIN = Target(add_train_arguments, run_train, __doc__)

@@ -1,29 +1,25 @@
 """Labelled patch recordings for training and evaluation: CoST-layout CSV and rosbag2 bags.
 
-A :class:`Session` is one continuous recording of one subject with one gesture class, as
-in the paper's data set (sympartner2018 6.3): for training, every frame of the session gets
-the session's class, silences included.
+A :class:`Session` is one recording of one subject with one gesture class (sympartner2018 6.3): for
+training, every frame gets the session's class, silences included.
 
 **CSV** in the layout of the Corpus of Social Touch (CoST), one row per frame::
 
     subject,variant,gesture,frame,ch1,ch2,...,chN
 
-with ``N = rows * cols`` channels, row-major, at a fixed rate (CoST: 8x8 at 135 Hz). A new
-session starts where subject, variant or gesture changes or the frame number does not
-increase. Values are raw pressure counts (CoST: 0..1023) turned into activations by eq.
-(1)-(2) (:func:`activation_from_raw`), or activations already (``values='activation'``).
-Empty or ``nan`` cells are read as NaN (treated as inactive by the features).
+``N = rows * cols`` channels, row-major. A session starts where subject, variant or gesture changes
+or the frame number does not increase. Values are raw counts turned into activations by eq. (1)-(2)
+(:func:`activation_from_raw`), or activations (``values='activation'``); empty cells are NaN.
 
-**Bags**: a YAML manifest lists rosbag2 recordings of ``/patch/frame``
-(``social_touch_msgs/msg/PatchFrame``) with their subject and gesture::
+**Bags**: a YAML manifest lists rosbag2 recordings of ``/patch/frame``::
 
     topic: /patch/frame        # optional (default)
     sessions:
       - {bag: bags/p1_stroke, subject: p1, gesture: stroke}
       - {bag: bags/p1_push, subject: p1, gesture: push, events: [[2.1, 4.0], [9.5, 11.2]]}
 
-Bag paths are relative to the manifest; ``events`` (onset, offset in seconds from the
-bag's first frame) are optional ground truth, otherwise events are segmented (6.3).
+Bag paths are relative to the manifest; ``events`` (onset, offset, s from the bag's first frame) are
+optional ground truth, else events are segmented.
 """
 
 from __future__ import annotations

@@ -1,30 +1,17 @@
 """Leave-one-subject-out evaluation of the patch gesture classifier (sympartner2018 6.3, Fig. 6).
 
-For every subject, the classifier is trained on every frame of the other subjects'
-sessions (each frame labelled with its session's class, silences included) and run over
-the held-out subject's sessions frame by frame, as on the robot: window features, log
-posterior, event rule. Detections are then compared with the ground-truth events: those
-given with a session (simulated scenes know them), else events segmented by an activity
-threshold on the pressure data (6.3, :func:`segment_events`).
+Per subject: train on every frame of the others' sessions, run the held-out sessions frame by frame
+as on the robot, compare detections with the ground-truth events (given, or :func:`segment_events`).
 
-**Matching** (what the numbers mean):
-
-- A detection at time ``t`` (s) belongs to ground-truth event ``i`` when
-  ``onset_i - early_s <= t <= offset_i + late_s`` (``late_s`` defaults to the window length:
-  the gesture is still in the window); if several qualify, to the one with the latest
-  onset. A detection that belongs to no event is a false detection *in silence*.
-- **event confusion** ``[truth, detected]``: detections counted by the class of their event
-  and their own class (a gesture can be detected more than once if the class changes).
-- **event_correct**: events with at least one detection of their own class.
-- **false_detections**: detections of the wrong class plus detections in silence.
-- **misses**: events without any detection.
-- Rates divide by the number of events, as the paper does (148/200, 52/200, 51/200).
-- **detection latency**: for each correct event, first correct detection minus onset, s.
-- **per-sample confusion** ``[predicted, truth]``: predicted = class whose posterior reaches
-  the threshold, else "not recognised"; truth = the event's class inside an event, else
-  "silence". ``tpr_all_samples`` counts silence predicted as "not recognised" as correct
-  (this reproduces the paper's 0.32); ``tpr_detected_samples`` is the accuracy over the
-  samples some class was recognised in, within events (the paper's 0.95).
+- A detection at ``t`` (s) belongs to event ``i`` when ``onset_i - early_s <= t <= offset_i + late_s``
+  (the latest onset if several); else it is a false detection *in silence*.
+- **event confusion** ``[truth, detected]``; **event_correct**: events with a detection of their class;
+  **false_detections**: wrong class plus in silence; **misses**: events without detection. Rates divide
+  by the number of events, as the paper does. **detection latency**: first correct detection - onset, s.
+- **per-sample confusion** ``[predicted, truth]``: predicted = class whose posterior reaches the
+  threshold, else "not recognised"; truth = the event's class, else "silence". ``tpr_all_samples``
+  counts silence as "not recognised" correct (the paper's 0.32); ``tpr_detected_samples`` is the
+  accuracy over samples within events where some class was recognised (the paper's 0.95).
 """
 
 from __future__ import annotations

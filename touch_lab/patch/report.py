@@ -1,15 +1,8 @@
 """Write docs/patch-evaluation.md: Fig. 6 of sympartner2018 and a speed-against-error table (SYNTHETIC).
 
-Regenerate with::
-
-    social-touch report patch            # about 10 minutes on one core
-    social-touch report patch --quick    # fewer settings, for a look
-
-Simulated people (touch_sim.patch.people) are rendered on the virtual patch read by the
-``patch_driver`` node (touch_sim.patch.render: the driver's decoder and calibration
-when installed), then evaluated leave-one-subject-out (touch_lab.patch.evaluate):
-first a grid search over components, threshold and dwell as the paper does, then the
-speed-against-error table over window length and components at the paper's threshold.
+``social-touch report patch [--quick]``: simulated people on the virtual patch through the
+``patch_driver`` node, evaluated leave-one-subject-out (:mod:`touch_lab.patch.evaluate`): a grid search
+over components, threshold and dwell, then speed against error over window length and components.
 """
 
 from __future__ import annotations

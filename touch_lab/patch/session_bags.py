@@ -1,14 +1,9 @@
 """Patch sessions from ``collect patch`` bags: one labelled :class:`~.datasets.Session` per trial.
 
-A session bag holds many trials of several classes (``/touch/label``); the evaluation and training of
-:mod:`.evaluate` take one class per session, as the paper's recordings (sympartner2018 6.3). Each
-trial becomes a session of its own: the ``/patch/frame`` activations from the middle of the pause
-before it to the middle of the pause after it (the bag's ends for the first and last), with the
-trial's interval as its ground-truth event. The silences belong to the trial's class for training,
-as in the paper's sessions.
-
-Rates: every bag's rate is measured (1 / median frame step); real drivers' clocks differ by a
-fraction of a percent, so :func:`common_rate` accepts rates within 2 % of their median.
+Each trial becomes a session: the ``/patch/frame`` activations from the middle of the pause before it
+to the middle of the pause after it (the bag's ends for the first and last), its interval the
+ground-truth event, the silences its class (as the paper's sessions). Each bag's rate is measured
+(1 / median frame step); :func:`common_rate` accepts rates within 2 % of their median.
 """
 
 from __future__ import annotations

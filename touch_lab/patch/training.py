@@ -1,17 +1,10 @@
 """Training the patch gesture mixtures (sympartner2018 6.2) with scikit-learn's EM.
 
-For each gesture class ``c`` a mixture ``p(f | c) = sum_k w_k N(f | mu_k, Sigma_k)`` is fitted
-by EM (scikit-learn ``GaussianMixture``, 5 components in the paper) to the window features of
-every frame of that class's sessions, silences included. The fitted model is a
-:class:`~touch_gestures.patch.classifier.GestureMixtures`, which the node evaluates with numpy
-alone: :class:`PatchGestureClassifier` is that class with ``fit`` (and scikit-learn's estimator
-API), so it lives here, in the lab, and the node's process never loads scikit-learn.
-
-Hard cases handled at fit: a class with fewer (distinct) frames than components gets as
-many components as it has distinct frames; constant or collinear features give singular
-covariances, which ``reg_covar`` (added to the diagonal, in standardised units) regularises;
-if EM still fails, ``reg_covar`` is raised tenfold (up to three times) and the effective
-value is kept per class in ``reg_covar_``.
+Per class ``c``, ``p(f | c) = sum_k w_k N(f | mu_k, Sigma_k)`` is fitted by ``GaussianMixture`` to the
+window features of every frame of its sessions. :class:`PatchGestureClassifier` is the node's
+:class:`~touch_gestures.patch.classifier.GestureMixtures` with ``fit``, kept in the lab so that the node
+never loads scikit-learn. A class with fewer distinct frames than components gets one component per
+distinct frame; if EM fails, ``reg_covar`` is raised tenfold (up to three times), kept in ``reg_covar_``.
 """
 
 from __future__ import annotations

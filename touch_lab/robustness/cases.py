@@ -1,17 +1,10 @@
 """Bad input tried as a new user and a broken robot would, each classified by what the stack did.
 
-Every case is a callable. What it does decides its outcome:
-
-- ``clear error``: it raised one of the package's errors (``SocialTouchError``) or a ``ValueError``
-  whose message names what is wrong; for a command, it exited non-zero with a message and no traceback;
-- ``handled``: it returned normally, and the check it made on the result held (the bad input was
-  counted and skipped, or the loop kept going as it should);
-- ``traceback``: any other exception, or a command that printed a traceback;
-- ``crash``: a process died of a signal it did not ask for;
-- ``wrong``: it returned, but the check failed (e.g. a bogus frame accepted, a touch from 3e38).
-
-The lists below are what ``social-touch report robustness`` runs; ``test/test_robustness_*.py``
-checks the same behaviours one by one.
+A case is a callable or a CLI argv; its outcome (:mod:`.outcomes`): ``clear error`` (a
+``SocialTouchError`` or a ``ValueError`` naming what is wrong; a command exiting non-zero without a
+traceback), ``handled`` (it returned and its check held), ``traceback`` (any other exception),
+``crash`` (killed by a signal), ``wrong`` (it returned but its check failed). ``social-touch report
+robustness`` runs :func:`all_cases`; ``test/test_robustness_*.py`` check the same behaviours one by one.
 """
 
 from __future__ import annotations

@@ -1,21 +1,13 @@
 """A graph a stray process cannot silently blind: robustness cases for frame screening and bounded parameters.
 
-Any process in the DDS domain may publish on ``/skin/frame`` or set a recogniser's parameters
-(docs/network.md). These cases try it and check what the recognisers do:
+- :func:`skin_flood`: the people scene (SYNTHETIC) through ``skin_driver`` + ``haptic_commands`` while a
+  separate process floods ``/skin/frame`` with empty frames over Cyclone DDS; the commands must match
+  an undisturbed run and ``/diagnostics`` must name the cause;
+- stale, foreign or empty frames among the driver's, on the patch and bear recognisers;
+- parameters that would switch a check off, refused with the reason; an accepted change logged at
+  WARN and counted in the node's diagnostics.
 
-- :func:`skin_flood`: the people scene (config/scenes/skin_people.yaml, SYNTHETIC) through
-  ``skin_driver`` + ``haptic_commands`` in this process, while a *separate process* joins the domain
-  over Cyclone DDS and floods ``/skin/frame`` with empty frames stamped 0 (``SkinFrame()``) at
-  ``hz``; the commands recognised are compared with an undisturbed run of the same scene, and the
-  recogniser's ``/diagnostics`` must name the cause;
-- stale or foreign frames interleaved with the driver's on the patch and bear recognisers, and
-  frames with nothing usable (ERROR on /diagnostics);
-- parameters that would switch a check off (``max_distance 1000000.0``, ``min_margin 0.0``, collision
-  limits, the patch event threshold) refused with the reason, and an accepted change logged at WARN
-  and counted in the node's diagnostics.
-
-Simulated time throughout; no case depends on how fast the machine is (the flood's own rate only
-decides how many stray frames arrive, which the case reports but does not require beyond "some").
+Simulated time throughout: no case depends on the machine's speed.
 """
 
 from __future__ import annotations
@@ -31,6 +23,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 
@@ -124,13 +117,12 @@ def _scene_run(scene: Any, stray: subprocess.Popen | None, rate: float, network:
 
 def skin_flood(hz: float = 300.0, rate: float = 1.0, frame_id: str = '', screening: bool = True,
                max_flood_s: float = 600.0) -> dict[str, Any]:
-    """The people scene undisturbed, then under a stray process's flood at ``hz`` (sim time at ``rate`` x real
-    time, so the scene lasts a known wall time and the flood overlaps all of it; real time by default, as on a
-    robot: at a faster clock a scheduling stall of a busy machine becomes a burst of driver frames beyond the
-    recogniser's queue, which loses gestures for a reason that is not the flood; its frames carry ``frame_id``:
-    ``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Needs a DDS domain of its own
-    (``ROS_DOMAIN_ID``; the caller sets it). Returns both runs' results, ``'ok'`` saying whether the flooded run
-    recognised within one command of the undisturbed one and its /diagnostics named the cause."""
+    """The people scene undisturbed, then under a stray process's flood of frames at ``hz`` carrying ``frame_id``
+    (``''`` as ``SkinFrame()``, or the driver's ``'skin_link'``, stale by stamp only). Sim time runs at ``rate`` x
+    real time (real time by default, as on a robot: a faster clock turns a busy machine's stall into a burst
+    beyond the recogniser's queue). Needs a DDS domain of its own (``ROS_DOMAIN_ID``; the caller sets it).
+    Returns both runs' results; ``'ok'``: the flooded run recognised within one command of the undisturbed
+    one and its /diagnostics named the cause."""
     scene = load_scene(share_file('config', 'scenes', 'skin_people.yaml'))
     calm = _scene_run(scene, None, rate=float('inf'), network=False)
     env = {**os.environ}
@@ -290,20 +282,11 @@ def hold_test_domain() -> Iterator[int]:
 def _flood_case(frame_id: str) -> Callable[[], Any]:
     """:func:`skin_flood` on a domain of its own (LOCALHOST discovery), whatever ``ROS_DOMAIN_ID`` says."""
     def run() -> Any:
-        keys = ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'CYCLONEDDS_URI')
-        saved = {k: os.environ.get(k) for k in keys}
-        try:
-            with hold_test_domain() as domain:
-                os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-                os.environ.pop('ROS_STATIC_PEERS', None)
-                os.environ.pop('CYCLONEDDS_URI', None)
-                r = skin_flood(frame_id=frame_id)
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        with hold_test_domain() as domain, patch.dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                                                      ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'):
+            os.environ.pop('ROS_STATIC_PEERS', None)
+            os.environ.pop('CYCLONEDDS_URI', None)
+            r = skin_flood(frame_id=frame_id)
         if not r['ok']:
             return False
         return (f"{r['flooded']} commands under the flood, {r['undisturbed']} undisturbed; "

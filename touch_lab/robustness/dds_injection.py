@@ -14,6 +14,7 @@ import sys
 import textwrap
 import time
 from typing import Any
+from unittest.mock import patch
 
 from touch_graph.messages import get_message
 from touch_graph.runtime import Context, Node, SingleThreadedExecutor
@@ -71,9 +72,8 @@ def dds_injection(domain: int | None = None, messages: int = 40, timeout_s: floa
     env.pop('CYCLONEDDS_URI', None)
     env.pop('ROS_STATIC_PEERS', None)
     env.pop('SOCIAL_TOUCH_NETWORK', None)
-    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'CYCLONEDDS_URI',
-                                            'ROS_STATIC_PEERS', 'SOCIAL_TOUCH_NETWORK')}
-    os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    restore_environ = patch.dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    restore_environ.start()
     for key in ('CYCLONEDDS_URI', 'ROS_STATIC_PEERS', 'SOCIAL_TOUCH_NETWORK'):
         os.environ.pop(key, None)
     got: list = []
@@ -99,11 +99,7 @@ def dds_injection(domain: int | None = None, messages: int = 40, timeout_s: floa
             proc, stderr = _run_intruder(executor, env, messages, timeout_s, switch_user=False)
     finally:
         ctx.shutdown()
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        restore_environ.stop()
     senders = sorted({m.recogniser for m in got})
     return {'measured': True, 'domain': domain, 'discovery': 'LOCALHOST', 'intruder_uid': intruder_uid, 'note': note,
             'our_uid': os.getuid(), 'sent': messages, 'received': len(got), 'senders': senders,

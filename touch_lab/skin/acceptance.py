@@ -1,37 +1,20 @@
 """Rejection a user tunes in one number: the wrong-command rate it may cost (issue 26, item 2).
 
-A codebook's own people tell how far a gesture of someone new lies from it. Leave-one-person-out
-inside the codebook (:func:`held_out_opinions`): each person's templates are read by a codebook of
-everyone else's, giving each held-out template the deciding distance to every class and the class the
-recogniser names. From those:
+Leave-one-person-out inside the codebook (:func:`held_out_opinions`) gives each held-out template its
+deciding distance to every class and the class named. From those:
 
-- each class's **scale**: the :data:`SCALE_QUANTILE` quantile of its held-out templates' distances to
-  it (how far a new person's gesture of the class lies: a star varies more than a line);
-- a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command, by a
-  logistic model (:func:`fit_weights`) on the touch's distances in the codebook's own units (to the named class
-  over its scale, over the runner-up's, the runner-up's over its scale, over the median of the other classes),
-  fit on the held-out templates named right against the held-out ones named wrong and synthetic touches that are
-  no gesture. The features are the codebook's own units, so the score means the same on any vocabulary;
-- the **limit**: the largest score that keeps the held-out templates' wrong commands at most
-  ``max_wrong_rate`` of them, and touches that are no gesture that fire at most :data:`MAX_RANDOM_FIRING` of
-  synthetic ones (:func:`null_touches`, read by the whole codebook).
+- each class's **scale**: the :data:`SCALE_QUANTILE` quantile of its held-out templates' distances to it;
+- a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command,
+  a logistic model (:func:`fit_weights`) on distances in scale units, fit on held-out templates named
+  right against those named wrong and synthetic touches that are no gesture;
+- the **limit**: the largest score keeping held-out wrong commands at most ``max_wrong_rate`` and
+  no-gesture touches firing at most :data:`MAX_RANDOM_FIRING` (:func:`null_touches`).
 
-The scales, the weights and the limit go into the recogniser (``acceptance_``; its distance rule is replaced by the
-score, its margin rule keeps a negative margin out) and the codebook file keeps them. Nothing is tuned
-on the people or the vocabulary it is used on: a new vocabulary calibrates itself when its codebook is
-made. The record also holds the held-out estimate of right / wrong / rejected, each person's templates
-judged by a limit and scales set from everyone else's.
-
-Editing a codebook (``social-touch codebook add|remove|merge``) or setting the old rejection parameters on the
-``haptic_commands`` node (``max_distance``, ``auto_scale``, ``auto_quantile``, ``min_margin``) recomputes the
-thresholds and drops the calibration: calibrate again (``social-touch codebook calibrate``).
-
-The held-out estimate reads templates, not touches: the evidence of strokes (which classes a stroke
-count allows) is applied, the duration and one-stroke order checks are not (they only reject more).
-The touches that are no gesture come from another generator than the evaluation's random touches
-(:func:`touch_sim.skin.stray.stray_touches`: presses, swipes, spirals, rubbing, taps; the evaluation counts
-:func:`touch_sim.skin.synthetic.random_touches`: scribbles, zigzags, dabs), so the evaluation's random-touch figure
-measures touches of a kind the calibration never saw.
+Scales, weights and limit go into the recogniser (``acceptance_``) and the codebook file. Editing a
+codebook or setting the old rejection parameters drops the calibration (``codebook calibrate`` again).
+The held-out estimate reads templates: stroke evidence applies, duration and order checks do not. The
+no-gesture touches (:func:`touch_sim.skin.stray.stray_touches`) are of another kind than the
+evaluation's random touches (:func:`touch_sim.skin.synthetic.random_touches`).
 """
 
 from __future__ import annotations

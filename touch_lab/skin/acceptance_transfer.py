@@ -1,23 +1,15 @@
 """Does the acceptance score's model transfer across vocabularies? (issue 26, item 2: fit on one file, measure
 on the other)
 
-    social-touch eval skin-transfer --fit unistroke_dev.csv.gz --fit-recogniser trace \\
-        --measure multistroke_dev.csv.gz --measure-recogniser fused --templates-per-gesture 30 --json
+Leave-one-person-out over the ``--measure`` file (``social-touch eval skin-transfer``), each fold's
+codebook calibrated for ``--max-wrong-rate`` three ways:
 
-Leave-one-person-out over the ``--measure`` file, each fold's codebook calibrated for ``--max-wrong-rate`` three
-ways, the rest of the pipeline the same:
-
-- **own**: the score's weights fit on the fold's own codebook (what ``social-touch eval skin --max-wrong-rate``
-  does, :func:`.acceptance.calibrate_acceptance`);
-- **transferred**: the weights fit once on the whole ``--fit`` file's codebook (its people read by each other,
-  against the same stray touches), only the limit set on the fold's codebook;
+- **own**: weights fit on the fold's codebook (:func:`.acceptance.calibrate_acceptance`);
+- **transferred**: weights fit once on the ``--fit`` file's codebook, only the limit set per fold;
 - **product**: the score before the model (distance over scale times the ratio to the runner-up).
 
-Each held-out sample is the gesture the virtual skin cut at the longest lift a gesture may have (as the
-codebook's samples; not the end-of-gesture rule ``eval skin`` cuts held-out samples with), so the figures
-compare the three scores with each other; ``eval skin`` gives the absolute ones. Random touches are the
-evaluation's (:func:`touch_sim.skin.synthetic.random_touches`), the calibration's the stray touches
-(:func:`.acceptance.null_touches`).
+Held-out samples are cut at the longest lift a gesture may have, so the figures compare the three
+scores with each other; ``eval skin`` gives the absolute ones.
 """
 
 from __future__ import annotations

@@ -1,43 +1,18 @@
 """Benchmark: microseconds per recognition with a codebook of n gestures x m templates.
 
-Goal (issue 6): at most 50 us per recognition with 16 gestures x 30 templates, one
-``predict`` call (features + matching against the whole codebook + decision), on one core;
-issue 13 allows the multi-stroke recognisers (``cloud``, ``ndollar``, ``refereed``, ``fused``, ``oriented``,
-``fused_oriented``, and ``auto``, which picks ``fused`` for multi-stroke vocabularies) 100 us
-(``goal_us_multistroke``). ``early`` is one candidate of
-:class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook (template prefixes at
-four fractions: four matchings) for the first half of each gesture, as the node publishes it
-while a gesture is traced.
-The paper's C++ took 50 us (map-based) and 80 us (centroid-based) for 5 gestures
-(cirillo2017 3.3, i7 at 2.8 GHz).
+Goal (issue 6): at most 50 us per ``predict`` (features + matching + decision) with 16 gestures x 30
+templates on one core; issue 13 allows the multi-stroke recognisers 100 us (``goal_us_multistroke``).
+``early`` is one candidate of :class:`~touch_gestures.skin.early.PrefixMatcher` on the cloud codebook for the
+first half of each gesture. The gestures are synthetic (:func:`~touch_sim.skin.synthetic.synthetic_traces`).
+Reported: the median over ``repeats`` (wall and thread CPU time), its ratio to the goal and to the
+centroid method, measured in the same run: ``social-touch bench skin [--json]``.
 
-The gestures are synthetic (:func:`~touch_sim.skin.synthetic.synthetic_traces`, 16 shapes
-by simulated performers, contact points at 150 Hz as the skin gives them), so the figure
-does not depend on a data file. Each recogniser is timed over ``queries`` gestures,
-``repeats`` times; the median of the repeats is reported (wall time, and the thread's CPU
-time, which on a shared machine leaves out the waits for a core), with its ratio to the goal and to
-the centroid method, measured in the same run: ``social-touch bench skin [--json]``.
-
-``steps_cpu_us`` says where every microsecond of a ``predict`` goes: the steps of
-:meth:`~touch_gestures.skin.base.TemplateRecogniser.predict`, run in its order on the same queries
-with the thread's CPU clock read as each ends (:func:`predict_steps`; medians of the repeats, each
-step's clock reads taken off): ``features`` (``features``), ``search`` (``distances``: the codebook
-against the query's features), ``minima`` (the nearest template of each class), ``evidence`` (the
-classes the stroke count allows before the decision, strokes and duration of the class it names
-after it, :mod:`~touch_gestures.skin.evidence`), ``decision`` (the nearest allowed class, ``refereed``'s
-referee on a tie, ``fused``'s trace and sum (``fused_oriented``: also the oriented cloud's gather), the
-distance and margin rules), ``order`` (the
-path order of a one-stroke touch, :mod:`~touch_gestures.skin.order_evidence`, for those the decision
-accepts) and ``other``: the whole
-``predict`` (timed as above) less those steps (calls, the answer's ``Match``). For ``cloud`` also
-``raster``, the distance-field bounds (step 2 of :mod:`~touch_gestures.skin.clouds`), timed alone:
-it is part of ``search``, not added to the total.
-
-``fused_3_strokes`` times the multi-stroke default (:data:`MULTISTROKE_DEFAULT`) where its trace searches most: the same
-gestures, each cut into three strokes (thirds of its path, lifts of ``LIFT_S``), so that every
-template is matched in all 3! = 6 orders of its strokes (:mod:`~touch_gestures.skin.stroke_orders`);
-``templates`` there counts the trace's rows. A real vocabulary mixes one, two and three strokes and
-costs between the two.
+``steps_cpu_us`` splits a ``predict`` into the steps of
+:meth:`~touch_gestures.skin.base.TemplateRecogniser.predict` (:func:`predict_steps`): ``features``,
+``search`` (``distances``), ``minima``, ``evidence``, ``decision``, ``order`` and ``other`` (the rest of
+``predict``); for ``cloud`` also ``raster`` (part of ``search``, not added to the total).
+``fused_3_strokes`` times :data:`MULTISTROKE_DEFAULT` on the same gestures cut into three strokes (all
+3! orders searched); ``templates`` there counts the trace's rows.
 """
 
 from __future__ import annotations
@@ -52,11 +27,11 @@ from touch_gestures.skin.clouds import CloudRecogniser
 from touch_gestures.skin.early import PrefixMatcher
 from touch_gestures.skin.gesture import TouchGesture
 from touch_lab.bench.timing import gc_paused
-from touch_lab.skin.recognisers import RECOGNISERS, AutoRecogniser, make_recogniser
+from touch_lab.skin.recognisers import MULTISTROKE_RECOGNISER, RECOGNISERS, AutoRecogniser, make_recogniser
 from touch_sim.skin.synthetic import SHAPES, synthetic_traces
 
-__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_recognition', 'in_strokes', 'predict_steps',
-           'synthetic_codebook']
+__all__ = ['GOAL_US', 'GOAL_US_MULTISTROKE', 'LIFT_S', 'STEPS', 'bench_acceptance', 'bench_recognition',
+           'in_strokes', 'predict_steps', 'synthetic_codebook']
 
 GOAL_US = 50.0
 GOAL_US_MULTISTROKE = 100.0
@@ -192,3 +167,36 @@ def _median_us(call, items: list, repeats: int) -> tuple[float, float]:
             wall.append((time.perf_counter() - start) / len(items) * 1e6)
             cpu.append((time.thread_time() - start_cpu) / len(items) * 1e6)
     return statistics.median(wall), statistics.median(cpu)
+
+
+def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int = 16, templates_per_gesture: int = 30,
+                     queries: int = 64, repeats: int = 7, seed: int = 0) -> dict:
+    """What the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
+
+    Median us per ``predict`` on a synthetic codebook, three ways interleaved in one run: the recogniser's own
+    thresholds, the product score, the logistic score (:mod:`touch_gestures.skin.doubt`); the acceptance
+    records are set by hand (the cost does not depend on them). A JSON-ready dict.
+    """
+    gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
+    probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
+    probe = probe[:queries]
+    models = {}
+    for rule in ('thresholds', 'product', 'logistic'):
+        model = make_recogniser(recogniser).fit(gestures, labels)
+        n = len(model.classes_)
+        if rule != 'thresholds':
+            model.set_acceptance({'class_scales': [1.0] * n, 'max_score': 1.0,
+                                  **({'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5]} if rule == 'logistic' else {})})
+        models[rule] = model
+    times: dict[str, list[float]] = {rule: [] for rule in models}
+    for _ in range(repeats):
+        for rule, model in models.items():   # interleaved: the machine's load falls on all three alike
+            t0 = time.perf_counter()
+            for g in probe:
+                model.predict(g)
+            times[rule].append((time.perf_counter() - t0) / len(probe) * 1e6)
+    us = {rule: float(np.median(v)) for rule, v in times.items()}
+    return {'data': 'synthetic gestures (SYNTHETIC)', 'recogniser': recogniser, 'gestures': n_gestures,
+            'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
+            'us_per_recognition': us, 'ratio_logistic_to_thresholds': us['logistic'] / us['thresholds'],
+            'ratio_logistic_to_product': us['logistic'] / us['product']}

@@ -1,26 +1,15 @@
 """``social-touch eval skin``: leave-one-subject-out evaluation of the skin recognisers.
 
-    social-touch eval skin --traces ../shared/data/unistroke_dev.csv.gz [--json]
-        [--recognisers trace,centroid,...] [--limit N] [--templates-per-gesture M (default: all)]
-        [--mode sensor|direct|both] [--random-touches N] [--seed S] [--no-cache] [--gap S]
-
-Each trace of the file goes through the virtual skin, the real driver decode and
-calibration and the segmenter (:mod:`.render`), then every recogniser is evaluated
-leave-one-subject-out (:mod:`.evaluate`). Progress goes to stderr; the report to stdout,
-as text or, with ``--json``, as one object::
+Each trace of the file goes through the virtual skin, the real driver decode and calibration and the
+segmenter (:mod:`.render`), then every recogniser is evaluated (:mod:`.evaluate`). Progress goes to
+stderr; the report to stdout, as text or, with ``--json``, one object::
 
     {"recognisers": {NAME: {"accuracy": ..., "us_per_recognition": ..., ...}}, "best": NAME, ...}
 
-Multi-stroke samples are traced with the finger lifted between strokes, the pauses as they
-are in the file; strokes closer than the segmenter's gap join into one gesture, a longer
-pen-up splits the sample into several gestures, which counts as a segmentation failure
-(wrong). In a vocabulary with multi-stroke gestures the end of a gesture is the codebook's
-(:mod:`touch_gestures.skin.ending`): a lift of ``--gap`` ends strokes that make a whole
-gesture, strokes that look like the beginning of a longer one wait up to ``--wait``; the
-samples are rendered once into pieces and cut per fold and recogniser (:mod:`.ending_eval`),
-and the report gives the latency this adds. ``--wait 0`` ends every gesture at ``--gap``
-(the fixed gap). A single-stroke vocabulary ends gestures at 0.15 s. The report gives the
-pauses between strokes and, per gap, the samples that stay whole (:mod:`.gaps`).
+A sample split into several gestures by its pen-ups is a segmentation failure (wrong). In a
+multi-stroke vocabulary the end of a gesture is the codebook's (:mod:`touch_gestures.skin.ending`,
+``--gap``, ``--wait``; cut per fold, :mod:`.ending_eval`); single-stroke vocabularies end at 0.15 s.
+The report gives the pauses between strokes and the samples each gap keeps whole (:mod:`.gaps`).
 """
 
 from __future__ import annotations

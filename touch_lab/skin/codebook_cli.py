@@ -1,14 +1,8 @@
 """``social-touch codebook info|add|remove|merge``: look into and edit skin codebooks.
 
-    social-touch codebook info config/skin_codebook.npz
-    social-touch codebook add robot.npz --bags sessions/skin/* -o robot2.npz      # templates of labelled touches
-    social-touch codebook remove robot.npz --gestures one,two -o robot2.npz
-    social-touch codebook merge a.npz b.npz -o both.npz
-    social-touch codebook calibrate robot.npz --max-wrong-rate 0.005 -o robot2.npz  # rejection for a wrong rate
-
 Every edit writes a new file (``-o``) with a model card saying what was done to which file
 (:mod:`touch_gestures.model_card`); rejection thresholds are recomputed from the templates kept
-(:mod:`.codebook_tools`), and a calibrated acceptance is dropped by an edit (calibrate again).
+(:mod:`.codebook_tools`), and an edit drops a calibrated acceptance (calibrate again).
 """
 
 from __future__ import annotations

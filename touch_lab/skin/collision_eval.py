@@ -1,21 +1,10 @@
 """``social-touch eval skin-collisions``: collisions, presses and traced gestures told apart (SYNTHETIC).
 
-Simulated contacts go through the virtual skin (:func:`~touch_sim.skin.device.render_frames`,
-the device model of ``skinsim://``) and the driver's calibration
-(:func:`~touch_driver.skin.calibration.calibrate_frames`), then, frame by frame, through the
-haptic_commands node's :class:`~touch_gestures.skin.collisions.CollisionDetector` and its
-segmenter and screening, as the node does:
-
-- **bumps**: something hits the skin: 4-15 N over a 10-40 mm wide patch, reached within 5-20 ms,
-  held 0.1-0.3 s (an arm or a hand knocking into the robot);
-- **presses**: a finger pressing still, 0.5-3 N, landing over 50-150 ms, held 0.3-1 s;
-- **traces**: a finger tracing a line 15-40 mm long at 0.8-2.5 N, landing over 30-100 ms.
-
-Each contact ends as a ``collision`` (the detector fired), a ``gesture`` (a segmented gesture
-that passed screening: the recogniser would see it) or ``nothing`` (a press, screened out).
-Reported: the confusion (true kind x outcome) and the detection latency in frames from the
-contact's first frame, for the thresholds given (the node's defaults unless set).
-All of it is synthetic: simulated contacts on a simulated sensor.
+Simulated contacts (bumps: 4-15 N over 10-40 mm; presses: a still finger, 0.5-3 N; traces: a finger
+tracing 15-40 mm) go through the virtual skin, the driver's calibration and, frame by frame, the
+haptic_commands node's :class:`~touch_gestures.skin.collisions.CollisionDetector`, segmenter and
+screening. Each ends as ``collision``, ``gesture`` or ``nothing``. Reported: the confusion (true kind x
+outcome) and the detection latency in frames, for the thresholds given (the node's defaults unless set).
 """
 
 from __future__ import annotations

@@ -1,20 +1,10 @@
 """How early the answer is right: the early-decision figures of ``social-touch eval skin --early``.
 
-For each person left out in turn, the recogniser is fitted on the others' gestures (as in
-:func:`~.evaluate.leave_one_subject_out`) and a :class:`~touch_gestures.skin.early.PrefixMatcher`
-follows each held-out gesture through the virtual skin as it is traced: the candidate after
-10 %, 20 %, ... of its trajectory points (in time order, as the node sees them), and the final
-answer on the whole gesture. Reported:
-
-- **stable fraction**: the fraction of the gesture traced from which the candidate is the
-  right gesture and stays so to the end (median, 75th and 90th percentile, over the
-  gestures whose final answer is right);
-- **right by half**: the share of all gestures whose candidate is right and stable once half
-  is traced;
-- **final right**: the share whose final answer (whole gesture) is right.
-
-Only samples cut into exactly one gesture count; ``every`` keeps one held-out sample in so
-many (the matcher costs a few recognitions per step).
+Per person left out, a :class:`~touch_gestures.skin.early.PrefixMatcher` fitted on the others follows each
+held-out gesture as it is traced (the candidate after 10 %, 20 %, ... of its points). Reported: the
+**stable fraction** (of the gesture traced from which the candidate is right to the end: median, 75th
+and 90th percentile over gestures finally right), **right by half** and **final right** (shares of all
+gestures). Only samples cut into one gesture count; ``every`` keeps one sample in so many.
 """
 
 from __future__ import annotations

@@ -1,14 +1,9 @@
 """``social-touch eval skin-ending``: which samples the end of a gesture cuts, and why; the rules side by side.
 
-    social-touch eval skin-ending --traces ../shared/data/multistroke_dev.csv.gz [--gap 1] [--wait 3]
-        [--rule strokes-unfinished|fractions-unfinished|fractions] [--limit N] [--json]
-
-The samples are rendered through the virtual skin into pieces once (cached, shared with
-``eval skin``), then cut leave-one-person-out with the cloud codebook of the other people
-(:mod:`.ending_eval`): per class, why the samples that are not one gesture were cut
-(:func:`~.ending_eval.ending_causes`), which strokes were taken for a whole gesture, the
-strokes the skin traced otherwise than the file, and the end-of-gesture table of the report
-(:func:`~.ending_eval.ending_table`: whole samples, accuracy and latency per gap, bound and rule).
+The samples are rendered into pieces once (cached, shared with ``eval skin``), then cut
+leave-one-person-out with the other people's cloud codebook (:mod:`.ending_eval`): per class why
+samples were cut (:func:`~.ending_eval.ending_causes`), and the end-of-gesture table
+(:func:`~.ending_eval.ending_table`).
 """
 
 from __future__ import annotations

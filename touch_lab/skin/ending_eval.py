@@ -1,25 +1,15 @@
 """The end of a gesture, measured: samples rendered once into pieces, joined per rule and codebook.
 
-Whether a lift ends a gesture depends, with :class:`~touch_gestures.skin.ending.GestureEnd`,
-on the codebook of the fold, so a sample cannot be rendered once per rule and fold (rendering
-is the slow part). It is rendered once with a short gap (:data:`PIECE_GAP_S`, ``min_frames``
-1): every lift of that length or more splits it into *pieces*. :func:`join_pieces` then does
-what :class:`~touch_gestures.skin.segmentation.GestureSegmenter` does at each of those lifts:
-shorter than ``gap_s`` joins, ``gap_s`` or more ends a whole gesture, a prefix waits up to
-``wait_s``, strokes that can be no whole gesture (``UNFINISHED``) until ``max_duration_s`` after
-the gesture's start. Joining is exact for what the recognisers read (trajectory, times,
-strokes, the OR of the maps, the maximum of the peaks, frames, duration), the lifts are read
-at frame times as the segmenter reads them; ``multi_contact`` is approximate (any piece
-flagged), and so is the limit: a piece starting ``max_duration_s`` or more after the gesture's
-start ends it as truncated and is dropped (the segmenter cuts at that piece's first frame and
-ignores the rest of its stroke), a gesture longer than that without such a piece is marked truncated.
+Whether a lift ends a gesture depends on the fold's codebook
+(:class:`~touch_gestures.skin.ending.GestureEnd`), and rendering is the slow part: each sample is rendered
+once with a short gap (:data:`PIECE_GAP_S`) into *pieces*, and :func:`join_pieces` does at each lift what
+:class:`~touch_gestures.skin.segmentation.GestureSegmenter` does. Joining is exact for what recognisers
+read; ``multi_contact`` and the ``max_duration_s`` limit are approximate (a piece starting past the limit
+ends the gesture as truncated and is dropped).
 
-Each gesture comes with its **latency**: the lift after its last contact at which it ended
-(``gap_s`` for a whole one, ``wait_s`` for a prefix that never went on, the time left to
-``max_duration_s`` for unfinished strokes). :func:`ending_table` measures whole samples,
-accuracy and latency per (gap, bound, rule), the table the defaults of
-:mod:`touch_gestures.skin.segmentation` are chosen on; :func:`ending_causes` tells, per class,
-why the samples that are not one gesture were cut (``social-touch eval skin-ending``).
+Each gesture comes with its **latency**: the lift after its last contact at which it ended.
+:func:`ending_table` gives whole samples, accuracy and latency per (gap, bound, rule);
+:func:`ending_causes` tells per class why samples were not one gesture (``social-touch eval skin-ending``).
 """
 
 from __future__ import annotations
@@ -194,13 +184,10 @@ def ending_table(pieces: Sequence[RenderedSample], make: Callable[[], TemplateRe
                  codebook_gap_s: float = 3.0, progress: Callable[[str], None] | None = None
                  ) -> list[dict[str, float | str | None]]:
     """Leave-one-person-out, per (gap_s, wait_s, rule) of ``configs`` (wait None: a fixed gap; rule a
-    key of :data:`RULES`): the samples cut into one gesture (``whole``), the nearest class right over
-    all samples (``accuracy``, rejection off), the mean and median latency (s) of the whole ones, and
-    the fraction of samples whole but not ended as whole (``waits_after``: the segmenter still waited
-    after their last stroke, so a next touch within its wait would have joined them; each sample is
-    traced alone here, so that never happens in this table; ``waits_to_limit``: of those, the ones
-    that waited until the limit, unfinished). The codebook of a fold is the other
-    people's samples cut at ``codebook_gap_s``, the same for every row."""
+    key of :data:`RULES`): ``whole`` (samples cut into one gesture), ``accuracy`` (nearest class right,
+    rejection off), mean and median latency (s) of the whole ones, ``waits_after`` (whole samples after
+    which the segmenter still waited) and ``waits_to_limit`` (of those, the ones that waited until the
+    limit). A fold's codebook is the other people's samples cut at ``codebook_gap_s``."""
     counts = {c: [0, 0, [], 0, 0] for c in configs}   # whole, correct, latencies, waits after, ...to the limit
     for subject, recogniser, held_out in _folds(pieces, make, codebook_gap_s):
         used = {rule for _, wait_s, rule in configs if wait_s and rule}
@@ -231,18 +218,12 @@ def ending_causes(pieces: Sequence[RenderedSample], make: Callable[[], TemplateR
                   progress: Callable[[str], None] | None = None) -> dict:
     """Why samples are not one gesture, per class, leave-one-person-out (``social-touch eval skin-ending``).
 
-    The cause is the first cut's (:data:`CAUSES`): ``ended as whole`` (the rule called the strokes so
-    far whole at a lift shorter than the bound that would have joined the next: the first bar of a T
-    taken for a line; ``prefixes`` counts them by the class traced, the strokes so far and the class
-    they were taken for), a pause over the bound (a prefix), over the limit (unfinished strokes),
-    a next stroke after the limit, a pause over the fixed gap, or nothing left (every piece too short).
-    ``bound_pauses`` counts the cutting lifts of the two pause causes by length (s). With
-    ``file_strokes`` (sample key -> strokes in the trace file), ``rendering`` counts per class the
-    samples the virtual skin traced with fewer strokes (two joined: a pause in the file shorter than
-    the skin sees) or more (a stroke broken by a lift inside it). Each sample is traced alone, so a
-    gesture never joins the next one here; ``waits_after`` counts, per class, the whole samples after
-    which the segmenter still waited, up to the bound or to the limit (a next touch within that
-    wait would have joined them).
+    The cause is the first cut's (:data:`CAUSES`); ``prefixes`` counts the strokes taken for a whole
+    gesture by the class traced, the strokes so far and the class named; ``bound_pauses`` counts the
+    cutting lifts of the two pause causes by length (s). With ``file_strokes`` (sample key -> strokes
+    in the trace file), ``rendering`` counts per class the samples the virtual skin traced with fewer or
+    more strokes than the file. ``waits_after`` counts per class the whole samples after which the
+    segmenter still waited, up to the bound or the limit.
     """
     per_class: dict[str, dict[str, int]] = {}
     prefixes: dict[str, int] = {}

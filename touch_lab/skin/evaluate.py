@@ -1,29 +1,18 @@
 """Leave-one-subject-out evaluation of the skin recognisers (issue 6, item 5).
 
-For each subject in turn, every recogniser gets a codebook made from the other subjects'
-gestures (all of them, or ``templates_per_gesture`` per gesture chosen evenly across
-subjects and variants) and recognises the held-out subject's gestures. Reported per
-recogniser:
+Per held-out subject, each recogniser gets a codebook of the others' gestures (all, or
+``templates_per_gesture`` per gesture). Reported per recogniser:
 
-- **accuracy**: the nearest class is right, over all samples (the paper's recognition
-  rate: its recognisers always answer; a sample the segmenter did not cut into exactly
-  one gesture counts as wrong);
-- with the recogniser's **rejection rule** on: **accuracy_with_rejection** (the command
-  fired is right), **rejection rate** (no command) and **error rate** (a wrong command);
-- the **confusion matrix** of the nearest class (true gesture x recognised, with a
-  ``<segmentation>`` column when the segmenter failed);
-- **per-performer** recognition rates R_{i,h} and, per gesture h, their mean mu_h (cirillo2017
-  eq. 9) and standard deviation sigma_h (eq. 8, the population form, 1/N);
-- **us per recognition**: median wall time of one ``predict`` (features + matching + decision),
-  with the codebook of the evaluation;
-- **random-touch acceptance** (when random touches are given): the fraction of touches that
-  are no gesture which still fire a command, over all folds' codebooks. As on the skin node,
-  a touch screened out (:func:`~touch_gestures.skin.screening.screen_gesture`: a dab, two
-  fingers) fires nothing; the held-out samples go through the same screening (a screened
-  sample counts as rejected);
-- with ``segment`` (the end of a gesture decided by the fold's codebook,
-  :mod:`.ending_eval`): the held-out samples are cut per fold and recogniser, and the
-  **latency** of each whole one (the lift after its last contact at which it ended) is kept.
+- **accuracy**: the nearest class is right (a sample not cut into exactly one gesture is wrong);
+- with rejection: **accuracy_with_rejection**, **rejection rate**, **error rate** (a wrong command);
+- the **confusion matrix** (with a ``<segmentation>`` column);
+- **per-performer** rates R_{i,h}, per gesture their mean mu_h (cirillo2017 eq. 9) and population
+  standard deviation sigma_h (eq. 8);
+- **us per recognition**: median wall time of one ``predict``;
+- **random-touch acceptance**: random touches that fire a command, over all folds (screened touches,
+  :func:`~touch_gestures.skin.screening.screen_gesture`, fire nothing);
+- with ``segment`` (:mod:`.ending_eval`): the samples cut per fold and recogniser, and each whole
+  one's **latency**.
 """
 
 from __future__ import annotations

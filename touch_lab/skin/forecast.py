@@ -1,21 +1,11 @@
 """``social-touch codebook forecast``: which gestures of a vocabulary the skin will confuse, before deploying it.
 
-    social-touch codebook forecast digits.npz              # table of the classes, then the pairs it confuses
-    social-touch codebook forecast digits.npz --json
-
-A codebook made by several people (``codebook record --person``, or ``--simulate``) knows how a new
-person's gesture of each class lies from everyone else's: each person's templates are read by a codebook of
-the others (:func:`touch_lab.skin.acceptance.held_out_opinions`, the calibration's own reading), and the
-confusions of that reading forecast the confusions on people the codebook never saw. A codebook of one
-person is read a fifth at a time by the other four fifths instead (:data:`FOLDS`): that forecasts how
-that person's own gestures are told apart, and it is said in the output.
-
-For each pair of classes the forecast gives the share of the two classes' held-out templates named as the
-other one, and how close the other class came: the median, over the held-out templates of a class, of
-their distance to the other class over their distance to their own (1: as near as their own class; the
-recogniser's own units cancel). A pair that is confused at :data:`CONFUSED_SHARE` or more, or whose
-median ratio is under :data:`NEAR_RATIO`, is one the skin cannot reliably tell apart: record more
-repetitions, change one of the two gestures, or give both the same command.
+Each person's templates are read by a codebook of the others
+(:func:`touch_lab.skin.acceptance.held_out_opinions`); a codebook of one person is read a fifth at a time
+(:data:`FOLDS`), which the output says. Per pair of classes: the share of their held-out templates named
+as the other, and the median ratio of the distance to the other class over the distance to their own.
+A pair confused at :data:`CONFUSED_SHARE` or more, or with a median ratio under :data:`NEAR_RATIO`, is
+one the skin cannot reliably tell apart.
 """
 
 from __future__ import annotations

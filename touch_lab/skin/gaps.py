@@ -1,11 +1,7 @@
 """How long a lift must be to end a gesture: the pauses between strokes of a trace file.
 
-The virtual skin traces the pauses between strokes as they are in the file, and the
-segmenter ends a gesture at the first lift of ``gap_s`` or more, so a sample stays one
-gesture exactly when its longest pause is shorter than the gap (less the few ms of the
-finger's ramps; the evaluation through the skin confirms it). :func:`gap_table` gives, for
-each gap, the fraction of samples kept whole against the latency the gap adds to every
-command (the gap itself: a command fires when the gap has passed after the last lift).
+A sample stays one gesture when its longest pause is shorter than the segmenter's gap.
+:func:`gap_table` gives, per gap, the share of samples kept whole (the gap is the latency it adds).
 
 >>> from touch_sim.skin.traces import TraceSample
 >>> s = TraceSample('1', 'a', 'X', '0', np.zeros(4), np.zeros(4), np.array([0, 100, 700, 800.0]),

@@ -1,27 +1,17 @@
 """Benchmark: from the end of the gap to the command, through the skin nodes (SYNTHETIC gestures).
 
-Goal (issue 13): the final command within 50 ms after the gap ends. A gesture ends when the
-finger has been lifted for ``gap_s`` (the vocabulary's gap; 1.5 s for multi-stroke ones), and
-the segmenter learns that from the first frame stamped at or after that moment: the node
-has no timer, it ends gestures on frames, which the skin driver publishes at 150 Hz whether
-or not anything touches the skin (frames that stop for ``max_gap_s`` drop the gesture under
-way instead). So the latency is two parts:
+Goal (issue 13): the command within 50 ms after the gap ends. The node ends gestures on frames (no
+timer), so the latency has two parts:
 
-- **waiting for the frame**: from the gap's end (last contact frame + ``gap_s``) to the stamp
-  of the first frame at or after it, in graph time: 0 to 1/150 s = 6.7 ms, set by the
-  frame rate, not by the code;
-- **processing**: wall time from ``skin_driver`` publishing that frame to the
-  ``/touch/haptic_command`` message reaching a subscriber: the node's frame callback, the
-  segmentation, screening, the recognition, the command map and intra-process delivery.
+- **waiting for the frame**: from the gap's end to the first frame stamped at or after it (graph time,
+  at most one frame period);
+- **processing**: wall time from ``skin_driver`` publishing that frame to ``/touch/haptic_command``
+  reaching a subscriber.
 
-``social-touch bench skin-latency`` plays synthetic gestures (:func:`~.bench.synthetic_codebook`'s
-shapes, other performers than the codebook's) on the virtual skin, read by the real
-``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph
-(:class:`~touch_sim.harness.Harness`), with a codebook of ``n_gestures`` x
-``templates_per_gesture`` for the ``recogniser`` (one the robot runs, :data:`touch_gestures.skin.registry.RECOGNISERS`;
-default ``fused``, the multi-stroke one; rejection is off, but ``fused`` still rejects a gesture where the sum names
-another class than the cloud's nearest, leaving it untimed: the path from the gap to the command is the same code);
-it reports median and p99 over every command.
+``social-touch bench skin-latency`` plays synthetic gestures on the virtual skin, read by the real
+``skin_driver`` and ``haptic_commands`` nodes in one simulated-time graph, with a codebook of
+``n_gestures`` x ``templates_per_gesture`` for ``recogniser`` (rejection off; a gesture ``fused`` rejects
+is not timed); it reports median and p99 over every command.
 """
 
 from __future__ import annotations

@@ -1,36 +1,17 @@
 """``social-touch codebook record``: record a skin codebook, m repetitions of each gesture (cirillo2017 Fig. 5).
 
-    social-touch codebook record [-o FILE] [--gestures a,b,...] [--repetitions M] [--recogniser NAME]
-        [--vocabulary NAME] [--gap S] [--simulate PERFORMERS [--seed S]] [--resume FILE.partial.npz]
-        [--topic /skin/frame]
-
 Two sources of touches:
 
-- **the live skin** (default): the tool joins the running graph over DDS (start the
-  skin first: ``social-touch launch launch/skin_driver.launch.yaml skin_port:=/dev/ttyACM0``),
-  subscribes to ``/skin/frame``, cuts the frames into gestures as the skin node does, and
-  prompts on stderr: ``trace 'line_right' (3/10)``. Type ``u`` + Enter to undo the last kept
-  repetition, ``s`` + Enter to skip the current gesture (it is left out of the codebook), ``q``
-  + Enter to stop. Touches that are no gesture (two fingers, too small, never lifted) are
-  refused with the reason. When every gesture has its M repetitions the codebook is written.
-  Stopped before that (``q`` or Ctrl-C), what was recorded is saved to ``FILE.partial.npz``
-  and the tool prints the command that resumes it (``--resume``).
-- **--simulate PERFORMERS**: synthetic performers (:func:`~.synthetic.synthetic_traces`, drawn
-  from ``--seed``) trace the gestures one after the other on a virtual skin read by the real
-  ``skin_driver`` node in a simulated-time graph (decode, calibration), and the same frame
-  handling and recorder as the live path take them (:func:`record_simulated`). SYNTHETIC data,
-  and the file says so. The M repetitions of a gesture come from all performers in turn.
+- **the live skin** (default): joins the running graph, subscribes to ``/skin/frame``, cuts gestures as
+  the skin node does and prompts on stderr (``u`` undo, ``s`` skip the gesture, ``q`` stop). Touches
+  that are no gesture are refused with the reason. Stopped early, what was recorded goes to
+  ``FILE.partial.npz`` and the command that resumes it (``--resume``) is printed.
+- **--simulate PERFORMERS**: synthetic performers trace the gestures on a virtual skin read by the real
+  ``skin_driver`` node in simulated time, through the same recorder (:func:`record_simulated`).
+  SYNTHETIC data, and the file says so.
 
-A vocabulary of symbols written with several strokes (an X, an H) needs ``--gap``: the lift (s)
-that ends a gesture, both while recording (shorter lifts join strokes into one gesture) and in the
-file, which the skin node reads (default: 0.15 s for gestures of one stroke; about 1 s suits
-people writing symbols, docs/skin-multistroke.md). ``--vocabulary`` names the codebook
-(default ``commands``): a scene chooses its vocabulary by the codebook it loads.
-
-``--gestures`` defaults to the gestures of the command map (``--commands``, default the
-package's ``config/skin_commands.yaml``), so the codebook fits the map the skin node loads.
-The shipped ``config/skin_codebook.npz`` is made with ``social-touch codebook record
---simulate 10 --seed 2026 --repetitions 30 -o config/skin_codebook.npz`` (config/skin_codebook.md).
+``--gap``: the lift (s) that ends a gesture, while recording and in the file (multi-stroke symbols need
+about 1 s). ``--gestures`` defaults to those of the command map (``--commands``).
 """
 
 from __future__ import annotations

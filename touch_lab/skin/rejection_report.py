@@ -1,15 +1,8 @@
 """``social-touch report skin-rejection``: docs/skin-rejection.md, rejection tuned in one number (issue 26, item 2).
 
-    social-touch eval skin --traces ../shared/data/unistroke_dev.csv.gz --recognisers trace,fused --json > uni.json
-    social-touch eval skin --traces ../shared/data/unistroke_dev.csv.gz --recognisers trace,fused \\
-        --max-wrong-rate 0.005 --json > uni-0.005.json
-    ...
-    social-touch report skin-rejection --runs uni.json uni-0.005.json multi.json multi-0.005.json
-
-The report is made from the JSON of ``social-touch eval skin`` runs (each leave-one-person-out over a
-trace file, with the recognisers' own rejection or with ``--max-wrong-rate``, :mod:`.acceptance`); it
-names the command that gives each row, so every figure can be measured again. Runs take minutes
-(unistroke) to an hour (multistroke, ``fused``) on a loaded machine, which is why they are inputs.
+Made from the JSON of ``social-touch eval skin --json`` runs (``--runs``: with the recognisers' own
+rejection or ``--max-wrong-rate``, :mod:`.acceptance`); each row names the command that measures it.
+The runs take minutes to an hour, which is why they are inputs.
 """
 
 from __future__ import annotations

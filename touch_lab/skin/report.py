@@ -1,16 +1,9 @@
 """Write ``docs/skin-evaluation.md``: the measurements behind the choice of recogniser.
 
-    social-touch report skin --traces ../shared/data/unistroke_dev.csv.gz
-
-regenerates the whole file (about 15 minutes on one core; rendered traces are cached):
-
-1. every recogniser, leave-one-subject-out on the traces through the virtual skin, with the
-   same figure before the sensor (:func:`touch_lab.skin.cli.evaluate_file`);
-2. speed against error over resample length and codebook size (trace and centroid);
-3. generalisation to other gesture sets and other people: synthetic performers tracing the
-   gestures of cirillo2017 Fig. 7-8 and the digits, under harder conditions;
-4. rejection operating points (genuine gestures rejected against random touches accepted);
-5. the speed benchmark at 16 gestures x 30 templates (:mod:`.bench`).
+``social-touch report skin --traces FILE`` regenerates it: every recogniser leave-one-subject-out
+through the virtual skin and before it (:func:`touch_lab.skin.cli.evaluate_file`); speed against
+error; generalisation to other gesture sets and people (synthetic); rejection operating points; the
+speed benchmark (:mod:`.bench`).
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """How the skin node does on simulated sessions, and what a frame costs it (SYNTHETIC data).
 
-    social-touch eval skin-sessions [--seeds 1-20] [--codebook FILE]
-    social-touch bench skin-node
-
-:func:`evaluate_sessions` draws one :func:`~.scene.people_scene` per seed (the options of
-``config/scenes/skin_people.yaml`` unless given), plays it on the virtual skin read by the
-real ``skin_driver`` node and runs ``haptic_commands`` on its frames in the same
-simulated-time graph, then compares every ``/touch/haptic_command`` with the scene's ground
-truth: a command during a traced gesture is right or wrong, a gesture without one is missed,
-and a command during any other touch (scribble, press, two fingers, resting hand) is a false
-command. :func:`bench_frames` times the node's frame callback (median of repeated runs).
+:func:`evaluate_sessions` (``eval skin-sessions``) plays one :func:`~.scene.people_scene` per seed on
+the virtual skin through the real ``skin_driver`` and ``haptic_commands`` nodes, and scores every
+``/touch/haptic_command`` against the scene: right, wrong, missed, or a false command during another
+touch. :func:`bench_frames` (``bench skin-node``) times the node's frame callback.
 """
 
 from __future__ import annotations
@@ -130,7 +124,6 @@ def _seeds(text: str) -> list[int]:
         lo, _, hi = part.partition('-')
         out += list(range(int(lo), int(hi or lo) + 1))
     return out
-
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,17 +1,10 @@
 """Skin codebooks from recorded sessions (``collect skin`` bags), and their leave-one-person-out score.
 
-A session's ``/skin/frame`` messages are cut into touches by the skin node's own segmentation
-(:class:`~touch_gestures.skin.frames.SkinFrameStream`); each labelled trial takes the touch that
-overlaps it most (a touch may start up to :data:`GRACE_S` before the label and end after it). A trial
-without a touch, or whose touch the node would screen out (two fingers, never lifted, too small), is
-reported with the bag and the time and left out of the codebook.
-
-Scoring (cirillo2017 reports recognition accuracy per gesture, Fig. 9): for each held-out person, a
-codebook from everybody else's trials recognises that person's touches; a trial is *right* when
-the recogniser names its gesture, *wrong* when it names another, *rejected* when the rejection
-rule refuses it (or the touch was screened out), *missed* when no touch was found. Latency is from
-the end of the touch to the recognition, which is when the node publishes (the recogniser's
-compute time, measured).
+Sessions are cut into touches by the node's own segmentation
+(:class:`~touch_gestures.skin.frames.SkinFrameStream`); a trial takes the touch that overlaps it most (it
+may start :data:`GRACE_S` early). A trial without a touch, or screened out, is reported and left out.
+Per held-out person a trial is *right*, *wrong*, *rejected* (or screened out) or *missed* (no touch);
+latency runs from the end of the touch to the recognition.
 """
 
 from __future__ import annotations

@@ -23,7 +23,6 @@ from .sessions import _say, fit_codebook, load_trials, usable
 __all__ = ['add_arguments', 'run']
 
 
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``social-touch train skin``."""
     parser.add_argument('--bags', nargs='+', metavar='BAG', required=True, help='session bags of the skin')

@@ -1,16 +1,11 @@
 """The skin recognisers the lab measures ours against, and the lab's registry of every recogniser.
 
-The runtime (:mod:`touch_gestures.skin.registry`) holds what a codebook deploys: the paper's
-three, ``trace`` and ``fused``. Here are the others, for the evaluation, the reports, the
-benchmarks and the codebook recorder: the peers (:mod:`.peers`: $1, Protractor, $P, DTW), $N
-(:mod:`.ndollar`), the cloud alone (:class:`~touch_gestures.skin.clouds.CloudRecogniser`, the
-fused recogniser's part), the cloud refereed by $N (:mod:`.refereed`), the oriented cloud alone
-and in the sum (:mod:`.oriented`), and ``auto`` (:mod:`.auto`), which picks ``trace`` or ``fused``
-for a vocabulary while a codebook is made.
-
-:data:`RECOGNISERS` extends the runtime's registry; :func:`make_recogniser`, :func:`load_codebook`
-and :func:`save_codebook` are the runtime's over it. A codebook made with a lab recogniser loads
-here, not on the robot (:mod:`touch_gestures.skin.codebook`).
+The runtime registry (:mod:`touch_gestures.skin.registry`) holds what a codebook deploys; here are the
+others: the peers (:mod:`.peers`), $N (:mod:`.ndollar`), the cloud alone, the cloud refereed by $N
+(:mod:`.refereed`), the oriented cloud (:mod:`.oriented`) and ``auto`` (:mod:`.auto`).
+:data:`RECOGNISERS` extends the runtime's registry; :func:`make_recogniser`, :func:`load_codebook` and
+:func:`save_codebook` are the runtime's over it. A codebook made with a lab recogniser loads here, not
+on the robot.
 
 >>> ' '.join(RECOGNISERS)
 'static map centroid dollar1 protractor pdollar dtw trace cloud ndollar refereed fused oriented fused_oriented auto'

@@ -1,50 +1,21 @@
 """The recogniser a vocabulary needs, decided from its own codebook: :class:`AutoRecogniser`.
 
-Two families answer different vocabularies. An order-free point cloud
-(:class:`~touch_gestures.skin.clouds.CloudRecogniser`) reads symbols people write with their strokes in any
-order and direction (an X, an H, a star: leave-one-person-out on the Mixed Multistroke
-Gestures it is right where the time-ordered trace is not, docs/skin-evaluation.md); a
-direction-aware trace (:class:`~touch_gestures.skin.proposed.TraceRecogniser`) is needed where the direction is
-the meaning (the skin's ``line_left`` and ``line_right`` are one cloud). Which one a
-vocabulary needs follows from its codebook, so the rule is measured there, not fixed per file.
+An order-free point cloud (:class:`~touch_gestures.skin.clouds.CloudRecogniser`) reads symbols people write
+with their strokes in any order and direction; a direction-aware trace
+(:class:`~touch_gestures.skin.proposed.TraceRecogniser`) is needed where the direction is the meaning (the
+skin's ``line_left`` and ``line_right`` are one cloud). The codebook decides which:
 
-**When the codebook says who drew each template** (two people or more: ``social-touch codebook record
---person``, or a trace file's subjects), the choice is made the way the codebook will be used, on
-people it has not seen: leave one person out, the others' templates recognise that person's gestures
-(rejection as configured), for each candidate in turn. The candidate with the higher mean per-class
-accuracy is kept; within ``tie`` of each other, the one with fewer wrong commands, then the ordered
-one (it is cheaper). Direction needs no rule of its own there: a vocabulary whose meaning is the
-direction costs the order-free recogniser its accuracy on held-out people too.
+- **people known** (two or more: ``codebook record --person``, or a trace file's subjects): leave one
+  person out for each candidate; the higher mean per-class accuracy wins; within ``tie``, fewer wrong
+  commands, then the ordered one (it is cheaper).
+- **otherwise**: both recognise every template from the others (leave one template out, nearest
+  neighbour, at most ``per_class`` a class). 1. If the order-free one confuses a class (accuracy below
+  ``confused``) that the ordered one reads (``separated`` better), the ordered one. 2. Else a vocabulary
+  with multi-stroke gestures gets the order-free ``fused`` (:mod:`touch_gestures.skin.fused`): a codebook
+  cannot show how differently people order their strokes, leave-one-person-out does
+  (docs/skin-multistroke.md). 3. Else the higher mean per-class accuracy, the ordered one within ``tie``.
 
-**Otherwise** (people not known, or one person), the rule below reads templates' nearest neighbours,
-which are mostly the same person's repetitions:
-
-    **the rule**: both recognise every template of the codebook from the others (leave one
-    template out, nearest neighbour, at most ``per_class`` templates per class), giving
-    per-class accuracies.
-
-    1. If the order-free one confuses a class (accuracy below ``confused``) that the ordered
-       one reads (at least ``separated`` better), direction is part of the vocabulary: the
-       ordered recogniser (two lines in opposite directions are one cloud: 50 % each).
-    2. Otherwise, a vocabulary with multi-stroke gestures gets the order-free recogniser (by
-       default ``fused``, :mod:`touch_gestures.skin.fused`: the cloud's class distances summed with the trace's,
-       each over its own nearest, to name the class; its distances and rejection are the
-       cloud's): people order and direct their strokes differently, which a codebook cannot
-       show (a template's nearest neighbour is mostly its own performer's repetition, traced
-       the same way), and which leave-one-person-out shows (docs/skin-evaluation.md). The
-       default among the order-free ones is the one leave-one-person-out on people the
-       codebook has not seen reads best without losing elsewhere, within the cost goal (and
-       of two that read the same, the cheaper): ``fused`` against ``fused_oriented`` (the
-       oriented cloud in the sum, :mod:`.oriented`: the same accuracy and wrong commands on the
-       Mixed Multistroke Gestures, at 12 us more per recognition, at the goal's edge with
-       three-stroke templates: 91 and 103 us in two runs of the report while it was the
-       default) and the cloud refereed by $N on its near ties (:mod:`.refereed`), random
-       touches firing the same (``social-touch eval skin``; figures in docs/skin-multistroke.md).
-    3. A single-stroke vocabulary gets the one with the higher mean per-class accuracy, the
-       ordered one within ``tie`` (it is cheaper).
-
-The measurement uses the codebook alone, so it holds for any vocabulary and any people, at
-``n_classes x per_class`` recognitions per candidate at fit time.
+Cost at fit time: ``n_classes x per_class`` recognitions per candidate.
 """
 
 from __future__ import annotations

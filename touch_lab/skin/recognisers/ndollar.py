@@ -1,64 +1,29 @@
 """$N for multi-stroke gestures: :class:`NDollarRecogniser`.
 
-$N (Anthony and Wobbrock, "A lightweight multistroke recognizer for user interface
-prototypes", GI 2010) turns a multi-stroke template into unistrokes: the strokes joined
-end to start in every order, each stroke either way round (k strokes: k! 2^k unistrokes).
-A query is joined in the order it was traced and matched against all of them, so the
-order and direction a person chose are found among a template's unistrokes instead of
-being averaged away (as a point cloud does). $N-Protractor (Anthony and Wobbrock, GI 2012)
-matches with Protractor's closed-form cosine distance (Li, CHI 2010). The details follow
-the authors' JavaScript reference (``ndollar.js``: ``MakeUnistrokes``, ``Resample``,
-``ScaleDimTo`` with ``OneDThreshold`` 0.25, ``CalcStartUnitVector`` at ``NumPoints / 8``,
-``AngleSimilarityThreshold`` 30 degrees, ``OptimalCosineDistance``); where this module
-differs, it says so:
+$N (Anthony and Wobbrock, GI 2010) turns a multi-stroke template into unistrokes: its strokes joined in
+every order, each either way round; a query is joined in the order it was traced. Matching is
+$N-Protractor's (GI 2012) closed-form cosine distance. The details follow the authors' ``ndollar.js``;
+where this module differs, it says so:
 
-1. **Features** (``features``, what a codebook file stores): the strokes resampled along
-   the ink to ``ink_points`` points, each stroke keeping 2 points plus its share of the rest
-   by ink length (a share that does not depend on the order, so a template's strokes give
-   the same points whatever order they were traced in), centred and divided by the larger
-   side of the box, with each point's stroke number; unused slots are padding (stroke -1).
+1. **Features** (what a codebook file stores): the strokes resampled along the ink to ``ink_points``
+   points, each stroke 2 points plus its share of the rest by ink length (independent of the order),
+   centred and divided by the larger side of the box; then each point's stroke number (padding: -1).
    Layout: ``(3 * ink_points,)`` float32, x and y interleaved, then the stroke numbers.
-2. **Expansion** (at fit and at load, ``_prepare_codebook``): a template of k strokes with
-   ``k <= permuted_strokes`` becomes all k! 2^k unistrokes (Heap's permutations x direction
-   bits, as ``MakeUnistrokes``). Beyond, the full expansion grows past any budget (6
-   strokes: 46,080), so a template keeps its recorded order with every direction of its
-   strokes (2^k) while that is no more than a template of ``permuted_strokes`` strokes
-   gets, else its recorded order and the whole trace backwards (2). The reference
-   implementation has no bound; its Java and C# ports neither: this is ours.
-3. **Unistroke normalisation** (``Unistroke`` in the reference): resampled to ``n_points``
-   along the joined path (the jumps between strokes count, as in $N), rotated to the
-   indicative angle, scaled to a square (uniformly when the box is thinner than
-   ``one_d_ratio``, a line), rotated back (the skin has a fixed frame: $N's bounded
-   rotation invariance), centred, as a unit vector; the start direction is the unit vector
-   from the first point to the ``n_points // 8``-th.
-4. **Distance**: the angle between unit vectors (radians, 0 to pi) after the best rotation
-   within ``max_rotation_deg`` (the closed form of Protractor clamped to the range; 45 is
-   the range of $N's golden-section search, 0 no rotation, 180 rotation invariance). The
-   reference computes ``acos(a cos t + b sin t)`` with ``t = atan(b / a)``, which picks the
-   worst rotation when ``a < 0``; the clamped closed form here is the best one.
-5. **Pruning and stroke counts**: unistrokes whose start direction differs from the
-   query's by more than ``start_angle_deg`` are not compared ($N's speed-up: unistrokes are
-   kept sorted by start angle, so the ones compared are one or two contiguous slices); with
-   ``same_strokes``, only templates of as many strokes as the query ($N's
-   ``requireSameNoOfStrokes``). When these leave no template at all, every unistroke is
-   compared (the reference answers "no match"; here the rejection rules of :mod:`touch_gestures.skin.base`
-   and :mod:`touch_gestures.skin.evidence` decide).
+2. **Expansion** (``_prepare_codebook``): k <= ``permuted_strokes`` strokes become all k! 2^k
+   unistrokes; beyond, the recorded order with every direction (2^k) while within that budget, else the
+   recorded order and the whole trace backwards. The reference has no bound: this is ours.
+3. **Unistroke normalisation**: resampled to ``n_points`` along the joined path, rotated to the
+   indicative angle, scaled to a square (uniformly below ``one_d_ratio``), rotated back (the skin has
+   a fixed frame), centred, a unit vector; the start direction runs to the ``n_points // 8``-th point.
+4. **Distance**: the angle between unit vectors (radians) after the best rotation within
+   ``max_rotation_deg``, Protractor's closed form clamped to the range (the reference's
+   ``atan(b / a)`` picks the worst rotation when ``a < 0``).
+5. **Pruning**: unistrokes whose start direction differs by more than ``start_angle_deg`` are not
+   compared; with ``same_strokes`` only templates of the query's stroke count. When that leaves
+   nothing, every unistroke is compared (the reference answers "no match"; here rejection decides).
 
-**Defaults, by measurement** (leave-one-person-out on the Mixed Multistroke Gestures through the
-virtual skin, :func:`touch_lab.skin.cli.evaluate_file` with the parameters set, while the virtual skin
-still kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`): no rotation (the
-skin has a fixed frame, and within 45 degrees a plus is an X turned) was more accurate than $N's
-45 degrees in every fold (a few more random touches fire: 1.7 % against 0.6 %). ``same_strokes`` raised
-the accuracy further, but let about six times as many random touches fire (a touch of one stroke
-meets only the classes drawn with one stroke, so no runner-up makes it ambiguous), and a symbol
-written with a stroke count its class's templates lack is matched against the other classes
-only: off by default. The start-angle pruning changed the accuracy less than either and saves about three
-quarters of the comparisons.
-
-``distances`` gives one distance per codebook template: the smallest over its unistrokes
-(inf where none was compared), so rejection, ``auto`` and codebook files work as for every
-recogniser. $N joins both directions of every stroke: a line left and a line right are the
-same template, so it is direction-blind unless ``reverse_strokes=False`` (orders only).
+``distances`` gives one distance per template, the smallest over its unistrokes (inf: none compared).
+$N joins both directions of every stroke, so it is direction-blind unless ``reverse_strokes=False``.
 """
 
 from __future__ import annotations
@@ -335,10 +300,9 @@ class NDollarRecogniser(TemplateRecogniser):
         """Cosine of the best rotation within ``max_rotation_deg`` for the unistrokes ``rows`` of ``vectors``
         (default: the codebook's sorted unistrokes; module doc, 4); ``queries`` is (2, 2 n) float32: the
         query and the query turned by 90 degrees (whose dot product with a unistroke is Protractor's b). Two
-        matrix-vector products on contiguous rows: a (2 n, 2) product or a strided vector takes numpy's slow
-        paths (3 to 5 times slower here). ``einsum``, not ``@``:
-        BLAS splits a long product over threads, which on a busy machine wait for each other and make a
-        recognition many times slower; einsum's loop stays in this thread at about one BLAS thread's speed."""
+        matrix-vector products on contiguous rows (a (2 n, 2) product or a strided vector takes numpy's slow
+        paths); ``einsum``, not ``@``: BLAS splits a long product over threads, which wait for each other on a
+        busy machine, while einsum's loop stays in this thread."""
         block = (self._vectors if vectors is None else vectors)[rows]
         a = np.einsum('ij,j->i', block, queries[0]).astype(np.float64)
         if self.max_rotation_deg <= 0:

@@ -1,33 +1,14 @@
 """Point clouds that know which way their ink runs: :class:`OrientedCloudRecogniser`.
 
-The cloud (:mod:`touch_gestures.skin.clouds`) forgets stroke order and direction, which is right for symbols people
-write their own way, but it also forgets the *orientation* of the ink at each point, which is
-neither: an N's diagonal and an H's bar cross the same middle of the box, an I's serifs and an H's
-legs end at the same corners. Each point here carries the orientation of the ink through it, as an
-undirected angle theta (a line traced either way has one orientation), encoded as
-``(cos 2 theta, sin 2 theta)``: the distance between two points is
+Each point carries the undirected orientation theta of the ink through it, as ``(cos 2 theta, sin 2
+theta)``; the distance between two points is ``|p - q| + w * |o_p - o_q|`` (positions in gesture sizes,
+``w = orientation_weight``); a dot carries ``o = 0``. This is $P's cloud with a per-point direction, as
+$P+ adds turning angles (Vatavu, ICMI 2017); it stays free of stroke order and direction.
 
-    ``|p - q| + w * |o_p - o_q|``  (positions in gesture sizes, ``w = orientation_weight``),
-
-where ``|o_p - o_q| = 2 |sin(theta_p - theta_q)|``: 0 for parallel ink, 2 for crossing ink. A point
-of a stroke too short to have a direction (a dot) carries ``o = 0``, 1 from every orientation. This
-is $P's cloud with a per-point direction, as $P+ adds turning angles (Vatavu, ICMI 2017); it stays
-free of stroke order and direction.
-
-The distance of a query to a template is the mean, over the query's points, of the distance to the
-template's nearest point (the directed Chamfer distance), read from a raster as $Q reads its lookup
-tables (Vatavu, Anthony and Wobbrock, MobileHCI 2018): at fit time each template's distance field is
-sampled on ``grid`` x ``grid`` positions x ``bins`` orientations (+ one code for no orientation), so a
-query's points read their distance to every template in one gather of ``n_points`` rows. Raster error
-(triangle inequality): a point is read at the centre of its cell, at most half a cell diagonal
-(``sqrt(2) / grid`` gesture sizes) away, and at the centre of its orientation bin, at most
-``pi / (2 bins)`` off (``w * 2 sin(pi / (2 bins))``); the distance is within the sum of the two of the
-exact one (test/test_skin_oriented.py). Bins are centred on horizontal, vertical and the diagonals,
-where most ink of symbols lies.
-
-Measured leave-one-person-out through the virtual skin (``social-touch eval skin --traces <file>
---json --recognisers fused,fused_oriented``; docs/skin-multistroke.md): as the naming opinion of
-:class:`OrientedFusedRecogniser` in place of the cloud, summed with the trace.
+A query's distance to a template is the directed Chamfer distance, read from a raster as $Q reads its
+lookup tables: each template's distance field is sampled on ``grid`` x ``grid`` positions x ``bins``
+orientations (+ one code for none). The raster error is at most ``sqrt(2) / grid + w * 2 sin(pi / (2
+bins))`` (test/test_skin_oriented.py). :class:`OrientedFusedRecogniser` sums it with the trace.
 """
 
 from __future__ import annotations

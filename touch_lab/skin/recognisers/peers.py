@@ -1,19 +1,11 @@
 """The recognisers people use for traced gestures, as peers to measure the paper's against.
 
-- :class:`DollarOneRecogniser`: $1 (Wobbrock, Wilson and Li, UIST 2007): arc-length
-  resampling to 64 points, rotation to the indicative angle, non-uniform scaling to a
-  square, golden-section search of the best rotation within +-45 degrees, mean point distance.
-- :class:`ProtractorRecogniser`: Protractor (Li, CHI 2010): 16 points, centred, unit
-  vector, closed-form optimal rotation, angular distance; orientation-sensitive mode
-  (the indicative angle snapped to the nearest of 8 base orientations) by default.
-- :class:`PointCloudRecogniser`: $P (Vatavu, Anthony and Wobbrock, ICMI 2012): 32 points
-  as an unordered cloud, greedy weighted matching from several start points. Blind to
-  direction by design.
-- :class:`DTWRecogniser`: dynamic time warping (Sakoe and Chiba 1978) between resampled,
-  centred, uniformly scaled trajectories, with a Sakoe-Chiba band.
+- :class:`DollarOneRecogniser`: $1 (Wobbrock, Wilson and Li, UIST 2007).
+- :class:`ProtractorRecogniser`: Protractor (Li, CHI 2010), orientation-sensitive by default.
+- :class:`PointCloudRecogniser`: $P (Vatavu, Anthony and Wobbrock, ICMI 2012), direction-blind.
+- :class:`DTWRecogniser`: dynamic time warping (Sakoe and Chiba 1978) with a Sakoe-Chiba band.
 
-Each is vectorised over the codebook (all templates advance together through the search
-loops), so the Python-level loop count does not grow with the codebook.
+Each is vectorised over the codebook: all templates advance together through the search loops.
 """
 
 from __future__ import annotations

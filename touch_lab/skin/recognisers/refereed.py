@@ -1,29 +1,13 @@
 """A point cloud with a referee for its near ties: :class:`RefereedRecogniser`.
 
-The order-free cloud (:mod:`touch_gestures.skin.clouds`) tells most multi-stroke symbols apart, but a few pairs
-are nearly the same cloud: an N and an H (two bars and what joins them), an asterisk and an
-X. The order of the strokes and their directions tell those apart, which is what $N matches
-(:mod:`.ndollar`: every stroke order and direction of the templates, each as one unistroke).
-$N alone is less accurate than the cloud and costs more, so it is asked only where the cloud
-cannot decide: when its two nearest classes are closer than its own ambiguity rule's margin
-(``min_margin`` times the nearest distance, the rule that rejects a touch as ambiguous,
-:mod:`touch_gestures.skin.base`), the referee's distances choose between those two. Nothing is tuned for it:
-the tie is the cloud's own rule, the choice the referee's nearest of two.
-
-The referee names the class; it does not make a command fire: the tie stays a tie for the
-rejection rule (the margin over the other class is below ``min_margin``, or negative where
-the referee chose the farther one), so what fires is what the cloud alone fires. Each
-template's features are the cloud's and the referee's side by side (one vector, so codebook
-files, ``auto`` and the evaluation handle it as any recogniser); distances, thresholds, the
-end of a gesture and early candidates are the cloud's (:attr:`RefereedRecogniser.cloud_`).
-
-Measured leave-one-person-out on the Mixed Multistroke Gestures through the virtual skin
-(``social-touch report skin-multistroke``, docs/skin-multistroke.md): the nearest class is right
-for 97.00 % of the samples against the cloud's 96.90 %, with the same commands (94.70 against
-93.86 % while the virtual skin kept one point per logged time, :func:`touch_sim.skin.traces.spread_stamps`).
-A tie matches the query against the two tied classes' unistrokes
-only (:meth:`~.ndollar.NDollarRecogniser.class_distances_among`: the whole search's distances for
-them). Its cost per recognition against the cloud's: ``social-touch bench skin``.
+A few pairs of multi-stroke symbols are nearly the same cloud (:mod:`touch_gestures.skin.clouds`): an N and
+an H, an asterisk and an X. Their stroke orders and directions tell them apart, which $N matches
+(:mod:`.ndollar`). When the cloud's two nearest classes are within its ambiguity margin (``min_margin``
+times the nearest distance), $N's distances to those two classes only
+(:meth:`~.ndollar.NDollarRecogniser.class_distances_among`) choose between them. The referee names the
+class; the tie stays a tie for the rejection rule, so what fires is what the cloud alone fires.
+Features are the cloud's and the referee's side by side; distances, thresholds, the end of a gesture
+and early candidates are the cloud's (:attr:`RefereedRecogniser.cloud_`).
 """
 
 from __future__ import annotations
