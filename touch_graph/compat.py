@@ -15,6 +15,7 @@ from the same ``.msg`` and ``.srv`` files.
 
 from __future__ import annotations
 
+import importlib
 import os
 from typing import Any
 
@@ -76,7 +77,6 @@ else:
 def _generated(typename: str, kind: str) -> type:
     """The class rosidl generated for ``typename`` (``pkg/kind/Type`` or ``pkg/Type``), imported from
     ``pkg.kind`` as rosidl_runtime_py does (which PyPI's Jazzy wheels do not bring)."""
-    import importlib
     parts = typename.split('/')
     if len(parts) == 2:
         parts.insert(1, kind)

@@ -9,6 +9,9 @@ and how to fix it.
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
+
 
 class SocialTouchError(Exception):
     """Base class of every error social_touch raises on purpose."""
@@ -54,3 +57,9 @@ class BagError(SocialTouchError):
 
 class ServiceCallError(GraphError):
     """A service call got no response: no server, the server vanished, or it was destroyed mid-call."""
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ''

@@ -73,10 +73,10 @@ class StopSignals:
 
 def run_node(node_class: type, args: list[str] | None = None) -> int:
     """Run one node in this process until Ctrl-C/SIGTERM; 0 on a clean stop, 1 when it cannot start."""
-    from .compat import USING_ROS
+    from .compat import USING_ROS  # lazy: the CLI imports StopSignals without loading rclpy or the runtime
     if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
         return _run_rclpy(node_class, args)
-    from .runtime import SingleThreadedExecutor, get_default_context
+    from .runtime import SingleThreadedExecutor, get_default_context  # ours only where rclpy is not used
     from .runtime.override_check import check_overrides
 
     argv = list(sys.argv[1:] if args is None else args)
@@ -108,7 +108,7 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
 
 
 def _run_rclpy(node_class: type, args: list[str] | None) -> int:  # pragma: no cover - needs ROS 2
-    import rclpy
+    import rclpy  # only on a ROS 2 machine
     from rclpy.executors import ExternalShutdownException
     rclpy.init(args=args)
     node = None

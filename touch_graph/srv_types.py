@@ -26,10 +26,9 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from .errors import MessageError
+from .errors import MessageError, did_you_mean
 from .messages import get_message, typestore
 from .srv_definitions import STANDARD_SERVICES, own_services, parse_srv, service_names, srv_files
-from .yamlconf import did_you_mean
 
 __all__ = ['STANDARD_SERVICES', 'ServiceType', 'get_service', 'parse_srv', 'service_definition', 'service_names',
            'srv_files']

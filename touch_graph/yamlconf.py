@@ -23,7 +23,6 @@ touch_graph.errors.ConfigError: inline.yaml:2: unknown key 'b' in example; expec
 
 from __future__ import annotations
 
-import difflib
 import reprlib
 from collections.abc import Iterable
 from pathlib import Path
@@ -31,7 +30,7 @@ from typing import Any
 
 import yaml
 
-from .errors import ConfigError
+from .errors import ConfigError, did_you_mean
 
 __all__ = ['MAX_BYTES', 'MAX_DEPTH', 'MAX_VALUES', 'YamlBoundsError', 'YamlDict', 'YamlList', 'check_bounds',
            'check_keys', 'did_you_mean', 'excerpt', 'load_yaml', 'loads_yaml', 'read_text', 'safe_load', 'typed']
@@ -289,12 +288,6 @@ def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:
 def load_yaml(path: str | Path) -> Any:
     """Read a YAML file, bounded; a missing, too large file or bad syntax raises :class:`ConfigError`."""
     return loads_yaml(read_text(path), source=str(path))
-
-
-def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
-    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ''
 
 
 def check_keys(mapping: Any, required: Iterable[str] = (), optional: Iterable[str] = (),

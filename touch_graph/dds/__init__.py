@@ -17,6 +17,6 @@ __all__ = ['UNKNOWN_NODE', 'DdsParticipant', 'EndpointInfo', 'GraphView', 'NodeI
 def __getattr__(name: str) -> Any:
     # Cyclone loads with the participant only: the graph daemon's clients read graph views and nothing else.
     if name == 'DdsParticipant':
-        from .participant import DdsParticipant
+        from .participant import DdsParticipant  # lazy: see above
         return DdsParticipant
     raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
