@@ -1,19 +1,9 @@
 """Type descriptions and RIHS01 type hashes as ROS 2 (Iron and later) computes them.
 
-ROS 2 describes an interface as ``type_description_interfaces/msg/TypeDescription``: the
-type's fields (each with a ``FieldType`` id, array/sequence capacity, string capacity and
-nested type name) and every type it refers to, sorted by name. The RIHS01 hash (REP-2011)
-is the SHA-256 of that description as JSON, default values left out, in the exact layout
-``rosidl_generator_type_description`` writes (``separators=(', ', ': ')``, fields in
-order, referenced types sorted).
-
-Built here from the field definitions the runtime already has (the rosbags type store),
-with rosidl's mapping of ``.msg`` types to IDL: ``char`` is ``uint8`` and ``byte`` is
-``octet`` (``FIELD_TYPE_BYTE``) — rosbags' own ``hash_rihs01`` gives ``char`` a type of its
-own, which no ROS 2 node computes. A service ``pkg/srv/X`` is described as rosidl does: a
-type with the fields ``request_message``, ``response_message`` and ``event_message``,
-referring to ``X_Request``, ``X_Response`` and ``X_Event`` (``info``:
-``service_msgs/msg/ServiceEventInfo``, ``request`` and ``response``: sequences of at most one).
+The hash (REP-2011) is the SHA-256 of ``type_description_interfaces/msg/TypeDescription`` as JSON
+in ``rosidl_generator_type_description``'s layout, built from the rosbags type store with rosidl's
+mapping (``char`` is ``uint8``, ``byte`` is ``octet``; rosbags' ``hash_rihs01`` differs there). A
+service is described as rosidl does: ``request_message``, ``response_message``, ``event_message``.
 
 >>> type_hash('std_msgs/msg/Char')
 'RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9'

@@ -1,33 +1,11 @@
 """Graph discovery the ROS 2 way: ``ros_discovery_info`` out, builtin topics and peers' ``ros_discovery_info`` in.
 
-DDS knows participants and endpoints, not nodes. ROS 2 (rmw_dds_common) adds the nodes:
-every participant publishes ``rmw_dds_common/msg/ParticipantEntitiesInfo`` on the DDS
-topic ``ros_discovery_info`` (reliable, TRANSIENT_LOCAL, depth 1), listing its nodes and
-the GIDs of each node's readers and writers. ``ros2 node list`` on a ROS 2 machine reads
-exactly that, so ours lists our nodes there; and :class:`GraphDiscovery` reads the
-peers' messages together with DCPSParticipant / DCPSPublication / DCPSSubscription to
-give a :class:`~touch_graph.dds.graph.GraphView` with foreign ROS 2 nodes in it too.
-
-**GID layout.** A GID is the 16-byte DDS GUID of the entity. ROS 2 Humble sends it in a
-``char[24]`` array (zero padded), Iron and later in ``char[16]``; the two layouts do not
-decode as each other, which is one reason Humble and Jazzy graphs do not mix. The layout
-follows ``ROS_DISTRO`` (``humble`` and older: 24, anything else or unset: 16).
-
-**Complete answers.** A participant's ``ros_discovery_info`` sample can come seconds after the
-participant: Fast DDS sends a latched sample to a newly matched reader on its first heartbeat
-to it, shortly after matching, and then only on its periodic one (period = 3 s); when that first
-heartbeat reaches us before we know its writer, the sample waits for the next. So when a
-remote ``ros_discovery_info`` writer is discovered before its participant's sample, a fresh
-reader is made (a *nudge*): the writer matches it and heartbeats at once. And
-:meth:`GraphDiscovery.incomplete` says which participants have not yet announced their
-nodes, or whose announced endpoints DDS has not shown yet, so a tool can wait for exactly
-that (:meth:`touch_graph.dds.tool.GraphTool.wait_for_discovery`).
-
-Every participant of ours also publishes, on the hidden topic
-``/_social_touch/subscription_stats`` (``diagnostic_msgs/msg/DiagnosticArray``, one
-status per subscription, ``hardware_id`` = reader GID), how many samples each of its
-subscriptions received, dropped from a full queue and could not decode, so ``topic info
--v`` can show them for any process of ours.
+Every participant publishes ``rmw_dds_common/msg/ParticipantEntitiesInfo`` on ``ros_discovery_info``
+(reliable, TRANSIENT_LOCAL, depth 1): its nodes and their readers' and writers' GIDs. A GID is 24
+bytes for ``ROS_DISTRO`` humble and older, else 16. When a peer's ``ros_discovery_info`` writer is
+seen before its sample, a fresh reader is made (a *nudge*) so that the writer sends it at once
+instead of at its next periodic heartbeat. Our participants also publish per-subscription counts
+(received, dropped, undecodable) on ``/_social_touch/subscription_stats`` for ``topic info -v``.
 """
 
 from __future__ import annotations

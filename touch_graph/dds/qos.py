@@ -1,20 +1,9 @@
 """ROS 2 QoS profiles as DDS QoS, the way rmw_cyclonedds maps them (``create_readwrite_qos``).
 
-- history: KEEP_LAST ``depth`` (depth 0, "system default", is 1), or KEEP_ALL;
-- reliability: RELIABLE (blocking up to :data:`MAX_BLOCKING_S` when a KEEP_ALL writer's
-  history is full; rmw_cyclonedds waits forever, which would let one stuck reader stall
-  a node) or BEST_EFFORT;
-- durability: VOLATILE, or TRANSIENT_LOCAL with a durability service keeping the same
-  history, so a reader that joins later gets the writer's last ``depth`` samples;
-- liveliness AUTOMATIC, no deadline, no lifespan; writers do not auto-dispose;
-- data representation XCDR1 only, as ROS 2 endpoints offer;
-- ignore-local PARTICIPANT on both sides: inside a process the runtime delivers in
-  memory, so DDS must neither echo a process's own samples back nor count its own
-  readers as matched (a writer with no remote reader serialises nothing);
-- user data ``typehash=RIHS01_...;`` as ROS 2 from Iron on announces it.
-
-Profiles come back as plain dicts (``{'history', 'depth', 'reliability', 'durability'}``,
-enum values of :mod:`touch_graph.runtime.qos`) for the graph view, bags and the CLI.
+Depth 0 is 1; a RELIABLE writer blocks at most :data:`MAX_BLOCKING_S` (rmw: forever);
+TRANSIENT_LOCAL keeps the same history; XCDR1 only; ignore-local PARTICIPANT (the runtime delivers
+in process); user data ``typehash=RIHS01_...;``. :func:`qos_to_dict` gives ``{'history', 'depth',
+'reliability', 'durability'}`` with enum values of :mod:`touch_graph.runtime.qos`.
 """
 
 from __future__ import annotations

@@ -1,27 +1,11 @@
 """The DDS side of a runtime ``Service`` and ``Client``: ROS 2's request/reply mapping, as rmw_cyclonedds does it.
 
-A service ``/x`` is two DDS topics, ``rq/xRequest`` (type ``pkg::srv::dds_::T_Request_``)
-and ``rr/xReply`` (``pkg::srv::dds_::T_Response_``). A server has a reader on the first and
-a writer on the second, a client the opposite; all four have the service QoS (reliable,
-volatile, keep last 10 by default) and, as user data, ``serviceid=...;`` or
-``clientid=...;`` (one id for the reader and the writer of one server or client), which is
-how rmw_cyclonedds pairs them, then ``typehash=RIHS01_...;`` of the topic's type (``T_Request`` or
-``T_Response``: what Jazzy's rmw_fastrtps announces on them).
-
-**On the wire** (rmw_cyclonedds ``serdata.cpp`` / ``Serialization.cpp``): the 4-byte CDR
-encapsulation header, then the request header ``cdds_request_header_t`` (uint64 client id
-= the instance handle of the client's request writer, int64 sequence number), then the
-request's or response's fields. A reply carries the header of its request back; every
-client of the service receives every reply and keeps those with its own id. The header is
-16 bytes, so the fields keep the alignment they have on their own: they are rosbags' CDR
-bytes after its encapsulation header.
-
-**A server** replies only once it has matched the client's reply reader (rmw_cyclonedds
-waits up to 100 ms for that, then drops the reply; a client whose request writer is gone
-gets nothing). **A client** is ready when it matched a server's request reader and reply
-writer with the same ``serviceid``; a request it sends with no server reader matched
-fails at once, and when the server's reader goes away with requests under way, those fail
-at the next housekeeping round (:meth:`DdsClient.check_server`).
+A service ``/x`` is the DDS topics ``rq/xRequest`` and ``rr/xReply``; a server reads the first and
+writes the second, a client the opposite. All four endpoints have the service QoS and the user data
+``serviceid=...;`` or ``clientid=...;`` (how rmw_cyclonedds pairs them), then ``typehash=RIHS01_...;``.
+A payload is the CDR header, ``cdds_request_header_t`` (uint64 client id, int64 sequence number),
+then the fields; a reply carries its request's header back, and a client keeps the replies with its id.
+A server replies once it has matched the client's reply reader (waiting up to 100 ms, as rmw does).
 """
 
 from __future__ import annotations

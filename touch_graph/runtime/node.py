@@ -1,20 +1,7 @@
 """``Node`` with rclpy's constructor, endpoints, parameters, logger and clock.
 
-A node class written against this module runs unchanged on real rclpy (import the names
-from :mod:`touch_graph.compat`). A launch file starts node classes of either shape::
-
-    class BearDriver(Node):                      # takes rclpy's keyword arguments and forwards them
-        def __init__(self, **kwargs):
-            super().__init__('bear_driver', **kwargs)
-
-    class Greeter(Node):                         # rclpy's usual shape: no arguments at all
-        def __init__(self):
-            super().__init__('greeter')
-
-The second gets its context, name, namespace, remaps and parameters as rclpy's nodes get them
-from ``ros2 launch`` (the process's ``--ros-args``), here through :func:`node_arguments`: the
-launcher sets them for the next node this thread constructs, which takes them when its own
-call passes none.
+A node class may take rclpy's keyword arguments or none at all (``super().__init__('greeter')``);
+a launcher gives the latter its context, remaps and parameters through :func:`node_arguments`.
 """
 
 from __future__ import annotations

@@ -1,16 +1,9 @@
 """A node's parameters with rclpy's API and semantics, and the ``/parameter_events`` they cause.
 
-Declaring a parameter runs the node's on-set-parameters callbacks with it, as rclpy's
-``declare_parameter`` does: a refusal raises :class:`InvalidParameterValueException` and the
-parameter stays undeclared; an exception a callback raises goes to the caller. So a callback
-registered before a declaration must accept it (``has_parameter`` is still False inside).
-Declaring, setting and undeclaring a parameter publishes an ``rcl_interfaces/ParameterEvent``
-on ``/parameter_events`` (new, changed and deleted parameters, the node's name and the ROS
-time), as rclpy does. Setting runs the node's on-set-parameters callbacks, newest first;
-the first refusal wins and nothing changes. A callback that raises changes nothing either, and
-its exception goes to the caller of ``set_parameters``, as in rclpy: through the parameter
-services it ends the spin of the node's executor (the node dies unless the callback catches). Setting a parameter to
-``NOT_SET`` undeclares it, which only a dynamically typed one allows (rclcpp's rule).
+As in rclpy: declaring runs the on-set-parameters callbacks (a refusal raises
+:class:`InvalidParameterValueException`), setting runs them newest first (the first refusal wins,
+nothing changes; an exception goes to the caller), and each change publishes a
+``rcl_interfaces/ParameterEvent``. Setting ``NOT_SET`` undeclares a dynamically typed parameter.
 """
 
 from __future__ import annotations

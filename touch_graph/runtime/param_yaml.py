@@ -1,37 +1,12 @@
 """ROS 2 parameter YAML read the way rcl reads it (``rcl_yaml_param_parser``), not by YAML's own typing.
 
-A parameter file maps node names to ``ros__parameters``; keys above ``ros__parameters`` are
-namespace components of the node name, keys below it are parameter names, nested mappings
-flatten to dotted names::
-
-    /**:                      # every node
-      ros__parameters: {frame_id: bear_link}
-    bear:                     # namespace component ...
-      bear_gestures:          # ... and node name: /bear/bear_gestures
-        ros__parameters:
-          subtype:
-            threshold: 0.3    # parameter subtype.threshold
-
-Scalars are typed by rcl's rules, on the raw text, whatever YAML 1.1 or 1.2 would say:
-
-- quoted (``'1'``, ``"yes"``) or tagged ``!!str``: a string;
-- plain ``y Y yes Yes YES true True TRUE on On ON`` (and the same for false with
-  ``n no false off``): a bool;
-- plain text that C's ``strtoll(text, &end, 0)`` reads whole, without overflow: an
-  integer (so ``0x1F`` is 31 and ``017`` is 15, as in rcl);
-- plain text that ``strtod`` reads whole, without overflow or underflow, or one of
-  ``.nan .inf +.inf -.inf`` (and their ``.NaN .NAN .Inf .INF`` spellings): a double
-  (so ``1e-6`` is a double, and ``08`` is 8.0);
-- anything else: a string (``1:30`` stays ``'1:30'``).
-
-A sequence holds scalars of one type (``[1, 2.5]`` is an error, as in rcl). Repeated node
-or parameter keys merge, the later value winning; YAML aliases are refused; a parameter
-without a value is an error. Explicit tags ``!!bool``, ``!!int``, ``!!float`` require a value
-of that kind (``!!float 1`` is 1.0); ``!!null`` leaves the parameter unset.
-
-Where we are stricter than rcl (each is an error naming file and line, rather than a file
-that loads and then does something surprising): an empty sequence (rcl leaves the parameter
-unset), keys beside ``ros__parameters`` under a node name.
+Keys above ``ros__parameters`` are namespace components of the node name, keys below it are
+parameter names; nested mappings flatten to dotted names. Plain scalars are typed by rcl's
+rules on the raw text: ``y yes true on`` (any case rcl allows) and the ``false`` words are bools;
+what C's ``strtoll(text, &end, 0)`` reads whole is an integer (``0x1F``, ``017``); what ``strtod``
+reads whole, or ``.nan``/``.inf``, is a double; anything else, and quoted or ``!!str`` text, is a
+string. A sequence holds one type. Aliases are refused. Stricter than rcl (an error naming file and
+line): an empty sequence, and keys beside ``ros__parameters`` under a node name.
 """
 
 from __future__ import annotations
