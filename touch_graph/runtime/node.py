@@ -33,7 +33,6 @@ from .parameter_service import ParameterService
 from .parameters import (
     Parameter,
     ParameterDescriptor,
-    ParameterSource,
     SetParametersResult,
     parse_ros_args,
 )
@@ -144,7 +143,7 @@ class Node(NodeParameters):
                 self._override_keys[name] = key
         for param in parameter_overrides or []:
             # A launch file's param carries where it was written (file:line) in `source`.
-            source = getattr(param, 'source', None) or ParameterSource('parameter_overrides')
+            source = getattr(param, 'source', None) or 'parameter_overrides'
             self._overrides[param.name] = (param.value, source)
             self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
