@@ -264,7 +264,7 @@ class GraphDiscovery:
         self._nudge_readers = keep
 
     def _take_info(self, reader: Any) -> None:
-        for data, stamp in self._take_data(reader, with_stamp=True):
+        for data, stamp in self._take_data(reader):
             try:
                 gid, nodes = self.codec.decode(data)
             except Exception:  # another distribution's layout, garbage: counted, never fatal
@@ -277,7 +277,7 @@ class GraphDiscovery:
         self._changed()
 
     def _take_stats(self) -> None:
-        for data in self._take_data(self._stats_reader):
+        for data, _ in self._take_data(self._stats_reader):
             try:
                 msg = messages.deserialize(data, _DIAGNOSTICS)
                 counts = {bytes.fromhex(s.hardware_id): {kv.key: int(kv.value) for kv in s.values} for s in msg.status}
@@ -288,14 +288,12 @@ class GraphDiscovery:
         self._changed(structure=False)
 
     @staticmethod
-    def _take_data(reader: Any, with_stamp: bool = False) -> list:
-        """The valid samples' data (``with_stamp``: ``(data, source timestamp ns)``)."""
+    def _take_data(reader: Any) -> list[tuple[bytes, int]]:
+        """``(data, source timestamp ns)`` of the valid samples waiting on ``reader``."""
         samples = ddspy_take(reader._ref, _ANY, 256)
         if not isinstance(samples, list):
             return []
-        if with_stamp:
-            return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
-        return [data for data, info in samples if info.valid_data]
+        return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
 
     def _changed(self, structure: bool = True) -> None:
         """Wake the waiters; ``structure``: participants, endpoints or nodes changed (not only statistics)."""
@@ -439,10 +437,7 @@ def service_endpoint(gid: bytes, entry: dict | None, node: str) -> ServiceEndpoi
         return None
     name, kind = found
     server = (kind == 'request') == (entry['kind'] == 'reader')
-    ros_type = ros_type_name(entry['type']) or entry['type']
-    for suffix in ('_Request', '_Response'):
-        if ros_type.endswith(suffix):
-            ros_type = ros_type[:-len(suffix)]
+    ros_type = (ros_type_name(entry['type']) or entry['type']).removesuffix('_Request').removesuffix('_Response')
     return ServiceEndpoint(node, entry['participant'].hex(), name, ros_type, 'server' if server else 'client', gid,
                            entry['kind'], user_data_value(entry.get('qos_raw'), 'serviceid' if server else 'clientid'))
 

@@ -136,6 +136,14 @@ class _Pair:
         return [(self.reader, False, self.read_topic, self.read_type),
                 (self.writer, True, self.write_topic, self.write_type)]
 
+    def _graph_endpoints(self, kind: str, dds_topic: str) -> list[bytes]:
+        """GUIDs of the ``kind`` ('reader'/'writer') endpoints on ``dds_topic`` that discovery knows."""
+        graph = getattr(self.participant, 'graph', None)
+        if graph is None:
+            return []
+        with graph._lock:
+            return [bytes(key) for key, e in graph._endpoints.items() if e['kind'] == kind and e['topic'] == dds_topic]
+
     def _take(self) -> list[tuple[int, int, Any, int]]:
         """``(client id, seq, CDR of the fields, writer handle)`` of every valid sample waiting on the reader.
 
@@ -258,14 +266,9 @@ class DdsService(_Pair):
         Read from discovery: Cyclone matches a Fast DDS request writer but drops its requests
         (header-less, they fail the check against our type), so none reaches :meth:`drain`.
         """
-        graph = getattr(self.participant, 'graph', None)
-        if graph is None:
-            return
-        with graph._lock:
-            endpoints = list(graph._endpoints.items())
-        for key, e in endpoints:
-            if e['kind'] == 'writer' and e['topic'] == self.read_topic and is_fast_dds(key):
-                self._fast_dds_client(bytes(key), counted=False)
+        for key in self._graph_endpoints('writer', self.read_topic):
+            if is_fast_dds(key):
+                self._fast_dds_client(key, counted=False)
 
     def _client_state(self, handle: int) -> str:
         """'yes' (its reply reader is matched), 'gone' (its request writer left) or 'maybe' (after waiting)."""
@@ -432,16 +435,10 @@ class DdsClient(_Pair):
 
     def _other_clients(self) -> int:
         """How many reply readers of the service, other than ours, the graph knows."""
-        graph = getattr(self.participant, 'graph', None)
-        if graph is None:
-            return 0
         mine = {self.reader_gid}
         if self._plain_reader is not None:
             mine.add(self._plain_reader.get_guid().bytes)
-        with graph._lock:
-            endpoints = list(graph._endpoints.items())
-        return sum(1 for key, e in endpoints
-                   if e['kind'] == 'reader' and e['topic'] == self.read_topic and bytes(key) not in mine)
+        return sum(1 for key in self._graph_endpoints('reader', self.read_topic) if key not in mine)
 
     def drain(self) -> bool:
         """Take the replies DDS holds; ours go onto the client's queue (executor thread). True if any did."""
