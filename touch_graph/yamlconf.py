@@ -101,9 +101,7 @@ class YamlList(list):
         self.item_lines: list[int] = []
 
     def line_of(self, index: int) -> int | None:
-        if 0 <= index < len(self.item_lines):
-            return self.item_lines[index]
-        return self.line
+        return self.item_lines[index] if 0 <= index < len(self.item_lines) else self.line
 
     def error(self, message: str, index: int | None = None) -> ConfigError:
         return ConfigError(message, self.path, self.line_of(index) if index is not None else self.line)
@@ -191,7 +189,7 @@ def check_bounds(text: str, source: str = '<string>', *, max_bytes: int = MAX_BY
             stack[-1][2] = max(stack[-1][2], depth)
 
     try:
-        for event in yaml.parse(text, Loader=_PARSER):
+        for event in yaml.parse(text, Loader=PARSER):
             if isinstance(event, yaml.AliasEvent):
                 if event.anchor in open_anchors:
                     raise _bound_error(f'alias *{event.anchor} is inside its own anchor &{event.anchor}: '
@@ -217,7 +215,7 @@ def check_bounds(text: str, source: str = '<string>', *, max_bytes: int = MAX_BY
                     sizes[anchor] = (values, depth + 1)
                 add(values, depth + 1, event.start_mark)
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 class YamlBoundsError(ConfigError):
@@ -229,7 +227,8 @@ def _bound_error(message: str, source: str, text: str, mark: Any) -> ConfigError
     return YamlBoundsError(message + _text_excerpt(text, line), source, line)
 
 
-def _syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
+def syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
+    """A pyyaml error as a :class:`ConfigError` naming ``source`` and, where pyyaml knows it, the line."""
     if isinstance(err, yaml.MarkedYAMLError):
         mark = err.problem_mark or err.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -238,7 +237,8 @@ def _syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
     return ConfigError(f'YAML error: {str(err)[:200]}', source)
 
 
-_PARSER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+#: pyyaml's safe loader, in C when libyaml is there.
+PARSER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 
 
 def loads_yaml(text: str, source: str = '<string>') -> Any:
@@ -247,7 +247,7 @@ def loads_yaml(text: str, source: str = '<string>') -> Any:
     try:
         return yaml.load(text, Loader=_make_loader(source))  # a SafeLoader subclass
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 def safe_load(text: str, source: str = '<string>') -> Any:
@@ -257,9 +257,9 @@ def safe_load(text: str, source: str = '<string>') -> Any:
     """
     check_bounds(text, source)
     try:
-        return yaml.load(text, Loader=_PARSER)
+        return yaml.load(text, Loader=PARSER)
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:

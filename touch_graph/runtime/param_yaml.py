@@ -20,7 +20,7 @@ from typing import Any
 import yaml
 
 from ..errors import ConfigError
-from ..yamlconf import check_bounds, read_text
+from ..yamlconf import PARSER, check_bounds, read_text, syntax_error
 
 __all__ = ['ParameterOverrides', 'parse_parameter_value', 'parse_scalar', 'pattern_matches']
 
@@ -211,18 +211,13 @@ def _tree(events: Any, source: str) -> list[Any]:
             elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
                 stack.pop()
                 pending_key.pop()
-    except yaml.MarkedYAMLError as err:
-        mark = err.problem_mark or err.context_mark
-        raise ConfigError(f'YAML syntax error: {err.problem or err.context or err}', source,
-                          mark.line + 1 if mark else None) from err
     except yaml.YAMLError as err:
-        raise ConfigError(f'YAML error: {err}', source) from err
+        raise syntax_error(err, source) from err
     return docs
 
 
 def _events(text: str) -> Any:
-    loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
-    return yaml.parse(text, Loader=loader)
+    return yaml.parse(text, Loader=PARSER)
 
 
 # --------------------------------------------------------------------------- values
