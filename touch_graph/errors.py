@@ -1,10 +1,5 @@
-"""The one exception hierarchy of social_touch.
-
-Every error the project raises on purpose derives from :class:`SocialTouchError`, so a
-caller can catch the project's errors without catching programming errors. Bad
-arguments to a function raise :class:`ValueError` (or a subclass that is also one), as
-the standard library and scikit-learn do. Messages say what was expected, what arrived
-and how to fix it.
+"""The one exception hierarchy of social_touch: every error raised on purpose is a :class:`SocialTouchError`;
+a bad argument is also a :class:`ValueError`. Messages say what was expected, what arrived and how to fix it.
 """
 
 from __future__ import annotations

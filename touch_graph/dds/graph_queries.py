@@ -1,8 +1,5 @@
-"""The questions a graph command asks a :class:`~touch_graph.dds.graph.GraphView`, with the errors it gives.
-
-Shared by :class:`~touch_graph.dds.tool.GraphTool` (a participant of the command's own) and
-:class:`~touch_graph.daemon.client.DaemonGraph` (the graph daemon's view), so both answer
-alike. Light on purpose: it imports nothing of Cyclone or the runtime.
+"""The questions a graph command asks a :class:`~touch_graph.dds.graph.GraphView`, with the errors it gives,
+shared by :class:`~touch_graph.dds.tool.GraphTool` and the graph daemon's client; imports no Cyclone.
 """
 
 from __future__ import annotations
