@@ -323,13 +323,9 @@ def typed(mapping: dict, key: str, types: type | tuple[type, ...], what: str, de
         return default
     value = mapping[key]
     types = types if isinstance(types, tuple) else (types,)
-    if isinstance(value, bool) and bool not in types:
-        ok = False
-    elif isinstance(value, int) and not isinstance(value, bool) and float in types and int not in types:
+    if isinstance(value, int) and not isinstance(value, bool) and float in types and int not in types:
         return float(value)
-    else:
-        ok = isinstance(value, types)
-    if not ok:
+    if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
         names = ' or '.join(t.__name__ for t in types)
         raise _error_at(mapping, f"'{key}' in {what} must be {names}; got {type(value).__name__} {excerpt(value)}", key)
     return value

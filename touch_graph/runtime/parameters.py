@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError
 from ..messages import get_message
-from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value, pattern_matches
+from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value
 
 __all__ = [
     'FloatingPointRange',
@@ -245,17 +245,6 @@ def check_ranges(name: str, value: Any, descriptor: ParameterDescriptor, node: s
 def load_parameter_file(path: str | Path, text: str | None = None) -> ParameterOverrides:
     """Read a ROS 2 parameter YAML file by rcl's rules (:mod:`.param_yaml`); errors name file and line."""
     return ParameterOverrides.from_file(path, text)
-
-
-def node_matches(pattern: str, node_name: str, fqn: str) -> bool:
-    """Does a parameter-file node key apply to a node? rclpy's rule (:func:`.param_yaml.pattern_matches`).
-
-    >>> node_matches('/**', 'a', '/x/a'), node_matches('/x/*', 'a', '/x/a'), node_matches('a', 'a', '/a')
-    (True, True, True)
-    >>> node_matches('/y/a', 'a', '/x/a'), node_matches('/**/a', 'a', '/x/y/a'), node_matches('a', 'a', '/x/a')
-    (False, True, False)
-    """
-    return pattern_matches(pattern, fqn)
 
 
 # --------------------------------------------------------------------------- --ros-args
