@@ -95,22 +95,26 @@ def qos_to_dict(qos: Any) -> dict[str, int]:
     return out
 
 
+def _name(enum: Any, value: int | None) -> str:
+    """The member name of ``value`` in ``enum``, or ``'UNKNOWN'`` (also for None: not announced)."""
+    try:
+        return enum(value).name
+    except ValueError:
+        return 'UNKNOWN'
+
+
 def describe_qos(qos: dict[str, int], indent: str = '  ') -> list[str]:
     """The ``QoS profile:`` lines of ``ros2 topic info -v`` for a profile dict.
 
     >>> describe_qos({'history': 1, 'depth': 5, 'reliability': 2, 'durability': 2})
     ['  Reliability: BEST_EFFORT', '  History (Depth): KEEP_LAST (5)', '  Durability: VOLATILE']
     """
-    def name(enum: Any, key: str) -> str:
-        try:
-            return enum(qos[key]).name
-        except (KeyError, ValueError):
-            return 'UNKNOWN'
-    history = name(HistoryPolicy, 'history')
+    history = _name(HistoryPolicy, qos.get('history'))
     if history == 'KEEP_LAST':
         history += f" ({qos.get('depth', '?')})"
-    return [f'{indent}Reliability: {name(ReliabilityPolicy, "reliability")}', f'{indent}History (Depth): {history}',
-            f'{indent}Durability: {name(DurabilityPolicy, "durability")}']
+    return [f'{indent}Reliability: {_name(ReliabilityPolicy, qos.get("reliability"))}',
+            f'{indent}History (Depth): {history}',
+            f'{indent}Durability: {_name(DurabilityPolicy, qos.get("durability"))}']
 
 
 def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfile:
@@ -122,11 +126,6 @@ def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfil
     >>> adapted_profile([]).reliability.name
     'RELIABLE'
     """
-    def name(enum: Any, value: Any) -> str:
-        try:
-            return enum(value).name
-        except ValueError:
-            return 'UNKNOWN'
-    reliability, durability = adapted_policies([(name(ReliabilityPolicy, q.get('reliability')),
-                                                 name(DurabilityPolicy, q.get('durability'))) for q in offered])
+    reliability, durability = adapted_policies([(_name(ReliabilityPolicy, q.get('reliability')),
+                                                 _name(DurabilityPolicy, q.get('durability'))) for q in offered])
     return QoSProfile(depth=depth, reliability=ReliabilityPolicy[reliability], durability=DurabilityPolicy[durability])
