@@ -316,12 +316,9 @@ class GraphDiscovery:
             return self.version
 
     def incomplete(self, grace_s: float = 1.5) -> list[bytes]:
-        """Remote participants whose graph is not all here yet: a ROS 2 participant (its user data names an
-        ``enclave``, as rcl's and ours do) whose ``ros_discovery_info`` sample has not come, or any participant
-        whose sample names endpoints DDS has not shown yet, or one with a ``ros_discovery_info`` writer known but
-        not its sample, or a plain DDS participant (no enclave: it may never announce nodes) discovered less
-        than ``grace_s`` ago. A ROS 2 participant always announces its nodes, but on a busy machine its
-        endpoints can come seconds after it: the caller bounds the wait."""
+        """Remote participants whose graph is not all here yet: no ``ros_discovery_info`` sample yet from a ROS 2
+        participant (one with an ``enclave``), one with a known info writer, or a plain DDS participant younger
+        than ``grace_s``; or a sample naming endpoints DDS has not shown yet. The caller bounds the wait."""
         now = time.monotonic()
         out = []
         with self._lock:
@@ -339,9 +336,8 @@ class GraphDiscovery:
         return out
 
     def count_endpoints(self, topic: str, kind: str) -> int:
-        """Writers (``kind`` 'publishers') or readers ('subscriptions') of the ROS topic ``topic`` that DDS shows,
-        ours included: ``len(view().topics[topic].publishers)`` without building the view, as cheap as rclpy's
-        ``count_publishers`` (a node may ask on every timer tick)."""
+        """Writers (``kind`` 'publishers') or readers ('subscriptions') of the ROS topic ``topic``, ours included,
+        without building the view (a node may ask on every timer tick)."""
         with self._lock:
             if self._counts_version != self.structure_version:
                 counts: dict[tuple[str | None, str], int] = {}

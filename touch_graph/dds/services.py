@@ -332,12 +332,9 @@ class DdsClient(_Pair):
     def send_request(self, seq: int, request: Any) -> str:
         """Write the request in the convention of the server matched; '' when sent, else why it could not be.
 
-        A Fast DDS server takes the request's id from the RTPS sample identity (our request
-        writer's GUID and the sample's sequence number) and wants no request header; its
-        reply names the request only in the inline QoS, which Cyclone DDS does not hand us,
-        so replies are paired with requests in order. That is sound only while no other
-        client of the service is in the graph (a Fast DDS server sends every reply to every
-        client): otherwise the call fails at once, saying so.
+        A Fast DDS server wants no request header and names the request of a reply only in the RTPS
+        inline QoS, which Cyclone does not hand us: its replies are paired with requests in order,
+        which is sound only while no other client of the service is in the graph (else this fails).
         """
         readers = self.writer.get_matched_subscriptions()
         if not readers:
