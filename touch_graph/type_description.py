@@ -34,7 +34,6 @@ _ARRAY, _BOUNDED_SEQUENCE, _UNBOUNDED_SEQUENCE = 48, 96, 144
 
 #: ``service_msgs/msg/ServiceEventInfo`` (Jazzy), which every service's ``_Event`` message refers to.
 _SERVICE_EVENT_INFO = 'service_msgs/msg/ServiceEventInfo'
-_TIME = 'builtin_interfaces/msg/Time'
 
 _lock = threading.Lock()
 _hashes: dict[str, str] = {}
@@ -108,11 +107,6 @@ def individual_description(type_name: str, store: Any = None) -> dict[str, Any]:
         return {'type_name': type_name, 'fields': [
             _nested('info', _SERVICE_EVENT_INFO), _nested('request', f'{service}_Request', 1),
             _nested('response', f'{service}_Response', 1)]}
-    if type_name == _SERVICE_EVENT_INFO:  # Jazzy's, should the type store not carry it
-        return {'type_name': type_name, 'fields': [
-            _field('event_type', _field_type((Nodetype.BASE, ('uint8', 0)))), _nested('stamp', _TIME),
-            _field('client_gid', _field_type((Nodetype.ARRAY, ((Nodetype.BASE, ('uint8', 0)), 16)))),
-            _field('sequence_number', _field_type((Nodetype.BASE, ('int64', 0))))]}
     raise MessageError(f"no type description for unknown type '{type_name}'")
 
 
