@@ -5,11 +5,8 @@
     def main(args=None):
         return run_node(BearDriver, args)
 
-With the shim it initialises the process-wide context with ``args`` (``--ros-args -p
-rate:=20 -r frame:=/x``...), which joins the DDS domain so other processes and machines
-(``social-touch topic echo``, ``record``, ROS 2 nodes) see the node, makes the node,
-spins until Ctrl-C or SIGTERM, then shuts down cleanly and returns an exit code. Under real rclpy
-(:data:`touch_graph.compat.USING_ROS`) it just inits, spins and shuts down rclpy.
+Initialises the context with ``args`` (``--ros-args ...``), which joins the DDS domain, makes the
+node and spins until Ctrl-C or SIGTERM, then shuts down; under real rclpy it does the same with rclpy.
 """
 
 from __future__ import annotations
