@@ -148,6 +148,7 @@ class Node(NodeParameters):
             self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
         self._set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]] = []
+        self._post_set_callbacks: list[Callable[[list[Parameter]], None]] = []
         self._parameter_lock = threading.RLock()
         self._parameter_events = self.create_publisher(_ParameterEvent, '/parameter_events',
                                                        qos_profile_parameter_events)

@@ -32,7 +32,7 @@ class NodeParameters:
     """The parameter half of :class:`~touch_graph.runtime.node.Node` (a mixin).
 
     The node sets ``_parameters``, ``_descriptors``, ``_overrides``, ``_override_keys``,
-    ``_allow_undeclared``, ``_set_callbacks``, ``_fqn`` and ``_parameter_events`` (a publisher
+    ``_allow_undeclared``, ``_set_callbacks``, ``_post_set_callbacks``, ``_fqn`` and ``_parameter_events`` (a publisher
     or None) before it declares anything.
     """
 
@@ -42,6 +42,7 @@ class NodeParameters:
     _override_keys: dict[str, str]
     _allow_undeclared: bool
     _set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]]
+    _post_set_callbacks: list[Callable[[list[Parameter]], None]]
     _fqn: str
     _parameter_events: Any
     _parameter_lock: threading.RLock
@@ -157,18 +158,13 @@ class NodeParameters:
         """As rclpy: ``callback(parameters)`` after parameters were set (a declaration too), newest first."""
         if not callable(callback):
             raise TypeError(f'Callback must be callable, got {type(callback)}')
-        self._post_set_callbacks().insert(0, callback)
+        self._post_set_callbacks.insert(0, callback)
 
     def remove_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], None]) -> None:
-        self._post_set_callbacks().remove(callback)
-
-    def _post_set_callbacks(self) -> list[Callable[[list[Parameter]], None]]:
-        if '_post_set' not in self.__dict__:
-            self._post_set: list[Callable[[list[Parameter]], None]] = []
-        return self._post_set
+        self._post_set_callbacks.remove(callback)
 
     def _call_post_set(self, parameter_list: list[Parameter]) -> None:
-        for callback in list(self._post_set_callbacks()):
+        for callback in list(self._post_set_callbacks):
             callback(parameter_list)
 
     def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:
