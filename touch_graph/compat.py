@@ -28,7 +28,7 @@ def _want_ros() -> bool:
     if os.environ.get('SOCIAL_TOUCH_SHIM') == '1':
         return False
     try:
-        import rclpy  # noqa: F401
+        import rclpy  # noqa: F401  (the probe: is real ROS 2 here?)
     except ImportError:
         return False
     return True
