@@ -13,7 +13,8 @@ from touch_graph.runtime import (
     ParameterNotDeclaredException,
     SetParametersResult,
 )
-from touch_graph.runtime.parameters import load_parameter_file, node_matches, parse_ros_args
+from touch_graph.runtime.param_yaml import pattern_matches
+from touch_graph.runtime.parameters import load_parameter_file, parse_ros_args
 
 
 @pytest.fixture
@@ -129,10 +130,10 @@ def test_declaring_runs_the_set_callbacks_with_each_parameter_as_rclpy_does(ctx)
 
 
 def test_node_matching_rules():
-    assert node_matches('/**', 'a', '/x/y/a')
-    assert node_matches('/**/a', 'a', '/a') and node_matches('/**/a', 'a', '/x/y/a')
-    assert not node_matches('/x/*', 'a', '/x/y/a')
-    assert node_matches('/x/*/a', 'a', '/x/y/a')
+    assert pattern_matches('/**', '/x/y/a')
+    assert pattern_matches('/**/a', '/a') and pattern_matches('/**/a', '/x/y/a')
+    assert not pattern_matches('/x/*', '/x/y/a')
+    assert pattern_matches('/x/*/a', '/x/y/a')
 
 
 def test_ros_args_parsing_errors():

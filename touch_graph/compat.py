@@ -4,17 +4,15 @@
 
     from touch_graph.compat import Node, QoSProfile, get_message, rclpy
 
-On a ROS 2 machine (``import rclpy`` works and ``SOCIAL_TOUCH_SHIM`` is not ``1``) these are
-rclpy's own, and ``get_message('social_touch_msgs/msg/SkinFrame')`` (``get_service('std_srvs/srv/Trigger')``)
-returns the class generated from the interface package ``social-touch export-interfaces``
-writes (built with colcon; docs/ros2.md), imported from ``pkg.msg`` as rosidl_runtime_py does, so
-PyPI's Jazzy wheels, which lack rosidl_runtime_py, serve too. Everywhere else they come from
-:mod:`touch_graph.runtime`, :mod:`touch_graph.messages` and :mod:`touch_graph.srv_types`, built
-from the same ``.msg`` and ``.srv`` files.
+Real rclpy when ``import rclpy`` works and ``SOCIAL_TOUCH_SHIM`` is not ``1``; ``get_message`` and
+``get_service`` then import the rosidl-generated class from ``pkg.msg``/``pkg.srv`` (PyPI's Jazzy
+wheels lack rosidl_runtime_py). Otherwise :mod:`touch_graph.runtime`, :mod:`touch_graph.messages`
+and :mod:`touch_graph.srv_types`, built from the same ``.msg`` and ``.srv`` files.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 from typing import Any
 
@@ -30,7 +28,7 @@ def _want_ros() -> bool:
     if os.environ.get('SOCIAL_TOUCH_SHIM') == '1':
         return False
     try:
-        import rclpy  # noqa: F401
+        import rclpy  # noqa: F401  (the probe: is real ROS 2 here?)
     except ImportError:
         return False
     return True
@@ -76,7 +74,6 @@ else:
 def _generated(typename: str, kind: str) -> type:
     """The class rosidl generated for ``typename`` (``pkg/kind/Type`` or ``pkg/Type``), imported from
     ``pkg.kind`` as rosidl_runtime_py does (which PyPI's Jazzy wheels do not bring)."""
-    import importlib
     parts = typename.split('/')
     if len(parts) == 2:
         parts.insert(1, kind)

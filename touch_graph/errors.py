@@ -1,13 +1,11 @@
-"""The one exception hierarchy of social_touch.
-
-Every error the project raises on purpose derives from :class:`SocialTouchError`, so a
-caller can catch the project's errors without catching programming errors. Bad
-arguments to a function raise :class:`ValueError` (or a subclass that is also one), as
-the standard library and scikit-learn do. Messages say what was expected, what arrived
-and how to fix it.
+"""The one exception hierarchy of social_touch: every error raised on purpose is a :class:`SocialTouchError`;
+a bad argument is also a :class:`ValueError`. Messages say what was expected, what arrived and how to fix it.
 """
 
 from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
 
 
 class SocialTouchError(Exception):
@@ -54,3 +52,9 @@ class BagError(SocialTouchError):
 
 class ServiceCallError(GraphError):
     """A service call got no response: no server, the server vanished, or it was destroyed mid-call."""
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ''

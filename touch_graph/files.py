@@ -1,9 +1,5 @@
-"""Files written whole or not at all, and one clear error for a full disk.
-
-A report, model or codebook is written to a temporary file beside its target, fsynced, then renamed
-over it (:func:`replacing`), so a disk that fills (or a crash) mid-write leaves the previous file as
-it was and no partial one; the temporary file is removed. A full disk (``ENOSPC``, or a quota:
-``EDQUOT``) is a :class:`DiskFullError` that names the file, says what was kept and what to do.
+"""Files written whole or not at all (:func:`replacing`: a temporary file beside the target, fsynced, renamed
+over it), and :class:`DiskFullError`, naming the file and what was kept, for ``ENOSPC`` or ``EDQUOT``.
 
 >>> import tempfile, pathlib
 >>> target = pathlib.Path(tempfile.mkdtemp()) / 'report.md'

@@ -1,35 +1,15 @@
 """Input frame screening: a recogniser keeps to the frames of its own driver when others arrive too.
 
-Any process in the DDS domain may publish on a recogniser's input topic (docs/network.md). A
-callback is not told which publisher sent a message (rclpy gives no publisher identity there), so
-:class:`FrameScreen` tells the frames apart by what they carry: ``header.frame_id``, ``header.stamp``
-and the driver's wire ``sequence`` counter. It follows one *source* and screens out a frame that
-
-- ``'other_frame_id'``: names another ``header.frame_id`` than the frames it follows;
-- ``'stamp_back'``: is stamped before the last frame it took (a stray publisher stamping 0, a stale
-  replay interleaved with the live driver);
-- ``'sequence_jump'``: once the source's ``sequence`` is seen counting (+1 per frame), a frame whose
-  counter is behind the last one or more than ``max_sequence_gap`` ahead of it.
-
-Frames with the same stamp pass: the node's own checks decide about repeats. A counting source's
-forward step of more than one counts the frames in between as *missed*: sent by the sensor, never
-handed to this node (lost on the way, or dropped from the queue of a node that falls behind). Real
-rclpy has no counter of a subscription's queue drops, so this is how a starved recogniser says so
-on either backend. A frame the node
-itself finds unusable (wrong sizes, NaN) is reported with :meth:`FrameScreen.malformed` and never
-becomes the source's last frame, so garbage cannot move the reference either.
-
-A real change of source is not a stray: a looped bag, a restarted driver, a sensor whose counter
-restarted after a reboot. Screened frames that continue each other (same frame_id, stamps and
-counter moving forward) for ``switch_after`` frames *with no frame of the followed source in
-between* become the new source; the frames held meanwhile are handed back in order, so a restart
-loses nothing (the node then sees time go back once, as before). Frames that repeat one stamp
-(``0`` from a stray, over and over) never form a source; a stray interleaving a forward-moving
-stream with the live driver is interrupted by the driver's every frame.
-
-:meth:`FrameScreen.status` says what happened since the previous call, for ``/diagnostics``
-(:class:`~touch_graph.node_health.NodeHealth`): WARN naming the causes and counts when frames were
-screened out, ERROR when nothing usable arrived at all while frames did.
+A callback is not told which publisher sent a message, so :class:`FrameScreen` follows one
+*source* by what frames carry and screens out a frame that names another ``header.frame_id``
+(``'other_frame_id'``), is stamped before the last frame taken (``'stamp_back'``), or, once the
+source's ``sequence`` counts, is behind it or more than ``max_sequence_gap`` ahead (``'sequence_jump'``).
+Screened frames that continue each other for ``switch_after`` frames, with none of the source
+between, become the new source (a looped bag, a restarted driver) and are handed back in order.
+A counting source's forward step of more than one counts the frames in between as *missed*: sent,
+never handed to this node (lost on the way, or dropped from the queue of a node that falls behind);
+real rclpy has no counter of a subscription's queue drops, so this is how a starved recogniser says
+so on either backend.
 
 >>> from types import SimpleNamespace as NS
 >>> def frame(t, seq, fid='skin'):

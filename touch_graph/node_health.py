@@ -1,24 +1,10 @@
 """A recogniser node's health on ``/diagnostics``: callbacks that raised and messages its subscriptions dropped.
 
-A callback that raises ends the node's spin, on rclpy and on our runtime alike, so a node that must
-survive bad input wraps its input callbacks in :meth:`NodeHealth.guard`: an exception there is logged
-(its traceback the first time), counted in ``errors`` and the node goes on. :class:`NodeHealth` also
-says so where monitors look: every ``period_s`` one ``diagnostic_msgs/DiagnosticStatus`` named
-``social_touch: <node>``, ERROR with the last error when a guarded callback raised in the period, WARN
-when a subscription dropped messages (and a warning in the log, through
-:class:`~touch_graph.subscriber_drops.DropReporter`), OK otherwise. A node with a ``health_counters()``
-method (name -> int) adds its own counters to the status's values, so what became of its inputs is
-visible where the monitors look (rqt_robot_monitor, `topic echo /diagnostics`).
-
-Two more things a node's health covers, for a graph other processes can reach (docs/network.md):
-
-- its input screens (:meth:`NodeHealth.screen`, a :class:`~touch_graph.frame_screen.FrameScreen` per
-  input topic): WARN naming the causes and counts when frames were screened out or unusable, ERROR
-  when nothing usable arrived in the period;
-- every change of a parameter after it was declared (a ``param set`` through the parameter services,
-  from any process in the domain) is logged at WARN with the old and new value and counted
-  (``parameter_changes``, ``last_parameter_change``); the period in which one happened is WARN. It is
-  seen through rclpy's ``add_post_set_parameters_callback``, so it holds on both runtimes.
+Input callbacks wrapped in :meth:`NodeHealth.guard` log and count an exception (``errors``) and the
+node goes on. Every ``period_s`` one ``DiagnosticStatus`` named ``social_touch: <node>``: ERROR with
+the last error of the period, WARN for dropped messages, screened frames (:meth:`NodeHealth.screen`)
+or a parameter changed after its declaration (logged with old and new value), else OK; a node's
+``health_counters()`` (name -> int) add to its values. Works on rclpy and on our runtime.
 """
 
 from __future__ import annotations

@@ -5,11 +5,8 @@
     def main(args=None):
         return run_node(BearDriver, args)
 
-With the shim it initialises the process-wide context with ``args`` (``--ros-args -p
-rate:=20 -r frame:=/x``...), which joins the DDS domain so other processes and machines
-(``social-touch topic echo``, ``record``, ROS 2 nodes) see the node, makes the node,
-spins until Ctrl-C or SIGTERM, then shuts down cleanly and returns an exit code. Under real rclpy
-(:data:`touch_graph.compat.USING_ROS`) it just inits, spins and shuts down rclpy.
+Initialises the context with ``args`` (``--ros-args ...``), which joins the DDS domain, makes the
+node and spins until Ctrl-C or SIGTERM, then shuts down; under real rclpy it does the same with rclpy.
 """
 
 from __future__ import annotations
@@ -73,10 +70,10 @@ class StopSignals:
 
 def run_node(node_class: type, args: list[str] | None = None) -> int:
     """Run one node in this process until Ctrl-C/SIGTERM; 0 on a clean stop, 1 when it cannot start."""
-    from .compat import USING_ROS
+    from .compat import USING_ROS  # lazy: the CLI imports StopSignals without loading rclpy or the runtime
     if USING_ROS:  # pragma: no cover - exercised on a ROS 2 machine
         return _run_rclpy(node_class, args)
-    from .runtime import SingleThreadedExecutor, get_default_context
+    from .runtime import SingleThreadedExecutor, get_default_context  # ours only where rclpy is not used
     from .runtime.override_check import check_overrides
 
     argv = list(sys.argv[1:] if args is None else args)
@@ -108,7 +105,7 @@ def run_node(node_class: type, args: list[str] | None = None) -> int:
 
 
 def _run_rclpy(node_class: type, args: list[str] | None) -> int:  # pragma: no cover - needs ROS 2
-    import rclpy
+    import rclpy  # only on a ROS 2 machine
     from rclpy.executors import ExternalShutdownException
     rclpy.init(args=args)
     node = None

@@ -1,20 +1,10 @@
 """Subscriptions that take the QoS their publishers offer, as ``ros2 topic echo`` and rosbag2 do.
 
-A reliable subscription does not match a best-effort publisher, and a transient-local one
-does not match a volatile publisher: a tool that subscribes with a fixed profile hears
-nothing from such publishers. ros2cli (``choose_qos``) and rosbag2
-(``Rosbag2QoS::adapt_request_to_offers``) therefore ask the graph what the publishers of a
-topic offer and subscribe with:
-
-- RELIABLE only when every publisher offers RELIABLE, else BEST_EFFORT;
-- TRANSIENT_LOCAL only when every publisher offers TRANSIENT_LOCAL, else VOLATILE.
-
-:class:`OfferedQosSubscriptions` does that for any node, on real rclpy as on our runtime
-(both answer ``get_publishers_info_by_topic``), and goes further than both: a subscription
-made before any publisher was known, or that a publisher which joined later cannot match,
-is made again with the profile the publishers now offer (checked every ``check_period_s``).
-A subscription that matches every publisher is never remade (no lost or repeated samples).
-The echo, hz and record commands, the view and the Foxglove server all subscribe through it.
+RELIABLE only when every publisher offers RELIABLE, else BEST_EFFORT; TRANSIENT_LOCAL only when
+every publisher offers it, else VOLATILE (ros2cli's ``choose_qos``). Unlike ros2cli, a subscription
+that a publisher which joined later cannot match is made again with the profile now offered
+(checked every ``check_period_s``); one that matches every publisher is never remade.
+Works on rclpy and on our runtime (both answer ``get_publishers_info_by_topic``).
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
-"""Where the package's shared files (launch/, config/, msg/) are.
+"""Where the package's shared files (launch/, config/, msg/) are: a source checkout, ``pip install .``
+(``<prefix>/share/social_touch``) or a colcon workspace (``AMENT_PREFIX_PATH``).
 
-The same lookup serves a source checkout, ``pip install .`` (data files under
-``<prefix>/share/social_touch``) and a colcon workspace (``AMENT_PREFIX_PATH``), as
-``ros2 pkg prefix`` / ``$(find-pkg-share ...)`` do on ROS 2.
-
-Tuning without reinstalling: ``social-touch launch`` run inside a source checkout of this
-package (the working directory or one above it holds its ``package.xml`` and ``config/``)
-calls :func:`prefer_checkout`, which sets :data:`CHECKOUT_ENV`; from then on, in that process
-and the node processes it starts, :func:`share_file` and :func:`launch_share` read ``config/``
-and ``launch/`` from the checkout instead of the installed copy, so an edit there counts at the
-next launch. Messages (``msg/``, ``srv/``) stay those of the installed code.
+``social-touch launch`` in a source checkout calls :func:`prefer_checkout`, which sets
+:data:`CHECKOUT_ENV`: that process and its node processes then read ``config/`` and ``launch/``
+from the checkout (``msg/`` and ``srv/`` stay the installed ones).
 """
 
 from __future__ import annotations

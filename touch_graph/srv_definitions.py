@@ -1,9 +1,5 @@
-"""Service definitions: the ``.srv`` texts the runtime knows, parsed into rosbags type definitions.
-
-A ``.srv`` file is a request and a response ``.msg`` separated by a ``---`` line; each half
-becomes a message type of its own, ``pkg/srv/Name_Request`` and ``pkg/srv/Name_Response``
-(see :mod:`touch_graph.srv_types`). The type store of :mod:`touch_graph.messages` registers
-these definitions; :mod:`touch_graph.srv_types` builds service classes on that store.
+"""Service definitions: the ``.srv`` texts the runtime knows, parsed into rosbags type definitions
+(``pkg/srv/Name_Request`` and ``_Response``) for the type store of :mod:`touch_graph.messages`.
 """
 
 from __future__ import annotations

@@ -1,18 +1,7 @@
 """Service types: ``.srv`` files read by the rosbags type system, and service classes with rclpy's shape.
 
-A ``.srv`` file is a request and a response ``.msg`` separated by a ``---`` line. rosbags
-parses ``.msg`` text only, so each half is registered as a message type of its own,
-``pkg/srv/Name_Request`` and ``pkg/srv/Name_Response``, the names rosidl gives them (and
-whose DDS names are ``pkg::srv::dds_::Name_Request_``). An empty half gets the
-``uint8 structure_needs_at_least_one_member`` field rosidl adds, so its CDR bytes are
-ROS 2's. A bare type name inside a ``.srv`` refers to a message of the same package, as
-in rosidl.
-
-Services come from two places: this package's ``srv/`` directory (``social_touch_msgs``,
-exported with the interface package) and :data:`STANDARD_SERVICES`, the ROS 2 services the
-runtime uses (``rcl_interfaces`` parameter services, ``std_srvs``), whose rosidl definitions
-rosbags' type store does not carry. Their fields are ROS 2's (rcl_interfaces and std_srvs
-as in Humble to Rolling); comments are left out.
+Each half of a ``.srv`` is registered as the message ``pkg/srv/Name_Request`` / ``_Response``
+(rosidl's names); an empty half gets rosidl's ``uint8 structure_needs_at_least_one_member``.
 
 >>> cls = get_service('std_srvs/srv/SetBool')
 >>> cls.Request(data=True).data, cls.Response().success
@@ -26,10 +15,9 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from .errors import MessageError
+from .errors import MessageError, did_you_mean
 from .messages import get_message, typestore
 from .srv_definitions import STANDARD_SERVICES, own_services, parse_srv, service_names, srv_files
-from .yamlconf import did_you_mean
 
 __all__ = ['STANDARD_SERVICES', 'ServiceType', 'get_service', 'parse_srv', 'service_definition', 'service_names',
            'srv_files']

@@ -1,11 +1,6 @@
-"""Messages a node's subscriptions lost because their queue was full, brought to where a user looks.
-
-A subscription keeps the last ``depth`` messages (KEEP_LAST); when its callback falls behind (CPU
-starvation, a paused ``topic echo``) the oldest are dropped and counted by the runtime
-(``Subscription.dropped``, also in ``topic info -v``). :class:`DropReporter` turns those counts into
-a warning in the node's log (and so on ``/rosout``), and :func:`dropped_by_topic` gives them to
-diagnostics (the drivers' ``subscriber_drops`` key). Under real rclpy the counters do not exist and
-both report nothing.
+"""Messages a node's subscriptions dropped from a full queue (``Subscription.dropped``), brought to where a user
+looks: a warning in the node's log (:class:`DropReporter`) and diagnostics (:func:`dropped_by_topic`).
+Under real rclpy the counters do not exist and both report nothing.
 """
 
 from __future__ import annotations

@@ -1,19 +1,9 @@
 """Type descriptions and RIHS01 type hashes as ROS 2 (Iron and later) computes them.
 
-ROS 2 describes an interface as ``type_description_interfaces/msg/TypeDescription``: the
-type's fields (each with a ``FieldType`` id, array/sequence capacity, string capacity and
-nested type name) and every type it refers to, sorted by name. The RIHS01 hash (REP-2011)
-is the SHA-256 of that description as JSON, default values left out, in the exact layout
-``rosidl_generator_type_description`` writes (``separators=(', ', ': ')``, fields in
-order, referenced types sorted).
-
-Built here from the field definitions the runtime already has (the rosbags type store),
-with rosidl's mapping of ``.msg`` types to IDL: ``char`` is ``uint8`` and ``byte`` is
-``octet`` (``FIELD_TYPE_BYTE``) — rosbags' own ``hash_rihs01`` gives ``char`` a type of its
-own, which no ROS 2 node computes. A service ``pkg/srv/X`` is described as rosidl does: a
-type with the fields ``request_message``, ``response_message`` and ``event_message``,
-referring to ``X_Request``, ``X_Response`` and ``X_Event`` (``info``:
-``service_msgs/msg/ServiceEventInfo``, ``request`` and ``response``: sequences of at most one).
+The hash (REP-2011) is the SHA-256 of ``type_description_interfaces/msg/TypeDescription`` as JSON
+in ``rosidl_generator_type_description``'s layout, built from the rosbags type store with rosidl's
+mapping (``char`` is ``uint8``, ``byte`` is ``octet``; rosbags' ``hash_rihs01`` differs there). A
+service is described as rosidl does: ``request_message``, ``response_message``, ``event_message``.
 
 >>> type_hash('std_msgs/msg/Char')
 'RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9'
@@ -44,7 +34,6 @@ _ARRAY, _BOUNDED_SEQUENCE, _UNBOUNDED_SEQUENCE = 48, 96, 144
 
 #: ``service_msgs/msg/ServiceEventInfo`` (Jazzy), which every service's ``_Event`` message refers to.
 _SERVICE_EVENT_INFO = 'service_msgs/msg/ServiceEventInfo'
-_TIME = 'builtin_interfaces/msg/Time'
 
 _lock = threading.Lock()
 _hashes: dict[str, str] = {}
@@ -118,11 +107,6 @@ def individual_description(type_name: str, store: Any = None) -> dict[str, Any]:
         return {'type_name': type_name, 'fields': [
             _nested('info', _SERVICE_EVENT_INFO), _nested('request', f'{service}_Request', 1),
             _nested('response', f'{service}_Response', 1)]}
-    if type_name == _SERVICE_EVENT_INFO:  # Jazzy's, should the type store not carry it
-        return {'type_name': type_name, 'fields': [
-            _field('event_type', _field_type((Nodetype.BASE, ('uint8', 0)))), _nested('stamp', _TIME),
-            _field('client_gid', _field_type((Nodetype.ARRAY, ((Nodetype.BASE, ('uint8', 0)), 16)))),
-            _field('sequence_number', _field_type((Nodetype.BASE, ('int64', 0))))]}
     raise MessageError(f"no type description for unknown type '{type_name}'")
 
 

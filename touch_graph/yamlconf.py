@@ -23,7 +23,6 @@ touch_graph.errors.ConfigError: inline.yaml:2: unknown key 'b' in example; expec
 
 from __future__ import annotations
 
-import difflib
 import reprlib
 from collections.abc import Iterable
 from pathlib import Path
@@ -31,7 +30,7 @@ from typing import Any
 
 import yaml
 
-from .errors import ConfigError
+from .errors import ConfigError, did_you_mean
 
 __all__ = ['MAX_BYTES', 'MAX_DEPTH', 'MAX_VALUES', 'YamlBoundsError', 'YamlDict', 'YamlList', 'check_bounds',
            'check_keys', 'did_you_mean', 'excerpt', 'load_yaml', 'loads_yaml', 'read_text', 'safe_load', 'typed']
@@ -102,9 +101,7 @@ class YamlList(list):
         self.item_lines: list[int] = []
 
     def line_of(self, index: int) -> int | None:
-        if 0 <= index < len(self.item_lines):
-            return self.item_lines[index]
-        return self.line
+        return self.item_lines[index] if 0 <= index < len(self.item_lines) else self.line
 
     def error(self, message: str, index: int | None = None) -> ConfigError:
         return ConfigError(message, self.path, self.line_of(index) if index is not None else self.line)
@@ -192,7 +189,7 @@ def check_bounds(text: str, source: str = '<string>', *, max_bytes: int = MAX_BY
             stack[-1][2] = max(stack[-1][2], depth)
 
     try:
-        for event in yaml.parse(text, Loader=_PARSER):
+        for event in yaml.parse(text, Loader=PARSER):
             if isinstance(event, yaml.AliasEvent):
                 if event.anchor in open_anchors:
                     raise _bound_error(f'alias *{event.anchor} is inside its own anchor &{event.anchor}: '
@@ -218,7 +215,7 @@ def check_bounds(text: str, source: str = '<string>', *, max_bytes: int = MAX_BY
                     sizes[anchor] = (values, depth + 1)
                 add(values, depth + 1, event.start_mark)
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 class YamlBoundsError(ConfigError):
@@ -230,7 +227,8 @@ def _bound_error(message: str, source: str, text: str, mark: Any) -> ConfigError
     return YamlBoundsError(message + _text_excerpt(text, line), source, line)
 
 
-def _syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
+def syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
+    """A pyyaml error as a :class:`ConfigError` naming ``source`` and, where pyyaml knows it, the line."""
     if isinstance(err, yaml.MarkedYAMLError):
         mark = err.problem_mark or err.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -239,7 +237,8 @@ def _syntax_error(err: yaml.YAMLError, source: str) -> ConfigError:
     return ConfigError(f'YAML error: {str(err)[:200]}', source)
 
 
-_PARSER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+#: pyyaml's safe loader, in C when libyaml is there.
+PARSER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 
 
 def loads_yaml(text: str, source: str = '<string>') -> Any:
@@ -248,7 +247,7 @@ def loads_yaml(text: str, source: str = '<string>') -> Any:
     try:
         return yaml.load(text, Loader=_make_loader(source))  # a SafeLoader subclass
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 def safe_load(text: str, source: str = '<string>') -> Any:
@@ -258,9 +257,9 @@ def safe_load(text: str, source: str = '<string>') -> Any:
     """
     check_bounds(text, source)
     try:
-        return yaml.load(text, Loader=_PARSER)
+        return yaml.load(text, Loader=PARSER)
     except yaml.YAMLError as err:
-        raise _syntax_error(err, source) from err
+        raise syntax_error(err, source) from err
 
 
 def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:
@@ -289,12 +288,6 @@ def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:
 def load_yaml(path: str | Path) -> Any:
     """Read a YAML file, bounded; a missing, too large file or bad syntax raises :class:`ConfigError`."""
     return loads_yaml(read_text(path), source=str(path))
-
-
-def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
-    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ''
 
 
 def check_keys(mapping: Any, required: Iterable[str] = (), optional: Iterable[str] = (),
@@ -330,13 +323,9 @@ def typed(mapping: dict, key: str, types: type | tuple[type, ...], what: str, de
         return default
     value = mapping[key]
     types = types if isinstance(types, tuple) else (types,)
-    if isinstance(value, bool) and bool not in types:
-        ok = False
-    elif isinstance(value, int) and not isinstance(value, bool) and float in types and int not in types:
+    if isinstance(value, int) and not isinstance(value, bool) and float in types and int not in types:
         return float(value)
-    else:
-        ok = isinstance(value, types)
-    if not ok:
+    if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
         names = ' or '.join(t.__name__ for t in types)
         raise _error_at(mapping, f"'{key}' in {what} must be {names}; got {type(value).__name__} {excerpt(value)}", key)
     return value

@@ -1,16 +1,8 @@
 """The few Cyclone DDS C calls cyclonedds-python does not expose the way the transport needs them.
 
-- a wait set that says *which* attached conditions triggered (cyclonedds' ``WaitSet.wait``
-  only says how many), woken by a guard condition;
-- deleting an entity now and making sure cyclonedds' Python object will not delete it
-  again when it is garbage collected (entity handles could be reused);
-- the number of matched remote readers of a writer, without building a list;
-- one lock around cyclonedds-python's calls that turn a C QoS into a ``Qos``
-  (:func:`take_builtin`, :func:`matched_endpoint`): they are not safe in two threads at once.
-
-Every call goes to the library cyclonedds-python loaded (its wheel bundles it). ctypes
-releases the GIL during each call, so a thread blocked in :meth:`WaitSet.wait` does not
-hold up Python.
+A wait set that says which conditions triggered; deleting an entity so that its Python object will
+not delete it again; the count of a writer's matched readers; one lock around the calls that turn
+a C QoS into a ``Qos`` (:func:`take_builtin`, :func:`matched_endpoint`: not thread-safe).
 """
 
 from __future__ import annotations

@@ -1,21 +1,10 @@
 """Which DDS domain to join and how far to look for peers, read from the environment as ROS 2 reads it.
 
-- ``ROS_DOMAIN_ID``: the domain (0 when unset), 0-232 as rcl allows; graphs in different
-  domains never see each other.
-- ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (rcl, Iron and later): ``SUBNET`` (the default:
-  multicast on the local network), ``LOCALHOST`` (unicast to this machine only), ``OFF``
-  (no discovery at all: only static peers could reach us, and rmw_cyclonedds ignores
-  those too), ``SYSTEM_DEFAULT`` (leave Cyclone's own configuration alone). Any other
-  value is treated as ``LOCALHOST`` with a warning, as rcl does. The deprecated
-  ``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST`` when the range is unset.
-- ``ROS_STATIC_PEERS``: ``;``-separated addresses also contacted by unicast (with SUBNET
-  or LOCALHOST).
-- ``CYCLONEDDS_URI``: appended after the generated fragment, as rmw_cyclonedds does, so a
-  user's Cyclone configuration still applies.
-
-:func:`cyclone_config` builds the same XML fragment rmw_cyclonedds' ``check_create_domain``
-builds for these settings, and announces the participant to its peers every second, far more often
-than Cyclone's default, so a Fast DDS node started after it finds it at once.
+``ROS_DOMAIN_ID`` (0-232, default 0), ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (``SUBNET`` default,
+``LOCALHOST``, ``OFF``, ``SYSTEM_DEFAULT``; another value is ``LOCALHOST`` with a warning, as in rcl;
+``ROS_LOCALHOST_ONLY=1`` means ``LOCALHOST`` when unset), ``ROS_STATIC_PEERS`` (``;``-separated) and
+``CYCLONEDDS_URI`` (appended). :func:`cyclone_config` builds rmw_cyclonedds' XML for them, with a
+participant announcement every second so that a Fast DDS node started later finds it at once.
 
 >>> read_discovery({'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '10.0.0.2;host-b'})
 DiscoveryOptions(range='LOCALHOST', static_peers=('10.0.0.2', 'host-b'))

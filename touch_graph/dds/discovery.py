@@ -1,33 +1,11 @@
 """Graph discovery the ROS 2 way: ``ros_discovery_info`` out, builtin topics and peers' ``ros_discovery_info`` in.
 
-DDS knows participants and endpoints, not nodes. ROS 2 (rmw_dds_common) adds the nodes:
-every participant publishes ``rmw_dds_common/msg/ParticipantEntitiesInfo`` on the DDS
-topic ``ros_discovery_info`` (reliable, TRANSIENT_LOCAL, depth 1), listing its nodes and
-the GIDs of each node's readers and writers. ``ros2 node list`` on a ROS 2 machine reads
-exactly that, so ours lists our nodes there; and :class:`GraphDiscovery` reads the
-peers' messages together with DCPSParticipant / DCPSPublication / DCPSSubscription to
-give a :class:`~touch_graph.dds.graph.GraphView` with foreign ROS 2 nodes in it too.
-
-**GID layout.** A GID is the 16-byte DDS GUID of the entity. ROS 2 Humble sends it in a
-``char[24]`` array (zero padded), Iron and later in ``char[16]``; the two layouts do not
-decode as each other, which is one reason Humble and Jazzy graphs do not mix. The layout
-follows ``ROS_DISTRO`` (``humble`` and older: 24, anything else or unset: 16).
-
-**Complete answers.** A participant's ``ros_discovery_info`` sample can come seconds after the
-participant: Fast DDS sends a latched sample to a newly matched reader on its first heartbeat
-to it, shortly after matching, and then only on its periodic one (period = 3 s); when that first
-heartbeat reaches us before we know its writer, the sample waits for the next. So when a
-remote ``ros_discovery_info`` writer is discovered before its participant's sample, a fresh
-reader is made (a *nudge*): the writer matches it and heartbeats at once. And
-:meth:`GraphDiscovery.incomplete` says which participants have not yet announced their
-nodes, or whose announced endpoints DDS has not shown yet, so a tool can wait for exactly
-that (:meth:`touch_graph.dds.tool.GraphTool.wait_for_discovery`).
-
-Every participant of ours also publishes, on the hidden topic
-``/_social_touch/subscription_stats`` (``diagnostic_msgs/msg/DiagnosticArray``, one
-status per subscription, ``hardware_id`` = reader GID), how many samples each of its
-subscriptions received, dropped from a full queue and could not decode, so ``topic info
--v`` can show them for any process of ours.
+Every participant publishes ``rmw_dds_common/msg/ParticipantEntitiesInfo`` on ``ros_discovery_info``
+(reliable, TRANSIENT_LOCAL, depth 1): its nodes and their readers' and writers' GIDs. A GID is 24
+bytes for ``ROS_DISTRO`` humble and older, else 16. When a peer's ``ros_discovery_info`` writer is
+seen before its sample, a fresh reader is made (a *nudge*) so that the writer sends it at once
+instead of at its next periodic heartbeat. Our participants also publish per-subscription counts
+(received, dropped, undecodable) on ``/_social_touch/subscription_stats`` for ``topic info -v``.
 """
 
 from __future__ import annotations
@@ -286,7 +264,7 @@ class GraphDiscovery:
         self._nudge_readers = keep
 
     def _take_info(self, reader: Any) -> None:
-        for data, stamp in self._take_data(reader, with_stamp=True):
+        for data, stamp in self._take_data(reader):
             try:
                 gid, nodes = self.codec.decode(data)
             except Exception:  # another distribution's layout, garbage: counted, never fatal
@@ -299,7 +277,7 @@ class GraphDiscovery:
         self._changed()
 
     def _take_stats(self) -> None:
-        for data in self._take_data(self._stats_reader):
+        for data, _ in self._take_data(self._stats_reader):
             try:
                 msg = messages.deserialize(data, _DIAGNOSTICS)
                 counts = {bytes.fromhex(s.hardware_id): {kv.key: int(kv.value) for kv in s.values} for s in msg.status}
@@ -310,14 +288,12 @@ class GraphDiscovery:
         self._changed(structure=False)
 
     @staticmethod
-    def _take_data(reader: Any, with_stamp: bool = False) -> list:
-        """The valid samples' data (``with_stamp``: ``(data, source timestamp ns)``)."""
+    def _take_data(reader: Any) -> list[tuple[bytes, int]]:
+        """``(data, source timestamp ns)`` of the valid samples waiting on ``reader``."""
         samples = ddspy_take(reader._ref, _ANY, 256)
         if not isinstance(samples, list):
             return []
-        if with_stamp:
-            return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
-        return [data for data, info in samples if info.valid_data]
+        return [(data, info.source_timestamp) for data, info in samples if info.valid_data]
 
     def _changed(self, structure: bool = True) -> None:
         """Wake the waiters; ``structure``: participants, endpoints or nodes changed (not only statistics)."""
@@ -340,12 +316,9 @@ class GraphDiscovery:
             return self.version
 
     def incomplete(self, grace_s: float = 1.5) -> list[bytes]:
-        """Remote participants whose graph is not all here yet: a ROS 2 participant (its user data names an
-        ``enclave``, as rcl's and ours do) whose ``ros_discovery_info`` sample has not come, or any participant
-        whose sample names endpoints DDS has not shown yet, or one with a ``ros_discovery_info`` writer known but
-        not its sample, or a plain DDS participant (no enclave: it may never announce nodes) discovered less
-        than ``grace_s`` ago. A ROS 2 participant always announces its nodes, but on a busy machine its
-        endpoints can come seconds after it: the caller bounds the wait."""
+        """Remote participants whose graph is not all here yet: no ``ros_discovery_info`` sample yet from a ROS 2
+        participant (one with an ``enclave``), one with a known info writer, or a plain DDS participant younger
+        than ``grace_s``; or a sample naming endpoints DDS has not shown yet. The caller bounds the wait."""
         now = time.monotonic()
         out = []
         with self._lock:
@@ -363,9 +336,8 @@ class GraphDiscovery:
         return out
 
     def count_endpoints(self, topic: str, kind: str) -> int:
-        """Writers (``kind`` 'publishers') or readers ('subscriptions') of the ROS topic ``topic`` that DDS shows,
-        ours included: ``len(view().topics[topic].publishers)`` without building the view, as cheap as rclpy's
-        ``count_publishers`` (a node may ask on every timer tick)."""
+        """Writers (``kind`` 'publishers') or readers ('subscriptions') of the ROS topic ``topic``, ours included,
+        without building the view (a node may ask on every timer tick)."""
         with self._lock:
             if self._counts_version != self.structure_version:
                 counts: dict[tuple[str | None, str], int] = {}
@@ -461,10 +433,7 @@ def service_endpoint(gid: bytes, entry: dict | None, node: str) -> ServiceEndpoi
         return None
     name, kind = found
     server = (kind == 'request') == (entry['kind'] == 'reader')
-    ros_type = ros_type_name(entry['type']) or entry['type']
-    for suffix in ('_Request', '_Response'):
-        if ros_type.endswith(suffix):
-            ros_type = ros_type[:-len(suffix)]
+    ros_type = (ros_type_name(entry['type']) or entry['type']).removesuffix('_Request').removesuffix('_Response')
     return ServiceEndpoint(node, entry['participant'].hex(), name, ros_type, 'server' if server else 'client', gid,
                            entry['kind'], user_data_value(entry.get('qos_raw'), 'serviceid' if server else 'clientid'))
 

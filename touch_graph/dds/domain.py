@@ -1,9 +1,5 @@
-"""One Cyclone domain per domain id and process, made with ROS 2's discovery configuration.
-
-rmw_cyclonedds creates the domain explicitly, with the configuration its discovery options
-call for, when the first node of a process joins it and deletes it with the last one; a
-second context in the same domain must ask for the same discovery options. This module
-does the same for :class:`~touch_graph.dds.participant.DdsParticipant`.
+"""One Cyclone domain per domain id and process, made with ROS 2's discovery configuration and deleted
+with its last participant, as rmw_cyclonedds does; a second context must ask for the same options.
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
 """A snapshot of the ROS graph as DDS discovery shows it: nodes, topics, endpoints, whoever runs them.
 
-Built by :class:`~touch_graph.dds.discovery.GraphDiscovery` from the builtin topics
-(DCPSParticipant, DCPSPublication, DCPSSubscription) and ``ros_discovery_info``, so it
-holds foreign ROS 2 nodes as well as ours. An endpoint no node claims (a plain DDS
-application, a node whose participant has not announced its nodes yet) belongs to the
-node ROS 2 calls ``_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_``.
+An endpoint no node claims belongs to ROS 2's ``_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_``.
 """
 
 from __future__ import annotations

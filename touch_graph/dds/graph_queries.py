@@ -1,8 +1,5 @@
-"""The questions a graph command asks a :class:`~touch_graph.dds.graph.GraphView`, with the errors it gives.
-
-Shared by :class:`~touch_graph.dds.tool.GraphTool` (a participant of the command's own) and
-:class:`~touch_graph.daemon.client.DaemonGraph` (the graph daemon's view), so both answer
-alike. Light on purpose: it imports nothing of Cyclone or the runtime (nor YAML, until a name is misspelt).
+"""The questions a graph command asks a :class:`~touch_graph.dds.graph.GraphView`, with the errors it gives,
+shared by :class:`~touch_graph.dds.tool.GraphTool` and the graph daemon's client; imports no Cyclone.
 """
 
 from __future__ import annotations
@@ -10,7 +7,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from ..errors import GraphError
+from ..errors import GraphError, did_you_mean
 from .graph import GraphView, TopicInfo
 
 __all__ = ['GraphQueries', 'NoGraphError', 'no_graph_message']
@@ -74,7 +71,6 @@ class GraphQueries:
             view = self.graph()
         info = view.topics.get(topic)
         if info is None:
-            from ..yamlconf import did_you_mean
             if type_name:
                 return TopicInfo(topic, {type_name})
             known = sorted(view.visible_topics())
@@ -97,7 +93,6 @@ class GraphQueries:
             self.wait_until(lambda v: bool(v.find_nodes(full)), wait_s)
             view = self.graph()
         if not view.find_nodes(full):
-            from ..yamlconf import did_you_mean
             known = sorted(n.name for n in view.visible_nodes(include_hidden))
             raise GraphError(f"node '{full}' not found{did_you_mean(full, known)}; nodes: {', '.join(known) or 'none'}")
         return full

@@ -1,20 +1,9 @@
-"""DDS type descriptions of ROS 2 messages, generated from the ``.msg`` definitions.
+"""DDS type descriptions (XTypes) of ROS 2 messages, generated from the ``.msg`` definitions.
 
-Cyclone DDS registers a topic's type with its XTypes description (TypeInformation and
-TypeMapping), and with that description it (a) checks that a remote endpoint's type is
-assignable to ours before matching it and (b) checks every received payload against the
-layout ("normalises" it) before handing it over. cyclonedds-python cannot register a type
-without that description, so leaving it out (as rmw_cyclonedds did up to Iron) is not an
-option here; instead the description says exactly what ROS 2's IDL says, the way
-rmw_cyclonedds builds it from the rosidl introspection since it started to register
-types: every struct ``@final`` and named ``pkg::msg::dds_::Name_``, ``byte`` and ``char``
-as ``uint8``, fixed arrays as arrays, ``T[<=N]`` as bounded sequences, ``string<=N`` as
-bounded strings, member names as in the ``.msg`` file.
-
-Only the description comes from here: payloads are written and read as the CDR bytes
-:mod:`touch_graph.messages` makes (XCDR1, little endian, 4-byte encapsulation header),
-never through cyclonedds' own Python serialiser. For a final type, XCDR1 and the classic
-CDR that ROS 2 puts on the wire are the same bytes.
+cyclonedds-python registers no type without one; it says what ROS 2's IDL says, as rmw_cyclonedds
+builds it: structs ``@final`` named ``pkg::msg::dds_::Name_``, ``byte``/``char`` as ``uint8``, fixed
+arrays, bounded sequences and strings. Payloads are never serialised by cyclonedds: they are the
+CDR bytes :mod:`touch_graph.messages` makes (for a final type XCDR1 is ROS 2's classic CDR).
 """
 
 from __future__ import annotations

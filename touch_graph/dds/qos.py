@@ -1,20 +1,9 @@
 """ROS 2 QoS profiles as DDS QoS, the way rmw_cyclonedds maps them (``create_readwrite_qos``).
 
-- history: KEEP_LAST ``depth`` (depth 0, "system default", is 1), or KEEP_ALL;
-- reliability: RELIABLE (blocking up to :data:`MAX_BLOCKING_S` when a KEEP_ALL writer's
-  history is full; rmw_cyclonedds waits forever, which would let one stuck reader stall
-  a node) or BEST_EFFORT;
-- durability: VOLATILE, or TRANSIENT_LOCAL with a durability service keeping the same
-  history, so a reader that joins later gets the writer's last ``depth`` samples;
-- liveliness AUTOMATIC, no deadline, no lifespan; writers do not auto-dispose;
-- data representation XCDR1 only, as ROS 2 endpoints offer;
-- ignore-local PARTICIPANT on both sides: inside a process the runtime delivers in
-  memory, so DDS must neither echo a process's own samples back nor count its own
-  readers as matched (a writer with no remote reader serialises nothing);
-- user data ``typehash=RIHS01_...;`` as ROS 2 from Iron on announces it.
-
-Profiles come back as plain dicts (``{'history', 'depth', 'reliability', 'durability'}``,
-enum values of :mod:`touch_graph.runtime.qos`) for the graph view, bags and the CLI.
+Depth 0 is 1; a RELIABLE writer blocks at most :data:`MAX_BLOCKING_S` (rmw: forever);
+TRANSIENT_LOCAL keeps the same history; XCDR1 only; ignore-local PARTICIPANT (the runtime delivers
+in process); user data ``typehash=RIHS01_...;``. :func:`qos_to_dict` gives ``{'history', 'depth',
+'reliability', 'durability'}`` with enum values of :mod:`touch_graph.runtime.qos`.
 """
 
 from __future__ import annotations
@@ -106,22 +95,26 @@ def qos_to_dict(qos: Any) -> dict[str, int]:
     return out
 
 
+def _name(enum: Any, value: int | None) -> str:
+    """The member name of ``value`` in ``enum``, or ``'UNKNOWN'`` (also for None: not announced)."""
+    try:
+        return enum(value).name
+    except ValueError:
+        return 'UNKNOWN'
+
+
 def describe_qos(qos: dict[str, int], indent: str = '  ') -> list[str]:
     """The ``QoS profile:`` lines of ``ros2 topic info -v`` for a profile dict.
 
     >>> describe_qos({'history': 1, 'depth': 5, 'reliability': 2, 'durability': 2})
     ['  Reliability: BEST_EFFORT', '  History (Depth): KEEP_LAST (5)', '  Durability: VOLATILE']
     """
-    def name(enum: Any, key: str) -> str:
-        try:
-            return enum(qos[key]).name
-        except (KeyError, ValueError):
-            return 'UNKNOWN'
-    history = name(HistoryPolicy, 'history')
+    history = _name(HistoryPolicy, qos.get('history'))
     if history == 'KEEP_LAST':
         history += f" ({qos.get('depth', '?')})"
-    return [f'{indent}Reliability: {name(ReliabilityPolicy, "reliability")}', f'{indent}History (Depth): {history}',
-            f'{indent}Durability: {name(DurabilityPolicy, "durability")}']
+    return [f'{indent}Reliability: {_name(ReliabilityPolicy, qos.get("reliability"))}',
+            f'{indent}History (Depth): {history}',
+            f'{indent}Durability: {_name(DurabilityPolicy, qos.get("durability"))}']
 
 
 def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfile:
@@ -133,11 +126,6 @@ def adapted_profile(offered: list[dict[str, int]], depth: int = 10) -> QoSProfil
     >>> adapted_profile([]).reliability.name
     'RELIABLE'
     """
-    def name(enum: Any, value: Any) -> str:
-        try:
-            return enum(value).name
-        except ValueError:
-            return 'UNKNOWN'
-    reliability, durability = adapted_policies([(name(ReliabilityPolicy, q.get('reliability')),
-                                                 name(DurabilityPolicy, q.get('durability'))) for q in offered])
+    reliability, durability = adapted_policies([(_name(ReliabilityPolicy, q.get('reliability')),
+                                                 _name(DurabilityPolicy, q.get('durability'))) for q in offered])
     return QoSProfile(depth=depth, reliability=ReliabilityPolicy[reliability], durability=DurabilityPolicy[durability])

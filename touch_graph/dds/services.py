@@ -1,27 +1,11 @@
 """The DDS side of a runtime ``Service`` and ``Client``: ROS 2's request/reply mapping, as rmw_cyclonedds does it.
 
-A service ``/x`` is two DDS topics, ``rq/xRequest`` (type ``pkg::srv::dds_::T_Request_``)
-and ``rr/xReply`` (``pkg::srv::dds_::T_Response_``). A server has a reader on the first and
-a writer on the second, a client the opposite; all four have the service QoS (reliable,
-volatile, keep last 10 by default) and, as user data, ``serviceid=...;`` or
-``clientid=...;`` (one id for the reader and the writer of one server or client), which is
-how rmw_cyclonedds pairs them, then ``typehash=RIHS01_...;`` of the topic's type (``T_Request`` or
-``T_Response``: what Jazzy's rmw_fastrtps announces on them).
-
-**On the wire** (rmw_cyclonedds ``serdata.cpp`` / ``Serialization.cpp``): the 4-byte CDR
-encapsulation header, then the request header ``cdds_request_header_t`` (uint64 client id
-= the instance handle of the client's request writer, int64 sequence number), then the
-request's or response's fields. A reply carries the header of its request back; every
-client of the service receives every reply and keeps those with its own id. The header is
-16 bytes, so the fields keep the alignment they have on their own: they are rosbags' CDR
-bytes after its encapsulation header.
-
-**A server** replies only once it has matched the client's reply reader (rmw_cyclonedds
-waits up to 100 ms for that, then drops the reply; a client whose request writer is gone
-gets nothing). **A client** is ready when it matched a server's request reader and reply
-writer with the same ``serviceid``; a request it sends with no server reader matched
-fails at once, and when the server's reader goes away with requests under way, those fail
-at the next housekeeping round (:meth:`DdsClient.check_server`).
+A service ``/x`` is the DDS topics ``rq/xRequest`` and ``rr/xReply``; a server reads the first and
+writes the second, a client the opposite. All four endpoints have the service QoS and the user data
+``serviceid=...;`` or ``clientid=...;`` (how rmw_cyclonedds pairs them), then ``typehash=RIHS01_...;``.
+A payload is the CDR header, ``cdds_request_header_t`` (uint64 client id, int64 sequence number),
+then the fields; a reply carries its request's header back, and a client keeps the replies with its id.
+A server replies once it has matched the client's reply reader (waiting up to 100 ms, as rmw does).
 """
 
 from __future__ import annotations
@@ -152,6 +136,14 @@ class _Pair:
         return [(self.reader, False, self.read_topic, self.read_type),
                 (self.writer, True, self.write_topic, self.write_type)]
 
+    def _graph_endpoints(self, kind: str, dds_topic: str) -> list[bytes]:
+        """GUIDs of the ``kind`` ('reader'/'writer') endpoints on ``dds_topic`` that discovery knows."""
+        graph = getattr(self.participant, 'graph', None)
+        if graph is None:
+            return []
+        with graph._lock:
+            return [bytes(key) for key, e in graph._endpoints.items() if e['kind'] == kind and e['topic'] == dds_topic]
+
     def _take(self) -> list[tuple[int, int, Any, int]]:
         """``(client id, seq, CDR of the fields, writer handle)`` of every valid sample waiting on the reader.
 
@@ -274,14 +266,9 @@ class DdsService(_Pair):
         Read from discovery: Cyclone matches a Fast DDS request writer but drops its requests
         (header-less, they fail the check against our type), so none reaches :meth:`drain`.
         """
-        graph = getattr(self.participant, 'graph', None)
-        if graph is None:
-            return
-        with graph._lock:
-            endpoints = list(graph._endpoints.items())
-        for key, e in endpoints:
-            if e['kind'] == 'writer' and e['topic'] == self.read_topic and is_fast_dds(key):
-                self._fast_dds_client(bytes(key), counted=False)
+        for key in self._graph_endpoints('writer', self.read_topic):
+            if is_fast_dds(key):
+                self._fast_dds_client(key, counted=False)
 
     def _client_state(self, handle: int) -> str:
         """'yes' (its reply reader is matched), 'gone' (its request writer left) or 'maybe' (after waiting)."""
@@ -345,12 +332,9 @@ class DdsClient(_Pair):
     def send_request(self, seq: int, request: Any) -> str:
         """Write the request in the convention of the server matched; '' when sent, else why it could not be.
 
-        A Fast DDS server takes the request's id from the RTPS sample identity (our request
-        writer's GUID and the sample's sequence number) and wants no request header; its
-        reply names the request only in the inline QoS, which Cyclone DDS does not hand us,
-        so replies are paired with requests in order. That is sound only while no other
-        client of the service is in the graph (a Fast DDS server sends every reply to every
-        client): otherwise the call fails at once, saying so.
+        A Fast DDS server wants no request header and names the request of a reply only in the RTPS
+        inline QoS, which Cyclone does not hand us: its replies are paired with requests in order,
+        which is sound only while no other client of the service is in the graph (else this fails).
         """
         readers = self.writer.get_matched_subscriptions()
         if not readers:
@@ -448,16 +432,10 @@ class DdsClient(_Pair):
 
     def _other_clients(self) -> int:
         """How many reply readers of the service, other than ours, the graph knows."""
-        graph = getattr(self.participant, 'graph', None)
-        if graph is None:
-            return 0
         mine = {self.reader_gid}
         if self._plain_reader is not None:
             mine.add(self._plain_reader.get_guid().bytes)
-        with graph._lock:
-            endpoints = list(graph._endpoints.items())
-        return sum(1 for key, e in endpoints
-                   if e['kind'] == 'reader' and e['topic'] == self.read_topic and bytes(key) not in mine)
+        return sum(1 for key in self._graph_endpoints('reader', self.read_topic) if key not in mine)
 
     def drain(self) -> bool:
         """Take the replies DDS holds; ours go onto the client's queue (executor thread). True if any did."""

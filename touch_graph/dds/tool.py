@@ -1,12 +1,8 @@
-"""What the graph commands of ``social-touch`` (topic, node, param, service, record, play) share: a place in the
-DDS graph.
+"""A place in the DDS graph for the graph commands (topic, node, param, service, record, play).
 
-:class:`GraphTool` gives a command its own wall-clock, networked context with a hidden
-node (``/_social_touch_<command>_<pid>``, hidden from ``node list`` as ros2cli's are),
-waits until discovery is complete (every participant found has announced its nodes and
-their endpoints, bounded in time), and turns the usual mistakes into clear errors: no
-graph in the domain, an unknown topic or node (with a did-you-mean), a service that is not
-there or does not answer (:meth:`GraphTool.call`).
+:class:`GraphTool` gives a command a networked context with a hidden node
+(``/_social_touch_<command>_<pid>``), waits until discovery is complete (bounded), and turns
+the usual mistakes into clear errors: no graph, an unknown topic, node or service.
 """
 
 from __future__ import annotations

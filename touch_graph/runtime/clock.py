@@ -1,12 +1,6 @@
-"""Time, Duration and Clock with rclpy's names, and the time sources behind them.
-
-A :class:`Context` has one time source for ROS time:
-
-- :class:`WallTimeSource`: the system clock (``time.time_ns``), for robots and demos;
-- :class:`SimTimeSource`: simulated time that starts at a fixed epoch and runs ``rate``
-  times faster than real time, or, with ``rate=inf``, as fast as the work allows: the
-  executor jumps the clock to the next timer when nothing is left to do, so a scene runs
-  deterministically, the same on every machine (the mode tests use).
+"""Time, Duration and Clock with rclpy's names, and a context's time source for ROS time:
+:class:`WallTimeSource` (the system clock) or :class:`SimTimeSource` (simulated time, ``rate`` times
+real time; with ``rate=inf`` the executor jumps to the next timer when idle: deterministic).
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
-"""The graph a set of nodes share: topics, nodes, time, and the shutdown flag.
+"""The graph a set of nodes share (rclpy's ``Context``): topics, nodes, time, and the shutdown flag.
 
-One :class:`Context` is one graph of nodes (rclpy's ``Context``). Topics live here:
-a topic has one message type, its publishers and its subscriptions; publishing walks
-the topic's subscriptions and queues the message on each, without copying or
-serialising it (serialising only for raw subscribers, such as a recorder).
-
-A context joins the DDS domain when it is initialised (:mod:`touch_graph.dds`: other
-processes and ROS 2 machines then see its nodes and topics, and it theirs), unless told
-not to: ``Context(network=False)``. Left unsaid (``network=None``), a wall-clock context
-joins and a simulated-time one does not (a simulated world is private: its clock means
-nothing to other processes, and evaluations run many of them side by side), and
-``SOCIAL_TOUCH_NETWORK=0`` in the environment keeps every context that was not told
-otherwise off the network (the test suite sets it).
+Publishing queues the message on each subscription of the topic without copying or serialising
+it. An initialised context joins the DDS domain unless ``network=False``; with ``network=None`` a
+wall-clock context joins and a simulated one does not, and ``SOCIAL_TOUCH_NETWORK=0`` keeps every
+context not told otherwise off the network.
 """
 
 from __future__ import annotations

@@ -1,11 +1,5 @@
-"""rclpy's ``TopicEndpointInfo``: who publishes or subscribes to a topic, with which QoS.
-
-What ``Node.get_publishers_info_by_topic`` / ``get_subscriptions_info_by_topic`` return, in
-process (the context's endpoints) and on a networked context (DDS discovery, every process
-of the domain), so tools can subscribe with the QoS publishers offer
-(:mod:`touch_graph.offered_qos`) the same way on both backends. A discovered endpoint that
-announced no reliability has the DDS default of its kind, as the rmw layers fill it in and
-``ros2 topic info -v`` shows it: a subscription BEST_EFFORT, a publisher RELIABLE.
+"""rclpy's ``TopicEndpointInfo``, for ``Node.get_publishers_info_by_topic`` and ``get_subscriptions_info_by_topic``,
+in process and from DDS discovery. An endpoint that announced no reliability has its kind's DDS default.
 
 >>> _profile({}, 'SUBSCRIPTION').reliability.name, _profile({}, 'PUBLISHER').reliability.name
 ('BEST_EFFORT', 'RELIABLE')

@@ -1,10 +1,7 @@
 """``node.create_guard_condition(callback)``: another thread wakes the executor to run ``callback`` there.
 
-rclpy's idiom for work that arrives outside the executor (a serial port read in a thread of its
-own): the thread calls :meth:`GuardCondition.trigger`, and the executor spinning the node runs
-the callback in its own thread. As in rclpy, triggers that come before the executor takes the
-condition are one call (the condition is a flag, not a counter), and a trigger before the node
-joins an executor is run once it does.
+Triggers before the executor takes the condition are one call (a flag, not a counter), and a
+trigger before the node joins an executor runs once it does, as in rclpy.
 """
 
 from __future__ import annotations

@@ -1,9 +1,7 @@
 """Node loggers with rclpy's names: ``node.get_logger().info('...', throttle_duration_sec=1.0)``.
 
 Lines go to stderr as rcutils prints them, ``[INFO] [1700000000.123456789] [bear.driver]: text``,
-stamped with the graph's ROS time (simulated time in a simulated scene, so a log line
-and a recorded message agree). ``once`` and ``throttle_duration_sec`` also count in ROS
-time: a driver that fails at every frame logs once a (simulated) second.
+stamped with the graph's ROS time; ``once`` and ``throttle_duration_sec`` count in ROS time.
 """
 
 from __future__ import annotations

@@ -1,20 +1,7 @@
 """``Node`` with rclpy's constructor, endpoints, parameters, logger and clock.
 
-A node class written against this module runs unchanged on real rclpy (import the names
-from :mod:`touch_graph.compat`). A launch file starts node classes of either shape::
-
-    class BearDriver(Node):                      # takes rclpy's keyword arguments and forwards them
-        def __init__(self, **kwargs):
-            super().__init__('bear_driver', **kwargs)
-
-    class Greeter(Node):                         # rclpy's usual shape: no arguments at all
-        def __init__(self):
-            super().__init__('greeter')
-
-The second gets its context, name, namespace, remaps and parameters as rclpy's nodes get them
-from ``ros2 launch`` (the process's ``--ros-args``), here through :func:`node_arguments`: the
-launcher sets them for the next node this thread constructs, which takes them when its own
-call passes none.
+A node class may take rclpy's keyword arguments or none at all (``super().__init__('greeter')``);
+a launcher gives the latter its context, remaps and parameters through :func:`node_arguments`.
 """
 
 from __future__ import annotations
@@ -46,7 +33,6 @@ from .parameter_service import ParameterService
 from .parameters import (
     Parameter,
     ParameterDescriptor,
-    ParameterSource,
     SetParametersResult,
     parse_ros_args,
 )
@@ -157,11 +143,12 @@ class Node(NodeParameters):
                 self._override_keys[name] = key
         for param in parameter_overrides or []:
             # A launch file's param carries where it was written (file:line) in `source`.
-            source = getattr(param, 'source', None) or ParameterSource('parameter_overrides')
+            source = getattr(param, 'source', None) or 'parameter_overrides'
             self._overrides[param.name] = (param.value, source)
             self._override_keys[param.name] = self._fqn
         self._allow_undeclared = allow_undeclared_parameters
         self._set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]] = []
+        self._post_set_callbacks: list[Callable[[list[Parameter]], None]] = []
         self._parameter_lock = threading.RLock()
         self._parameter_events = self.create_publisher(_ParameterEvent, '/parameter_events',
                                                        qos_profile_parameter_events)

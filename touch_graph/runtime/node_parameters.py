@@ -1,16 +1,9 @@
 """A node's parameters with rclpy's API and semantics, and the ``/parameter_events`` they cause.
 
-Declaring a parameter runs the node's on-set-parameters callbacks with it, as rclpy's
-``declare_parameter`` does: a refusal raises :class:`InvalidParameterValueException` and the
-parameter stays undeclared; an exception a callback raises goes to the caller. So a callback
-registered before a declaration must accept it (``has_parameter`` is still False inside).
-Declaring, setting and undeclaring a parameter publishes an ``rcl_interfaces/ParameterEvent``
-on ``/parameter_events`` (new, changed and deleted parameters, the node's name and the ROS
-time), as rclpy does. Setting runs the node's on-set-parameters callbacks, newest first;
-the first refusal wins and nothing changes. A callback that raises changes nothing either, and
-its exception goes to the caller of ``set_parameters``, as in rclpy: through the parameter
-services it ends the spin of the node's executor (the node dies unless the callback catches). Setting a parameter to
-``NOT_SET`` undeclares it, which only a dynamically typed one allows (rclcpp's rule).
+As in rclpy: declaring runs the on-set-parameters callbacks (a refusal raises
+:class:`InvalidParameterValueException`), setting runs them newest first (the first refusal wins,
+nothing changes; an exception goes to the caller), and each change publishes a
+``rcl_interfaces/ParameterEvent``. Setting ``NOT_SET`` undeclares a dynamically typed parameter.
 """
 
 from __future__ import annotations
@@ -39,7 +32,7 @@ class NodeParameters:
     """The parameter half of :class:`~touch_graph.runtime.node.Node` (a mixin).
 
     The node sets ``_parameters``, ``_descriptors``, ``_overrides``, ``_override_keys``,
-    ``_allow_undeclared``, ``_set_callbacks``, ``_fqn`` and ``_parameter_events`` (a publisher
+    ``_allow_undeclared``, ``_set_callbacks``, ``_post_set_callbacks``, ``_fqn`` and ``_parameter_events`` (a publisher
     or None) before it declares anything.
     """
 
@@ -49,6 +42,7 @@ class NodeParameters:
     _override_keys: dict[str, str]
     _allow_undeclared: bool
     _set_callbacks: list[Callable[[list[Parameter]], SetParametersResult]]
+    _post_set_callbacks: list[Callable[[list[Parameter]], None]]
     _fqn: str
     _parameter_events: Any
     _parameter_lock: threading.RLock
@@ -164,18 +158,13 @@ class NodeParameters:
         """As rclpy: ``callback(parameters)`` after parameters were set (a declaration too), newest first."""
         if not callable(callback):
             raise TypeError(f'Callback must be callable, got {type(callback)}')
-        self._post_set_callbacks().insert(0, callback)
+        self._post_set_callbacks.insert(0, callback)
 
     def remove_post_set_parameters_callback(self, callback: Callable[[list[Parameter]], None]) -> None:
-        self._post_set_callbacks().remove(callback)
-
-    def _post_set_callbacks(self) -> list[Callable[[list[Parameter]], None]]:
-        if '_post_set' not in self.__dict__:
-            self._post_set: list[Callable[[list[Parameter]], None]] = []
-        return self._post_set
+        self._post_set_callbacks.remove(callback)
 
     def _call_post_set(self, parameter_list: list[Parameter]) -> None:
-        for callback in list(self._post_set_callbacks()):
+        for callback in list(self._post_set_callbacks):
             callback(parameter_list)
 
     def set_parameters(self, parameter_list: list[Parameter]) -> list[SetParametersResult]:

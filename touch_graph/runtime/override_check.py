@@ -1,13 +1,7 @@
-"""Overrides nobody declared: a misspelt parameter in a launch or parameter file.
+"""Overrides nobody declared: a misspelt parameter in a launch or parameter file (ROS 2 ignores them silently).
 
-ROS 2 accepts overrides a node never declares and says nothing; a typo (``treshold``) then
-silently leaves the default in force. After a launch has made its nodes, :func:`check_overrides`
-finds every such override, says where it was written and what the node declares that is
-close, and, with ``strict=True`` (``--strict-params``), makes it an error instead of a warning.
-
-An override meant for one node (its full name, or a bare name) is unknown when that node does
-not declare it; one written for a wildcard key (``/**``, ``/ns/*``) only when no node it
-reached declares it, since such files usually serve several nodes at once.
+An override for one node is unknown when that node does not declare it; one for a wildcard key
+(``/**``, ``/ns/*``) when no node it reached declares it. Warnings, or with ``strict`` an error.
 """
 
 from __future__ import annotations

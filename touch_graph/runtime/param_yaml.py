@@ -1,51 +1,26 @@
 """ROS 2 parameter YAML read the way rcl reads it (``rcl_yaml_param_parser``), not by YAML's own typing.
 
-A parameter file maps node names to ``ros__parameters``; keys above ``ros__parameters`` are
-namespace components of the node name, keys below it are parameter names, nested mappings
-flatten to dotted names::
-
-    /**:                      # every node
-      ros__parameters: {frame_id: bear_link}
-    bear:                     # namespace component ...
-      bear_gestures:          # ... and node name: /bear/bear_gestures
-        ros__parameters:
-          subtype:
-            threshold: 0.3    # parameter subtype.threshold
-
-Scalars are typed by rcl's rules, on the raw text, whatever YAML 1.1 or 1.2 would say:
-
-- quoted (``'1'``, ``"yes"``) or tagged ``!!str``: a string;
-- plain ``y Y yes Yes YES true True TRUE on On ON`` (and the same for false with
-  ``n no false off``): a bool;
-- plain text that C's ``strtoll(text, &end, 0)`` reads whole, without overflow: an
-  integer (so ``0x1F`` is 31 and ``017`` is 15, as in rcl);
-- plain text that ``strtod`` reads whole, without overflow or underflow, or one of
-  ``.nan .inf +.inf -.inf`` (and their ``.NaN .NAN .Inf .INF`` spellings): a double
-  (so ``1e-6`` is a double, and ``08`` is 8.0);
-- anything else: a string (``1:30`` stays ``'1:30'``).
-
-A sequence holds scalars of one type (``[1, 2.5]`` is an error, as in rcl). Repeated node
-or parameter keys merge, the later value winning; YAML aliases are refused; a parameter
-without a value is an error. Explicit tags ``!!bool``, ``!!int``, ``!!float`` require a value
-of that kind (``!!float 1`` is 1.0); ``!!null`` leaves the parameter unset.
-
-Where we are stricter than rcl (each is an error naming file and line, rather than a file
-that loads and then does something surprising): an empty sequence (rcl leaves the parameter
-unset), keys beside ``ros__parameters`` under a node name.
+Keys above ``ros__parameters`` are namespace components of the node name, keys below it are
+parameter names; nested mappings flatten to dotted names. Plain scalars are typed by rcl's
+rules on the raw text: ``y yes true on`` (any case rcl allows) and the ``false`` words are bools;
+what C's ``strtoll(text, &end, 0)`` reads whole is an integer (``0x1F``, ``017``); what ``strtod``
+reads whole, or ``.nan``/``.inf``, is a double; anything else, and quoted or ``!!str`` text, is a
+string. A sequence holds one type. Aliases are refused. Stricter than rcl (an error naming file and
+line): an empty sequence, and keys beside ``ros__parameters`` under a node name.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from ..errors import ConfigError
-from ..yamlconf import check_bounds, read_text
+from ..yamlconf import check_bounds, read_text, syntax_error
 
 __all__ = ['ParameterOverrides', 'parse_parameter_value', 'parse_scalar', 'pattern_matches']
 
@@ -172,110 +147,80 @@ def _tagged(text: str, tag: str) -> Value:
     raise ValueError(f'unsupported tag {tag!r}: ROS 2 parameters know !!str, !!bool, !!int, !!float and !!null')
 
 
-# --------------------------------------------------------------------------- events -> tree
+# --------------------------------------------------------------------------- YAML -> nodes
 
-@dataclass
-class _Scalar:
-    text: str
-    style: str | None
-    tag: str | None
-    line: int
+class _Composer(yaml.SafeLoader):
+    """pyyaml's node tree as rcl reads it: an untagged scalar keeps ``tag`` None (rcl types its text),
+    anchors and aliases are refused (rcl refuses them) and mapping keys are scalars."""
+
+    def __init__(self, text: str, source: str) -> None:
+        super().__init__(text)
+        self.source = source
+
+    def resolve(self, kind: type, value: Any, implicit: Any) -> Any:
+        return None if kind is yaml.ScalarNode else super().resolve(kind, value, implicit)
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent) or getattr(event, 'anchor', None):
+            raise ConfigError('YAML anchors and aliases are not supported in ROS 2 parameter files '
+                              '(rcl refuses them); write the value out', self.source, _line(event))
+        return super().compose_node(parent, index)
+
+    def compose_mapping_node(self, anchor: Any) -> Any:
+        node = super().compose_mapping_node(anchor)
+        for key, _ in node.value:
+            if not isinstance(key, yaml.ScalarNode):
+                raise ConfigError('a mapping key must be a plain name, not a sequence or mapping', self.source,
+                                  _line(key))
+        return node
 
 
-@dataclass
-class _Seq:
-    items: list
-    line: int
-
-
-@dataclass
-class _Map:
-    pairs: list[tuple[_Scalar, Any]] = field(default_factory=list)
-    line: int = 0
-
-
-def _tree(events: Any, source: str) -> list[Any]:
-    """The documents of an event stream as _Map/_Seq/_Scalar trees; aliases are refused (rcl)."""
-    docs: list[Any] = []
-    stack: list[Any] = []
-    pending_key: list[Any] = []  # per open mapping: the key waiting for its value, or None
-
-    def add(node: Any, line: int) -> None:
-        if not stack:
-            docs.append(node)
-            return
-        parent = stack[-1]
-        if isinstance(parent, _Seq):
-            parent.items.append(node)
-        elif pending_key[-1] is None:
-            if not isinstance(node, _Scalar):
-                raise ConfigError('a mapping key must be a plain name, not a sequence or mapping', source, line)
-            pending_key[-1] = node
-        else:
-            parent.pairs.append((pending_key[-1], node))
-            pending_key[-1] = None
-
+def _documents(text: str, source: str) -> list[Any]:
+    """The documents of ``text`` as pyyaml nodes (:class:`_Composer`)."""
+    loader = _Composer(text, source)
     try:
-        for event in events:
-            line = event.start_mark.line + 1 if event.start_mark else 0
-            if isinstance(event, yaml.AliasEvent) or getattr(event, 'anchor', None):
-                raise ConfigError('YAML anchors and aliases are not supported in ROS 2 parameter files '
-                                  '(rcl refuses them); write the value out', source, line)
-            if isinstance(event, yaml.ScalarEvent):
-                add(_Scalar(event.value, event.style, event.tag, line), line)
-            elif isinstance(event, yaml.SequenceStartEvent):
-                node = _Seq([], line)
-                add(node, line)
-                stack.append(node)
-                pending_key.append(None)
-            elif isinstance(event, yaml.MappingStartEvent):
-                node = _Map([], line)
-                add(node, line)
-                stack.append(node)
-                pending_key.append(None)
-            elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
-                stack.pop()
-                pending_key.pop()
-    except yaml.MarkedYAMLError as err:
-        mark = err.problem_mark or err.context_mark
-        raise ConfigError(f'YAML syntax error: {err.problem or err.context or err}', source,
-                          mark.line + 1 if mark else None) from err
+        docs = []
+        while loader.check_node():
+            docs.append(loader.get_node())
+        return docs
     except yaml.YAMLError as err:
-        raise ConfigError(f'YAML error: {err}', source) from err
-    return docs
+        raise syntax_error(err, source) from err
+    finally:
+        loader.dispose()
 
 
-def _events(text: str) -> Any:
-    loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
-    return yaml.parse(text, Loader=loader)
+def _line(node: Any) -> int:
+    """1-based line of a pyyaml node or event."""
+    return node.start_mark.line + 1
 
 
 # --------------------------------------------------------------------------- values
 
 def _value(node: Any, source: str, name: str) -> Value:
     """A parameter value from a scalar or a sequence of scalars of one type."""
-    if isinstance(node, _Scalar):
+    if isinstance(node, yaml.ScalarNode):
         try:
-            return parse_scalar(node.text, node.style, node.tag)
+            return parse_scalar(node.value, node.style, node.tag)
         except ValueError as err:
-            raise ConfigError(f"parameter '{name}': {err}", source, node.line) from err
-    if isinstance(node, _Seq):
-        if not node.items:
+            raise ConfigError(f"parameter '{name}': {err}", source, _line(node)) from err
+    if isinstance(node, yaml.SequenceNode):
+        if not node.value:
             raise ConfigError(f"parameter '{name}' is an empty list: ROS 2 cannot tell its element type "
-                              '(rcl leaves it unset); give at least one item or remove the key', source, node.line)
+                              '(rcl leaves it unset); give at least one item or remove the key', source, _line(node))
         values = []
-        for item in node.items:
-            if not isinstance(item, _Scalar):
+        for item in node.value:
+            if not isinstance(item, yaml.ScalarNode):
                 raise ConfigError(f"parameter '{name}': a list holds bools, integers, doubles or strings, "
-                                  'not lists or mappings', source, item.line)
+                                  'not lists or mappings', source, _line(item))
             values.append(_value(item, source, name))
         kinds = {type(v) for v in values}
         if len(kinds) > 1 or type(None) in kinds:
             got = ', '.join(f'{v!r} ({_SCALAR_TYPES.get(type(v), "null")})' for v in values)
             raise ConfigError(f"parameter '{name}': the items of a list must share one type, as rcl requires "
-                              f'(write 1.0, not 1, in a list of doubles); got {got}', source, node.line)
+                              f'(write 1.0, not 1, in a list of doubles); got {got}', source, _line(node))
         return values
-    raise ConfigError(f"parameter '{name}': expected a value or a list of values", source, node.line)
+    raise ConfigError(f"parameter '{name}': expected a value or a list of values", source, _line(node))
 
 
 def parse_parameter_value(text: str, source: str = '-p') -> Value:
@@ -285,10 +230,10 @@ def parse_parameter_value(text: str, source: str = '-p') -> Value:
     (1e-06, [1, 2], 'on')
     """
     check_bounds(text, source)
-    docs = _tree(_events(text), source)
+    docs = _documents(text, source)
     if not docs:
         raise ConfigError('no value', source)
-    if len(docs) != 1 or isinstance(docs[0], _Map):
+    if len(docs) != 1 or isinstance(docs[0], yaml.MappingNode):
         raise ConfigError(f'a parameter value is a scalar or a list, got {text!r}', source)
     return _value(docs[0], source, source)
 
@@ -384,53 +329,48 @@ class ParameterOverrides:
             text = read_text(path)             # bounded size, as every YAML input (touch_graph.yamlconf)
         check_bounds(text, source)             # and bounded depth, before anything is built
         out = cls()
-        for doc in _tree(_events(text), source):
-            if isinstance(doc, _Scalar) and doc.text == '' and doc.style is None:
-                continue  # an empty document
-            if not isinstance(doc, _Map):
+        for doc in _documents(text, source):
+            if not isinstance(doc, yaml.MappingNode):
                 raise ConfigError('a parameter file maps node names to {ros__parameters: {name: value}}',
-                                  source, doc.line)
+                                  source, _line(doc))
             out._read_node_level(doc, [], source)
         return out
 
-    def _read_node_level(self, mapping: _Map, prefix: list[str], source: str) -> None:
-        for key, value in mapping.pairs:
-            if key.text == '':
-                raise ConfigError('a node name cannot be empty', source, key.line)
-            if key.text.startswith(PARAMS_KEY):
+    def _read_node_level(self, mapping: yaml.MappingNode, prefix: list[str], source: str) -> None:
+        for key, value in mapping.value:
+            if key.value == '':
+                raise ConfigError('a node name cannot be empty', source, _line(key))
+            if key.value.startswith(PARAMS_KEY):
                 if not prefix:
-                    raise ConfigError(f"'{PARAMS_KEY}' needs a node name above it "
-                                      f"(node_name: {{{PARAMS_KEY}: ...}}, or '/**' for every node)", source, key.line)
-                others = [k for k, _ in mapping.pairs if not k.text.startswith(PARAMS_KEY)]
+                    raise ConfigError(f"'{PARAMS_KEY}' needs a node name above it (node_name: "
+                                      f"{{{PARAMS_KEY}: ...}}, or '/**' for every node)", source, _line(key))
+                others = [k for k, _ in mapping.value if not k.value.startswith(PARAMS_KEY)]
                 if others:
-                    raise ConfigError(f"unexpected key '{others[0].text}' beside {PARAMS_KEY} under "
-                                      f"'{'/'.join(prefix)}'", source, others[0].line)
-                node_key = _check_node_key(_join(prefix), source, key.line)
-                if isinstance(value, _Scalar) and value.text == '' and value.style is None:
-                    self.nodes.setdefault(node_key, {})
-                    continue  # ros__parameters with nothing under it
-                if not isinstance(value, _Map):
+                    raise ConfigError(f"unexpected key '{others[0].value}' beside {PARAMS_KEY} under "
+                                      f"'{'/'.join(prefix)}'", source, _line(others[0]))
+                node_key = _check_node_key(_join(prefix), source, _line(key))
+                if not isinstance(value, yaml.MappingNode):
                     raise ConfigError(f"{PARAMS_KEY} of '{node_key}' must be a mapping of names to values",
-                                      source, key.line)
+                                      source, _line(key))
                 self.nodes.setdefault(node_key, {})
                 self._read_params(value, node_key, '', source)
-            elif isinstance(value, _Map):
-                self._read_node_level(value, [*prefix, key.text], source)
+            elif isinstance(value, yaml.MappingNode):
+                self._read_node_level(value, [*prefix, key.value], source)
             else:
-                hint = 'a sequence' if isinstance(value, _Seq) else f'the value {value.text!r}'
-                raise ConfigError(f"'{key.text}' holds {hint} where a node name with {PARAMS_KEY} belongs "
+                hint = 'a sequence' if isinstance(value, yaml.SequenceNode) else f'the value {value.value!r}'
+                raise ConfigError(f"'{key.value}' holds {hint} where a node name with {PARAMS_KEY} belongs "
                                   f'(node_name: {{{PARAMS_KEY}: {{name: value}}}}); is ros__parameters misspelt?',
-                                  source, key.line)
+                                  source, _line(key))
 
-    def _read_params(self, mapping: _Map, node_key: str, prefix: str, source: str) -> None:
-        for key, value in mapping.pairs:
-            if key.text == '':
-                raise ConfigError('a parameter name cannot be empty', source, key.line)
-            name = f'{prefix}.{key.text}' if prefix else key.text
-            if isinstance(value, _Map):
+    def _read_params(self, mapping: yaml.MappingNode, node_key: str, prefix: str, source: str) -> None:
+        for key, value in mapping.value:
+            if key.value == '':
+                raise ConfigError('a parameter name cannot be empty', source, _line(key))
+            name = f'{prefix}.{key.value}' if prefix else key.value
+            if isinstance(value, yaml.MappingNode):
                 self._read_params(value, node_key, name, source)
             else:
-                self.set(node_key, name, OverrideValue(_value(value, source, name), source, key.line))
+                self.set(node_key, name, OverrideValue(_value(value, source, name), source, _line(key)))
 
 
 def _join(prefix: list[str]) -> str:

@@ -13,6 +13,7 @@ list back from get/describe/types; set reports each refusal with its reason.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..messages import get_message
@@ -47,6 +48,14 @@ def _result_msg(result: SetParametersResult) -> Any:
                                                                     reason=str(result.reason))
 
 
+def _each_declared(names: list[str], answer: Callable[[str], Any]) -> list[Any]:
+    """``answer`` for each name; an empty list when one is not declared (rclpy)."""
+    try:
+        return [answer(n) for n in names]
+    except ParameterNotDeclaredException:
+        return []
+
+
 class ParameterService:
     """The six parameter services of ``node`` (``~/get_parameters``...)."""
 
@@ -56,24 +65,16 @@ class ParameterService:
                          for name, srv_type in PARAMETER_SERVICES.items()]
 
     def _describe_parameters(self, request: Any, response: Any) -> Any:
-        try:
-            response.descriptors = [descriptor_msg(self.node.describe_parameter(n)) for n in request.names]
-        except ParameterNotDeclaredException:
-            response.descriptors = []
+        response.descriptors = _each_declared(request.names,
+                                              lambda n: descriptor_msg(self.node.describe_parameter(n)))
         return response
 
     def _get_parameters(self, request: Any, response: Any) -> Any:
-        try:
-            response.values = [parameter_value(self.node.get_parameter(n)) for n in request.names]
-        except ParameterNotDeclaredException:
-            response.values = []
+        response.values = _each_declared(request.names, lambda n: parameter_value(self.node.get_parameter(n)))
         return response
 
     def _get_parameter_types(self, request: Any, response: Any) -> Any:
-        try:
-            response.types = [int(self.node.get_parameter(n).type_) for n in request.names]
-        except ParameterNotDeclaredException:
-            response.types = []
+        response.types = _each_declared(request.names, lambda n: int(self.node.get_parameter(n).type_))
         return response
 
     def _list_parameters(self, request: Any, response: Any) -> Any:

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError
 from ..messages import get_message
-from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value, pattern_matches
+from .param_yaml import OverrideValue, ParameterOverrides, parse_parameter_value
 
 __all__ = [
     'FloatingPointRange',
@@ -37,7 +37,6 @@ __all__ = [
     'ParameterDescriptor',
     'ParameterNotDeclaredException',
     'ParameterOverrides',
-    'ParameterSource',
     'ParameterType',
     'RosArgs',
     'SetParametersResult',
@@ -66,14 +65,6 @@ class ParameterType(IntEnum):
     STRING_ARRAY = 9
 
 
-_TYPE_NAMES = {
-    ParameterType.NOT_SET: 'not set', ParameterType.BOOL: 'bool', ParameterType.INTEGER: 'integer',
-    ParameterType.DOUBLE: 'double', ParameterType.STRING: 'string', ParameterType.BYTE_ARRAY: 'byte array',
-    ParameterType.BOOL_ARRAY: 'bool array', ParameterType.INTEGER_ARRAY: 'integer array',
-    ParameterType.DOUBLE_ARRAY: 'double array', ParameterType.STRING_ARRAY: 'string array',
-}
-
-
 def _infer_type(value: Any) -> ParameterType:
     if value is None:
         return ParameterType.NOT_SET
@@ -88,17 +79,14 @@ def _infer_type(value: Any) -> ParameterType:
     if isinstance(value, (bytes, bytearray)):
         return ParameterType.BYTE_ARRAY
     if isinstance(value, (list, tuple)):
-        if all(isinstance(v, bool) for v in value) and value:
-            return ParameterType.BOOL_ARRAY
-        if all(isinstance(v, int) and not isinstance(v, bool) for v in value) and value:
-            return ParameterType.INTEGER_ARRAY
-        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) and value:
-            return ParameterType.DOUBLE_ARRAY
-        if all(isinstance(v, str) for v in value) and value:
-            return ParameterType.STRING_ARRAY
         if not value:
             raise ParameterError('an empty list has no parameter type; declare the parameter with a '
                                  'non-empty default or an explicit descriptor type')
+        kinds = {_infer_type(v) if isinstance(v, (bool, int, float, str)) else None for v in value}
+        if kinds == {ParameterType.INTEGER, ParameterType.DOUBLE}:
+            return ParameterType.DOUBLE_ARRAY
+        if len(kinds) == 1 and None not in kinds:
+            return ParameterType[f'{kinds.pop().name}_ARRAY']
         raise ParameterError(f'a parameter array must hold one type (bools, ints, doubles or strings); got {value!r}')
     raise ParameterError(f'unsupported parameter value {value!r} of type {type(value).__name__}')
 
@@ -194,19 +182,9 @@ class InvalidParameterValueException(ParameterError):
         return f"{self.args[0]} (parameter '{self.parameter}')"
 
 
-@dataclass(frozen=True)
-class ParameterSource:
-    """Where an override came from, for error messages (``config/x.yaml:4`` or ``launch``)."""
-
-    where: str
-    line: int | None = None
-
-    def __str__(self) -> str:
-        return f'{self.where}:{self.line}' if self.line is not None else self.where
-
-
 def type_name(type_: ParameterType) -> str:
-    return _TYPE_NAMES[ParameterType(type_)]
+    """``'double array'`` for DOUBLE_ARRAY."""
+    return ParameterType(type_).name.lower().replace('_', ' ')
 
 
 def coerce_to_type(name: str, value: Any, expected: ParameterType, node: str, source: Any) -> Any:
@@ -267,17 +245,6 @@ def check_ranges(name: str, value: Any, descriptor: ParameterDescriptor, node: s
 def load_parameter_file(path: str | Path, text: str | None = None) -> ParameterOverrides:
     """Read a ROS 2 parameter YAML file by rcl's rules (:mod:`.param_yaml`); errors name file and line."""
     return ParameterOverrides.from_file(path, text)
-
-
-def node_matches(pattern: str, node_name: str, fqn: str) -> bool:
-    """Does a parameter-file node key apply to a node? rclpy's rule (:func:`.param_yaml.pattern_matches`).
-
-    >>> node_matches('/**', 'a', '/x/a'), node_matches('/x/*', 'a', '/x/a'), node_matches('a', 'a', '/a')
-    (True, True, True)
-    >>> node_matches('/y/a', 'a', '/x/a'), node_matches('/**/a', 'a', '/x/y/a'), node_matches('a', 'a', '/x/a')
-    (False, True, False)
-    """
-    return pattern_matches(pattern, fqn)
 
 
 # --------------------------------------------------------------------------- --ros-args
@@ -366,13 +333,9 @@ FloatRangeMsg = get_message('rcl_interfaces/msg/FloatingPointRange')
 IntegerRangeMsg = get_message('rcl_interfaces/msg/IntegerRange')
 ParameterEvent = get_message('rcl_interfaces/msg/ParameterEvent')
 
-#: ParameterType -> the ParameterValue field holding such a value.
-FIELDS = {
-    ParameterType.BOOL: 'bool_value', ParameterType.INTEGER: 'integer_value', ParameterType.DOUBLE: 'double_value',
-    ParameterType.STRING: 'string_value', ParameterType.BYTE_ARRAY: 'byte_array_value',
-    ParameterType.BOOL_ARRAY: 'bool_array_value', ParameterType.INTEGER_ARRAY: 'integer_array_value',
-    ParameterType.DOUBLE_ARRAY: 'double_array_value', ParameterType.STRING_ARRAY: 'string_array_value',
-}
+def _field(type_: ParameterType) -> str:
+    """The ParameterValue field holding a value of ``type_`` (``double_array_value``)."""
+    return f'{ParameterType(type_).name.lower()}_value'
 
 
 def parameter_value(param: Parameter) -> Any:
@@ -391,7 +354,7 @@ def parameter_value(param: Parameter) -> Any:
     value = param.value
     if param.type_ == ParameterType.BYTE_ARRAY:
         value = np.frombuffer(bytes(value), np.uint8) if isinstance(value, (bytes, bytearray)) else value
-    return ParameterValue(type=int(param.type_), **{FIELDS[param.type_]: value})
+    return ParameterValue(type=int(param.type_), **{_field(param.type_): value})
 
 
 def value_of(msg: Any) -> Any:
@@ -402,7 +365,7 @@ def value_of(msg: Any) -> Any:
         return None
     if kind == ParameterType.NOT_SET:
         return None
-    value = getattr(msg, FIELDS[kind])
+    value = getattr(msg, _field(kind))
     if kind == ParameterType.BYTE_ARRAY:
         return bytes(np.asarray(value, np.uint8))
     if isinstance(value, (np.ndarray, array.array)):  # array.array: rclpy's integer and double arrays

@@ -1,13 +1,9 @@
 """Quality of service, with rclpy.qos's names.
 
-In process, ``depth`` bounds each subscription's queue (KEEP_LAST: the oldest message
-is dropped and counted when it is full) and TRANSIENT_LOCAL makes a publisher hand
-its last ``depth`` messages to subscriptions that join later. A publisher delivers only
-to subscriptions whose requested QoS it can satisfy, in process as DDS does between
-processes (:func:`incompatible_policy`): a RELIABLE subscription gets nothing from a
-BEST_EFFORT publisher, a TRANSIENT_LOCAL one nothing from a VOLATILE publisher; both
-sides log rclpy's "incompatible QoS" warning. Otherwise every delivery in process is
-reliable.
+In process, ``depth`` bounds each subscription's queue (the oldest message is dropped and
+counted), TRANSIENT_LOCAL hands a publisher's last ``depth`` messages to later subscriptions,
+and a publisher delivers only to subscriptions whose QoS it satisfies (:func:`incompatible_policy`),
+as DDS does between processes.
 """
 
 from __future__ import annotations

@@ -1,23 +1,11 @@
 """Services and clients with rclpy's names: ``create_service``, ``create_client``, ``call_async``, ``call``.
 
-A server's callback runs in the executor spinning its node, ``callback(request, response)
--> response``, as in rclpy. A client's ``call_async(request)`` returns a
-:class:`~.task.Future` that the executor spinning the client's node completes when the
-response arrives.
-
-- **In the process**: when a server of the name is in the client's context, the request
-  object goes onto the server's queue and the response object back onto the client's:
-  nothing is serialised.
-- **Across processes**: otherwise the request goes over DDS (:mod:`touch_graph.dds.services`)
-  with ROS 2's request/reply mapping, so ROS 2 servers and clients are peers.
-
-A server callback that raises is counted on the service (``errors``) and ends the spin of
-the executor running it, as in rclpy (the node dies unless it catches its own errors); the
-client gets no response. A callback that returns something other than a ``Response`` likewise. A request nobody can
-receive (no server in the graph) fails at once with :class:`~touch_graph.errors.ServiceCallError`;
-a server that vanishes with requests under way fails them (the DDS side notices when the
-server's reader disappears); a server destroyed in the process fails the requests it still
-held. ``call(request, timeout_sec)`` gives up after the timeout and returns None (rclpy).
+A server's ``callback(request, response) -> response`` runs in the executor spinning its node; a
+client's ``call_async`` returns a :class:`~.task.Future` completed by the executor spinning the
+client's node. A server in the client's context gets the request object itself; otherwise it goes
+over DDS (:mod:`touch_graph.dds.services`). A callback that raises or returns no ``Response`` is
+counted (``errors``) and ends its executor's spin, as in rclpy. A request with no server fails at
+once with :class:`~touch_graph.errors.ServiceCallError`, as do requests of a server that vanishes.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
-"""``Future``: the outcome of a service call, with rclpy's names (``rclpy.task.Future``).
+"""``Future``: the outcome of a service call (``rclpy.task.Future``).
 
-A future is completed once, with a result or an exception, by whichever thread delivers
-the response (the executor spinning the client's node, as in rclpy). ``result()`` does not
-wait: it returns None while the future is pending, as rclpy's does; wait with
-``rclpy.spin_until_future_complete(node, future)`` or ``executor.spin_until_future_complete``.
-Done callbacks run in the completing thread, each guarded: one that raises is logged and
-the others still run.
+Completed once, with a result or an exception, by the thread delivering the response;
+``result()`` does not wait (None while pending). Done callbacks run in the completing thread;
+one that raises is logged and the others still run.
 """
 
 from __future__ import annotations

@@ -1,11 +1,7 @@
 """``~/get_type_description`` (``type_description_interfaces/srv/GetTypeDescription``), as Jazzy nodes serve it.
 
-rcl answers for the types the node uses (its publishers', subscriptions', services' and
-clients'); so does this. A request naming another type, or a hash that is not the type's,
-gets ``successful=False`` with the reason. The description is the one whose RIHS01 hash the
-node announces (:mod:`touch_graph.type_description`); ``type_sources`` stays empty (rcl
-fills it only from the ``.msg`` files installed in a ROS 2 share directory), and default
-values are not described (no message of this package has one).
+Answers for the node's own types (``successful=False`` with the reason otherwise), with the
+description whose RIHS01 hash the node announces; ``type_sources`` stays empty.
 """
 
 from __future__ import annotations
