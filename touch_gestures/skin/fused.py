@@ -1,31 +1,21 @@
 """The order-free cloud and the direction-aware trace, their opinions summed: :class:`FusedRecogniser`.
 
-The cloud (:mod:`.clouds`) ignores stroke order and direction, which reads symbols people
-write their own way; the trace (:mod:`.proposed`) follows the path in time, which tells
-apart what the cloud cannot (an N from an H: the same bars, joined in another order; a
-five-point star from strokes scattered over the same points). Both are asked on every touch
-and their per-class distances combined by the **sum rule** of classifier combination
-(Kittler, Hatef, Duin and Matas, "On combining classifiers", IEEE TPAMI 20(3), 1998): each
-recogniser's distances are divided by its own nearest class's (:func:`relative_distances`:
-each speaks on one scale, whatever its units: 1 for its nearest class, how many times
-farther for the others) and the two summed with equal weight; the class of the smallest sum
-among those the codebook's evidence allows (:mod:`.evidence`) is named. Nothing is fitted for
-it: no weight, no scale, no margin.
+The cloud (:mod:`.clouds`) ignores stroke order and direction; the trace (:mod:`.proposed`) follows
+the path in time, which tells apart what the cloud cannot (an N from an H). Both are asked on every
+touch and combined by the **sum rule** (Kittler, Hatef, Duin and Matas, IEEE TPAMI 20(3), 1998):
+each one's distances divided by its nearest class's (:func:`relative_distances`), summed with equal
+weight; the smallest sum among the classes the codebook's evidence allows (:mod:`.evidence`) is
+named. Nothing is fitted for it.
 
-The combination names the class; it does not make a command fire: distances, thresholds,
-margins, the end of a gesture and early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
+The combination names the class only: distances, thresholds, margins, the end of a gesture and
+early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
 :meth:`FusedRecogniser.deciding_recogniser`), so a class the cloud does not put first is named but
-rejected (its margin over the cloud's nearest is negative), and what fires is what the cloud
-alone fires.
+rejected (negative margin).
 
-People write a symbol's strokes in their own order, so the trace holds each template of up to
-``stroke_orders`` strokes in every order of its strokes (:mod:`.stroke_orders`; each stroke
-keeps its direction): a person who draws the other bar of an X first is near the X's templates
-read that way, not nearer a pitchfork.
-
-A template's features are the cloud's (``2 n_points`` values), then the trace's of each order
-of its strokes in ``stroke_orders!`` slots of ``2 trace_points`` (copies of the order traced fill
-the slots a template of fewer strokes leaves). Measured figures: docs/skin-multistroke.md.
+The trace holds each template of up to ``stroke_orders`` strokes in every order of its strokes
+(:mod:`.stroke_orders`; each stroke keeps its direction). A template's features are the cloud's
+(``2 n_points`` values), then the trace's of each order in ``stroke_orders!`` slots of
+``2 trace_points`` (copies of the order traced fill the slots a template of fewer strokes leaves).
 """
 
 from __future__ import annotations

@@ -1,31 +1,15 @@
-"""A recogniser for traced gestures, chosen by measurement: :class:`TraceRecogniser`.
+"""A recogniser for traced gestures: :class:`TraceRecogniser` (direction-aware).
 
-It keeps what makes cirillo2017's centroid method work (the contact-point trajectory in
-time order, so direction counts) and fixes what makes it fragile: it is as accurate as
-the best on the $1 traces and far more robust on lines, slant and hesitant tracing
-(docs/skin-evaluation.md). Each step was chosen by leave-one-subject-out measurements on
-the $1 traces and on synthetic performers during development:
-
-1. **Resampling by time bins** (``n_points``): the gesture's duration is cut into
-   ``n_points`` equal bins and each bin's contact points are averaged. Like the paper's
-   NNA it is uniform in time, so it keeps the speed profile, which is part of how people
-   draw a shape (they slow down at corners, consistently across people); resampling the
-   same features along the arc, as $1 does, measured worse on the $1 traces (and DTW
-   on arc worse than DTW in time; docs/skin-evaluation.md). Unlike NNA, the bin
-   mean is a box filter: it removes the contact point's jitter (sensor noise, a shaky
-   finger) in proportion to the bin width, cannot alias, and stays exact when frames are
-   dropped (an empty bin is interpolated from its neighbours).
-2. **Uniform scaling** (``aspect_floor`` = 1): centre on the bounding box and divide both
-   axes by the larger extent. Eq. (6) divides each axis by its own extent, which blows the
-   wobble of a horizontal line up to the full height (the paper's weak horizontal lines,
-   Table 3) and turns a slanted line into a diagonal; uniform scaling keeps proportions.
-   ``aspect_floor`` < 1 divides each axis by at least that fraction of the larger extent
-   (0 is eq. (6); 0.3 is the 1-D rule of $N, Anthony and Wobbrock 2010): both measured
-   no better on the $1 traces and worse on the synthetic lines.
-3. **Nearest neighbour by Euclidean distance** over the (x, y) points, as one
-   matrix-vector product against the whole codebook (|t|^2 - 2 t.q + |q|^2 with |t|^2
-   precomputed). No rotation search: on a skin a line's orientation is the command
-   (Protractor, which removes rotation, confuses every line with every other).
+1. **Resampling by time bins** (``n_points``): the gesture's duration is cut into ``n_points``
+   equal bins and each bin's contact points are averaged. Uniform in time like the paper's NNA, so
+   it keeps the speed profile; the bin mean filters the contact point's jitter, cannot alias, and
+   an empty bin (dropped frames) is interpolated from its neighbours.
+2. **Uniform scaling** (``aspect_floor`` = 1): centre on the bounding box and divide both axes by
+   the larger extent, which keeps a line's proportions (eq. (6) blows a line's wobble up to full
+   height). ``aspect_floor`` < 1 divides each axis by at least that fraction of the larger extent
+   (0 is eq. (6)).
+3. **Nearest neighbour by Euclidean distance** over the (x, y) points, one matrix-vector product
+   against the codebook. No rotation search: on a skin a line's orientation is the command.
 
 The distance is the root-mean-square point distance in units of the gesture's size.
 """
