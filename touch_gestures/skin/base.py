@@ -82,11 +82,12 @@ class Match:
     rejected: str | None = None
 
 
+@dataclass(eq=False, kw_only=True)
 class TemplateRecogniser(Params):
     """Base class: nearest-template matching over a codebook, with rejection (see module doc).
 
-    Subclass parameters (in their ``__init__``) must include ``max_distance``,
-    ``auto_scale``, ``auto_quantile`` and ``min_margin``; their meaning is the module docstring's.
+    A subclass is a dataclass of its own parameters; the rejection parameters ``max_distance``,
+    ``auto_scale``, ``auto_quantile`` and ``min_margin`` (keyword-only) are the module docstring's.
     """
 
     #: registry name, e.g. ``'centroid'``
@@ -94,10 +95,10 @@ class TemplateRecogniser(Params):
     #: True when the features follow the direction of the trace
     direction_aware = False
 
-    max_distance: float | str | None
-    auto_scale: float
-    auto_quantile: float
-    min_margin: float
+    max_distance: float | str | None = 'auto'
+    auto_scale: float = 2.0
+    auto_quantile: float = 0.9
+    min_margin: float = 0.1
 
     # ----------------------------------------------------------------- subclass API
     def features(self, gesture: TouchGesture) -> np.ndarray | None:

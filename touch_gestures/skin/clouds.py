@@ -26,6 +26,7 @@ tells directions apart, the trace (:mod:`.proposed`) or the fused recogniser (:m
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -43,6 +44,7 @@ _EXTENT = 1.0
 _TABLE_CELLS = 1024
 
 
+@dataclass(eq=False)
 class CloudRecogniser(TemplateRecogniser):
     """Order- and direction-free matching of point clouds (module doc).
 
@@ -57,16 +59,9 @@ class CloudRecogniser(TemplateRecogniser):
     name = 'cloud'
     direction_aware = False
 
-    def __init__(self, n_points: int = 32, grid: int = 24, exact: int = 6,
-                 max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.grid = grid
-        self.exact = exact
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    grid: int = 24
+    exact: int = 6
 
     def _check_params(self) -> None:
         super()._check_params()

@@ -21,6 +21,7 @@ The trace holds each template of up to ``stroke_orders`` strokes in every order 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -61,6 +62,7 @@ def relative_sum(first: np.ndarray, second: np.ndarray) -> np.ndarray:
     return relative_distances(first) + relative_distances(second)
 
 
+@dataclass(eq=False)
 class FusedRecogniser(TemplateRecogniser):
     """The cloud and the trace, their relative distances summed to name the class (module doc).
 
@@ -81,16 +83,9 @@ class FusedRecogniser(TemplateRecogniser):
     name = 'fused'
     direction_aware = False
 
-    def __init__(self, n_points: int = 32, trace_points: int = 32, stroke_orders: int = 3,
-                 max_distance: float | str | None = 'auto', auto_scale: float = 2.0, auto_quantile: float = 0.9,
-                 min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.trace_points = trace_points
-        self.stroke_orders = stroke_orders
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    trace_points: int = 32
+    stroke_orders: int = 3
 
     def _check_params(self) -> None:
         super()._check_params()

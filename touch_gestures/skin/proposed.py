@@ -17,6 +17,7 @@ The distance is the root-mean-square point distance in units of the gesture's si
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -87,6 +88,7 @@ def trace_features(points: np.ndarray, times: np.ndarray, n_points: int = 32, as
     return ((res - 0.5 * (lo + hi)) / scale).reshape(-1).astype(np.float32)
 
 
+@dataclass(eq=False)
 class TraceRecogniser(TemplateRecogniser):
     """Time-binned, uniformly scaled trajectory matching (module doc).
 
@@ -100,15 +102,8 @@ class TraceRecogniser(TemplateRecogniser):
     name = 'trace'
     direction_aware = True
 
-    def __init__(self, n_points: int = 32, aspect_floor: float = 1.0,
-                 max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.aspect_floor = aspect_floor
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    aspect_floor: float = 1.0
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:
