@@ -42,15 +42,12 @@ __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_
 
 #: Gap (s) for vocabularies of single-stroke gestures: joins a finger skipping between taxels.
 SINGLE_STROKE_GAP_S = 0.15
-#: Gap (s) for vocabularies with multi-stroke gestures. Chosen on the pauses between the strokes
-#: of the Mixed Multistroke Gestures traces (10 people, 3 speeds; `social-touch eval skin
-#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which a longer one keeps hardly
-#: more samples whole. It is also the latency every command pays after the last lift, so the knee
-#: of that table, not its tail.
+#: Gap (s) for vocabularies with multi-stroke gestures: the knee of `social-touch eval skin --gap-table`
+#: (a longer gap keeps hardly more samples whole, and every command waits it after the last lift).
 MULTISTROKE_GAP_S = 1.5
 #: With the vocabulary's end of a gesture (:class:`~.ending.GestureEnd`): the lift (s) that ends
 #: strokes that make a whole gesture, and the longest one that still continues strokes that look
-#: like the beginning of a longer gesture (docs/skin-multistroke.md, the end-of-gesture table).
+#: like the beginning of a longer gesture.
 ENDING_GAP_S = 1.0
 ENDING_WAIT_S = 3.0
 
