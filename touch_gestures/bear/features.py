@@ -45,8 +45,6 @@ FEATURE_NAMES = (*PAPER_FEATURES, 'mean_level', 'std_level', 'active_fraction', 
 #: paper: 0.02 of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
 MIN_COMPONENT = 0.02
 
-_F = {name: i for i, name in enumerate(FEATURE_NAMES)}
-
 
 @dataclass(frozen=True, slots=True)
 class BufferFeatures:
@@ -77,13 +75,6 @@ class BufferFeatures:
     def duration_s(self) -> np.ndarray:
         """(n_channels,) time the buffer's peak has stayed >= threshold, s."""
         return self.table[:, 3]
-
-    def column(self, name: str) -> np.ndarray:
-        """(n_channels,) the feature called ``name`` (one of :data:`FEATURE_NAMES`)."""
-        try:
-            return self.table[:, _F[name]]
-        except KeyError:
-            raise ValueError(f'unknown feature {name!r}; expected one of {", ".join(FEATURE_NAMES)}') from None
 
 
 #: Buffers up to this many cycles use a precomputed DFT matrix (one small matrix product, faster than
