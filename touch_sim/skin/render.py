@@ -34,6 +34,7 @@ from touch_driver.skin.protocol import FRAME_RATE_HZ
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import GRID, TouchGesture, ideal_frame
 from touch_gestures.skin.segmentation import GestureSegmenter
+from touch_graph.files import replacing
 from touch_sim.harness import DeviceRun, stamp_ns, wire_frames_before
 from touch_sim.skin.traces import TraceSample, TraceStimulus, clock_tick, traced_strokes
 
@@ -169,7 +170,6 @@ def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings
 
 
 # ----------------------------------------------------------------------------- cache
-_ARRAYS = ('binary_map', 'peak_map', 'trajectory', 'times', 'stroke')
 _SCALARS = ('frames', 'start_s', 'duration_s', 'strokes', 'multi_contact', 'truncated')
 
 
@@ -206,9 +206,8 @@ def _save(path: Path, rendered: list[RenderedSample]) -> None:
     for name in _SCALARS:
         data[name] = np.array([getattr(g, name) for g in gestures])
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix('.tmp.npz')
-    np.savez_compressed(tmp, **data)
-    tmp.replace(path)
+    with replacing(path) as tmp:
+        np.savez_compressed(tmp, **data)
 
 
 def _load(path: Path) -> list[RenderedSample] | None:
