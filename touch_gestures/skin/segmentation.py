@@ -111,17 +111,13 @@ class GestureSegmenter:
 
     Args:
         gap_s: a lift must last this long (s) to end the gesture; shorter lifts separate
-            strokes. Not in the paper; 0.15 s joins the gaps of a finger skipping taxels
-            (single-stroke vocabularies), :data:`MULTISTROKE_GAP_S` the strokes of symbols.
-        max_duration_s: a touch is cut after this long (s). Not in the paper; 10 s is
-            longer than any traced gesture of the $1 logs (docs/skin-evaluation.md).
+            strokes (:data:`SINGLE_STROKE_GAP_S`, :data:`MULTISTROKE_GAP_S`).
+        max_duration_s: a touch is cut after this long (s).
         min_frames: contacts with fewer frames are dropped as taps or noise.
         map_threshold: pressure (1 = full scale) a taxel must reach to enter the binary map
-            (cirillo2017 3.1: "a binary image is obtained by thresholding"); 0.02 is twice the
-            calibration's contact threshold, above the noise.
+            (cirillo2017 3.1); 0.02 is twice the calibration's contact threshold.
         map_relative: a taxel must also reach this fraction of the frame's highest pressure,
-            so the map shows the finger's pad whatever the force (a hard press spreads to
-            more taxels, but not to more than the ones near the pad).
+            so the map shows the finger's pad whatever the force.
         merge_gap_taxels: blobs separated by at most this many empty taxels are one contact.
         min_multi_frames: multi-blob frames needed to flag a gesture multi_contact...
         multi_fraction: ...and the fraction of its contact frames they must make up.
