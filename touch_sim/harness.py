@@ -1,9 +1,8 @@
 """The one harness that runs the runtime's nodes on virtual devices in simulated time (synthetic data).
 
-Every evaluation, benchmark and test that needs the graph runs through :class:`Harness`: a
-``Context('sim')`` (as fast as the work allows, deterministic), the nodes asked for with their
-parameters, virtual devices playing a stimulus behind their pyserial URLs, subscriptions that
-collect what the nodes publish, and a teardown that leaves nothing registered behind::
+:class:`Harness`: a ``Context('sim')`` (deterministic, as fast as the work allows), nodes with their
+parameters, virtual devices playing a stimulus behind pyserial URLs, subscriptions that collect
+what the nodes publish, and a teardown that leaves nothing registered::
 
     with Harness() as h:
         url = h.device('bear', scene, seed=3)                 # bearsim://<unique>?scene=<unique>&seed=3
@@ -12,11 +11,9 @@ collect what the nodes publish, and a teardown that leaves nothing registered be
         events = h.collect('/touch/symbolic', 'SymbolicGesture')
         h.spin_for(scene.duration_s)
 
-:class:`DeviceRun` is the common case of one driver node on one virtual device, giving the
-messages the driver publishes for the device's first ``n`` wire frames in the order they were
-published, a slice of simulated time at a time (so a long scene never holds all its frames).
-The robot's latency is kept: a message's stamp is the graph time at which the driver's poll
-timer read the frame, 0 to one poll period after the frame's device time.
+:class:`DeviceRun` is one driver node on one virtual device: the messages it publishes for the
+device's first ``n`` wire frames, a slice of simulated time at a time. A message's stamp is when
+the driver's poll timer read the frame.
 """
 
 from __future__ import annotations

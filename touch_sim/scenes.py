@@ -1,12 +1,9 @@
-"""Stimuli that drive the virtual bear and patch: who touches which sensors, how and when.
+"""Stimuli that drive the virtual bear and patch: who touches which sensors, how and when (synthetic).
 
-A *stimulus* is what a scene does to a sensor, as a function of time; the virtual devices
-(:mod:`touch_sim.bear.device`, :mod:`touch_sim.patch.device`) sample it at frame time
-and add the sensor physics (noise, drift, saturation, cross-talk). Scene generators in
-``touch_gestures/`` implement the protocols below; this module also gives a small
-scripted stimulus, a timeline of touches that can be written in YAML, for tests and demos.
-
-All stimuli here are synthetic.
+A *stimulus* is what a scene does to a sensor as a function of time; the virtual devices
+(:mod:`touch_sim.bear.device`, :mod:`touch_sim.patch.device`) sample it at frame time and add the
+sensor physics. This module gives the protocols and a scripted stimulus, a timeline of touches
+that can be written in YAML.
 
 YAML timeline (``sensor: bear``)::
 
@@ -23,17 +20,16 @@ and (``sensor: patch``; cells are (row, col), fractional allowed)::
     panels:
       - {panels: [0, 1], start: 6.0, duration: 2.0, level: 1.0}
 
-or a generated scene: ``generator`` names a scene generator registered in the
-``social_touch.scene_generators`` entry point group (:data:`GENERATOR_GROUP`), a function that
-returns the stimulus, called with ``options``::
+or a generated scene: ``generator`` names a function registered in the
+``social_touch.scene_generators`` entry point group (:data:`GENERATOR_GROUP`), called with ``options``::
 
     sensor: bear
     generator: bear_people
     options: {n_people: 2, seed: 7, gestures: [hug, head_pat]}
 
-Envelopes (``u`` = seconds since the touch started, each also ramped in and out over ``ramp_s``):
-``constant`` (``level``), ``sine`` (``level * (1 - cos(2 pi f u)) / 2``: stroking, tickling),
-``pulse`` (``level`` for the first ``duty`` of every ``1/f`` period: pats, taps).
+Envelopes (``u`` = seconds since the touch started, ramped in and out over ``ramp_s``):
+``constant`` (``level``), ``sine`` (``level * (1 - cos(2 pi f u)) / 2``), ``pulse`` (``level``
+for the first ``duty`` of every ``1/f`` period).
 
 >>> script = BearScript([BearTouch(channels=(1,), start=1.0, duration=2.0, level=0.8)])
 >>> script.proximity(0.5)[1].item(), round(script.proximity(2.0)[1].item(), 6)

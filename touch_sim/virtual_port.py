@@ -1,29 +1,21 @@
 """Virtual serial devices: a sensor simulator behind a pyserial URL.
 
-A virtual device is opened like real hardware, ``serial.serial_for_url('skinsim://demo')``,
-and yields the bytes the hardware would send, paced by a clock. The sensor-specific part
-is a :class:`DeviceModel` (``touch_sim/<sensor>/device.py``) that turns the stimulus
-of a scene into wire frames; this module supplies the pyserial plumbing shared by the
-three sensors, as the URL handlers in ``serial/urlhandler/`` do (see ``protocol_loop``):
+``serial.serial_for_url('skinsim://demo')`` opens a virtual device that yields the bytes the
+hardware would send, paced by a clock. A :class:`DeviceModel` (``touch_sim/<sensor>/device.py``)
+turns a scene's stimulus into wire frames; this module is the pyserial plumbing the three share:
 
-- **time**: by default the device runs on the wall clock from the moment it is opened, or, with
-  ``SOCIAL_TOUCH_SIM_EPOCH=T`` in the environment (a Unix time, s), from ``T`` on: devices in
-  several processes then play their scenes in step, and one opened before ``T`` sends nothing
-  until then (:func:`set_wall_epoch` moves it; :func:`set_wall_end` ends the stretch they play).
-  ``port.attach_clock(fn)`` (``fn() -> seconds``)
-  puts it on another clock, such as a graph's simulated clock, so a scene runs faster than real
-  time and deterministically. A driver node attaches its own clock; when that clock reads the
-  Unix time (ROS time without sim time), the common time zero holds on it too.
-- **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of
-  random bytes before it), ``corrupt=P`` (of one flipped byte in it), ``drop=P`` (of losing
-  it), ``unplug_at=S&replug_at=S`` (device seconds between which the device is gone: reads
-  fail as a real unplug does, and so does ``open()``), ``seed=N``.
-- **bounded buffers**: a reader that falls more than ``buffer_s`` (default 2 s) behind loses
-  the oldest frames, as a UART buffer overruns; the decoder sees the sequence gap.
+- **time**: the wall clock from the moment the port opens, or with ``SOCIAL_TOUCH_SIM_EPOCH=T``
+  (Unix time, s) from ``T`` on, so devices in several processes play in step
+  (:func:`set_wall_epoch` moves it, :func:`set_wall_end` ends what they play);
+  ``port.attach_clock(fn)`` (``fn() -> seconds``) puts it on another clock, e.g. a graph's
+  simulated clock.
+- **faults**, as URL query options: ``garbage=P`` (probability per frame of a burst of random bytes
+  before it), ``corrupt=P`` (of one flipped byte), ``drop=P`` (of losing it),
+  ``unplug_at=S&replug_at=S`` (device seconds during which reads and ``open()`` fail), ``seed=N``.
+- **bounded buffers**: a reader more than ``buffer_s`` (default 2 s) behind loses the oldest frames.
 
-Device state lives in a registry keyed by the URL's host part (``skinsim://demo`` ->
-``'demo'``), so a port closed on unplug and reopened finds the same device, and a test can
-reach it: ``device_state('demo').unplug()``.
+Device state lives in a registry keyed by the URL's host part, so a port reopened after an unplug
+finds the same device, and a test can reach it: ``device_state('demo').unplug()``.
 """
 
 from __future__ import annotations

@@ -1,13 +1,10 @@
 """``social-touch bench view``: the extra CPU the web view costs the graph, with five pages connected.
 
-The demo scene (``launch/demo.launch.yaml``: the three sensors on their virtual devices, their
-drivers and recognisers; SYNTHETIC data) runs ``scene_s`` simulated seconds at ``rate`` times
-real time, alternately without the view and with the view and ``clients`` pages connected, in
-the same run. A page is a separate process reading the event stream (like a browser, but
-without drawing), so its CPU is not counted; the graph's process CPU (every thread: executor,
-the view's server and broadcaster) is. Each mode runs ``repeats`` times from the start of the
-scene, interleaved, after one unmeasured run of each (the first run of a process pays imports and
-the scene generators' caches); the figure is the ratio of the medians of CPU seconds per scene.
+The demo scene (``launch/demo.launch.yaml``, SYNTHETIC data) runs ``scene_s`` simulated seconds at
+``rate`` times real time, without the view and with the view and ``clients`` pages (separate
+processes reading the event stream) connected, ``repeats`` times each, interleaved, after one
+unmeasured run of each. The figure is the ratio of the medians of the graph process's CPU seconds
+per scene.
 """
 
 from __future__ import annotations

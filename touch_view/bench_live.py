@@ -1,27 +1,15 @@
 """How many of the skin's frames ``social-touch view`` and ``social-touch foxglove`` get from another process.
 
-Three processes, as a user starts them: the skin scene (``launch/skin.launch.yaml``: the skin's
-virtual device playing the package's scene of simulated people, SYNTHETIC data; its driver
-publishes ``/skin/frame`` best effort at 150 Hz, wall clock), ``social-touch view`` and
-``social-touch foxglove``, in two orders:
-
-- ``view-first``: the view and Foxglove are serving before the scene starts (their subscriptions
-  are made before any publisher of the frames exists, and must follow what the driver offers);
-- ``scene-first``: the scene runs for ``warmup_s`` before the view and Foxglove start.
-
-Each process runs on the backend ``touch_graph.compat`` picks in this environment (real rclpy
-where ROS 2 is sourced, our runtime with ``SOCIAL_TOUCH_SHIM=1``), or on the one named by
+Three processes: the skin scene (``launch/skin.launch.yaml``, SYNTHETIC data; ``/skin/frame`` best
+effort, wall clock), ``social-touch view`` and ``social-touch foxglove``, in two orders:
+``view-first`` (the view and Foxglove serve before the scene starts) and ``scene-first`` (the scene
+runs ``warmup_s`` before they start). Each runs on the backend ``touch_graph.compat`` picks, or on
 ``scene_backend`` / ``view_backend`` ('ours' or 'rclpy'). After ``warmup_s``, ``repeats`` windows
-of ``window_s`` each:
+of ``window_s``: the driver's rate (from the frames' sequence numbers), the frames per second a
+Foxglove client and the view's node (``sensors.skin.frames`` of ``/state.json``) received.
+Medians per order, side by side in one run::
 
-- the driver's rate: frames it published in the window, from the frames' sequence numbers as a
-  Foxglove client receives them (``sequence`` counts every frame the driver sends);
-- Foxglove: frames a client subscribed to ``/skin/frame`` received, per second;
-- the view: frames its node received (``sensors.skin.frames`` of ``/state.json``), per second.
-
-Medians over the windows, per order, side by side in one run::
-
-    social-touch bench view-live --json      # about 80 s
+    social-touch bench view-live --json
 """
 
 from __future__ import annotations

@@ -1,33 +1,24 @@
 """``foxglove_server``: every topic of the graph over the Foxglove WebSocket protocol (foxglove-sdk).
 
-Foxglove (the app, or any client of the Foxglove WebSocket protocol, asking for it as
-``foxglove.sdk.v1`` or by its older name ``foxglove.websocket.v1``) connects to ``ws://host:port``
-and sees:
+A Foxglove client (subprotocol ``foxglove.sdk.v1`` or ``foxglove.websocket.v1``) connecting to
+``ws://host:port`` sees:
 
-- every topic with a publisher, as a channel with message encoding ``cdr`` (the CDR bytes ROS 2
-  puts on the wire and in bags, passed through unchanged) and a ``ros2msg`` schema (the ``.msg``
-  text with its nested types, the text rosbag2 stores in MCAP: Foxglove decodes and plots every
-  field);
-- ``/patch/activation_image`` and ``/skin/pressure_image``: the patch's and skin's maps as
-  ``foxglove.RawImage`` (rgb8, the page's colour ramp, 8 px per cell), which the Image panel
-  shows, at most ``image_rate_hz`` per second.
+- every topic with a publisher, as a channel with message encoding ``cdr`` (the wire bytes, passed
+  through) and a ``ros2msg`` schema (the ``.msg`` text rosbag2 stores in MCAP);
+- ``/patch/activation_image`` and ``/skin/pressure_image``: the maps as ``foxglove.RawImage`` (rgb8,
+  8 px per cell), at most ``image_rate_hz`` per second.
 
-The package's layout (``touch_view/layouts/social_touch.json``, Foxglove: Layouts > Import)
-opens the same views as the web page. Topics are found as rclpy-based bridges find them: the
-node asks the graph for its topics every ``discovery_period_s`` (and at once when a publisher
-appears in this process) and subscribes to the new ones with the QoS their publishers offer
-(:mod:`touch_graph.offered_qos`: best effort for the sensors' frames). Nothing is sent to Foxglove before a
-client subscribes to a channel; the server's per-client queue (``message_backlog_size``) drops
-the oldest message for a client that does not keep up, so the graph never waits for it.
-foxglove-sdk advertises a new channel to connected clients a moment before it accepts
-subscriptions to it: a client that subscribes the instant a channel is advertised may be answered
-with the status ``Unknown channel ID: N`` and must subscribe again (the bench's client does).
+The layout ``touch_view/layouts/social_touch.json`` opens the web page's views. Every
+``discovery_period_s`` (and at once when a publisher appears in this process) the node subscribes to
+new topics with the QoS their publishers offer (:mod:`touch_graph.offered_qos`). Nothing is sent
+before a client subscribes; the per-client queue (``backlog``) drops the oldest message for a slow
+client, so the graph never waits. A client that subscribes the instant a channel is advertised may
+be answered ``Unknown channel ID: N`` and must subscribe again.
 
 Parameters: ``host`` ('127.0.0.1'), ``port`` (8765; 0: any free port), ``image_rate_hz`` (20),
-``discovery_period_s`` (1.0), ``backlog`` (messages per client, 1024), ``allowed_origins`` (web
-pages allowed to connect besides the Foxglove app, comma-separated; ''). A page of another site
-open in the user's browser is refused (:mod:`touch_view.origins`); the server offers no request
-that changes the graph (no client publishing, services or parameters).
+``discovery_period_s`` (1.0), ``backlog`` (messages per client, 1024), ``allowed_origins`` (web pages
+allowed to connect besides the Foxglove app, comma-separated; ''). Pages of other sites are refused
+(:mod:`touch_view.origins`); no request changes the graph.
 """
 
 from __future__ import annotations

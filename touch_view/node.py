@@ -1,28 +1,23 @@
 """``touch_view``: a node that shows what the robot feels on a live web page.
 
-It subscribes to the perception topics like any other node (so it sees a graph on another
-machine once the graph is on the network) and serves a page on ``http://host:port/``
-(:mod:`touch_view.server`) that shows, live:
+It subscribes to the perception topics like any other node and serves a page on
+``http://host:port/`` (:mod:`touch_view.server`) showing, live:
 
-- the bear: its body outline with every sensor's level, the regions of the active symbolic
-  gestures, the active touch subtypes (``/bear/frame``, ``/touch/symbolic``, ``/touch/subtype``);
-- the patch: the activation map, the 11 panels' contact, the class posteriors over the last
-  10 s with the gesture events marked, as in sympartner2018 Fig. 7 (``/patch/frame``,
-  ``/patch/panels``, ``/patch/posteriors``, ``/touch/gesture``);
-- the skin: the 12x12 map, the contact point's trace of the current and the last gesture, the
-  force vector, the last command with its distance and margin (``/skin/frame``,
-  ``/touch/haptic_command``);
-- the drivers' diagnostics (``/diagnostics``) and a log of events;
-- the prompt of a ``social-touch collect`` session while one runs (``/touch/collect_prompt``).
+- the bear: every sensor's level, the active symbolic gestures' regions and the touch subtypes
+  (``/bear/frame``, ``/touch/symbolic``, ``/touch/subtype``);
+- the patch: the activation map, the panels, the class posteriors over the last 10 s with the
+  events marked (``/patch/frame``, ``/patch/panels``, ``/patch/posteriors``, ``/touch/gesture``);
+- the skin: the 12x12 map, the current and last gesture's trace, the force vector, the last command
+  (``/skin/frame``, ``/touch/haptic_command``);
+- ``/diagnostics``, a log of events, and a ``social-touch collect`` prompt (``/touch/collect_prompt``).
 
-Only the sensors whose frame topics have publishers (or whose frames arrive) are shown; one
-that sends no frame for ``stale_after_s`` wall seconds is marked SILENT. The graph never
-waits for a page: callbacks only store references (:mod:`touch_view.state`), and snapshots
-are built and sent from the server's threads at ``rate_hz`` at most.
+Only sensors with publishers or frames are shown; one silent for ``stale_after_s`` wall seconds is
+marked SILENT. Callbacks only store references (:mod:`touch_view.state`); snapshots are built in the
+server's threads at ``rate_hz`` at most, so the graph never waits for a page.
 
-Parameters: ``host`` ('127.0.0.1'; '0.0.0.0' serves other machines too), ``port`` (8080; 0
-picks a free one), ``rate_hz`` (20: snapshots per second at most), ``stale_after_s`` (1.0),
-``max_clients`` (32), ``body_map`` and ``panels`` (config files; default the package's).
+Parameters: ``host`` ('127.0.0.1'; '0.0.0.0' serves other machines too), ``port`` (8080; 0 picks a
+free one), ``rate_hz`` (20), ``stale_after_s`` (1.0), ``max_clients`` (32), ``body_map`` and
+``panels`` (config files; default the package's).
 """
 
 from __future__ import annotations

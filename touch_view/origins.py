@@ -1,26 +1,18 @@
 """Which requests the view's HTTP server and the Foxglove server answer: pages of other sites are refused.
 
-A page of any site open in the user's browser can send requests to ``127.0.0.1``. Two checks keep
-it out, for both servers:
+Any page open in the user's browser can send requests to ``127.0.0.1``. Checks, for both servers:
 
-- **Host** (DNS rebinding): a site whose name the attacker re-points at 127.0.0.1 reaches the
-  server as "same origin", but its name travels in the ``Host`` header. Accepted: no Host (not a
-  browser), ``localhost``, an IP address (a rebound name is never an IP), this machine's name, the
-  configured ``host``, and the names of ``allowed_origins``.
-- **Origin**: a browser names the page that opened a WebSocket (and that sent any cross-site
-  request) in ``Origin``; JavaScript cannot change it. Accepted: no Origin (desktop clients and
-  scripts: foxglove-sdk's and ``websockets`` clients send none), the server's own page (an Origin
-  whose authority is the request's Host, which passed the check above), the configured
-  ``allowed_origins``, and, for Foxglove only, :data:`FOXGLOVE_ORIGINS` (the Foxglove web app, and
-  ``file://``, where desktop apps built on Electron load their page from). ``Origin: null`` is
-  refused: a sandboxed frame of any site sends it.
-- **Sec-Fetch-Site**: browsers send no Origin on a plain cross-site GET (an image, a no-cors fetch)
-  but name it ``cross-site`` or ``same-site`` (another port of localhost); the view refuses both.
-- A request with two Host or two Origin headers is refused: which one a check read is ambiguous.
+- **Host** (DNS rebinding): accepted are no Host (not a browser), ``localhost``, an IP address, this
+  machine's name, the configured ``host`` and the names of ``allowed_origins``.
+- **Origin**: accepted are no Origin (desktop clients and scripts), the server's own page (an Origin
+  whose authority is the request's Host), ``allowed_origins`` and, for Foxglove only,
+  :data:`FOXGLOVE_ORIGINS` (the web app and Electron's ``file://``). ``Origin: null`` is refused.
+- **Sec-Fetch-Site**: ``cross-site`` or ``same-site`` (a plain cross-site GET sends no Origin) is
+  refused by the view.
+- A request with two Host or two Origin headers is refused.
 
-Neither server offers a request that changes anything (the view serves GET only; the Foxglove server
-advertises no capability: no publishing, services or parameters), so what these checks protect is
-what the robot senses, from being read by a page of another site.
+Neither server offers a request that changes anything, so these checks keep what the robot senses
+from being read by a page of another site.
 """
 
 from __future__ import annotations

@@ -1,22 +1,18 @@
 """The touch view's HTTP server: the page, its assets, and a Server-Sent Events stream of snapshots.
 
-Standard library only (``http.server``): the page needs one direction of data, which
-Server-Sent Events give over plain HTTP, and browsers reconnect by themselves. Routes:
+Standard library only (``http.server``). Routes (GET only; others 405):
 
-- ``/``, ``/static/<file>``: the page and its assets, shipped in the package (no internet needed);
-- ``/config.json``: what does not change while the view runs (the bear's body map and layout,
-  panel names, the display rate);
-- ``/state.json``: one snapshot, for scripts and curl;
-- ``/events``: the live stream; ``event: state`` frames of snapshot JSON at up to ``rate_hz``.
+- ``/``, ``/static/<file>``: the page and its assets, shipped in the package;
+- ``/config.json``: what does not change while the view runs (body map and layout, panel names,
+  the display rate);
+- ``/state.json``: one snapshot;
+- ``/events``: the live stream, ``event: state`` frames of snapshot JSON at up to ``rate_hz``.
 
-GET only (any other method: 405); a request whose Host is not this machine (DNS rebinding) or whose Origin is a page of
-another site is refused with 403 (:mod:`touch_view.origins`), so another site open in the same
-browser cannot read what the robot senses.
+A request from a page of another site or to another Host is refused with 403 (:mod:`touch_view.origins`).
 
-Threads: ``serve_forever`` in one thread, one thread per connected page, and a broadcaster that
-builds one snapshot per display tick (only while a page is connected) and offers it to every
-page's bounded queue (:mod:`touch_view.clients`). Nothing here ever runs in, or waits for, the
-graph's executor.
+Threads: ``serve_forever``, one per connected page, and a broadcaster that builds one snapshot per
+display tick while a page is connected and offers it to every page's bounded queue
+(:mod:`touch_view.clients`). Nothing here runs in, or waits for, the graph's executor.
 """
 
 from __future__ import annotations

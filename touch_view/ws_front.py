@@ -1,25 +1,17 @@
 """A TCP front for the Foxglove WebSocket server that also serves clients asking for ``foxglove.websocket.v1``.
 
-foxglove-sdk's server (0.30) accepts only the subprotocol ``foxglove.sdk.v1`` and answers HTTP 400
-to a client that asks for the older name ``foxglove.websocket.v1`` alone (older Foxglove apps,
-Lichtblick before 1.22, ``@foxglove/ws-protocol`` and roslibjs-foxglove clients), although both
-name the same protocol (foxglove-sdk discussion 1131). :class:`SubprotocolFront` listens where
-the server should, and for each connection rewrites only the WebSocket handshake: the request's
-``Sec-WebSocket-Protocol: foxglove.websocket.v1`` becomes ``foxglove.sdk.v1`` for the server, and
-the server's answer names the protocol the client asked for. After the handshake it passes the
-bytes through unchanged in both directions (the frames do not depend on the subprotocol's name), so
-the server's per-client queue still sees a slow client as slow. A client that asks for
-``foxglove.sdk.v1`` is passed through untouched.
+foxglove-sdk's server accepts only the subprotocol ``foxglove.sdk.v1`` and answers HTTP 400 to a
+client asking for the older name of the same protocol, ``foxglove.websocket.v1`` (foxglove-sdk
+discussion 1131). :class:`SubprotocolFront` listens where the server should and rewrites only the
+handshake: the request names ``foxglove.sdk.v1`` for the server, the answer names what the client
+asked for; then bytes pass through unchanged, so the server still sees a slow client as slow.
 
-foxglove-sdk 0.30 sometimes answers a subscribe sent right after an advertisement with the status
-``Unknown channel ID: N`` (the channel is advertised before it accepts subscriptions); a client
-that does not subscribe again (the Foxglove app) then never gets a frame. The front reads the
-WebSocket frames both ways (:class:`SubscribeReplay`) and sends such a refused subscribe to the
-server again, once the channel is advertised, a little later, up to :data:`MAX_REPLAYS` times.
+A subscribe sent right after an advertisement may be answered ``Unknown channel ID: N``; the front
+reads the frames both ways (:class:`SubscribeReplay`) and sends such a subscribe again once the
+channel is advertised, up to :data:`MAX_REPLAYS` times.
 
-Before anything reaches the server, the front refuses with 403 a handshake from a page of another
-site (its ``Origin``) or sent to a name that is not this machine (its ``Host``: DNS rebinding), as
-:class:`~touch_view.origins.OriginPolicy` decides; foxglove-sdk's own server checks neither.
+Before anything reaches the server, a handshake from a page of another site (``Origin``) or to a
+name that is not this machine (``Host``) is refused with 403 (:class:`~touch_view.origins.OriginPolicy`).
 """
 
 from __future__ import annotations

@@ -1,32 +1,17 @@
 """Per-sensor buffer features for touch subtypes (knight2009 V.D, Table II), all channels at once.
 
-"The peak amplitude is the maximum value in the set, base frequency can be calculated from lowest
-frequency value in the Fourier Transform, noise level reflects frequency spread, and duration is
-incremented for each cycle" (knight2009 V.D). One :func:`spectral_features` call computes these and
-the extra features of the trainable classifier for a whole (n, 64) buffer with one ``rfft`` along
-the buffer axis.
+:func:`spectral_features` computes them for a whole (n, 64) buffer with one ``rfft``. For one
+channel's buffer ``x`` of ``n`` samples at ``rate_hz``:
 
-Definitions (``x`` is one channel's buffer, ``n`` samples at ``rate_hz``):
-
-- ``peak_amplitude``: ``max(x)``, level 0..1.
-- ``base_frequency_hz``: frequency of the largest non-DC bin of ``|rfft(x - mean(x))|``, in Hz,
-  on the grid ``k * rate_hz / n``. The paper says "lowest frequency value"; we take the *dominant*
-  one (msg/TouchSubtype.msg), which noise cannot move to the first bin. When that component's
-  amplitude ``2|X_k|/n`` is below ``min_component`` the signal counts as constant: 0 Hz.
+- ``peak_amplitude``: ``max(x)``, level 0..1;
+- ``base_frequency_hz``: frequency of the largest non-DC bin of ``|rfft(x - mean(x))|``, Hz (the
+  *dominant* one, msg/TouchSubtype.msg); 0 when its amplitude ``2|X_k|/n`` is below ``min_component``;
 - ``spectral_spread_hz`` (the paper's "noise level"): standard deviation of frequency under the
-  non-DC power spectrum ``|X_k|^2``, in Hz; 0 for a constant signal.
-- ``duration_s``: kept by :class:`FeatureExtractor`, not by the window: cycles in a row in which the
-  buffer's peak amplitude was >= the activation threshold, over ``rate_hz`` (the pseudocode's
-  "Else { Increment duration }"). It can exceed the buffer span.
+  non-DC power spectrum, Hz;
+- ``duration_s``: kept by :class:`FeatureExtractor`: cycles in a row with the peak >= the activation
+  threshold, over ``rate_hz`` (may exceed the buffer span).
 
-Hard cases give defined values, never NaN or an exception:
-
-- an empty buffer (n = 0): every feature 0;
-- a buffer shorter than two samples, or shorter than one period of a signal: no non-DC bin can hold
-  that period, so base frequency and spread describe only what fits (n = 1: both 0 Hz);
-- a constant signal, including all zeros and a sensor stuck at full scale: base frequency 0 Hz,
-  spread 0 Hz (Table II: hold and no touch are "0 Hz");
-- NaN or inf in the window: replaced by 0 (no touch) before anything is computed.
+Never NaN nor an exception: an empty buffer gives zeros, a constant signal 0 Hz; NaN or inf read as 0.
 
 >>> ext = FeatureExtractor(rate_hz=10.0, n_channels=2, window='buffer')
 >>> t = np.arange(20) / 10.0
@@ -60,8 +45,6 @@ FEATURE_NAMES = (*PAPER_FEATURES, 'mean_level', 'std_level', 'active_fraction', 
 #: paper: 0.02 of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
 MIN_COMPONENT = 0.02
 
-_F = {name: i for i, name in enumerate(FEATURE_NAMES)}
-
 
 @dataclass(frozen=True, slots=True)
 class BufferFeatures:
@@ -92,13 +75,6 @@ class BufferFeatures:
     def duration_s(self) -> np.ndarray:
         """(n_channels,) time the buffer's peak has stayed >= threshold, s."""
         return self.table[:, 3]
-
-    def column(self, name: str) -> np.ndarray:
-        """(n_channels,) the feature called ``name`` (one of :data:`FEATURE_NAMES`)."""
-        try:
-            return self.table[:, _F[name]]
-        except KeyError:
-            raise ValueError(f'unknown feature {name!r}; expected one of {", ".join(FEATURE_NAMES)}') from None
 
 
 #: Buffers up to this many cycles use a precomputed DFT matrix (one small matrix product, faster than

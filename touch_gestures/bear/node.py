@@ -1,28 +1,20 @@
 """``bear_gestures``: the Sensate Bear's recognisers on the graph (knight2009 V.C-V.E, Fig. 5).
 
-Subscribes to ``frame`` (``/bear/frame`` in the ``bear`` namespace, ``BearFrame`` from
-``bear_driver``) and wraps :class:`~.pipeline.BearRecogniser`:
+Subscribes to ``frame`` (``BearFrame`` from ``bear_driver``) and wraps
+:class:`~.pipeline.BearRecogniser`:
 
 - ``/touch/sensor_level`` (``SensorLevel``): the active sensors, every cycle (V.C);
 - ``/touch/subtype`` (``TouchSubtype``): a sensor's subtype changed, with its buffer features (V.D);
-- ``/touch/symbolic`` (``SymbolicGesture``): a gesture STARTs or ENDs, with onset and sensors (V.E);
-  before its START, a CANDIDATE as soon as its filter matches, with a confidence, then START or
-  WITHDRAWN (:mod:`.symbolic`).
+- ``/touch/symbolic`` (``SymbolicGesture``): CANDIDATE, WITHDRAWN, START, END (V.E, :mod:`.symbolic`).
 
-Time is the frame's header stamp (so a replayed bag gives the same events as the live run).
-Faulty channels (``faults != 0``) and channels the frame says are unfitted read as untouched. A
-frame with NaN levels or levels outside [0, 1], wrong array sizes or a stamp not after the previous one is counted in
-:attr:`BearGesturesNode.skipped` and skipped. When time jumps back (a looped bag) or no frame
-arrives for ``max_gap_s``, the node ends what is under way (END for started gestures, 'none' for
-sensors with a subtype) and starts afresh. Frames of another publisher on ``frame`` (another
-frame_id, stamped before the frame in use, a sequence out of step) are screened out first and
-reported on ``/diagnostics`` (:class:`~touch_graph.frame_screen.FrameScreen`,
-:attr:`BearGesturesNode.screen`): one stale frame ends nothing; a looped bag is followed, and
-time jumps back, after three frames of its own.
+Time is the frame's header stamp. Faulty and unfitted channels read as untouched. A frame with
+levels NaN or outside [0, 1], wrong array sizes or a stamp not after the previous one is counted in
+:attr:`BearGesturesNode.skipped`. When time jumps back or no frame arrives for ``max_gap_s``, the
+node ends what is under way and starts afresh. Frames of another publisher are screened out
+(:attr:`BearGesturesNode.screen`) and reported on ``/diagnostics``.
 
-"Model only what a scene needs": with ``publish_symbolic: false`` the gesture file is not read and
-no symbolic work is done; with ``publish_subtypes: false`` as well, or when no configured gesture
-needs a subtype, no features are computed and no classifier runs.
+With ``publish_symbolic: false`` the gesture file is not read; with ``publish_subtypes: false`` as
+well, or when no gesture needs a subtype, no features are computed and no classifier runs.
 """
 
 from __future__ import annotations

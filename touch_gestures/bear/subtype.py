@@ -76,10 +76,6 @@ class PaperRuleClassifier:
     - ``tickle_cutoff = 3.5`` Hz: midway between the highest pet (2 Hz) and the lowest tickle (5 Hz of
       "5-10 Hz"), Table II.
 
-    At the real bear's 3.4 Hz scan rate the base frequency cannot exceed the 1.7 Hz Nyquist limit, so
-    with these cutoffs only a broad spread can reach 'tickle' (knight2009 VI.B warns that fast tickle may
-    be "misclassified as constant touch"); see docs/bear-rates.md.
-
     ``fit(X, y)`` is optional: with ``tune_cutoffs=True`` it grid-searches the two cutoffs on labelled
     rows (those whose label the rule can output) and stores them as ``tickle_cutoff_`` and
     ``pet_cutoff_``; otherwise the defaults above are used as they are.

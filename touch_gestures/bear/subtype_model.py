@@ -1,22 +1,13 @@
 """The eight-subtype model (knight2009 Table I): a fitted logistic regression, evaluated with numpy.
 
-Model: multinomial logistic regression on the standardised feature table of :mod:`.features`
-(durations through ``log1p``, since they span 0.1 s to minutes), trained with scikit-learn's
-``LogisticRegression`` and balanced class weights in the lab
-(:class:`touch_lab.bear.subtype_training.SubtypeClassifier`, this class with ``fit``), evaluated
-here with numpy in the log domain (:class:`SubtypeModel`), so the node's process never loads
-scikit-learn.
+Multinomial logistic regression on the standardised feature table of :mod:`.features` (durations
+through ``log1p``), trained in the lab (:class:`touch_lab.bear.subtype_training.SubtypeClassifier`)
+and evaluated here in the log domain (:class:`SubtypeModel`), so the node never loads scikit-learn.
+Why this model: docs/bear-evaluation.md, "Choice of the subtype model".
 
 With ``relative=True`` (the default) the model also sees :data:`RELATIVE_FEATURES`: the level
-features divided by the buffer's own peak, so they describe the *shape* of a touch rather than how
-hard or how widely this person touches (a light fingertip and a firm palm doing the same pat give
-the same ratios). Format-1 files (without them) still load, with ``relative=False``.
-
-Why this model: ``social-touch report bear`` compares it with tree ensembles and an MLP on held-out
-simulated people (table "Choice of the subtype model" in docs/bear-evaluation.md, where the figures
-are): it leads on balanced accuracy (the rare subtypes) and one prediction for 56 sensors costs a
-small fraction of the per-cycle budget that the tree ensembles alone would exceed. Its file is a
-few small arrays (.npz, no pickle).
+features over the buffer's own peak (the shape of a touch, not how hard this person touches).
+Format-1 files (without them) load with ``relative=False``.
 
 >>> from touch_graph.paths import share_file
 >>> model = SubtypeModel.load(share_file('config', 'bear_subtype_model.npz'))   # the shipped model

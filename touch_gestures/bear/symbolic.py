@@ -1,40 +1,27 @@
 """Symbolic gestures over the bear's body (knight2009 V.E, Table I): locational filters + priority logic.
 
-"A minimum number of sensors within the locational filter must be active for at least two seconds
-[...] Next, the algorithm enters its priority logic [...] hug supersedes Tickle" (V.E). Filters and
-priorities live in ``config/bear_gestures.yaml`` (format documented there); :class:`GestureLibrary`
-loads and checks it against the body map, :class:`SymbolicRecogniser` runs it once per cycle and emits
-START / END events (msg/SymbolicGesture.msg) with the onset, the time the filter first matched.
+Filters and priorities live in ``config/bear_gestures.yaml`` (format documented there);
+:class:`GestureLibrary` loads and checks it against the body map, :class:`SymbolicRecogniser` runs
+it once per cycle and emits START / END events (msg/SymbolicGesture.msg) with the onset.
 
-Per cycle, for every detectable gesture ``g`` (all gestures at once, as (G, 64) masks):
+Per cycle, for every gesture ``g`` (all at once, as (G, 64) masks):
 
-- a filter sensor *counts* when it is active (level >= threshold) and, if ``g`` requires subtypes,
-  currently carries one of them;
-- ``g`` *matches* when at least ``min_active`` sensors count (and, with ``both_sides``, at least one
-  on the bear's left and one on its right);
-- ``g`` is a *candidate* from the first match (its onset) while every gap between matches is at most
-  ``gap_s``;
-- priority logic: ``g`` is suppressed while a candidate that supersedes it is itself not suppressed
-  (the paper's "Tickle: (not Hug) && ..."); gestures are visited in topological order of "supersedes";
+- a filter sensor *counts* when it is active and, if ``g`` requires subtypes, carries one of them;
+- ``g`` *matches* when at least ``min_active`` sensors count (with ``both_sides``, one on each side);
+- ``g`` is a *candidate* from its first match (its onset) while no gap between matches exceeds ``gap_s``;
+- ``g`` is suppressed while a candidate that supersedes it is itself not suppressed (visited in
+  topological order of "supersedes");
 - START when a candidate, not suppressed, has ``t - onset >= dwell_s`` and matches now, or is in a
-  lift (no match for at most ``gap_s``) after at least two separate contacts that span at least half
-  the dwell: a patting hand lifts between pats, and at the bear's 3.4 Hz scan a whole dwell may hold
-  only two or three touched scans, none at its end. One touch, however long, never STARTs a gesture
-  by its lift (the paper's two seconds hold for it). END when it stops being a candidate or becomes
-  suppressed. Gestures that do not supersede one another can be active
-  at the same time.
-- a *brief* gesture (``max_s`` set, e.g. a shoulder tap) is told by its end: it STARTs when its
-  candidate is released (a gap longer than ``gap_s``) after matching for at least ``dwell_s`` and at
-  most ``max_s`` seconds, and ENDs in the same cycle. A longer touch on its filter (a pat, a pet, a
-  hold on the shoulder) never STARTs it.
+  lift of at most ``gap_s`` after at least two separate contacts spanning half the dwell (a patting
+  hand lifts between pats; at 3.4 Hz a dwell holds few touched scans); END when it stops being a
+  candidate or becomes suppressed;
+- a *brief* gesture (``max_s`` set, a shoulder tap) STARTs and ENDs when its candidate is released
+  after matching for between ``dwell_s`` and ``max_s`` seconds; a longer touch never STARTs it.
 
-A first word before the decision (START is the confirmation): a gesture whose filter is touched (one
-of its sensors active, before ``min_active``, sides or subtypes are met), that is not suppressed and has
-not STARTed is announced at once with CANDIDATE, with a confidence from :class:`CandidateConfidence`
-for its evidence (touched only, matched, matched with more sensors); WITHDRAWN follows when it is
-superseded, when neither a match nor a contact has held it for ``gap_s``, or (a brief gesture) when it
-matched longer than ``max_s``. A gesture that STARTs in the cycle it is first touched (``dwell_s: 0``)
-sends no CANDIDATE. Code that waits for the decision reads START and END only and ignores the other two.
+Before START, a gesture whose filter is touched, not suppressed, is announced with CANDIDATE and a
+confidence (:class:`CandidateConfidence`); WITHDRAWN follows when it is superseded, when nothing has
+held it for ``gap_s``, or (brief) when it matched longer than ``max_s``. A gesture that STARTs in the
+cycle it is first touched sends no CANDIDATE. Code that waits for the decision reads START and END only.
 """
 
 from __future__ import annotations

@@ -267,20 +267,10 @@ class Detection:
 class EventDetector:
     """The event rule of sympartner2018 6.2, per frame.
 
-    An event is sent when one class's posterior reaches ``threshold`` (paper: 0.99) and
-    the class differs from the current one. The current class is forgotten (so the same
-    gesture can be reported again) when its posterior falls below ``release`` or when the
-    window holds no active frame (the touch is over). With ``release == threshold`` this is
-    the paper's rule read literally, the decision returning to "none" between events; a
-    lower ``release`` adds hysteresis against a posterior flickering around the threshold.
-    No event is sent from a window without any active frame.
-
-    ``dwell`` asks the same class to stay above the threshold for that many consecutive
-    frames before the event is sent (1 = the paper's rule; the bear's symbolic gestures call
-    the same wait ``dwell_s``). A sliding window sees only the beginning of a gesture at
-    first: the first frames of a push look like a slap, those of a stroke like a tickle; a
-    short dwell lets the window see a little more before the robot reacts, at the price of
-    ``dwell - 1`` frames of latency.
+    An event is sent when one class's posterior reaches ``threshold`` for ``dwell`` consecutive
+    frames and the class differs from the current one; never from a window without an active
+    frame. The current class is forgotten when its posterior falls below ``release`` (hysteresis;
+    ``release == threshold`` is the paper's rule) or the window holds no active frame.
 
     Args:
         classes: class names, in the classifier's order.

@@ -1,34 +1,21 @@
 """The twelve sliding-window features of the textile patch (sympartner2018 6.2).
 
-Per frame ``t`` the activation map ``r`` (eq. 2, unitless in [k, 1]; cells outside the
-patch outline carry 0) gives five basic features:
+Per frame the activation map ``r`` (eq. 2, in [k, 1]; cells outside the outline 0) gives ``f1`` max
+activation, ``f2`` sum of activations, ``f3`` number of active cells and ``(f4, f5)`` the centre of
+activation (row, column, cell units). Over the last ``window`` frames the twelve features are, in
+order (:data:`FEATURE_NAMES`): max, mean and variance of f1, f2 and f3; the frames with an active
+cell (duration); the distance between consecutive centres (movement); the variance of the 2-D
+centre (spread).
 
-- ``f1`` maximum activation, ``f2`` sum of all activations, ``f3`` number of active cells
-  (``r > k``, the contact area in cells);
-- ``(f4, f5)`` the centre of activation (row, column) in cell units.
+Choices the paper leaves open (the incremental and batch code agree):
 
-Over a window of the last ``window`` frames (3 s = 60 frames at 20 Hz in the paper) the
-twelve window features are, in this order (:data:`FEATURE_NAMES`): max, mean and
-variance of f1, of f2 and of f3 (nine features); the number of frames with at least one
-active cell (duration); the accumulated distance between the centres of consecutive
-frames (movement); the variance of the 2-D centre (spread).
-
-Choices the paper leaves open, made here and kept identical in the incremental and the
-batch code:
-
-- **Active** means ``r > k + 1e-6``: a float32 copy of the floor ``k`` may round above the
-  float64 ``k``, and must not count as contact.
-- **Centre** is weighted by ``r`` over the *active* cells only, so the floor ``k`` of the
-  idle cells does not pull it towards the middle of the patch. A frame with no active
-  cell has no centre: it is left out of the centre variance, and a step into or out of
-  such a frame adds no distance (a lifted finger that lands elsewhere has not moved on
-  the skin).
-- **Spread** is the total variance ``var(row) + var(col)`` of the centres of the active
-  frames in the window (0 with fewer than two); variances are population variances.
-- **Partial windows** (the first ``window - 1`` frames after a reset) are summarised over
-  the frames seen so far.
-- **Non-finite cells** (NaN, inf) are treated as 0 (no reading, like a cell outside the
-  outline), so never active, and counted in :attr:`WindowFeatures.nonfinite_cells`.
+- **active** means ``r > k + 1e-6`` (a float32 copy of ``k`` may round above it);
+- the **centre** is weighted by ``r`` over the active cells only; a frame with none has no centre,
+  is left out of the spread, and a step into or out of it adds no distance;
+- **spread** is ``var(row) + var(col)`` of the active frames' centres (0 with fewer than two);
+  variances are population variances;
+- **partial windows** (after a reset) are summarised over the frames seen so far;
+- **non-finite cells** are treated as 0 and counted in :attr:`WindowFeatures.nonfinite_cells`.
 
 >>> wf = WindowFeatures(window=3, grid=(2, 2))
 >>> wf.update([[0.08, 0.08], [0.08, 0.08]])[[0, 9, 11]]  # an idle frame: floor only

@@ -1,41 +1,28 @@
 """``patch_gestures``: the textile patch's gesture recogniser on the graph (sympartner2018 6.2).
 
-Subscribes to ``frame`` (``/patch/frame`` in the ``patch`` namespace, ``PatchFrame`` from
-``patch_driver``, 20 Hz) and publishes ``/touch/gesture`` (``GestureEvent``) when one class's
-posterior reaches the threshold and differs from the current class (the event rule of 6.2, with
-the model file's dwell and release), and ``posteriors`` (``/patch/posteriors``, ``GesturePosteriors``)
-for every frame: all classes' posteriors, the curves of the paper's Fig. 7, for views and evaluation.
-Per frame it does what the evaluation measured (docs/patch-evaluation.md): the incremental window
-features (:class:`~.features.WindowFeatures`), the log posterior of every class evaluated directly
-from the stored mixtures (no scikit-learn call), and the event rule (:class:`~.classifier.EventDetector`).
+Subscribes to ``frame`` (``PatchFrame`` from ``patch_driver``) and per frame computes the window
+features (:class:`~.features.WindowFeatures`), every class's log posterior from the stored mixtures,
+and the event rule (:class:`~.classifier.EventDetector`). Publishes ``posteriors``
+(``GesturePosteriors``, every frame) and ``/touch/gesture`` (``GestureEvent``: the frame's header,
+the class, all posteriors, ``latency_s`` = this stamp minus the stamp of the window's first frame
+with contact) when a class's posterior reaches the threshold and differs from the current class.
 
-A ``GestureEvent`` carries the frame's header (its stamp is the frame's), the class and its
-posterior, all classes' posteriors, and ``latency_s``: the stamp of this frame minus the stamp
-of the first frame with contact in the window.
+Parameters (read once at start, except ``threshold``, ``dwell_s`` and ``release``, which a parameter
+set applies at once):
 
-Parameters (read once at start, except the event rule's ``threshold``, ``dwell_s`` and ``release``,
-which a parameter set applies at once, e.g. ``social-touch param set /patch/patch_gestures threshold 0.95``):
-
-- ``model``: the ``.npz`` model file (default: the package's ``config/patch_gestures.npz``,
-  trained on simulated people, SYNTHETIC; see ``config/patch_gestures.md``). A missing or
-  incompatible file stops the node at start with one error naming the file and the problem.
-- ``threshold``, ``dwell_s``, ``release``: the event rule; defaults from the model file. ``dwell_s``
-  is the bear's word for the same wait; its old name ``hold_s`` is still read from parameter
-  files, with a WARN saying to rename it (as ROS 2 packages do for renamed parameters).
-- ``window``: the window length in frames; the model fixes it (its features were computed over
-  that window), so only the model's value is accepted: another one is an error saying to retrain.
+- ``model``: the ``.npz`` model file (default ``config/patch_gestures.npz``, SYNTHETIC:
+  ``config/patch_gestures.md``); a missing or incompatible file stops the node at start;
+- ``threshold``, ``dwell_s``, ``release``: the event rule, defaults from the model file (the old
+  name ``hold_s`` is still read, with a WARN saying to rename it);
+- ``window``: frames; only the model's value is accepted (another one says to retrain);
 - ``max_gap_s``: frames further apart than this (s of header time) start a new window.
 
-Bad input never stops the node: frames whose activation does not have the model's ``rows *
-cols`` cells are counted in :attr:`PatchGesturesNode.skipped` and skipped; NaN or infinite
-cells are read as 0 (no contact), as the features do, and counted in ``nonfinite_cells``;
-a stamp earlier than the previous frame's (a looped bag, a restarted driver) starts afresh.
-Frames of another publisher on ``frame`` (another frame_id, stamped before the frame in use, a
-sequence out of step) are screened out first and reported on ``/diagnostics``
-(:class:`~touch_graph.frame_screen.FrameScreen`, :attr:`PatchGesturesNode.screen`); a looped bag
-or restarted driver is followed after three frames of its own. ``threshold`` and ``dwell_s`` carry
-descriptor ranges (:attr:`PatchGesturesNode.SAFETY_RANGES`); every change after start is logged at
-WARN and counted (:class:`~touch_graph.node_health.NodeHealth`).
+Bad input never stops the node: frames of the wrong size are counted in
+:attr:`PatchGesturesNode.skipped`; NaN or infinite cells read as 0 and are counted in
+``nonfinite_cells``; a stamp earlier than the previous one starts afresh; frames of another
+publisher are screened out (:attr:`PatchGesturesNode.screen`) and reported on ``/diagnostics``.
+``threshold`` and ``dwell_s`` carry descriptor ranges (:attr:`PatchGesturesNode.SAFETY_RANGES`);
+every change after start is logged at WARN and counted.
 """
 
 from __future__ import annotations

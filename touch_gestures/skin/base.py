@@ -1,59 +1,39 @@
 """The interface every skin recogniser shares: a codebook of templates and a rejection rule.
 
-A recogniser keeps scikit-learn's estimator conventions without scikit-learn
-(:mod:`touch_gestures.estimator`: ``__init__`` only stores parameters, ``fit`` validates and
-returns ``self``, learned attributes end in ``_``); its ``fit(gestures,
-labels)`` turns n gestures x m repetitions into a codebook of feature vectors
-(cirillo2017 Fig. 5, training branch), and whose ``predict(gesture)`` returns a
-:class:`Match`: the nearest class, its distance and its margin over the runner-up
-(recognition branch; "the gesture corresponding to the lowest error index is selected").
-Subclasses supply two vectorised pieces, public so that a recogniser made of others can
-ask them: ``features(gesture) -> (d,) float32 | None`` and ``distances(query) -> (T,)
-float`` against the whole codebook at once (with ``_prepare_codebook()`` to precompute
-what the codebook alone determines).
+A recogniser follows scikit-learn's estimator conventions (:mod:`touch_gestures.estimator`).
+``fit(gestures, labels)`` turns n gestures x m repetitions into a codebook of feature vectors
+(cirillo2017 Fig. 5); ``predict(gesture)`` returns a :class:`Match`: the nearest class, its
+distance and its margin over the runner-up. Subclasses supply ``features(gesture) -> (d,)
+float32 | None`` and ``distances(query) -> (T,) float`` against the whole codebook (public, so a
+recogniser made of others can ask them), and ``_prepare_codebook()`` for what the codebook
+alone determines.
 
-**Rejection** (not in the paper, which always answers): no command when
+**Rejection** (not in the paper, which always answers). The rule that decides, in order: the
+nearest class among those written with the touch's number of strokes
+(:meth:`.evidence.CodebookEvidence.allowed`; all classes when none is or the strokes are not
+known), its margin taken over the nearest other class of all; no command when
 
-- the best distance exceeds the nearest class's threshold. With ``max_distance='auto'``
-  the thresholds come from the codebook itself at fit time: for each class, ``auto_scale``
-  times the ``auto_quantile`` quantile of its templates' leave-one-out distances to the
-  nearest other template of the class (how far a genuine repetition lies from the
-  codebook; a star varies more than a line, so each class gets its own scale). Nothing is
-  tuned to the people who use it. A number is one absolute threshold for every class,
-  None disables the rule; or
-- the margin (runner-up class distance minus best) is below ``min_margin`` times the best
-  distance: two classes are about equally close, the touch is ambiguous; or
-- for a codebook whose acceptance was calibrated (``acceptance_``, :meth:`TemplateRecogniser.set_acceptance`,
-  kept in the codebook file; made by :func:`touch_lab.skin.acceptance.calibrate_acceptance` from the codebook
-  itself, leave-one-person-out, for a wrong-command rate the user states), the two rules above are one:
-  no command when the score (:func:`.doubt.doubt` with the record's ``score_weights``; without them
-  :func:`acceptance_score`, the distance over the class's scale times the ratio to the runner-up) exceeds
-  ``acceptance_['max_score']`` (``'score'``) or the margin is negative; or
-- the touch's strokes or duration are none the nearest class shows in the codebook
-  (:mod:`.evidence`; where the codebook knows its templates' strokes and contact times); or
-- for an order-free recogniser (``direction_aware`` False), a touch of one stroke whose
-  path, in the order it was traced, is far from every one-stroke path of its nearest class
-  (:mod:`.order_evidence`, calibrated as the distance threshold; where the codebook knows
-  its templates' paths, and not with ``max_distance`` None: no distance limits at all).
+- the distance exceeds the class's threshold (``'distance'``). With ``max_distance='auto'``
+  each class's threshold is ``auto_scale`` times the ``auto_quantile`` quantile of its
+  templates' leave-one-out distances to the nearest other template of the class; a number is
+  one threshold for every class; None disables the rule;
+- the margin is below ``min_margin`` times the distance (``'margin'``); a class ruled out by
+  its strokes yet nearer leaves a negative margin, rejected as ``'strokes'``;
+- for a codebook with a calibrated acceptance (``acceptance_``, :meth:`TemplateRecogniser.set_acceptance`,
+  made by :func:`touch_lab.skin.acceptance.calibrate_acceptance`), the two rules above are one:
+  the score (:func:`.doubt.doubt` with the record's ``score_weights``, else :func:`acceptance_score`)
+  exceeds ``acceptance_['max_score']`` (``'score'``) or the margin is negative;
+- the stroke count is rare or unseen for the class (``'strokes'``) or the time in contact is out
+  of its range (``'duration'``; it rejects but does not name: people trace at their own pace)
+  (:mod:`.evidence`);
+- for an order-free recogniser (``direction_aware`` False) with distance limits, a one-stroke
+  touch whose path in tracing order is far from every one-stroke path of the class
+  (``'order'``, :mod:`.order_evidence`).
 
-**The rule that decides**, in the order it is applied: the nearest class by distance among
-the classes written with the touch's number of strokes
-(:meth:`.evidence.CodebookEvidence.allowed`; all classes when none is, or when the codebook
-does not know its templates' strokes), its margin taken over the nearest other class of all,
-ruled out or not; no command if the distance is over the class's threshold (``'distance'``),
-the margin is too small (``'margin'``), the calibrated score is too high (``'score'``), the stroke
-count is rare or unseen for the class
-(``'strokes'``), the duration is out of the class's range (``'duration'``) or the one-stroke
-path is out of order (``'order'``). A class ruled out yet nearer leaves a negative margin, and
-the touch is rejected for ``'strokes'``. The time in contact rejects but does not name: people
-trace at their own pace, and one slower or faster than the codebook's would be named for
-another class. What each rule does to the commands is measured in docs/skin-multistroke.md.
-
-Degenerate codebooks: a class with one template has no within-class distance and takes the
-median scale of the other classes; if no class has two templates, every class's scale is
-half the smallest distance between templates of different classes; a single template in
-all gets no distance limit. A codebook with one class has no runner-up: the margin is
-``inf`` and only the distance rule applies.
+Degenerate codebooks: a class with one template takes the median scale of the other classes;
+if no class has two templates, every scale is half the smallest distance between templates of
+different classes; a single template in all gets no distance limit. A codebook with one class
+has no runner-up: the margin is ``inf`` and only the distance rule applies.
 """
 
 from __future__ import annotations
@@ -102,11 +82,12 @@ class Match:
     rejected: str | None = None
 
 
+@dataclass(eq=False, kw_only=True)
 class TemplateRecogniser(Params):
     """Base class: nearest-template matching over a codebook, with rejection (see module doc).
 
-    Subclass parameters (in their ``__init__``) must include ``max_distance``,
-    ``auto_scale``, ``auto_quantile`` and ``min_margin``; their meaning is the module docstring's.
+    A subclass is a dataclass of its own parameters; the rejection parameters ``max_distance``,
+    ``auto_scale``, ``auto_quantile`` and ``min_margin`` (keyword-only) are the module docstring's.
     """
 
     #: registry name, e.g. ``'centroid'``
@@ -114,10 +95,10 @@ class TemplateRecogniser(Params):
     #: True when the features follow the direction of the trace
     direction_aware = False
 
-    max_distance: float | str | None
-    auto_scale: float
-    auto_quantile: float
-    min_margin: float
+    max_distance: float | str | None = 'auto'
+    auto_scale: float = 2.0
+    auto_quantile: float = 0.9
+    min_margin: float = 0.1
 
     # ----------------------------------------------------------------- subclass API
     def features(self, gesture: TouchGesture) -> np.ndarray | None:

@@ -1,50 +1,32 @@
 """Point clouds for multi-stroke gestures: :class:`CloudRecogniser`.
 
-People write an X, an H or a star with the strokes in any order and either way round; as
-an unordered cloud of points the symbol looks the same however it was traced ($P, Vatavu,
-Anthony and Wobbrock, ICMI 2012). Measured leave-one-person-out on the Mixed Multistroke
-Gestures traces, order-free matching is what tells these symbols apart, while the
-time-ordered trace of :class:`~.proposed.TraceRecogniser` loses to the people's different
-stroke orders (docs/skin-evaluation.md). The steps:
+As an unordered cloud of points a symbol looks the same whatever the order and direction of its
+strokes ($P, Vatavu, Anthony and Wobbrock, ICMI 2012). The steps:
 
-1. **Resampling along the ink** (``n_points``): the strokes are resampled to ``n_points``
-   equally spaced along the ink only ($P's resampling: the air between strokes adds no
-   length), then centred on their mean and divided by the larger side of their box.
-2. **A $Q-style lookup table** (Vatavu, Anthony and Wobbrock, MobileHCI 2018): at
-   fit time each template's distance field is sampled on a ``grid`` x ``grid`` raster;
-   a query's points read their distance to every template in one gather, and the
-   template points read the query's own distance field the same way. Their mean (the
-   symmetric Chamfer distance, to within the raster's cells of ``2 / grid``) ranks the
-   codebook in one vectorised pass. At that resolution it is no bound of the matching
-   cost (gestures of a class lie closer than a cell), so step 3 bounds with exact distances.
-3. **One-to-one matching on the closest** (``exact``): the ``exact`` templates with the
-   smallest Chamfer distance are matched point to point with the optimal assignment
-   (shortest augmenting paths, :func:`.assignment.min_cost_assignment`), which $P's greedy
-   matching approximates. Its mean point distance is the distance; the other templates
-   keep their Chamfer bound, raised to the farthest of the closest, so the margin over the
-   runner-up class is never overstated. As in $Q, most assignments are never solved: one
-   point-distance matrix for the ``exact`` closest gives each its true Chamfer distance
-   (the larger of the two directed means, a lower bound of the matching cost); they are
-   visited in that order, and one is solved only if its bound is below both its own
-   class's matched cost (else it cannot lower the class's distance: it keeps the bound) and
-   the runner-up class's (else neither the nearest class nor the runner-up can change).
-   Where each query point's nearest template point is a different one, that pairing is
-   already optimal. A zero cost (the query is that template, as in the leave-one-out
-   calibration, or a duplicate) settles no class, so its nearest *other* template is
-   matched too. The nearest class gets the distance that solving all ``exact`` assignments
-   gives, and so does the runner-up where one of its templates is among the closest (the
-   margin is then the same); no distance is larger than solving all would make it (the
-   templates outside the closest are raised to the largest cost or bound among them), so
-   the margin is never larger either (test/test_skin_cloud_search.py).
+1. **Resampling along the ink** (``n_points``): the strokes are resampled to ``n_points`` equally
+   spaced along the ink only, centred on their mean and divided by the larger side of their box.
+2. **A $Q-style lookup table** (Vatavu, Anthony and Wobbrock, MobileHCI 2018): each template's
+   distance field is sampled on a ``grid`` x ``grid`` raster at fit time; the query's points read
+   their distance to every template in one gather, and the template points read the query's field.
+   Their mean (symmetric Chamfer distance, to within ``2 / grid``) ranks the codebook.
+3. **One-to-one matching on the closest** (``exact``): the ``exact`` templates with the smallest
+   Chamfer distance are matched point to point by optimal assignment
+   (:func:`.assignment.min_cost_assignment`); the mean point distance is the distance. The other
+   templates keep their Chamfer bound, raised to the farthest of the closest, so the margin is
+   never overstated. An assignment is solved only where its exact Chamfer bound is below both its
+   class's matched cost and the runner-up class's; where each query point's nearest template point
+   differs, that pairing is already optimal; a zero cost settles no class, so the nearest other
+   template is matched too. The nearest class gets the distance that solving all ``exact``
+   assignments gives (test/test_skin_cloud_search.py).
 
-Distances are in units of the gesture's size. The cloud is blind to direction: a line
-traced left-to-right and right-to-left are the same cloud. Where a vocabulary tells such
-gestures apart, the trace (:mod:`.proposed`) or the fused recogniser (:mod:`.fused`) reads direction.
+Distances are in units of the gesture's size. The cloud is blind to direction; where a vocabulary
+tells directions apart, the trace (:mod:`.proposed`) or the fused recogniser (:mod:`.fused`) reads it.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -62,6 +44,7 @@ _EXTENT = 1.0
 _TABLE_CELLS = 1024
 
 
+@dataclass(eq=False)
 class CloudRecogniser(TemplateRecogniser):
     """Order- and direction-free matching of point clouds (module doc).
 
@@ -76,16 +59,9 @@ class CloudRecogniser(TemplateRecogniser):
     name = 'cloud'
     direction_aware = False
 
-    def __init__(self, n_points: int = 32, grid: int = 24, exact: int = 6,
-                 max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.grid = grid
-        self.exact = exact
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    grid: int = 24
+    exact: int = 6
 
     def _check_params(self) -> None:
         super()._check_params()

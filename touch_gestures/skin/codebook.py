@@ -1,7 +1,7 @@
 """Codebook files and the recorder that fills them (cirillo2017 Fig. 5, training branch).
 
-A codebook is a fitted recogniser's templates: n gestures x m recorded repetitions, as
-feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
+A codebook is a fitted recogniser's templates (n gestures x m repetitions, as feature vectors)
+in an ``.npz`` read with ``allow_pickle=False``::
 
     key                 shape       dtype     what
     format              ()          str       'social_touch.skin_codebook'
@@ -13,42 +13,28 @@ feature vectors. The file is an ``.npz`` read with ``allow_pickle=False``::
     template_labels     (T,)        int64     index into classes
     class_thresholds    (n,)        float64   rejection distance per class (inf: none)
     description         ()          str       optional: how it was recorded (synthetic or not)
-    vocabulary          ()          str       v2: the vocabulary's name ('commands', 'symbols', 'digits'...)
-    gap_s               ()          float64   v2: the segmenter's gap for it, s (a lift this long ends a gesture)
-    max_strokes         ()          int64     v2: most strokes of a template (1: single-stroke vocabulary)
-    template_strokes    (T,)        int64     optional: strokes of each template (the end of a gesture, rejection)
-    template_contact_s  (T,)        float64   optional: time in contact of each template, s (rejection;
-                                              files before it had ``template_durations``, the span with
-                                              the pauses, which is not read: no duration check for them)
-    template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for the others
-                                              (an order-free recogniser's rejection, :mod:`.order_evidence`)
-    template_people     (T,)        str       optional: who drew each template ('' not known), so a
-                                              codebook is judged leave-one-person-out
-    acceptance          ()          str       optional: JSON record of the calibration that set
-                                              class_thresholds for a stated wrong-command rate
-                                              (``max_wrong_rate``, ...; turns on the ``'ambiguous'``
-                                              rule, :mod:`.base`; :mod:`touch_lab.skin.acceptance`)
+    vocabulary          ()          str       v2: the vocabulary's name ('commands', 'symbols'...)
+    gap_s               ()          float64   v2: the segmenter's gap, s (a lift this long ends a gesture)
+    max_strokes         ()          int64     v2: most strokes of a template
+    template_strokes    (T,)        int64     optional: strokes of each template
+    template_contact_s  (T,)        float64   optional: time in contact of each template, s
+                                              (an older ``template_durations`` is not read)
+    template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for
+                                              the others (:mod:`.order_evidence`)
+    template_people     (T,)        str       optional: who drew each template ('' not known)
+    acceptance          ()          str       optional: JSON record of a calibrated acceptance
+                                              (:mod:`.base`, :mod:`touch_lab.skin.acceptance`)
 
-A version 1 file is a single-stroke vocabulary named ``commands`` (what the skin shipped):
-``gap_s`` 0.15 s, ``max_strokes`` 1. The loaded recogniser carries ``vocabulary_``,
-``gap_s_`` and ``max_strokes_``; the scene chooses the vocabulary by the codebook it gives
-the ``haptic_commands`` node, and the node's segmenter takes the file's gap unless set.
+A version 1 file is the single-stroke vocabulary ``commands``: ``gap_s`` 0.15 s, ``max_strokes`` 1.
+The loaded recogniser carries ``vocabulary_``, ``gap_s_`` and ``max_strokes_``.
 
-At load the format, version, recogniser name and parameters are checked, and so is the
-feature dimension (against the features the named recogniser computes with those
-parameters): a codebook recorded with 32 points does not silently match 16-point queries.
+At load the format, version, recogniser name, parameters and feature dimension are checked. Only the
+recognisers of :data:`.registry.RECOGNISERS` load here: the runtime does not reach into the lab, and
+the error says to record the codebook again with ``trace`` or ``fused`` (the lab's tools pass their
+own registry as ``recognisers``).
 
-The robot runs only the recognisers of :data:`.registry.RECOGNISERS` (the paper's three,
-``trace`` and ``fused``). A codebook made with one of the lab's (:mod:`touch_lab.skin.recognisers`:
-the peers, $N, ``refereed``, the oriented pair) does not load here, even where touch_lab is
-installed: the runtime does not reach into the lab, and a robot should not run a recogniser kept to
-be measured against. The error says to record the codebook again with ``trace`` or ``fused``; the
-lab's tools load such files with the lab's registry (the ``recognisers`` argument).
-
-:class:`CodebookRecorder` collects m repetitions of each gesture from a stream of
-segmented gestures (``social-touch codebook record``, :mod:`.record_cli`, feeds it from the
-skin), refusing two-finger, truncated, empty and tiny touches; :mod:`.recording` saves what it
-holds so a recording can be resumed.
+:class:`CodebookRecorder` collects m repetitions of each gesture from a stream of segmented gestures
+(``social-touch codebook record``), refusing two-finger, truncated, empty and tiny touches.
 """
 
 from __future__ import annotations

@@ -1,28 +1,10 @@
 """Collisions told apart from touches, frame by frame: :class:`CollisionDetector`.
 
-The skin's other job (cirillo2017, abstract): the same sensor that reads intentional touches
-feels unintentional collisions. A traced finger presses with one or two newtons and lands
-over tens of milliseconds; a bump against the arm loads the skin with several newtons
-within a few frames. Each calibrated frame gives a :class:`ContactState` (contact point in
-m, the force vector summed over the modules in N, the normal force's rise rate in N/s) and a
-collision when
-
-- the normal force reaches ``force_n`` (a press far harder than any finger needs), or
-- it rises faster than ``rate_n_s``, measured over the last ``rate_frames`` frames at the
-  skin's frame rate (a finger landing ramps up over tens of milliseconds; an impact
-  does it in one or two frames). Frames, not header stamps: a driver spreads the stamps of
-  frames read together at the nominal rate, but a bag from another driver, or a burst squeezed
-  into the time since the last poll, may carry nearly equal stamps, over which a rate would
-  explode (a dropped frame makes the rate over-estimated by at most one frame's worth),
-
-on the frame that crosses, once per contact (the contact must end before another fires).
-The gesture under way when a collision fires is never a gesture (the node drops it), and
-a gesture is only ever cut from contacts that never crossed: so an impact is not a gesture,
-and a traced finger is a collision only if it presses past the thresholds.
-
-Thresholds are parameters (a robot's controller decides how touchy it is); the defaults are
-placed between the finger forces of the simulated performers and the simulated bumps
-(docs/skin-evaluation.md, ``social-touch eval skin-collisions``).
+Each calibrated frame gives a :class:`ContactState` (contact point in m, force vector summed over
+the modules in N, the normal force's rise rate in N/s) and a collision when the normal force reaches
+``force_n`` or rises faster than ``rate_n_s`` over the last ``rate_frames`` frames at the skin's
+frame rate (frames, not header stamps, which may be nearly equal in a burst), on the frame that
+crosses, once per contact. The node drops the gesture under way when a collision fires.
 
 >>> det = CollisionDetector(force_n=5.0, rate_n_s=80.0)
 >>> f = np.zeros((36, 3), np.float32)

@@ -1,18 +1,15 @@
 """Deciding before the finger lifts: the best candidate for a gesture still being traced.
 
-cirillo2017 closes with recognition "during the accomplishment of the gesture itself". A
-prefix of a gesture looks like the prefix of its templates, not like the whole of them, so
-:class:`PrefixMatcher` matches what has been traced so far against the templates cut at a
-few fractions of their length (``fractions``): a template's features are its points in
-order (along the ink for :class:`~.clouds.CloudRecogniser`, in time for
-:class:`~.proposed.TraceRecogniser`), so its prefix at fraction f is its first f of them,
-resampled back to the full count and normalised as the features are. The best fraction is
-also the estimate of how much of the gesture is done.
+A prefix of a gesture looks like the prefix of its templates, so :class:`PrefixMatcher` matches
+what has been traced so far against the templates cut at a few fractions of their length
+(``fractions``): a template's features are its points in order (along the ink for
+:class:`~.clouds.CloudRecogniser`, in time for :class:`~.proposed.TraceRecogniser`), so its prefix
+at fraction f is its first f of them, resampled to the full count and normalised as the features
+are. The best fraction estimates how much of the gesture is done.
 
-The answer, a :class:`Candidate`, carries a confidence in [0, 1]: the relative margin
-``1 - d1 / d2`` of the best class distance d1 over the runner-up's d2 (0: two classes
-equally close; 1: nothing else near). It is a score for a behaviour to react early on, not a
-probability; the final command still comes after the gap, from the whole gesture.
+A :class:`Candidate` carries a confidence in [0, 1], the relative margin ``1 - d1 / d2`` of the best
+class distance over the runner-up's: a score to react early on, not a probability; the command
+still comes from the whole gesture.
 """
 
 from __future__ import annotations

@@ -1,41 +1,23 @@
 """When a gesture is over: the vocabulary tells whether the strokes so far are a whole gesture.
 
-A fixed gap ends every gesture after the same lift, so it must be longer than the pauses
-people take inside their slowest symbol, and every command pays it. After a lift, the
-strokes traced so far either look like a whole gesture of the vocabulary (a line, a
-finished X) or like the beginning of one with more strokes (the first bar of an X, the stem
-of a P, an H with one bar to go). :class:`GestureEnd` asks the codebook:
+After a lift, the strokes traced so far look either like a whole gesture of the vocabulary (a line,
+a finished X) or like the beginning of one with more strokes (the first bar of an X).
+:class:`GestureEnd` asks the codebook:
 
-- **whole or prefix** (``margin``, ``prefixes``): the k strokes so far are matched against the
-  whole templates and against the prefixes of the templates with more strokes, cut after
-  their first k strokes (``'strokes'``: a template of n strokes cut at k/n of its ink, the
-  codebook keeping each template's stroke count but not where its strokes end), or, where
-  the codebook does not know its templates' strokes (``'fractions'``), cut at a quarter,
-  half and three quarters of their ink (:class:`~.early.PrefixMatcher`, the early decisions'
-  own matcher). The strokes are complete when a whole template is nearer than every prefix,
-  by ``margin`` relative to the prefix's distance (0: nearer at all). A lift comes after a
-  whole stroke, so the prefixes cut between strokes are the ones to compare: measured on the
-  Mixed Multistroke traces (``social-touch eval skin-ending``, docs/skin-multistroke.md) they
-  keep about as many samples whole as the fractions and make far fewer whole gestures wait;
-- **stroke counts** (``strokes``): and the nearest whole class has templates of no more
-  strokes than traced so far (people write a D with one stroke or two; a codebook that has
-  only 2-stroke X's says the first bar is not yet an X). Used where the codebook knows
-  each template's strokes (a codebook fitted from gestures: ``template_strokes_``).
+- **whole or prefix** (``margin``, ``prefixes``): the k strokes so far are matched against the whole
+  templates and against the prefixes of templates with more strokes (``'strokes'``: a template of n
+  strokes cut at k/n of its ink; ``'fractions'``, where the codebook does not know its templates'
+  strokes: cut at a quarter, half and three quarters, :class:`~.early.PrefixMatcher`). The strokes
+  are complete when a whole template is nearer than every prefix by ``margin`` relative to the
+  prefix's distance;
+- **stroke counts** (``strokes``, where the codebook knows ``template_strokes_``): and the nearest
+  whole class has templates of no more strokes than traced so far.
 
-The answer is a :class:`~.segmentation.Verdict`: ``WHOLE`` (the lift ends the gesture),
-``PREFIX`` (whole and prefix compared, the prefix won: wait for a next stroke up to the
-segmenter's bound) or, with ``unfinished``, ``UNFINISHED``: the nearest class was never
-written with so few strokes in the codebook, so the strokes so far can be no whole gesture
-(the rejection's own stroke evidence, :mod:`.evidence`, would turn them away: ending them fires
-nothing). Those wait as long as a gesture may last (the segmenter's ``max_duration_s``): people
-pause longer than the bound inside a symbol now and then, often after a first stroke that
-is no gesture on its own (the first of a six-point star's two triangles; per class:
-``social-touch eval skin-ending``, docs/skin-multistroke.md). What it costs: a touch after such strokes, within
-that time, joins them (a person who gives up half a star and starts an X within 10 s).
-
-:class:`~.segmentation.GestureSegmenter` asks the rule once a lift reaches its short gap
-and, when the strokes look incomplete, waits for the next stroke. The rule costs one prefix
-match (a few recognitions) per lift, never per frame.
+The answer is a :class:`~.segmentation.Verdict`: ``WHOLE`` (the lift ends the gesture), ``PREFIX``
+(wait for a next stroke up to the segmenter's bound) or, with ``unfinished``, ``UNFINISHED``: the
+nearest class was never written with so few strokes, so ending them would fire nothing
+(:mod:`.evidence`); those wait up to the segmenter's ``max_duration_s``, so a touch within that time
+joins them. :class:`~.segmentation.GestureSegmenter` asks once per lift, never per frame.
 """
 
 from __future__ import annotations

@@ -1,32 +1,18 @@
 """Cheap evidence a shape match throws away: strokes and duration, checked against the codebook.
 
-The recognisers compare normalised shapes, so a random scribble that happens to look like
-a symbol is as close to it as the symbol itself. Two things the normalisation discards
-still tell them apart, and the codebook says what each class allows:
+A scribble that happens to look like a symbol is as close to it as the symbol; what the shape
+normalisation discards still tells them apart, and :class:`CodebookEvidence`, calibrated on the
+codebook alone, says what each class allows:
 
-- **strokes**: a touch of 1 stroke is no X if nobody in the codebook wrote an X with 1
-  stroke (people do write a D with one or two: both are then allowed). A count that only a
-  few templates of a big class show (fewer than ``min_share`` of them: 1 %, so in a class of
-  fewer than 100 templates any count seen is allowed) is taken for an accident of the
-  recording, not a way to write the symbol: two strokes joined by a lift too short to see,
-  one broken by a skip of the pen. On the Mixed Multistroke Gestures a single one-stroke
-  arrowhead among the class's two-stroke ones let the one-stroke scribbles shaped like an
-  arrow through (docs/skin-multistroke.md);
-- **duration**: a touch far faster or slower than any repetition of the class in the
-  codebook (from the ``low`` to the ``high`` quantile of the class's contact times, widened
-  by ``slack``: 1.5 is half again faster than its fastest and slower than its slowest). The
-  time in contact (:attr:`~.gesture.TouchGesture.contact_s`: the strokes' own durations, the
-  pauses between them left out) is what the pace of a symbol shows; how long someone pauses
-  between strokes is not (on the Mixed Multistroke Gestures people pause from a fraction of
-  a second to over ten, and the span from first touch to last lift turned away whole
-  symbols written with a long pause, once the end of a gesture waited for them). Only
-  for classes with at least ``min_templates`` templates: a few repetitions by a few people
-  do not show how fast others go (a codebook of 2 people x 3 repetitions turned away a
-  third of a new person's gestures).
+- **strokes**: a stroke count the class shows in fewer than ``min_share`` of its templates (in a
+  class of fewer than 1 / ``min_share`` templates: in none) is taken for an accident of the
+  recording and not allowed;
+- **duration**: the time in contact (:attr:`~.gesture.TouchGesture.contact_s`, the pauses between
+  strokes left out) must lie between the ``low`` and ``high`` quantiles of the class's contact
+  times, widened by ``slack`` (1.5: half again faster than the fastest, slower than the slowest);
+  checked only for classes with at least ``min_templates`` templates.
 
-:class:`CodebookEvidence` is calibrated on the codebook alone (no constant fitted to any
-test file), so it holds for vocabularies and people it has not seen. A codebook that does
-not know its templates' strokes or contact times (an older file) skips that check.
+A codebook that does not know its templates' strokes or contact times skips that check.
 """
 
 from __future__ import annotations

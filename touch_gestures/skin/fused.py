@@ -1,36 +1,27 @@
 """The order-free cloud and the direction-aware trace, their opinions summed: :class:`FusedRecogniser`.
 
-The cloud (:mod:`.clouds`) ignores stroke order and direction, which reads symbols people
-write their own way; the trace (:mod:`.proposed`) follows the path in time, which tells
-apart what the cloud cannot (an N from an H: the same bars, joined in another order; a
-five-point star from strokes scattered over the same points). Both are asked on every touch
-and their per-class distances combined by the **sum rule** of classifier combination
-(Kittler, Hatef, Duin and Matas, "On combining classifiers", IEEE TPAMI 20(3), 1998): each
-recogniser's distances are divided by its own nearest class's (:func:`relative_distances`:
-each speaks on one scale, whatever its units: 1 for its nearest class, how many times
-farther for the others) and the two summed with equal weight; the class of the smallest sum
-among those the codebook's evidence allows (:mod:`.evidence`) is named. Nothing is fitted for
-it: no weight, no scale, no margin.
+The cloud (:mod:`.clouds`) ignores stroke order and direction; the trace (:mod:`.proposed`) follows
+the path in time, which tells apart what the cloud cannot (an N from an H). Both are asked on every
+touch and combined by the **sum rule** (Kittler, Hatef, Duin and Matas, IEEE TPAMI 20(3), 1998):
+each one's distances divided by its nearest class's (:func:`relative_distances`), summed with equal
+weight; the smallest sum among the classes the codebook's evidence allows (:mod:`.evidence`) is
+named. Nothing is fitted for it.
 
-The combination names the class; it does not make a command fire: distances, thresholds,
-margins, the end of a gesture and early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
+The combination names the class only: distances, thresholds, margins, the end of a gesture and
+early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
 :meth:`FusedRecogniser.deciding_recogniser`), so a class the cloud does not put first is named but
-rejected (its margin over the cloud's nearest is negative), and what fires is what the cloud
-alone fires.
+rejected (negative margin).
 
-People write a symbol's strokes in their own order, so the trace holds each template of up to
-``stroke_orders`` strokes in every order of its strokes (:mod:`.stroke_orders`; each stroke
-keeps its direction): a person who draws the other bar of an X first is near the X's templates
-read that way, not nearer a pitchfork.
-
-A template's features are the cloud's (``2 n_points`` values), then the trace's of each order
-of its strokes in ``stroke_orders!`` slots of ``2 trace_points`` (copies of the order traced fill
-the slots a template of fewer strokes leaves). Measured figures: docs/skin-multistroke.md.
+The trace holds each template of up to ``stroke_orders`` strokes in every order of its strokes
+(:mod:`.stroke_orders`; each stroke keeps its direction). A template's features are the cloud's
+(``2 n_points`` values), then the trace's of each order in ``stroke_orders!`` slots of
+``2 trace_points`` (copies of the order traced fill the slots a template of fewer strokes leaves).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -71,6 +62,7 @@ def relative_sum(first: np.ndarray, second: np.ndarray) -> np.ndarray:
     return relative_distances(first) + relative_distances(second)
 
 
+@dataclass(eq=False)
 class FusedRecogniser(TemplateRecogniser):
     """The cloud and the trace, their relative distances summed to name the class (module doc).
 
@@ -91,16 +83,9 @@ class FusedRecogniser(TemplateRecogniser):
     name = 'fused'
     direction_aware = False
 
-    def __init__(self, n_points: int = 32, trace_points: int = 32, stroke_orders: int = 3,
-                 max_distance: float | str | None = 'auto', auto_scale: float = 2.0, auto_quantile: float = 0.9,
-                 min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.trace_points = trace_points
-        self.stroke_orders = stroke_orders
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    trace_points: int = 32
+    stroke_orders: int = 3
 
     def _check_params(self) -> None:
         super()._check_params()

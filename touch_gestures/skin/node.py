@@ -1,60 +1,43 @@
 """``haptic_commands``: commands traced on the optoelectronic skin, on the graph (cirillo2017 3.2, Fig. 5).
 
-Subscribes to ``frame`` (``/skin/frame`` in the ``skin`` namespace: ``SkinFrame`` from
-``skin_driver``, 150 Hz) and does the recognition branch of cirillo2017 Fig. 5 on every touch:
+Subscribes to ``frame`` (``SkinFrame`` from ``skin_driver``) and, on every touch:
 
-1. **segmentation** (:class:`~.frames.SkinFrameStream`, :class:`~.segmentation.GestureSegmenter`):
-   a gesture runs from the first contact to the end of the last one, time from the header stamps;
-2. **screening** (:func:`~.screening.screen_gesture`): two fingers, a touch that never ended
-   (cut at ``max_duration_s``), too few points and touches smaller than ``min_extent_mm`` (a
-   press, a tap) are no command;
-3. **recognition** against the codebook (default recogniser ``trace``, docs/skin-evaluation.md),
-   with its rejection rule (distance over the class's threshold, or too small a margin);
-4. **early candidates**: while a gesture is traced, every ``candidate_period_s`` the best
-   candidate for the part traced so far (:class:`~.early.PrefixMatcher`) is published on
-   ``candidate`` (``/skin/candidate``, ``SkinCandidate``: gesture, confidence, distance, progress);
-5. **contacts and collisions** (:class:`~.collisions.CollisionDetector`): every frame in contact
-   (and the one that ends it) on ``contact`` (``/skin/contact``, ``SkinContact``: start/end, point
-   in m, force vector in N, rise rate); a ``SkinCollision`` on ``collision`` from the frame whose
-   normal force or rise rate crosses ``collision_force_n`` / ``collision_rate_n_s``. The gesture
-   under way is then no command (outcome ``'collision'``);
-6. **the command map**: an accepted gesture with a command is published on
-   ``/touch/haptic_command`` (``HapticCommand``: gesture, command, recogniser, distance, margin,
-   duration_s, frames; the header stamp is the end of the gesture, frame_id ``skin``).
+1. segments it (:class:`~.frames.SkinFrameStream`, :class:`~.segmentation.GestureSegmenter`),
+   time from the header stamps;
+2. screens it (:func:`~.screening.screen_gesture`): two fingers, a touch cut at ``max_duration_s``,
+   too few points or smaller than ``min_extent_mm`` is no command;
+3. recognises it against the codebook, with its rejection rule (:mod:`.base`);
+4. while it is traced, every ``candidate_period_s``, publishes the best candidate so far
+   (:class:`~.early.PrefixMatcher`) on ``candidate`` (``SkinCandidate``);
+5. publishes every frame in contact on ``contact`` (``SkinContact``: point in m, force in N, rise
+   rate) and a ``SkinCollision`` on ``collision`` when the normal force or rise rate crosses
+   ``collision_force_n`` / ``collision_rate_n_s`` (:class:`~.collisions.CollisionDetector`); the
+   gesture under way is then no command (outcome ``'collision'``);
+6. publishes an accepted gesture that has a command on ``/touch/haptic_command``
+   (``HapticCommand``; stamp: the end of the gesture, frame_id ``skin``).
 
-Everything else (screened out, rejected, a codebook gesture without a command) is logged at
-debug level and counted in :attr:`HapticCommandsNode.outcomes`; nothing is published. Bad
-frames (wrong size, NaN) are counted in ``stream.skipped`` and skipped.
+Everything else is logged at debug level and counted in :attr:`HapticCommandsNode.outcomes`. Bad
+frames (wrong size, NaN) are counted in ``stream.skipped``; frames of another publisher are screened
+out (:class:`~touch_graph.frame_screen.FrameScreen`, :attr:`HapticCommandsNode.screen`) and reported
+on ``/diagnostics``.
 
-Frames of another publisher on ``frame`` (stamped 0 or stale, another frame_id, a sequence
-counter out of step with the driver's) are screened out before segmentation
-(:class:`~touch_graph.frame_screen.FrameScreen`, in :attr:`HapticCommandsNode.screen`) and
-reported on ``/diagnostics`` (WARN naming the cause and counts, ERROR when nothing usable
-arrives); the driver's own frames are still recognised.
+Parameters (read once at start, except ``max_distance``, ``auto_scale``, ``auto_quantile``,
+``min_margin`` and ``min_extent_mm``, which apply from the next gesture):
 
-Parameters (read once at start, except rejection and screening: ``max_distance``, ``auto_scale``,
-``auto_quantile``, ``min_margin`` and ``min_extent_mm`` apply from the next gesture when set):
+- ``codebook``: the ``.npz`` codebook (default ``config/skin_codebook.npz``, SYNTHETIC:
+  ``config/skin_codebook.md``); ``commands``: the gesture -> command map (default
+  ``config/skin_commands.yaml``; a gesture the codebook does not know stops the node at start);
+- ``recogniser``: must match the codebook's (empty: the codebook's);
+- segmentation: ``gap_s`` (default: the codebook's), ``wait_s``, ``max_duration_s``, ``min_frames``,
+  ``map_threshold``, ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction``
+  (:class:`~.segmentation.GestureSegmenter`), ``max_gap_s`` (frames stopped this long: the gesture
+  under way is dropped);
+- rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds, a number
+  >= 0: one for all), ``auto_scale``, ``auto_quantile``, ``min_margin``.
 
-- ``codebook``: the ``.npz`` codebook (default: the package's ``config/skin_codebook.npz``,
-  recorded from simulated performers, SYNTHETIC: ``config/skin_codebook.md``);
-- ``commands``: the gesture -> command map (default: ``config/skin_commands.yaml``); a mapped
-  gesture the codebook does not know stops the node at start, naming the file and line;
-- ``recogniser``: must match the codebook's (empty: whatever the codebook was made with);
-- segmentation: ``gap_s`` (default: the codebook's, i.e. its vocabulary's), ``wait_s`` (in a multi-stroke
-  vocabulary, how long strokes that look unfinished wait for the next: touch_gestures.skin.ending), ``max_duration_s``,
-  ``min_frames``, ``map_threshold``, ``map_relative``, ``merge_gap_taxels``, ``min_multi_frames``, ``multi_fraction``
-  (see GestureSegmenter), ``max_gap_s`` (frames stopped this long: the gesture under way is dropped);
-- screening: ``min_extent_mm``;
-- rejection (defaults from the codebook file): ``max_distance`` (-1: per-class thresholds,
-  ``auto_scale`` x the ``auto_quantile`` quantile of the codebook's own spread; a number >= 0:
-  one threshold for all), ``auto_scale``, ``auto_quantile``, ``min_margin``.
-
-Rejection, screening and collision parameters switch off a check when pushed far enough, and any
-process in the DDS domain can set them: their descriptors carry ranges that keep each check
-meaningful (:data:`SAFETY_RANGES`; ``max_distance`` at most the codebook's largest distance between
-a template and the nearest template of another class), refused out of range as rclpy refuses
-(at start and on ``param set``). Every change after start is logged at WARN and counted on
-``/diagnostics`` (:class:`~touch_graph.node_health.NodeHealth`).
+Any process in the DDS domain can set the rejection, screening and collision parameters, so their
+descriptors carry ranges that keep each check meaningful (:data:`SAFETY_RANGES`), refused as rclpy
+refuses; every change after start is logged at WARN and counted on ``/diagnostics``.
 """
 
 from __future__ import annotations

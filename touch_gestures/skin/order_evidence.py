@@ -1,36 +1,18 @@
 """Evidence an order-free match throws away: the order of the points along a one-stroke touch.
 
-A point cloud (:class:`~.clouds.CloudRecogniser`) is blind to the order of its points, so a
-random scribble whose points happen to fill the places of a five-point star is as close to
-the star as a star. A person who writes a star in one stroke, though, traces its points in
-one of few orders: from one of its tips, one way or the other. :class:`OrderEvidence` asks
-whether the touch, as the path it was traced, is near such a path of the class:
+A point cloud (:class:`~.clouds.CloudRecogniser`) is blind to point order, so a scribble that fills
+the places of a star is as close as a star. :class:`OrderEvidence` asks whether a touch of **one
+stroke** is near a one-stroke template path of its nearest class:
 
-- only a touch of **one stroke** is checked, against the templates of one stroke of its
-  nearest class (a multi-stroke symbol's strokes come in any order, which is what the cloud
-  is for; a random brush of the hand is one stroke);
-- the **path distance** is the root-mean-square distance between the touch's and a
-  template's points, both resampled along the ink (:func:`~.features.cloud_features`, in
-  units of the gesture's size), the smaller of the two directions; where the template is a
-  **closed** stroke (its ends less than ``closed`` gesture sizes apart: a star, a circle),
-  from any of its points as the start as well. The touch is compared with every one-stroke
-  template of the class at once: the open ones, as traced and reversed (stacked per class at
-  fit time), ranked by one product with the touch's path, the nearest then measured point by
-  point; the closed ones from every start and both directions in one product of their paths
-  with the touch's path read from each of its points both ways (2n x 2n, gathered from the
-  touch); the products in blocks small enough that BLAS keeps to one thread (threads stall on
-  a busy machine).
-  Where the recogniser's own features are that path (the cloud's, for a touch of one stroke),
-  the check reads them instead of resampling the touch again;
-- **the threshold is calibrated on the codebook** as the shape distance's is (:mod:`.base`):
-  ``auto_scale`` times the ``auto_quantile`` quantile of the path distances of the class's
-  one-stroke templates to their nearest other such template (leave one out). A class with
-  fewer than two one-stroke templates has nothing to calibrate with and no check (its touches
-  of one stroke are a matter for :mod:`.evidence`'s stroke counts). At most ``per_class``
-  evenly spaced templates per class are left out, which bounds the cost of the calibration.
-
-A codebook that does not know its templates' paths (one loaded from a file without them)
-skips the check.
+- the **path distance** is the RMS distance between the touch's and a template's points, both
+  resampled along the ink (:func:`~.features.cloud_features`, units of the gesture's size), the
+  smaller of both directions; for a **closed** template (ends less than ``closed`` sizes apart),
+  from any of its points as the start as well. The products run in blocks small enough that BLAS
+  keeps to one thread. Where the recogniser's features are that path, they are read, not recomputed;
+- **the threshold** is calibrated on the codebook as the shape distance's is (:mod:`.base`):
+  ``auto_scale`` times the ``auto_quantile`` quantile of the leave-one-out path distances among the
+  class's one-stroke templates (at most ``per_class`` of them). A class with fewer than two has no
+  check, nor has a codebook that does not know its templates' paths.
 """
 
 from __future__ import annotations

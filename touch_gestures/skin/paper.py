@@ -13,6 +13,8 @@ Matching is vectorised over the whole codebook. Rejection is the shared rule of
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .base import TemplateRecogniser
@@ -22,6 +24,7 @@ from .gesture import GRID, TouchGesture
 __all__ = ['CentroidRecogniser', 'MapRecogniser', 'StaticRecogniser']
 
 
+@dataclass(eq=False)
 class StaticRecogniser(TemplateRecogniser):
     """Dot-product matching of thresholded static maps (cirillo2017 3.1, eq. 2).
 
@@ -39,13 +42,7 @@ class StaticRecogniser(TemplateRecogniser):
     name = 'static'
     direction_aware = False
 
-    def __init__(self, threshold: float | None = None, max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        self.threshold = threshold
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    threshold: float | None = None
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         bitmap = gesture.binary_map if self.threshold is None else gesture.peak_map >= self.threshold
@@ -59,6 +56,7 @@ class StaticRecogniser(TemplateRecogniser):
         return 1.0 - score / max(float(query.sum()), 1.0)
 
 
+@dataclass(eq=False)
 class MapRecogniser(TemplateRecogniser):
     """Hamming distance between rescaled binary maps (cirillo2017 3.2.1, Algorithm 1).
 
@@ -72,14 +70,7 @@ class MapRecogniser(TemplateRecogniser):
     name = 'map'
     direction_aware = False
 
-    def __init__(self, size: int = GRID,
-                 max_distance: float | str | None = 'auto', auto_scale: float = 2.0, auto_quantile: float = 0.9,
-                 min_margin: float = 0.1) -> None:
-        self.size = size
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    size: int = GRID
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         scaled = nna_rescale(gesture.binary_map, self.size)
@@ -93,6 +84,7 @@ class MapRecogniser(TemplateRecogniser):
         return self._ones + query.sum() - 2.0 * (self.templates_ @ query)
 
 
+@dataclass(eq=False)
 class CentroidRecogniser(TemplateRecogniser):
     """Resampled, min-max normalised contact-point trajectories (cirillo2017 3.2.2, Algorithm 2).
 
@@ -110,14 +102,7 @@ class CentroidRecogniser(TemplateRecogniser):
     name = 'centroid'
     direction_aware = True
 
-    def __init__(self, length: int = 32,
-                 max_distance: float | str | None = 'auto', auto_scale: float = 2.0, auto_quantile: float = 0.9,
-                 min_margin: float = 0.1) -> None:
-        self.length = length
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    length: int = 32
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:

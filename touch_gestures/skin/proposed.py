@@ -1,31 +1,15 @@
-"""A recogniser for traced gestures, chosen by measurement: :class:`TraceRecogniser`.
+"""A recogniser for traced gestures: :class:`TraceRecogniser` (direction-aware).
 
-It keeps what makes cirillo2017's centroid method work (the contact-point trajectory in
-time order, so direction counts) and fixes what makes it fragile: it is as accurate as
-the best on the $1 traces and far more robust on lines, slant and hesitant tracing
-(docs/skin-evaluation.md). Each step was chosen by leave-one-subject-out measurements on
-the $1 traces and on synthetic performers during development:
-
-1. **Resampling by time bins** (``n_points``): the gesture's duration is cut into
-   ``n_points`` equal bins and each bin's contact points are averaged. Like the paper's
-   NNA it is uniform in time, so it keeps the speed profile, which is part of how people
-   draw a shape (they slow down at corners, consistently across people); resampling the
-   same features along the arc, as $1 does, measured worse on the $1 traces (and DTW
-   on arc worse than DTW in time; docs/skin-evaluation.md). Unlike NNA, the bin
-   mean is a box filter: it removes the contact point's jitter (sensor noise, a shaky
-   finger) in proportion to the bin width, cannot alias, and stays exact when frames are
-   dropped (an empty bin is interpolated from its neighbours).
-2. **Uniform scaling** (``aspect_floor`` = 1): centre on the bounding box and divide both
-   axes by the larger extent. Eq. (6) divides each axis by its own extent, which blows the
-   wobble of a horizontal line up to the full height (the paper's weak horizontal lines,
-   Table 3) and turns a slanted line into a diagonal; uniform scaling keeps proportions.
-   ``aspect_floor`` < 1 divides each axis by at least that fraction of the larger extent
-   (0 is eq. (6); 0.3 is the 1-D rule of $N, Anthony and Wobbrock 2010): both measured
-   no better on the $1 traces and worse on the synthetic lines.
-3. **Nearest neighbour by Euclidean distance** over the (x, y) points, as one
-   matrix-vector product against the whole codebook (|t|^2 - 2 t.q + |q|^2 with |t|^2
-   precomputed). No rotation search: on a skin a line's orientation is the command
-   (Protractor, which removes rotation, confuses every line with every other).
+1. **Resampling by time bins** (``n_points``): the gesture's duration is cut into ``n_points``
+   equal bins and each bin's contact points are averaged. Uniform in time like the paper's NNA, so
+   it keeps the speed profile; the bin mean filters the contact point's jitter, cannot alias, and
+   an empty bin (dropped frames) is interpolated from its neighbours.
+2. **Uniform scaling** (``aspect_floor`` = 1): centre on the bounding box and divide both axes by
+   the larger extent, which keeps a line's proportions (eq. (6) blows a line's wobble up to full
+   height). ``aspect_floor`` < 1 divides each axis by at least that fraction of the larger extent
+   (0 is eq. (6)).
+3. **Nearest neighbour by Euclidean distance** over the (x, y) points, one matrix-vector product
+   against the codebook. No rotation search: on a skin a line's orientation is the command.
 
 The distance is the root-mean-square point distance in units of the gesture's size.
 """
@@ -33,6 +17,7 @@ The distance is the root-mean-square point distance in units of the gesture's si
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -103,6 +88,7 @@ def trace_features(points: np.ndarray, times: np.ndarray, n_points: int = 32, as
     return ((res - 0.5 * (lo + hi)) / scale).reshape(-1).astype(np.float32)
 
 
+@dataclass(eq=False)
 class TraceRecogniser(TemplateRecogniser):
     """Time-binned, uniformly scaled trajectory matching (module doc).
 
@@ -116,15 +102,8 @@ class TraceRecogniser(TemplateRecogniser):
     name = 'trace'
     direction_aware = True
 
-    def __init__(self, n_points: int = 32, aspect_floor: float = 1.0,
-                 max_distance: float | str | None = 'auto',
-                 auto_scale: float = 2.0, auto_quantile: float = 0.9, min_margin: float = 0.1) -> None:
-        self.n_points = n_points
-        self.aspect_floor = aspect_floor
-        self.max_distance = max_distance
-        self.auto_scale = auto_scale
-        self.auto_quantile = auto_quantile
-        self.min_margin = min_margin
+    n_points: int = 32
+    aspect_floor: float = 1.0
 
     def features(self, gesture: TouchGesture) -> np.ndarray | None:
         if len(gesture.trajectory) == 0:

@@ -1,18 +1,13 @@
 """Which segmented touches may become a command at all, before any recogniser looks at them.
 
-The recognisers compare *shapes*: every feature is normalised for position and size
-(cirillo2017 3.2.1 bounding box, eq. 6), so a finger resting in place, whose contact point
-only jitters by a fraction of a millimetre, is blown up to a random shape of full size.
-:func:`screen_gesture` turns away the touches that are no traced gesture, with a reason
-the skin node counts and the codebook recorder tells the person recording:
+The recognisers normalise position and size, so a resting finger's jitter becomes a random shape
+of full size. :func:`screen_gesture` turns away touches that are no traced gesture, with a reason:
 
-- ``'multi_contact'``: two fingers at once (the contact point lies between them);
-- ``'truncated'``: the touch lasted longer than the segmenter's limit (a resting hand);
+- ``'multi_contact'``: two fingers at once;
+- ``'truncated'``: longer than the segmenter's limit (a resting hand);
 - ``'too_few_points'``: fewer trajectory points than a shape needs;
-- ``'too_small'``: the trajectory's bounding box is smaller than ``min_extent_mm`` on its
-  longer side: a press, a tap or a brush of a few millimetres. Not in the paper (which
-  assumes every touch is a gesture); the default, two taxel pitches (7.8 mm), is the
-  smallest extent the 12 x 12 map resolves as a stroke rather than one contact.
+- ``'too_small'``: the bounding box's longer side is below ``min_extent_mm`` (default two taxel
+  pitches: the smallest extent the 12 x 12 map resolves as a stroke).
 
 >>> import numpy as np
 >>> from touch_gestures.skin.gesture import TouchGesture

@@ -1,47 +1,29 @@
 """Cut the skin's frame stream into gestures (cirillo2017 3.2, Fig. 5).
 
-"The sensor starts acquiring the gesture applied by the user as soon as a contact on the
-deformable layer is detected. The gesture data are collected until the contact ends."
-:class:`GestureSegmenter` does this one calibrated frame at a time, with three additions
-the paper leaves open:
+A gesture runs from the first contact until the contact ends. :class:`GestureSegmenter` does this
+one calibrated frame at a time, with what the paper leaves open:
 
-- **strokes and the gap**: a lift shorter than ``gap_s`` does not end the gesture: the
-  next contact starts a new stroke of the same gesture (a finger skipping between taxels,
-  or the strokes of an X, a T, a star). The points of each stroke keep their stroke index;
-  a lift of ``gap_s`` or more ends the gesture, so one command fires per gesture, ``gap_s``
-  after the last lift. The default (0.15 s) suits single-stroke vocabularies (the skin's
-  commands); a vocabulary with multi-stroke templates uses :data:`MULTISTROKE_GAP_S`
-  (chosen on the pauses between strokes, see there; the codebook file carries it).
-- **the vocabulary's end of a gesture** (``is_complete``, ``wait_s``): a fixed gap makes
-  every command wait as long as the longest pause people take inside their slowest symbol.
-  With a rule that tells whether the strokes so far are a whole gesture of the vocabulary
-  (:class:`~.ending.GestureEnd`), a lift of ``gap_s`` ends a complete gesture, while one
-  that looks like the beginning of a gesture with more strokes (the first bar of an X, the
-  stem of a P) keeps waiting for its next stroke, up to a lift of ``wait_s``. Strokes that
-  can be no whole gesture at all (:attr:`Verdict.UNFINISHED`: the nearest class was never
-  written with so few strokes) would fire nothing if ended, so they wait as long as a gesture
-  may last: until ``max_duration_s`` after its start (and at least ``wait_s``). The rule is
-  asked once per lift, when the lift reaches ``gap_s``.
-- **a limit**: a touch that never ends (a hand resting on the skin) is cut at
-  ``max_duration_s`` and emitted with ``truncated=True``; the segmenter then waits for the
-  release before it starts another gesture, so a resting hand yields one gesture, not
-  one every ``max_duration_s``. State is bounded by ``max_frames`` preallocated rows.
+- **strokes and the gap**: a lift shorter than ``gap_s`` starts a new stroke of the same gesture
+  (each point keeps its stroke index); a lift of ``gap_s`` ends it. Multi-stroke vocabularies use
+  :data:`MULTISTROKE_GAP_S` (the codebook file carries its gap).
+- **the vocabulary's end of a gesture** (``is_complete``, ``wait_s``): with a rule that tells
+  whether the strokes so far are a whole gesture (:class:`~.ending.GestureEnd`, asked once per lift
+  when it reaches ``gap_s``), a complete gesture ends at ``gap_s``, one that looks like the start of
+  a longer one waits up to ``wait_s``, and strokes that can be no whole gesture
+  (:attr:`Verdict.UNFINISHED`) wait until ``max_duration_s`` after the start (at least ``wait_s``).
+- **a limit**: a touch that never ends is cut at ``max_duration_s`` with ``truncated=True``, and
+  the segmenter waits for the release before it starts another. State is bounded by
+  ``max_frames`` preallocated rows.
 - **two fingers**: a frame whose thresholded map has two or more blobs more than
-  ``merge_gap_taxels`` empty taxels apart is a multi-contact frame (one finger pad can
-  show holes: sliding tilts each module's dome, so its four taxels read unevenly). When at
-  least ``min_multi_frames`` frames and ``multi_fraction`` of the gesture's frames are
-  multi-contact, the gesture is flagged ``multi_contact``: its contact point, a
-  pressure-weighted mean, lies between the fingers, so the recognisers should not trust
-  it. With the defaults two fingertips about 18 mm or more apart (centre to centre) are
-  told apart; closer ones merge into one blob, as on the real skin's 3.9 mm taxels.
+  ``merge_gap_taxels`` empty taxels apart is multi-contact; a gesture with at least
+  ``min_multi_frames`` such frames, and ``multi_fraction`` of its frames, is flagged
+  ``multi_contact`` (its pressure-weighted contact point lies between the fingers).
 
-Bad input is counted, not raised: NaN pressures count as 0 (``stats.nan_frames``), a
-frame whose time goes backwards is skipped (``stats.time_reversals``), a contact without
-a finite contact point adds to the map but not the trajectory (``stats.missing_points``).
-A contact frame whose highest pressure is below ``map_threshold`` (the finger landing or
-lifting) counts as part of the gesture but gives no trajectory point
-(``stats.faint_points``): with almost no load under the finger, noise and the silicone's
-hysteresis residue elsewhere pull the pressure-weighted contact point anywhere on the skin.
+Bad input is counted in ``stats``, not raised: NaN pressures count as 0 (``nan_frames``), a frame
+whose time goes backwards is skipped (``time_reversals``), a contact without a finite point adds to
+the map but not the trajectory (``missing_points``), and a contact frame whose highest pressure is
+below ``map_threshold`` gives no trajectory point (``faint_points``: with almost no load, noise and
+hysteresis pull the contact point anywhere).
 """
 
 from __future__ import annotations
@@ -60,15 +42,12 @@ __all__ = ['ENDING_GAP_S', 'ENDING_WAIT_S', 'MULTISTROKE_GAP_S', 'SINGLE_STROKE_
 
 #: Gap (s) for vocabularies of single-stroke gestures: joins a finger skipping between taxels.
 SINGLE_STROKE_GAP_S = 0.15
-#: Gap (s) for vocabularies with multi-stroke gestures. Chosen on the pauses between the strokes
-#: of the Mixed Multistroke Gestures traces (10 people, 3 speeds; `social-touch eval skin
-#: --gap-table`, docs/skin-evaluation.md): the smallest gap past which a longer one keeps hardly
-#: more samples whole. It is also the latency every command pays after the last lift, so the knee
-#: of that table, not its tail.
+#: Gap (s) for vocabularies with multi-stroke gestures: the knee of `social-touch eval skin --gap-table`
+#: (a longer gap keeps hardly more samples whole, and every command waits it after the last lift).
 MULTISTROKE_GAP_S = 1.5
 #: With the vocabulary's end of a gesture (:class:`~.ending.GestureEnd`): the lift (s) that ends
 #: strokes that make a whole gesture, and the longest one that still continues strokes that look
-#: like the beginning of a longer gesture (docs/skin-multistroke.md, the end-of-gesture table).
+#: like the beginning of a longer gesture.
 ENDING_GAP_S = 1.0
 ENDING_WAIT_S = 3.0
 
@@ -132,17 +111,13 @@ class GestureSegmenter:
 
     Args:
         gap_s: a lift must last this long (s) to end the gesture; shorter lifts separate
-            strokes. Not in the paper; 0.15 s joins the gaps of a finger skipping taxels
-            (single-stroke vocabularies), :data:`MULTISTROKE_GAP_S` the strokes of symbols.
-        max_duration_s: a touch is cut after this long (s). Not in the paper; 10 s is
-            longer than any traced gesture of the $1 logs (docs/skin-evaluation.md).
+            strokes (:data:`SINGLE_STROKE_GAP_S`, :data:`MULTISTROKE_GAP_S`).
+        max_duration_s: a touch is cut after this long (s).
         min_frames: contacts with fewer frames are dropped as taps or noise.
         map_threshold: pressure (1 = full scale) a taxel must reach to enter the binary map
-            (cirillo2017 3.1: "a binary image is obtained by thresholding"); 0.02 is twice the
-            calibration's contact threshold, above the noise.
+            (cirillo2017 3.1); 0.02 is twice the calibration's contact threshold.
         map_relative: a taxel must also reach this fraction of the frame's highest pressure,
-            so the map shows the finger's pad whatever the force (a hard press spreads to
-            more taxels, but not to more than the ones near the pad).
+            so the map shows the finger's pad whatever the force.
         merge_gap_taxels: blobs separated by at most this many empty taxels are one contact.
         min_multi_frames: multi-blob frames needed to flag a gesture multi_contact...
         multi_fraction: ...and the fraction of its contact frames they must make up.

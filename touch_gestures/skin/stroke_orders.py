@@ -1,16 +1,10 @@
 """A touch's strokes traced in another order: :func:`every_order`.
 
-People write the strokes of a symbol in their own order: an X's two bars either one first,
-an H's bar before or after its second post. A recogniser that follows the path in time (the
-trace, :mod:`.proposed`) finds a person who writes in an order nobody in the codebook used
-far from every template of the class, however alike the strokes are (on the Mixed Multistroke
-traces one person of ten draws the other bar of the X first, and the trace named most of
-that person's X's a pitchfork). As $N does for its templates' unistrokes, a
-template of a few strokes is held in every order of its strokes (the fused recogniser's trace,
-:mod:`.fused`). Each stroke keeps its points, its times and its direction (on the skin a line's
-direction is the command; adding each stroke reversed too, as $N does, read worse on those
-traces), and the lifts keep their lengths in turn: the first lift still comes after the first
-stroke traced, whichever stroke that is.
+People write a symbol's strokes in their own order (an X's bars either one first), and a recogniser
+that follows the path in time (:mod:`.proposed`) finds an order nobody in the codebook used far
+from every template. As $N does, a template of a few strokes is held in every order of its strokes
+(the fused recogniser's trace, :mod:`.fused`). Each stroke keeps its points, times and direction
+(on the skin a line's direction is the command), and the lifts keep their lengths in turn.
 """
 
 from __future__ import annotations

@@ -1,33 +1,24 @@
 """Virtual Sensate Bear: a stimulus in, the bytes the Somatic board would send out (synthetic).
 
-:class:`BearDevice` implements the :class:`~touch_sim.virtual_port.DeviceModel` protocol:
-at frame time it samples a :class:`~touch_sim.scenes.BearStimulus` (proximity 0..1 per
-channel), applies the sensor model below and encodes a scan frame (id 0x42) with a
-sequence counter. ``serial.serial_for_url('bearsim://NAME?scene=...')`` wraps it in a port.
+:class:`BearDevice` implements :class:`~touch_sim.virtual_port.DeviceModel`: at frame time it samples
+a :class:`~touch_sim.scenes.BearStimulus` (proximity 0..1 per channel), applies the sensor model and
+encodes a scan frame (id 0x42). ``serial.serial_for_url('bearsim://NAME?scene=...')`` wraps it.
 
 Sensor model (every constant a parameter; knight2009 section in brackets):
 
-- **scan timing** [IV.D, VI.B]: the 33794 reads one channel every ``channel_dt_s`` = 5 ms.
-  ``scan='sequential'`` reads the fitted channels one after the other (the real bear:
-  56-58 x 5 ms = 0.29 s, ~3.4 Hz); ``scan='parallel'`` reads input k of all eight
-  Midplanes together (8 x 5 ms = 40 ms, the ideal 25 Hz). Each channel samples the
-  stimulus at its own time within the scan; if the slots do not fit in one frame period
-  they are squeezed evenly into it.
-- **counts** [III, IV.D, V.A]: ``baseline + drift(t) + span * proximity + noise``, rounded
-  and clipped to 0..1023. The Somatic board scales signals to the full range, so the
-  untouched baseline is low (uniform in ``baseline_range``) and ``span`` is
-  ``(1023 - baseline) * overdrive`` with overdrive uniform in ``overdrive_range`` >= 1:
-  full direct contact saturates at 1023 ("direct touch results in the maximum change,
-  saturating detection").
-- **drift**: a slow sinusoid per channel, amplitude ``drift_counts``, period around
-  ``drift_period_s`` (temperature, humidity); **noise**: Gaussian, ``noise`` counts.
-- **cross-talk** [IV.D: the shield *decreases* cross-triggering]: a fraction
-  ``crosstalk`` of the touch signal of the neighbouring inputs on the same Midplane.
-- **faults**: per channel ``'dead'`` (reads 0), ``'saturated'`` (reads 1023) or
-  ``'stuck'`` (reads its baseline, no noise). Unfitted channels read 0.
+- **scan timing** [IV.D, VI.B]: one channel every ``channel_dt_s``; ``scan='sequential'`` reads the
+  fitted channels one after the other (the real bear), ``'parallel'`` input k of all eight
+  Midplanes together. Each channel samples the stimulus at its own time, squeezed into the frame
+  period if the slots do not fit.
+- **counts** [III, IV.D, V.A]: ``baseline + drift(t) + span * proximity + noise``, clipped to
+  0..1023; baseline uniform in ``baseline_range``, ``span = (1023 - baseline) * overdrive`` with
+  overdrive in ``overdrive_range`` >= 1, so full contact saturates.
+- **drift**: a slow sinusoid per channel (``drift_counts``, ``drift_period_s``); **noise**: Gaussian.
+- **cross-talk** [IV.D]: ``crosstalk`` of the neighbouring inputs' signal on the same Midplane.
+- **faults**: ``'dead'`` (0), ``'saturated'`` (1023), ``'stuck'`` (baseline, no noise); unfitted
+  channels read 0.
 
-Noise is drawn from a generator seeded by ``(seed, frame index)``, so a frame's bytes do
-not depend on which frames were read before it.
+Noise is seeded by ``(seed, frame index)``, so a frame's bytes do not depend on earlier reads.
 """
 
 from __future__ import annotations

@@ -1,33 +1,24 @@
 """A second family of simulated people touching the Sensate Bear: hands over plates (**synthetic**).
 
-Written from knight2009 alone, independently of :mod:`.people` (whose contacts are level waveforms
-with Table II statistics), so a model made from one family can be measured on the other. Here a
-person moves a *hand* over the bear, and each sensor's level is what a shielded plate would see:
+Written from knight2009 independently of :mod:`.people` (level waveforms with Table II statistics),
+so a model made from one family can be measured on the other. A person moves a *hand* over the
+bear and each sensor's level is what a shielded plate would see:
 
-- *contact size*: a palm is a disc of the person's hand radius; a poke, tap or tickle uses
-  fingertips (discs of the person's fingertip radius). Sensors are 1.5"x2" or 3"x2" plates
-  (IV.C) at the body map's positions.
-- *coupling*: the level grows with the share of the plate the hand covers and falls off with the
-  hand's distance from the plate's centre and with its height above the fur ("detect human touch
-  to a height of approximately 1 inch", IV.A); full contact saturates ("Direct touch results in the
-  maximum change, saturating detection", IV.D). Pressure flattens the hand (more area).
-- *how a subtype is done* (Table I): hold = a still palm; pet = palm strokes across the plate,
-  lifting on the way back; rub = palm or fingers moving back and forth on it; pat = the palm landing
-  and lifting; tap = one or two brief fingertip touches; poke = one fingertip pressed; tickle =
-  fingertips wiggling fast; shake = a gripping hand squeezing rhythmically.
-- *per person* (the paper leaves all of these open): hand and fingertip size, pressure, tempo
-  (speed of every rhythm), persistence (how long each touch lasts), rhythm (how irregular the
-  period is from one pat or stroke to the next) and aim (how far from the target plate the hand
-  lands, so neighbouring plates see part of it).
-- *the sensing chain* (IV.A, IV.D): each channel is read 5 ms after the previous one within a
-  ~3.4 Hz scan (the device model, :class:`~.device.BearDevice`, reads ``proximity`` at each channel's
-  own time); per-channel baseline drift and rare one-read glitches; cross-talk between the eight
-  channels of one Midplane board; and the bear's clock running fast or slow against the people's
-  (``clock_error``). Dropped frames are the virtual port's ``drop`` option
+- *contact size*: a palm is a disc of the hand radius; poke, tap and tickle use fingertips;
+  plates are 1.5"x2" or 3"x2" (IV.C) at the body map's positions;
+- *coupling*: the level grows with the share of the plate covered and falls off with distance from
+  its centre and height above the fur (about 1 inch, IV.A); full contact saturates (IV.D);
+- *subtypes* (Table I): hold = a still palm; pet = palm strokes, lifting on the way back; rub =
+  back and forth; pat = the palm landing and lifting; tap = one or two brief fingertip touches;
+  poke = one fingertip pressed; tickle = fingertips wiggling fast; shake = a rhythmic squeeze;
+- *per person*: hand and fingertip size, pressure, tempo, persistence, rhythm and aim;
+- *the sensing chain* (IV.A, IV.D): channels read 5 ms apart within a scan (the device reads
+  ``proximity`` at each channel's time); baseline drift, rare glitches, cross-talk within a
+  Midplane, the bear's clock error (``clock_error``); dropped frames are the port's ``drop``
   (:data:`PORT_OPTIONS`).
 
 :class:`HandScene` implements ``touch_sim.scenes.BearStimulus`` and carries :class:`~.people.Label`
-rows, as :class:`~.people.BearScene` does, so the evaluation and ``collect`` tools take either.
+rows, as :class:`~.people.BearScene` does.
 
 >>> scene = make_hand_scene(n_people=1, seed=2, subtype_reps=1, gesture_reps=1)
 >>> scene.synthetic, scene.proximity(10.0).shape

@@ -1,21 +1,16 @@
 """Simulated people touching the Sensate Bear: labelled, reproducible, **synthetic** scenes.
 
-A :class:`Person` has their own style for every touch subtype, drawn from knight2009 Table II (means
-and standard deviations of peak amplitude, base frequency and duration over three users). Table II
-covers tickle, poke, pet and hold; pat, tap, shake and rub (Table I, no statistics in the paper) use
-the assumed statistics in :data:`SUBTYPE_STATS`, marked ``paper=False``. Total variance equals the
-table's; a share ``person_share`` of it lies between people (each person's own mean), the rest
-between one person's repetitions.
+A :class:`Person` has their own style for every touch subtype, drawn from knight2009 Table II
+(tickle, poke, pet, hold); pat, tap, shake and rub use the assumed statistics in
+:data:`SUBTYPE_STATS` (``paper=False``). A share ``person_share`` of the variance lies between
+people, the rest between one person's repetitions.
 
-A person performs single-sensor subtypes and the symbolic gestures of :data:`PERFORMANCES` (which
-sensors a person aims at, which subtype they use, how long) with pauses between interactions. Each
-contact on a sensor also has a chance to *stray* to a neighbouring sensor outside the gesture's
-locational filter (``stray_prob``, a per-person trait); a second attempt "with explanation" (Table
-III's column) strays four times less.
+A person performs single-sensor subtypes and the symbolic gestures of :data:`PERFORMANCES`, with
+pauses between them. A contact may *stray* to a neighbouring sensor outside the gesture's filter
+(``stray_prob``); a second attempt "with explanation" (Table III) strays four times less.
 
-:class:`BearScene` implements ``touch_sim.scenes.BearStimulus`` (``proximity(t) -> (64,)
-float32 in [0, 1]``) and carries the ground truth as :class:`Label` rows. Everything here is
-synthetic data; reports built on it must say so.
+:class:`BearScene` implements ``touch_sim.scenes.BearStimulus`` (``proximity(t) -> (64,) float32 in
+[0, 1]``) and carries the ground truth as :class:`Label` rows.
 
 >>> scene = make_scene(n_people=1, seed=3, subtype_reps=1, gesture_reps=1)
 >>> scene.synthetic, scene.proximity(0.0).shape, scene.proximity(0.0).dtype

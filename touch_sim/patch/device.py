@@ -1,34 +1,27 @@
 """Virtual textile patch and capacitive panels: a stimulus in, the firmware's bytes out (synthetic).
 
-:class:`PatchDevice` implements the :class:`~touch_sim.virtual_port.DeviceModel` protocol.
-By default it streams every raw 100 Hz scan (frame id 0x51), so the paper's moving average
-and 5:1 sub-sampling run in our calibration code; ``mode='averaged'`` makes it behave like
-the paper's firmware and send 20 Hz frames (id 0x50) that average the last 5 scans.
-``serial.serial_for_url('patchsim://NAME?scene=...')`` wraps it in a port.
+:class:`PatchDevice` implements :class:`~touch_sim.virtual_port.DeviceModel`. By default it streams
+every raw 100 Hz scan (frame id 0x51); ``mode='averaged'`` sends the paper firmware's 20 Hz frames
+(id 0x50, the mean of the last 5 scans). ``serial.serial_for_url('patchsim://NAME?scene=...')``
+wraps it in a port.
 
-Sensor model of the matrix (every constant a parameter; sympartner2018 section in brackets):
+Sensor model (every constant a parameter; sympartner2018 section in brackets):
 
-- **transfer** [5.3, Fig. 5]: ``counts = rest + span * s * tanh(p / p_sat)`` for pressure p in
-  N/cm^2, span = 1023 - rest, per-cell sensitivity s ~ 1 +- ``sensitivity_spread``. With
-  p_sat = 8 N/cm^2 the curve is within 5 % of linear below 3 N/cm^2 (~300 g/cm^2, "nearly
-  linear") and compresses above ~4 N/cm^2 ("best resolution below 400 g/cm^2").
-- **resting state** [5.3]: ``rest`` uniform in ``rest_range`` per cell, plus a slow sinusoidal
-  drift of ``drift_counts``; after a press the fabric is slow to relax: a creep term of
-  ``creep`` x the cell's recent signal decays with time constant ``creep_tau_s``.
-- **cross-talk** [5.1, 5.3]: without diodes, cells sharing a row or column with a pressed
-  cell show a phantom signal; its size is the resistance ratio of a pressed cell to an
-  unpressed one, ~30 kOhm / 1 MOhm = 0.03 (``crosstalk``) of the row's and the column's
-  strongest signal.
-- **noise** Gaussian, ``noise`` counts; 10-bit saturation at 1023; cells outside the patch
-  outline have no fabric and read only noise near 0.
+- **transfer** [5.3]: ``counts = rest + span * s * tanh(p / p_sat)``, p in N/cm^2,
+  span = 1023 - rest, per-cell sensitivity s ~ 1 +- ``sensitivity_spread``;
+- **resting state** [5.3]: ``rest`` uniform in ``rest_range``, a slow sinusoidal drift of
+  ``drift_counts``, and creep: ``creep`` x the cell's recent signal decaying with ``creep_tau_s``;
+- **cross-talk** [5.1, 5.3]: ``crosstalk`` of the strongest signal in the cell's row and column;
+- **noise**: Gaussian, ``noise`` counts; 10-bit saturation; cells outside the outline read noise
+  near 0;
 - **faults**: per cell ``'dead'`` (0), ``'saturated'`` (1023) or ``'stuck'`` (rest, no noise);
   ``dead_panels`` read 0.
 
-Panels [4, Fig. 2]: ``counts = quiescent + drift + span * level + noise`` with quiescent uniform
-in ``panel_quiescent_range`` and span (full hand contact) in ``panel_span_range``.
+Panels [4]: ``counts = quiescent + drift + span * level + noise``, quiescent uniform in
+``panel_quiescent_range``, span in ``panel_span_range``.
 
-Noise is drawn from a generator seeded by ``(seed, scan index)``. The creep term is the only
-state carried between frames, so frames must be generated in time order (VirtualSerial does).
+Noise is seeded by ``(seed, scan index)``. Creep is the only state carried between frames, so
+frames must be generated in time order.
 """
 
 from __future__ import annotations

@@ -1,36 +1,24 @@
 """Simulated people touching the textile patch: stroke, tickle, push, slap (SYNTHETIC data).
 
-A :class:`PatchScene` implements ``touch_sim.scenes.PatchStimulus``: ``pressure(t)`` is a
-(16, 16) float32 map of pressure per cell in N/cm^2 and ``panels(t)`` an (11,) float32 hand
-proximity per capacitive panel in [0, 1] (1 = full contact). It also carries the ground
-truth: every gesture event (:class:`TouchEvent`) and panel contact. Everything is drawn from
-a seed at construction, so a scene is reproducible and can be sampled at any time.
+A :class:`PatchScene` implements ``touch_sim.scenes.PatchStimulus``: ``pressure(t)`` is a (16, 16)
+float32 map in N/cm^2 and ``panels(t)`` an (11,) float32 hand proximity per panel in [0, 1]. It
+carries the ground truth (:class:`TouchEvent`, panel contacts). Everything is drawn from a seed at
+construction. Sessions follow sympartner2018 6.3: one class per session, at least 4 s between
+events; :func:`demo_scene` mixes classes.
 
-Recording protocol as in sympartner2018 6.3: one gesture class per session, a pause of at
-least 4 s between consecutive events. The demo scene (:func:`demo_scene`) mixes classes.
+The hand is a set of *tracks*: contact patches with a position (row, col cells), a radius (cm) and
+a normal force (N) on a 200 Hz grid. A cell (pitch 1.75 cm) sees ``p0 (1 - d^2/a_eff^2)`` with
+``a_eff^2 = a^2 + (pitch/2)^2`` and p0 set so the force is kept. Gestures:
 
-Contact model (documented, deliberately simple). The hand is a set of *tracks*: contact
-patches (a fingertip, a finger pad, a palm) with a position in cell units (row, col), a
-radius (cm) and a normal force (N) sampled on a 200 Hz time grid. A contact of force F and
-radius a has the mean pressure F / (pi a^2); a cell (pitch 1.75 cm: 13 mm electrodes with
-4-5 mm gaps, sympartner2018 5.1) sees the pressure profile ``p0 (1 - d^2/a_eff^2)`` with
-``a_eff^2 = a^2 + (pitch/2)^2`` (the contact smeared over the electrode area) and p0 set so
-the force is kept. Gesture models, with ranges from everyday touch (forces 0.3-10 N for
-gentle gestures, more for pushes and slaps; the patch is most sensitive below about
-4 N/cm^2, sympartner2018 5.3):
+- **stroke**: two to four finger pads or the palm sliding 6-14 cm at 8-25 cm/s, 2-8 N, one to
+  three passes;
+- **tickle**: two to four fingertips tapping and scratching 1-2 cm at 4-10 contacts/s, 0.4-2 N,
+  for 1-3 s;
+- **push**: palm or fist ramping to 10-40 N over 0.2-0.8 s, held 0.5-3 s; often a panel contact;
+- **slap**: flat hand, peak 15-60 N within 20-50 ms, contact 80-250 ms, sometimes twice.
 
-- **stroke**: two to four finger pads in a row, or the palm, sliding 6-14 cm across the
-  patch at 8-25 cm/s, 2-8 N, one to three passes with the hand lifted in between;
-- **tickle**: two to four fingertips (radius ~0.5 cm) tapping and scratching 1-2 cm in turn
-  at 4-10 contacts/s, 0.4-2 N each, for 1-3 s, the hand drifting slowly;
-- **push**: palm or fist, force ramping up to 10-40 N over 0.2-0.8 s, held 0.5-3 s with a
-  slow drift, released; often the other hand grabs the shell (a panel contact);
-- **slap**: flat hand (radius 3.5-5 cm), peak 15-60 N within 20-50 ms, contact 80-250 ms,
-  sometimes a second slap 0.3-0.7 s later.
-
-Each person (:class:`PersonStyle`) has their own preferred place, hand size, force, speed,
-duration and habits (palm or fingers, number of fingers, single or double slap); every
-event varies around them. Sessions carry a small hand tremor and force fluctuation.
+Each person (:class:`PersonStyle`) has their own place, hand size, force, speed, duration and
+habits; every event varies around them, with a small tremor and force fluctuation.
 """
 
 from __future__ import annotations

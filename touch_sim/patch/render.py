@@ -1,17 +1,9 @@
 """A patch stimulus as the robot perceives it: virtual patch -> ``patch_driver`` node -> ``/patch/frame`` (synthetic).
 
-:func:`render_scene` plays a stimulus (e.g. a :class:`~touch_sim.patch.people.PatchScene`) on a
-virtual patch read by the real ``patch_driver`` node in the :class:`~touch_sim.harness.Harness`
-(simulated time, as fast as the work allows, deterministic) and gathers the 20 Hz activation maps
-of eq. (1)-(2) from ``/patch/frame``, each with the panel contact of the ``PanelContact`` the
-driver publishes just before it (same header). The virtual patch streams every raw 100 Hz scan
-(id 0x51); the driver averages five and sub-samples to 20 Hz (sympartner2018 6.1), and
-thresholds the panels on every scan.
-
-Panels (item 4 of issue 5): the panel signals travel in every wire frame, so contact is known
-as soon as one frame arrives: one scan, 10 ms, with the raw stream, 50 ms with the paper's
-20 Hz averaged firmware. ``panel_contact`` is reported per 20 Hz frame only to line up with the
-activations; a "being handled" publisher should not wait for the 20 Hz frame.
+:func:`render_scene` plays a stimulus on a virtual patch (raw 100 Hz scans, id 0x51) read by the
+real ``patch_driver`` node in the :class:`~touch_sim.harness.Harness` (simulated time,
+deterministic) and gathers the 20 Hz activation maps from ``/patch/frame``, each with the panel
+contact the driver publishes just before it (same header).
 
 >>> from touch_sim.patch.people import make_people, simulate_session
 >>> slap = simulate_session(make_people(1)[0], 'slap', n_events=1, seed=2, lead_s=(1.0, 1.0), pause_s=(4.0, 4.0))

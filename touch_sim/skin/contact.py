@@ -1,43 +1,24 @@
 """Finger contact model of the optoelectronic skin simulator: contacts -> per-taxel signal.
 
-A stimulus (anything with ``contacts(t) -> list[Contact]``) says where fingers touch at time ``t``;
-:class:`FingerContactModel` turns the contacts of one frame into the deformation signal of each
-taxel. :class:`~touch_sim.skin.device.SkinDevice` adds the electronics (baseline, drift, noise,
-16-bit saturation, faults) and the wire format. The model is as simple as the recognisers and the
-calibration tests need; every constant is a parameter.
+A stimulus (``contacts(t) -> list[Contact]``) says where fingers touch at time ``t``;
+:class:`FingerContactModel` turns one frame's contacts into each taxel's signal and
+:class:`~touch_sim.skin.device.SkinDevice` adds the electronics and the wire format. Every constant
+is a parameter. Per frame:
 
-The model, per frame:
+1. **Load spreading**: a normal force ``F`` spreads over the taxels with a Gaussian kernel of width
+   ``sigma = hypot(spread_mm, radius_mm / 2)``; taxel ``i`` carries
+   ``F * pitch^2 / (2 pi sigma^2) * exp(-d_i^2 / (2 sigma^2))`` (an infinite grid sums to ``F``).
+2. **Shear**: a finger sliding faster than ``min_slide_mm_s`` drags the skin with ``mu * F`` along
+   its velocity; each module's share tilts its dome: ``delta_t = (shear_counts_per_n /
+   gain_counts_per_n) * share_m * (Ft . e_t)`` N-equivalent, ``e_t`` = (+-1, +-1) from the module
+   centre to taxel ``t``.
+3. **Hysteresis** (cirillo2017 2.3) per taxel on ``u = load / full_scale_n``: a play operator with
+   band ``b(u) = 2 H u (1 - u)`` on 0 <= u <= 1: ``x = clip(x_prev, u - b, u + b)``.
+4. **Repeatability** (cirillo2017 2.3): each touch-down draws a gain ``g ~ U[1 - R/2, 1 + R/2]``.
+5. **Cross-talk** inside a module (assumed): ``s'_t = (1 - 4c/3) s_t + (c/3) sum(s)``.
+6. **Transduction**: counts = ``gain_counts_per_n * full_scale_n * g * x``.
 
-1. **Load spreading.** The silicone layer (cirillo2017 2.1: one dome per 2x2 module, the domes
-   joined by a second moulding, 2.3) spreads a normal force ``F`` over the taxels with a Gaussian
-   kernel of width ``sigma = hypot(spread_mm, radius_mm / 2)``. Taxel ``i`` carries
-   ``F * pitch^2 / (2 pi sigma^2) * exp(-d_i^2 / (2 sigma^2))``, ``d_i`` the distance from the
-   contact to its centre: the load of an infinite grid sums to ``F``; near the edge part of it
-   falls off the active area, as on the real patch.
-2. **Shear.** A finger sliding faster than ``min_slide_mm_s`` drags the skin with Coulomb friction
-   ``mu * F`` along its velocity (the friction on the finger opposes its motion; the skin, which
-   the sensor measures, feels the reaction, i.e. along the motion). Each module's share of the
-   tangential force tilts its dome: the taxels on the side the force points to deform more,
-   those on the other side less: ``delta_t = (shear_counts_per_n / gain_counts_per_n) *
-   share_m * (Ft . e_t)`` in N-equivalent load, with ``e_t`` = (+-1, +-1) pointing from the
-   module centre to taxel ``t``. So the module x/y forces are non-zero while tracing.
-3. **Hysteresis** (cirillo2017 2.3: 10.27 %) per taxel on the load normalised to the taxel full
-   scale ``u = load / full_scale_n``: a play operator with band ``b(u) = 2 H u (1 - u)`` on
-   0 <= u <= 1 (0 outside): ``x = clip(x_prev, u - b, u + b)``. Loading follows ``u - b``,
-   unloading ``u + b``; the widest gap, at u = 0.5, is ``H`` of full scale; no residue at zero load.
-4. **Repeatability** (cirillo2017 2.3: 6.77 %): each touch-down (contacts after none) draws a gain
-   ``g ~ U[1 - R/2, 1 + R/2]`` for the whole touch, so two presses differ by at most ``R``.
-5. **Cross-talk** inside a module (assumed, not from the paper): the four cells share one dome, so
-   a fraction ``c`` of each cell's signal leaks equally to its three neighbours:
-   ``s'_t = (1 - 4c/3) s_t + (c/3) sum(s)``. The module sum, hence fz, is unchanged; shear
-   contrast shrinks by ``1 - 4c/3``.
-6. **Transduction**: signal in counts = ``gain_counts_per_n * full_scale_n * g * x``.
-
-Not modelled: the scanning skew inside a frame (modules are sampled 12 times per 6.7 ms; a finger at
-100 mm/s moves 0.6 mm meanwhile), the 1 ms response time (cirillo2017 2.3; below one frame), creep.
-With the defaults a 0.2 N touch (cirillo2017 2.3 sensitivity) anywhere on the skin lifts its
-strongest taxel by >= 260 counts before hysteresis and repeatability and >= 200 counts after them
-(8 times the device noise of 25 counts; the calibration's contact threshold is 160).
+Not modelled: the scanning skew inside a frame, the response time, creep.
 """
 
 from __future__ import annotations

@@ -1,22 +1,19 @@
-"""Virtual optoelectronic skin: a stimulus in, the bytes the hardware would send out.
+"""Virtual optoelectronic skin: a stimulus in, the bytes the hardware would send out (synthetic).
 
-:class:`SkinDevice` implements :class:`touch_sim.virtual_port.DeviceModel` (``frame_period``,
-``frame_bytes(index, t)``) for the ``skinsim://`` URL handler, and :func:`render_frames` runs the same
-model without a port. Per frame it asks the stimulus for the contacts at ``t``, turns them into taxel
-signals with :class:`~touch_sim.skin.contact.FingerContactModel` (load spreading, shear,
-hysteresis, repeatability, cross-talk) and adds the electronics:
+:class:`SkinDevice` implements :class:`touch_sim.virtual_port.DeviceModel` for the ``skinsim://`` URL
+handler, and :func:`render_frames` runs the same model without a port. Per frame it turns the
+stimulus's contacts into taxel signals (:class:`~touch_sim.skin.contact.FingerContactModel`) and
+adds the electronics:
 
-- **baseline** per taxel: ``baseline_counts`` + N(0, ``baseline_spread_counts``) (LED/PT pairs differ);
-- **drift**: a common-mode term (temperature) ``drift_counts * sin(2 pi t / drift_period_s + phi)`` and
-  per-taxel terms (LED ageing) of amplitude U(0, ``taxel_drift_counts``) and periods U(300, 1200) s;
-- **noise**: Gaussian, ``noise_counts`` (about 1.5 LSB of the STM32F303's 12-bit ADC scaled to 16 bits);
-- **16-bit saturation**: counts are rounded and clipped to 0..65535;
-- **faults** (row-major taxel indices): ``dead`` taxels read 0..63 counts (no light), ``stuck`` ones hold
-  their rest value exactly, ``saturated`` ones read 65535.
+- **baseline** per taxel: ``baseline_counts`` + N(0, ``baseline_spread_counts``);
+- **drift**: common-mode ``drift_counts * sin(2 pi t / drift_period_s + phi)`` plus per-taxel terms
+  of amplitude U(0, ``taxel_drift_counts``) and periods U(300, 1200) s;
+- **noise**: Gaussian, ``noise_counts``; counts rounded and clipped to 0..65535;
+- **faults** (row-major taxel indices): ``dead`` read 0..63, ``stuck`` hold their rest value,
+  ``saturated`` read 65535.
 
-All randomness comes from one ``numpy.random.Generator`` seeded with ``seed``, so a device asked for
-frames 0, 1, 2, ... in order (as the URL handler and :func:`render_frames` do) is deterministic.
-Synthetic data: everything this module produces is simulated.
+All randomness comes from one generator seeded with ``seed``, so frames asked for in order are
+deterministic.
 """
 
 from __future__ import annotations

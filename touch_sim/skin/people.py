@@ -1,24 +1,16 @@
 """Simulated people at the optoelectronic skin: traced gestures and touches that are none (SYNTHETIC).
 
-A :class:`SkinScene` is a sequence of touches that do not overlap in time, each a skin
-stimulus of :mod:`touch_driver.skin` (``contacts(t)``), with its ground truth as a
-:class:`SceneEvent`. It implements ``touch_sim.skin.contact.SkinStimulus``, so the
-virtual skin plays it (``skinsim://NAME?scene=...``, a registered stimulus or a YAML scene
-naming :func:`people_scene` as its ``generator``). Finding the touch at ``t`` is a
-bisection, so a scene of hundreds of touches (a simulated codebook recording) costs no
-more per frame than one touch.
+A :class:`SkinScene` is a sequence of touches that do not overlap in time, each a skin stimulus
+(``contacts(t)``) with its ground truth as a :class:`SceneEvent`; it implements
+``touch_sim.skin.contact.SkinStimulus``, so ``skinsim://`` plays it. Touches (``SceneEvent.kind``):
 
-Touches (``SceneEvent.kind``):
-
-- ``'gesture'``: a codebook gesture traced by a simulated performer
-  (:func:`~.synthetic.synthetic_traces`: own size, place, slant, speed, corner style, shake);
-- ``'random'``: a scribble, a zigzag or a dab that is no gesture (:func:`~.synthetic.random_touches`);
+- ``'gesture'``: a codebook gesture traced by a simulated performer (:func:`~.synthetic.synthetic_traces`);
+- ``'random'``: a scribble, a zigzag or a dab (:func:`~.synthetic.random_touches`);
 - ``'press'``: a finger pressing still for 0.5-2 s;
 - ``'two_fingers'``: two fingertips about 20 mm apart stroking side by side;
-- ``'resting_hand'``: a press that outlasts the segmenter's limit (a hand left on the skin).
+- ``'resting_hand'``: a press that outlasts the segmenter's limit.
 
-Only ``'gesture'`` touches should fire a command; :func:`people_scene` draws a session of
-them from a seed. Everything here is synthetic.
+Only ``'gesture'`` touches should fire a command; :func:`people_scene` draws a session from a seed.
 """
 
 from __future__ import annotations

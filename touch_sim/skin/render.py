@@ -1,31 +1,20 @@
 """Skin stimuli and trace samples through the skin into :class:`TouchGesture` objects (synthetic sensor).
 
-:func:`graph_gestures` plays a skin stimulus (e.g. a :class:`~touch_sim.skin.people.SkinScene`) on
-the virtual skin read by the real ``skin_driver`` node in the :class:`~touch_sim.harness.Harness`
-(simulated time, deterministic) and cuts the ``SkinFrame`` messages of ``/skin/frame`` into
-gestures with a :class:`~touch_gestures.skin.frames.SkinFrameStream`, the skin node's own frame
-handling. Each gesture comes with its start and end in scene time (device time: the stimulus's
-``t``), so it can be matched with the scene's ground truth. A frame's stamp is the graph time at
-which the driver's poll timer (300 Hz) read it: up to 3.3 ms after the frame's device time.
+:func:`graph_gestures` plays a skin stimulus on the virtual skin read by the real ``skin_driver``
+node in the :class:`~touch_sim.harness.Harness` (simulated time, deterministic) and cuts
+``/skin/frame`` into gestures with the skin node's :class:`~touch_gestures.skin.frames.SkinFrameStream`.
+Each gesture comes with its start and end in scene time (the stimulus's ``t``); a frame's stamp is
+when the driver's poll timer read it.
 
-For evaluation, a trace sample goes one of two ways, so the cost of the sensor is visible:
+A trace sample goes one of two ways, so the cost of the sensor is visible:
 
-- ``'sensor'``: the virtual skin (finger contact model, hysteresis, repeatability, noise,
-  150 Hz) read by ``skin_driver`` (the robot's stream decoder and
-  :class:`~touch_driver.skin.calibration.SkinCalibrator`), the node's frame handling and
-  :class:`GestureSegmenter` cut the gestures (:func:`graph_gestures`). Synthetic sensor data.
-- ``'direct'`` ("before the sensor"): the same placement and timing, but the segmenter is
-  fed the true finger position at 150 Hz and a perfect pressure map
-  (:func:`~touch_gestures.skin.gesture.ideal_frame`).
+- ``'sensor'``: the virtual skin, ``skin_driver`` and the node's frame handling (:func:`graph_gestures`);
+- ``'direct'``: the same placement and timing, the segmenter fed the true finger position at
+  150 Hz and a perfect pressure map (:func:`~touch_gestures.skin.gesture.ideal_frame`).
 
-A sample of the file becomes a :class:`TraceStimulus` (its bounding box scaled onto the
-active area, aspect kept); synthetic samples already in mm (``placement='mm'``) keep their
-size and position. Multi-stroke samples are traced stroke by stroke with the finger lifted
-in between; the segmenter joins strokes whose gap is shorter than its hysteresis and
-splits the others into separate gestures (the evaluation counts a split sample as wrong).
-
-Rendering costs about 50 ms a sample, so :func:`render_samples` caches its output in an
-``.npz`` file (no pickle) keyed by the samples' content and the settings.
+A sample becomes a :class:`TraceStimulus` (its bounding box scaled onto the active area);
+samples already in mm (``placement='mm'``) keep their size and position. :func:`render_samples`
+caches its output in an ``.npz`` file (no pickle) keyed by the samples' content and the settings.
 """
 
 from __future__ import annotations
@@ -45,6 +34,7 @@ from touch_driver.skin.protocol import FRAME_RATE_HZ
 from touch_gestures.skin.frames import SkinFrameStream
 from touch_gestures.skin.gesture import GRID, TouchGesture, ideal_frame
 from touch_gestures.skin.segmentation import GestureSegmenter
+from touch_graph.files import replacing
 from touch_sim.harness import DeviceRun, stamp_ns, wire_frames_before
 from touch_sim.skin.traces import TraceSample, TraceStimulus, clock_tick, traced_strokes
 
@@ -180,7 +170,6 @@ def render_sample(sample: TraceSample, settings: RenderSettings = RenderSettings
 
 
 # ----------------------------------------------------------------------------- cache
-_ARRAYS = ('binary_map', 'peak_map', 'trajectory', 'times', 'stroke')
 _SCALARS = ('frames', 'start_s', 'duration_s', 'strokes', 'multi_contact', 'truncated')
 
 
@@ -217,9 +206,8 @@ def _save(path: Path, rendered: list[RenderedSample]) -> None:
     for name in _SCALARS:
         data[name] = np.array([getattr(g, name) for g in gestures])
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix('.tmp.npz')
-    np.savez_compressed(tmp, **data)
-    tmp.replace(path)
+    with replacing(path) as tmp:
+        np.savez_compressed(tmp, **data)
 
 
 def _load(path: Path) -> list[RenderedSample] | None:

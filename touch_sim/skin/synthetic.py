@@ -1,22 +1,11 @@
 """Synthetic traced gestures and random touches (labelled synthetic wherever reported).
 
-Tests and generalisation checks need traces that are not the five people of
-``../shared/data``: :func:`synthetic_traces` draws gesture sets of the paper's figures
-(cirillo2017 Fig. 7 and 8: diagonals, lines in both directions, the numbers 1 and 2) and
-the digits, traced by simulated performers who differ the way people do:
-
-- **size and position**: the gesture's box is 18-42 mm on a side anywhere on the 47 mm skin;
-- **orientation and proportions**: a performer's slant (sd 6 degrees) and aspect (sd 10 %),
-  plus per-repetition jitter;
-- **speed**: 40-160 mm/s per performer, x0.7-1.4 per repetition, slowing down at corners
-  by a performer-specific amount, sometimes a pause mid-stroke;
-- **a shaky line**: a slow wobble across the path (0-1 mm) and a tremor;
-- **corner style**: sharp or rounded corners.
-
-Traces come as :class:`~touch_sim.skin.traces.TraceSample` in **mm on the skin**
-(x along columns, y along rows) with ``t_ms``, sampled at ``rate_hz`` like a touch logger.
-:func:`random_touches` draws scribbles, wiggles and dabs that are no gesture at all, for
-measuring how often a random touch fires a command.
+:func:`synthetic_traces` draws gesture sets of cirillo2017 (Fig. 7 and 8) and the digits, traced by
+simulated performers who differ in size and position (box 18-42 mm anywhere on the skin), slant
+and aspect, speed (slowing at corners, sometimes pausing), wobble and tremor, and corner style.
+Traces are :class:`~touch_sim.skin.traces.TraceSample` in **mm on the skin** (x along columns, y
+along rows) with ``t_ms``, sampled at ``rate_hz``. :func:`random_touches` draws scribbles, wiggles
+and dabs that are no gesture at all.
 """
 
 from __future__ import annotations

@@ -1,29 +1,21 @@
 """Traced gestures (:class:`TraceSample`) and a finger tracing one across the skin (:class:`TraceStimulus`).
 
-A :class:`TraceSample` is one gesture as a pen or finger drew it (recorded, e.g. the $1 logs
-read by :func:`touch_lab.skin.datasets.read_traces`, or synthetic, :mod:`~touch_sim.skin.synthetic`).
+A :class:`TraceSample` is one gesture as a pen or finger drew it (recorded: :func:`touch_lab.skin.datasets.read_traces`,
+or synthetic: :mod:`~touch_sim.skin.synthetic`). :meth:`TraceStimulus.from_points` places screen
+points (x, y pixels, y downward, t ms) on the skin:
 
-:meth:`TraceStimulus.from_points` takes a gesture sample as screen points (e.g. a row group of
-``unistroke_dev.csv.gz``: x, y in pixels, y growing downward, t in ms) and places it on the skin:
+- **space**: the bounding box is scaled onto the 47 x 47 mm active area minus a margin on each side,
+  keeping the aspect ratio, and centred; screen x runs along the columns, y along the rows. A
+  sample with no extent lands in the centre.
+- **time**: after ``lead_in_s`` of untouched skin the force ramps up over ``ramp_s``, the finger
+  follows the points (linear between samples, ``t_ms`` times ``time_scale``), the force ramps down,
+  and ``tail_s`` of untouched skin follows.
+- **strokes** are traced in time order with a lift between them; overlapping strokes are an error.
+- **a coarse clock** stamps several points with one time: :func:`spread_stamps` spreads each such
+  run evenly over its tick, so the finger passes every point.
 
-- **space**: the bounding box of all points is scaled onto the 47 x 47 mm active area minus a
-  margin (default one taxel pitch) on each side, keeping the aspect ratio, and centred. Screen x
-  runs along the columns, screen y (downward) along the rows, so the picture is not mirrored when
-  row 0 (the connector edge) is drawn at the top. A sample with no extent (a tap) lands in the centre.
-- **time**: ``t_ms`` (times ``time_scale``) from the first point. After ``lead_in_s`` of untouched
-  skin (the calibrator tares on it) the force ramps up over ``ramp_s`` at the first point, the
-  finger follows the points (linear between samples, velocity from the segment for shear), and
-  the force ramps down over ``ramp_s`` at the last point; ``tail_s`` of untouched skin follows.
-- **strokes**: several strokes (``stroke`` ids) are traced in time order; the finger lifts between
-  them (ramp down, ramp up; ramps shorten to fit a short gap). Overlapping strokes are an error.
-- **a coarse clock**: a logger whose clock ticks slower than its pen reports several points with
-  one time (the Mixed Multistroke logs: a 16 ms tick, 84 % of the points share their time; keeping
-  one point per time would lose 21 % of the median sample's ink, 51 % at the 90th percentile:
-  :mod:`touch_lab.skin.logged_times`, docs/skin-multistroke.md). :func:`spread_stamps` spreads each
-  such run evenly over its tick, so the finger passes every point.
-
-:func:`~touch_sim.skin.device.render_frames` turns the stimulus into raw frames
-with the same device model as the ``skinsim://`` URL handler, without a serial port::
+:func:`~touch_sim.skin.device.render_frames` turns the stimulus into raw frames with the device model
+of the ``skinsim://`` URL handler::
 
     stim = TraceStimulus.from_points(x, y, t_ms)
     frames = render_frames(stim, seed=1)            # (n, 144) uint16 at 150 Hz
