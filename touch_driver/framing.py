@@ -37,7 +37,7 @@ from __future__ import annotations
 import struct
 from binascii import crc_hqx
 from dataclasses import dataclass, field
-from typing import Generic, TypeVar
+from typing import Generic, NamedTuple, TypeVar
 from zlib import crc32
 
 __all__ = ['HEADER_SIZE', 'MAX_WRAP_GAP', 'OVERHEAD', 'PROTOCOL_VERSION', 'START_SEQ', 'SYNC', 'DecoderStats',
@@ -74,9 +74,9 @@ def encode_frame(sensor_id: int, seq: int, payload: bytes) -> bytes:
     return head + payload + _CRC.pack(crc32(payload, crc32(head[2:])))
 
 
-@dataclass(frozen=True, slots=True)
-class Frame:
-    """A checked frame: sensor id, sequence counter (0..65535) and raw payload bytes."""
+class Frame(NamedTuple):
+    """A checked frame: sensor id, sequence counter (0..65535) and raw payload bytes (immutable; a named
+    tuple, cheaper to make than a frozen dataclass, one per frame)."""
 
     sensor_id: int
     seq: int
