@@ -3,7 +3,8 @@
 The skin driver (``skin_driver``) and its recogniser (``haptic_commands``) run in one process, in
 one executor, on the wall clock, fed the bytes the virtual skin sends for the demo's people scene
 (synthetic, :func:`~touch_lab.bench.replay.record_scene`), one wire frame at a time. Each frame's
-path is timed per step (``time.perf_counter_ns``):
+path is timed per step in CPU time of the thread (``time.thread_time_ns``: on a shared machine a
+preempted step would otherwise count the other processes' time):
 
 - ``decode``: the bytes through the driver's stream decoder (framing, checksums, payload order);
 - ``calibrate``: :meth:`~touch_driver.skin.calibration.SkinCalibrator.update`;
@@ -31,6 +32,7 @@ __all__ = ['STEPS', 'bench_frame_steps', 'time_steps']
 STEPS = ('decode', 'calibrate', 'build message', 'publish', 'recognise')
 #: The skin's frame period, s (150 Hz).
 SKIN_PERIOD_S = 1.0 / 150.0
+_clock = time.thread_time_ns
 
 
 class _Timed:
@@ -40,11 +42,11 @@ class _Timed:
         self.fn, self.totals, self.step = fn, totals, step
 
     def __call__(self, *args: Any) -> Any:
-        start = time.perf_counter_ns()
+        start = _clock()
         try:
             return self.fn(*args)
         finally:
-            self.totals[self.step] += time.perf_counter_ns() - start
+            self.totals[self.step] += _clock() - start
 
 
 def time_steps(chunks: tuple[bytes, ...], pause_s: float) -> dict[str, list[int]]:
@@ -71,7 +73,7 @@ def time_steps(chunks: tuple[bytes, ...], pause_s: float) -> dict[str, list[int]
         driver.calibrator.update = _Timed(driver.calibrator.update, totals, 'calibrate')
         driver.frame_pub.publish = _Timed(driver.frame_pub.publish, totals, 'publish')
         out: dict[str, list[int]] = {step: [] for step in STEPS}
-        clock = time.perf_counter_ns
+        clock = _clock
         for chunk in chunks:
             if pause_s:
                 time.sleep(pause_s)
