@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
 
 import yaml
 
 from touch_lab.bench.replay import PtyPort, record_scene
-from touch_lab.bench.wall_clock import measure, prepared_launch, render, tree_cpu_s
+from touch_lab.bench.wall_clock import measure, prepared_launch, render, tree_cpu_s, tree_thread_cpu_s
 from touch_lab.bench.wall_clock_feed import feed
 
 
@@ -45,12 +46,30 @@ def test_tree_cpu_counts_this_process() -> None:
     assert tree_cpu_s(os.getpid()) > before
 
 
+def test_thread_cpu_is_split_into_the_main_thread_and_the_others() -> None:
+    def busy(seconds: float) -> None:
+        end = time.thread_time() + seconds
+        while time.thread_time() < end:
+            pass
+
+    main0, other0 = tree_thread_cpu_s(os.getpid())
+    worker = threading.Thread(target=busy, args=(0.3,))
+    worker.start()
+    worker.join()
+    main1, other1 = tree_thread_cpu_s(os.getpid())
+    busy(0.3)
+    main2, other2 = tree_thread_cpu_s(os.getpid())
+    assert other1 - other0 >= 0.2 and main1 - main0 < 0.1      # clock ticks: 0.01 s
+    assert main2 - main1 >= 0.2 and other2 - other1 < 0.1
+
+
 def test_one_patch_launched_on_the_wall_clock_publishes_every_frame_sent() -> None:
     recordings = {'skin': record_scene('skin', 4.0)}
     run = measure('patches', 1, 1.0, True, False, recordings)
     assert run['all_published'] and run['frames_missed'] == 0
     assert run['frames_sent'] >= 300                      # 3.5 s fed at 150 Hz
     assert run['percent_of_core'] > 0
+    assert abs(run['main_threads_percent'] + run['other_threads_percent'] - run['percent_of_core']) < 5
 
 
 def test_the_report_renders_every_configuration() -> None:

@@ -33,9 +33,8 @@ import time
 import urllib.parse
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from importlib.metadata import entry_points
-from typing import Any, Generic
+from typing import Any, Generic, NamedTuple
 
 import serial
 
@@ -94,10 +93,10 @@ def prepare_port_url(port: str) -> None:
         serial.protocol_handler_packages.append(package)
 
 
-@dataclass(frozen=True, slots=True)
-class DecodedFrame(Generic[ScanT]):
+class DecodedFrame(NamedTuple, Generic[ScanT]):
     """A sensor's decoded scan, the time it was read (``clock()`` seconds) and, once the driver node
-    has stamped it, its header stamp (ns on the graph's clock; None before)."""
+    has stamped it, its header stamp (ns on the graph's clock; None before). Immutable; a named tuple
+    rather than a frozen dataclass because two are made for every frame."""
 
     scan: ScanT
     received_s: float

@@ -207,6 +207,8 @@ def _scalar_converter(owner: str, field: str, base: str, bound: int) -> tuple[Ca
         lo, hi = _INT_RANGES[base]
 
         def conv_int(v: Any) -> int:
+            if type(v) is int and lo <= v <= hi:  # the common case first: every header's stamp takes it
+                return v
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
                 raise _fail(owner, field, f'an int ({base})', v)
             v = int(v)
@@ -217,20 +219,27 @@ def _scalar_converter(owner: str, field: str, base: str, bound: int) -> tuple[Ca
     if base in _FLOATS:
         # float32 fields hold the float32-rounded value, so a CDR round trip gives the same message.
         narrow = _FLOATS[base] if base == 'float32' else float
+        wide = base != 'float32'
 
         def conv_float(v: Any) -> float:
+            if wide and type(v) is float:  # a Python float is a float64 already
+                return v
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise _fail(owner, field, f'a float ({base})', v)
             return float(narrow(v))
         return conv_float, 0.0
     if base == 'bool':
         def conv_bool(v: Any) -> bool:
+            if type(v) is bool:
+                return v
             if not isinstance(v, (bool, np.bool_)):
                 raise _fail(owner, field, 'a bool', v)
             return bool(v)
         return conv_bool, False
     if base == 'string':
         def conv_str(v: Any) -> str:
+            if type(v) is str and not bound:
+                return v
             if not isinstance(v, str):
                 raise _fail(owner, field, 'a str', v)
             if bound and len(v) > bound:

@@ -210,16 +210,14 @@ class SkinCalibrator:
             if self._n_stuck:
                 dead |= self._stuck & ~saturated
                 stuck_sat = self._stuck & saturated
-        sig = counts.astype(np.float64)
-
         # 2. tare
         if not self.tared:
-            return self._collect_tare(sig, dead, saturated)
+            return self._collect_tare(counts.astype(np.float64), dead, saturated)
 
         # 3. pressure
-        resid = sig - self._baseline
+        resid = np.subtract(counts, self._baseline)   # float64 (uint16 counts convert exactly)
         q = resid * self._scale
-        q[dead] = 0.0
+        np.copyto(q, 0.0, where=dead)
         if stuck_sat is not None and np.count_nonzero(stuck_sat):
             # Saturated for stuck_s: real only if a neighbour is pressed too.
             pressed = (q > c.drift_gate) & ~stuck_sat

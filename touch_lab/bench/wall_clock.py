@@ -9,7 +9,9 @@ bytes the virtual devices of touch_sim send for the demo's people scenes (synthe
 first, :func:`~touch_lab.bench.replay.record_scene`), at the sensors' real rates (bear 3.4 Hz,
 patch 20 Hz, skin 150 Hz). Once every driver has reported on /diagnostics the feed starts; after
 :data:`WARMUP_S` the CPU time (user + system, ``/proc/PID/stat``) of the launch process and all
-its descendants is read over ``seconds`` wall seconds: the share of one core. Then the drivers'
+its descendants is read over ``seconds`` wall seconds: the share of one core, also split into the
+processes' main threads (the executors: decoding, calibrating, recognising) and their other threads
+(the drivers' port readers, DDS). Then the drivers'
 last /diagnostics must count every frame written as published (``frames``), none missed.
 
 Configurations: ``sensors`` (bear, patch and skin with their recognisers, launch/bear, patch and
@@ -44,7 +46,7 @@ from touch_graph.paths import share_file
 from .replay import PtyPort, Recording, record_scene
 
 __all__ = ['GOAL_PATCH_PERCENT', 'GOAL_SENSORS_PERCENT', 'WARMUP_S', 'bench_wall_clock', 'measure', 'prepared_launch',
-           'tree_cpu_s']
+           'tree_cpu_s', 'tree_thread_cpu_s']
 
 #: Issue 27's goals: the three sensors with their recognisers in one process, and each extra patch.
 GOAL_SENSORS_PERCENT = 3.0
@@ -67,13 +69,37 @@ def tree_cpu_s(pid: int) -> float:
     while todo:
         current = todo.pop()
         try:
-            fields = Path(f'/proc/{current}/stat').read_text().rsplit(')', 1)[1].split()
-            total += (int(fields[11]) + int(fields[12])) / _TICK
+            total += _stat_cpu_s(Path(f'/proc/{current}/stat'))
             for task in Path(f'/proc/{current}/task').iterdir():
                 todo += [int(c) for c in (task / 'children').read_text().split()]
         except (FileNotFoundError, ProcessLookupError, IndexError):
             continue
     return total
+
+
+def tree_thread_cpu_s(pid: int) -> tuple[float, float]:
+    """User + system CPU seconds of process ``pid`` and its living descendants, split into their main threads
+    (where the executors spin) and all their other threads (port readers, DDS; ended ones included)."""
+    main = other = 0.0
+    todo = [pid]
+    while todo:
+        current = todo.pop()
+        try:
+            total = _stat_cpu_s(Path(f'/proc/{current}/stat'))
+            own = _stat_cpu_s(Path(f'/proc/{current}/task/{current}/stat'))
+            main += own
+            other += total - own
+            for task in Path(f'/proc/{current}/task').iterdir():
+                todo += [int(c) for c in (task / 'children').read_text().split()]
+        except (FileNotFoundError, ProcessLookupError, IndexError):
+            continue
+    return main, other
+
+
+def _stat_cpu_s(path: Path) -> float:
+    """utime + stime of a ``/proc/.../stat`` file, s."""
+    fields = path.read_text().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / _TICK
 
 
 def _with_driver_param(entries: list, name: str, value: Any) -> list:
@@ -186,9 +212,9 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
             feeder.stdin.flush()
             listener.executor.spin_for(WARMUP_S)
             load_before = os.getloadavg()[0]
-            cpu0, wall0 = tree_cpu_s(launch.pid), time.monotonic()
+            threads0, cpu0, wall0 = tree_thread_cpu_s(launch.pid), tree_cpu_s(launch.pid), time.monotonic()
             listener.executor.spin_for(seconds)
-            cpu1, wall1 = tree_cpu_s(launch.pid), time.monotonic()
+            cpu1, wall1, threads1 = tree_cpu_s(launch.pid), time.monotonic(), tree_thread_cpu_s(launch.pid)
             load_after = os.getloadavg()[0]
             fed = json.loads(feeder.stdout.readline())
             sent = dict.fromkeys(drivers, 0)
@@ -202,6 +228,8 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
             got = published()
             missed = {name: int(listener.latest[name].get('frames_missed', 0)) for name in drivers}
             return {'percent_of_core': 100.0 * (cpu1 - cpu0) / (wall1 - wall0), 'wall_s': wall1 - wall0,
+                    'main_threads_percent': 100.0 * (threads1[0] - threads0[0]) / (wall1 - wall0),
+                    'other_threads_percent': 100.0 * (threads1[1] - threads0[1]) / (wall1 - wall0),
                     'frames_sent': sum(sent.values()), 'frames_published': sum(got.values()),
                     'frames_missed': sum(missed.values()), 'all_published': got == sent,
                     'feeder_max_late_s': fed['max_late_s'], 'load_average_1min': (load_before + load_after) / 2}
@@ -226,6 +254,8 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
 def _median_run(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return {'percent_of_core': round(statistics.median(r['percent_of_core'] for r in runs), 2),
             'runs_percent': [round(r['percent_of_core'], 2) for r in runs],
+            'main_threads_percent': round(statistics.median(r['main_threads_percent'] for r in runs), 2),
+            'other_threads_percent': round(statistics.median(r['other_threads_percent'] for r in runs), 2),
             'frames_sent': runs[-1]['frames_sent'], 'frames_published': runs[-1]['frames_published'],
             'no_frame_missed': all(r['all_published'] and r['frames_missed'] == 0 for r in runs),
             'load_average_1min': round(statistics.median(r['load_average_1min'] for r in runs), 2)}
@@ -291,6 +321,13 @@ def _curve_png(figures: dict, path: Path) -> Path:
         return save_png(fig, path)
 
 
+def _threads(row: dict) -> str:
+    """``main / other`` threads' % of one core of a row ('-' for figures measured before the split)."""
+    if 'main_threads_percent' not in row:
+        return '-'
+    return f'{row["main_threads_percent"]:.2f} / {row["other_threads_percent"]:.2f}'
+
+
 def render(figures: dict, png_name: str) -> str:
     goals = figures['goals']
     lines = [
@@ -302,28 +339,33 @@ def render(figures: dict, png_name: str) -> str:
         'the bytes the virtual devices send for the demo\'s people scenes (SYNTHETIC). CPU is user + system time of '
         f'the launch process and its children over {figures["seconds"]:g} wall seconds after {WARMUP_S:g} s of '
         f'feeding, as % of one core, median of {figures["repeats"]} runs. "arrival": the drivers read when bytes '
-        'arrive (the default); "polled": a timer at twice the sensor rate (`read_on_arrival:=false`, the way before).',
+        'arrive (the default); "polled": a timer at twice the sensor rate (`read_on_arrival:=false`, the way before). '
+        '"main / other threads": the same CPU split into the processes\' main threads (the executors: decoding, '
+        'calibrating, recognising) and their other threads (the drivers\' port readers, DDS).',
         '',
         f'**Noise.** This machine has {figures["cpu_count"]} cores shared with other work; the 1-minute load '
         'average during each configuration is printed beside it. With a load average above the core count the '
         'figures carry the scheduler\'s noise (runs are listed); compare ratios within one run of the report.', '',
         f'## Three sensors with their recognisers, one process (goal <= {goals["sensors_percent"]:g} %)', '',
-        '| reading | % of one core | runs | frames sent | published | none missed | load average |',
-        '|---|---:|---|---:|---:|---|---:|',
+        '| reading | % of one core | main / other threads | runs | frames sent | published | none missed | '
+        'load average |',
+        '|---|---:|---:|---|---:|---:|---|---:|',
     ]
     for mode, row in figures['sensors'].items():
-        lines.append(f'| {mode} | {row["percent_of_core"]:.2f} | {row["runs_percent"]} | {row["frames_sent"]} | '
+        lines.append(f'| {mode} | {row["percent_of_core"]:.2f} | {_threads(row)} | {row["runs_percent"]} | '
+                     f'{row["frames_sent"]} | '
                      f'{row["frames_published"]} | {"yes" if row["no_frame_missed"] else "NO"} | '
                      f'{row["load_average_1min"]:.2f} |')
     lines += ['', f'## N skin patches: launch/skin_patches.launch.yaml (goal <= {goals["per_extra_patch_percent"]:g} '
               '% per extra patch)', '', f'![CPU against N patches]({png_name})', '',
-              '| processes | reading | patches | % of one core | runs | frames sent | published | none missed | '
-              'load average |', '|---|---|---:|---:|---|---:|---:|---|---:|']
+              '| processes | reading | patches | % of one core | main / other threads | runs | frames sent | '
+              'published | none missed | load average |', '|---|---|---:|---:|---:|---|---:|---:|---|---:|']
     for key, label in (('patches', 'one'), ('patches_processes', 'one per node')):
         for mode, curve in figures[key].items():
             for n in sorted(k for k in curve if isinstance(k, int)):
                 row = curve[n]
-                lines.append(f'| {label} | {mode} | {n} | {row["percent_of_core"]:.2f} | {row["runs_percent"]} | '
+                lines.append(f'| {label} | {mode} | {n} | {row["percent_of_core"]:.2f} | {_threads(row)} | '
+                             f'{row["runs_percent"]} | '
                              f'{row["frames_sent"]} | {row["frames_published"]} | '
                              f'{"yes" if row["no_frame_missed"] else "NO"} | {row["load_average_1min"]:.2f} |')
     lines += ['', 'Per extra patch (the slope from the fewest to the most patches measured), % of one core:', '']

@@ -41,6 +41,8 @@ BENCHES: dict[str, Command] = {
                            'RSS of each node process as launched (--processes) and of its imports'),
     'wall-clock': Command('touch_lab.bench.wall_clock:bench_wall_clock',
                           'the graph as launched on the wall clock, sensors fed through ptys: CPU share'),
+    'frame-steps': Command('touch_lab.bench.frame_steps:bench_frame_steps',
+                           "one skin frame's CPU per step (decode ... recognise), back to back and at 150 Hz"),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
     'skin-acceptance': Command('touch_lab.skin.bench:bench_acceptance',
                                'one recognition with thresholds, the product score and the logistic score'),
