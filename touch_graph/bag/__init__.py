@@ -11,9 +11,9 @@ __all__ = ['BagPlayer', 'BagRecorder', 'BagTopic', 'DefinitionCheck', 'PlayerNod
 
 def __getattr__(name: str):  # the nodes import the runtime: only load them when asked for
     if name == 'PlayerNode':
-        from .player_node import PlayerNode
+        from .player_node import PlayerNode  # lazy: see __getattr__
         return PlayerNode
     if name == 'RecorderNode':
-        from .recorder_node import RecorderNode
+        from .recorder_node import RecorderNode  # lazy: see __getattr__
         return RecorderNode
     raise AttributeError(name)

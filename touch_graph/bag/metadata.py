@@ -21,6 +21,7 @@ from typing import Any
 import yaml
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 from rosbags.rosbag2.metadata import dump_qos_v9, parse_qos
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 __all__ = ['DEFAULT_ROS_DISTRO', 'SCHEMA_ENCODING', 'FileRecord', 'TopicRecord', 'bag_metadata', 'qos_text',
            'ros_distro', 'serialized_metadata', 'to_bag_qos', 'type_hash', 'write_metadata']
@@ -73,7 +74,6 @@ def qos_text(profiles: list[Qos]) -> str:
 
 def type_hash(type_name: str, encoding: str, definition: str) -> str:
     """RIHS01 hash of a ``.msg`` definition (with nested types); '' when it cannot be parsed."""
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
     if encoding != SCHEMA_ENCODING:
         return ''
     try:

@@ -11,6 +11,7 @@ from typing import Any
 
 from ..errors import BagError, GraphError, MessageError
 from ..messages import get_message
+from ..node_main import run_node
 from ..runtime import Node, ParameterType, QoSProfile
 from .player import BagPlayer, BagTopic
 from .recorder_node import read_at_start
@@ -134,5 +135,4 @@ class PlayerNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    from ..node_main import run_node
     return run_node(PlayerNode, args)

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import BagError
+from ..node_main import run_node
 from ..offered_qos import OfferedQosSubscriptions
 from ..runtime import Node, ParameterDescriptor, ParameterType
 from .recorder import BagRecorder
@@ -122,5 +123,4 @@ class RecorderNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    from ..node_main import run_node
     return run_node(RecorderNode, args)

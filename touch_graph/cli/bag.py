@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.action == 'reindex':
-        from ..bag.reindex import reindex
+        from ..bag.reindex import reindex  # lazy: --help runs without rosbags and the message classes
         report = reindex(args.bag, args.output)
         what = f'repaired {", ".join(report.repaired)}' if report.repaired else 'the MCAP files were complete'
         print(f'reindexed {report.bag}: {what}; {report.message_count} messages'
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
         for topic, count in sorted(report.topics.items()):
             print(f'  {topic}: {count}')
         return 0
-    from ..bag.player import bag_info
+    from ..bag.player import bag_info  # lazy: as reindex above
     info = bag_info(args.bag)
     lines = [('Files', '\n'.join(info['files'])), ('Bag size', format_size(info['size'])),
              ('Storage id', info['storage']), ('Duration', f'{info["duration_ns"] / 1e9:.9f}s')]

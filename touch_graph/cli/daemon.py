@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..daemon import client
+from ..daemon.address import is_older
 from .options import non_negative_int, seconds
 
 __all__ = ['add_arguments', 'add_no_daemon', 'run']
@@ -29,10 +31,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.action == 'serve':
-        from ..daemon.server import IDLE_TIMEOUT_S, serve
+        from ..daemon.server import IDLE_TIMEOUT_S, serve  # lazy: the list verbs import this module, not the server
         return serve(args.ros_domain_id, args.idle_timeout or IDLE_TIMEOUT_S)
-    from ..daemon import client
-    from ..daemon.address import is_older
     address = client.daemon_address()
     where = f'domain {address.domain_id}, discovery range {address.discovery_range}'
     if args.action == 'stop':

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ..daemon.client import graph_source
 from ..errors import GraphError
 from ..yamlconf import did_you_mean
 from .daemon import add_no_daemon
@@ -24,7 +25,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..daemon.client import graph_source
     with graph_source(f'node_{args.action}', args.no_daemon) as source:
         view = source.require_graph()
         return _list(view, args) if args.action == 'list' else _info(view, args)

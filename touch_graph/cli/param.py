@@ -3,6 +3,9 @@
 Every call goes through the node's parameter services, so it works on any ROS 2 node of the
 domain too. A value given on the command line is typed by rcl's rules (``25`` an integer,
 ``25.0`` a double, ``[1, 2]`` an integer array, ``true`` a bool, anything else a string).
+
+Imports inside functions: the DDS tool, the runtime's parameters and the service types load in the
+verb that calls a service, so ``social-touch param --help`` and argument errors stay quick.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from typing import Any
 
 import yaml
 
+from ..daemon.client import graph_source
 from ..errors import ConfigError, GraphError, ParameterError
 from .daemon import add_no_daemon
 from .options import seconds
@@ -63,7 +67,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..daemon.client import graph_source
     with graph_source(f'param_{args.action}', args.no_daemon) as graph, _caller(graph, args.action) as tool:
         return _VERBS[args.action](_Params(graph, tool, args), args)
 
@@ -72,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
 def _caller(graph: Any, action: str) -> Iterator[Any]:
     """The participant that calls the parameter services: the graph's own without the daemon; with it, one that
     skips the discovery wait (the daemon knows the graph; each call waits for its service to match)."""
-    from ..dds.tool import GraphTool
+    from ..dds.tool import GraphTool  # lazy: see the module doc
     if isinstance(graph, GraphTool):
         yield graph
         return
@@ -97,8 +100,8 @@ class _Params:
 
     def call(self, node: str, service: str, **fields: Any) -> Any:
         """The response of ``node``'s parameter service ``service`` (e.g. ``get_parameters``) to ``fields``."""
-        from ..runtime.parameter_service import PARAMETER_SERVICES
-        from ..srv_types import get_service
+        from ..runtime.parameter_service import PARAMETER_SERVICES  # lazy: see the module doc
+        from ..srv_types import get_service  # lazy: see the module doc
         srv_type = get_service(PARAMETER_SERVICES[service])
         return self.tool.call(srv_type, f'{node}/{service}', srv_type.Request(**fields), self.timeout)
 
@@ -136,7 +139,7 @@ def _list(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _get(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameters import value_of
+    from ..runtime.parameters import value_of  # lazy: see the module doc
     node = params.node(args.node_name)
     values = params.call(node, 'get_parameters', names=[args.parameter_name]).values
     if not values or values[0].type == 0:
@@ -151,8 +154,8 @@ def _get(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _set(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.param_yaml import parse_parameter_value
-    from ..runtime.parameters import Parameter, parameter_msg
+    from ..runtime.param_yaml import parse_parameter_value  # lazy: see the module doc
+    from ..runtime.parameters import Parameter, parameter_msg  # lazy: see the module doc
     pairs = args.params_and_values
     if len(pairs) % 2:
         raise GraphError(f'parameters are name value pairs (name value [name value ...]); got {len(pairs)} '
@@ -210,7 +213,7 @@ def _describe(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _dump(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameters import value_of
+    from ..runtime.parameters import value_of  # lazy: see the module doc
     node = params.node(args.node_name)
     names = params.names(node, [])
     values = params.call(node, 'get_parameters', names=names).values if names else []
@@ -226,7 +229,7 @@ def _dump(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _load(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameters import Parameter, load_parameter_file, parameter_msg
+    from ..runtime.parameters import Parameter, load_parameter_file, parameter_msg  # lazy: see the module doc
     node = params.node(args.node_name)
     overrides = load_parameter_file(args.parameter_file)
     chosen: dict[str, Any] = {}
@@ -248,7 +251,7 @@ def _load(params: _Params, args: argparse.Namespace) -> int:
 
 
 def _delete(params: _Params, args: argparse.Namespace) -> int:
-    from ..runtime.parameters import Parameter, ParameterType, parameter_msg
+    from ..runtime.parameters import Parameter, ParameterType, parameter_msg  # lazy: see the module doc
     node = params.node(args.node_name)
     message = parameter_msg(Parameter(args.parameter_name, ParameterType.NOT_SET, None))
     [result] = params.call(node, 'set_parameters', parameters=[message]).results

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..node_main import StopSignals
 from ..runtime import Parameter
 from .options import non_negative_seconds, speed_factor
 
@@ -37,9 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bag.player_node import PlayerNode
-    from ..dds.tool import GraphTool
-    from ..node_main import StopSignals
+    from ..bag.player_node import PlayerNode  # lazy: --help runs without the bag libraries
+    from ..dds.tool import GraphTool  # lazy: --help runs without Cyclone DDS
 
     params = [Parameter('bag', value=str(args.bag)), Parameter('rate', value=float(args.rate)),
               Parameter('fast', value=bool(args.fast)), Parameter('loop', value=bool(args.loop)),

@@ -21,6 +21,7 @@ import time
 from typing import Any
 
 from ..errors import BagError, GraphError, SocialTouchError
+from ..node_main import StopSignals
 from .options import seconds
 
 __all__ = ['add_arguments', 'format_size', 'run']
@@ -52,10 +53,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # lazy: --help and argument errors run without Cyclone DDS, rosbags or the runtime
     from ..bag.recorder import BagRecorder
-    from ..bag.recorder_node import default_bag_name
-    from ..dds.tool import GraphTool
-    from ..node_main import StopSignals
+    from ..bag.recorder_node import default_bag_name  # lazy: as above
+    from ..dds.tool import GraphTool  # lazy: as above
 
     if bool(args.topics) == bool(args.all):
         raise GraphError('name the topics to record, or pass -a/--all for every topic (not both)')
@@ -106,7 +107,7 @@ class _TopicRecorder:
         self.warned: set[str] = set()
 
     def update(self) -> None:
-        from ..messages import get_message
+        from ..messages import get_message  # lazy: as in run()
         view = self.tool.graph()
         for name, info in view.published_topics().items():
             if name in self.subscriptions or (self.topics is not None and name not in self.topics):

@@ -8,8 +8,10 @@ from __future__ import annotations
 import argparse
 import time
 
+from ..daemon.client import graph_source
 from ..errors import ConfigError, GraphError, MessageError
-from ..yamlconf import safe_load
+from ..node_main import StopSignals
+from ..yamlconf import did_you_mean, safe_load
 from .daemon import add_no_daemon
 from .options import rate_hz, seconds
 
@@ -47,7 +49,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.action == 'call':
         return _call(args)
-    from ..daemon.client import graph_source
     with graph_source(f'service_{args.action}', args.no_daemon) as source:
         view = source.require_graph()
         services = view.visible_services(args.include_hidden_services)
@@ -61,7 +62,6 @@ def run(args: argparse.Namespace) -> int:
         if args.action == 'type':
             info = services.get(args.service_name)
             if info is None:
-                from ..yamlconf import did_you_mean
                 raise GraphError(f"unknown service '{args.service_name}'{did_you_mean(args.service_name, services)}"
                                  '; social-touch service list shows them')
             for type_name in sorted(info.types):
@@ -75,15 +75,15 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _normalized_type(name: str) -> str:
-    from ..srv_types import normalize_service_name
+    from ..srv_types import normalize_service_name  # lazy: the daemon answers list and type without the messages
     return normalize_service_name(name)
 
 
 def _call(args: argparse.Namespace) -> int:
+    # lazy: only call joins the domain and builds messages (list and type are the daemon's)
     from .. import messages
-    from ..dds.tool import GraphTool
-    from ..node_main import StopSignals
-    from ..srv_types import get_service
+    from ..dds.tool import GraphTool  # lazy: as above
+    from ..srv_types import get_service  # lazy: as above
     srv_type = get_service(args.service_type)
     try:
         values = safe_load(args.values, 'the request values')

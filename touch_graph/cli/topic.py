@@ -3,6 +3,10 @@
 ``echo``, ``hz`` and ``record`` subscribe with a QoS every publisher matches, as ``ros2 topic
 echo`` chooses it; ``hz`` measures in the publishing graph's ROS time (source timestamps), or
 in arrival wall time with ``--wall-time``.
+
+Imports inside functions: ``list`` and ``info`` are answered by the graph daemon, so this module
+loads the message classes, PyYAML and the DDS tool only in the verbs that use them (as does
+``social-touch topic --help``).
 """
 
 from __future__ import annotations
@@ -14,7 +18,10 @@ import time
 from collections import deque
 from typing import Any
 
+from ..daemon.client import graph_source
+from ..dds.graph import format_gid
 from ..errors import ConfigError, GraphError, MessageError
+from ..node_main import StopSignals
 from .daemon import add_no_daemon
 from .options import non_negative_seconds, positive_int, rate_hz, seconds
 
@@ -77,7 +84,7 @@ def abbreviate_arrays(msg: Any) -> dict[str, Any]:
     >>> abbreviate_arrays(messages.get_message('DriverStatus')())['header'] == messages.to_dict(Header())
     True
     """
-    from .. import messages
+    from .. import messages  # lazy: see the module doc
     out = {}
     for name, type_str in messages.msg_field_types(type(msg)).items():
         value = getattr(msg, name)
@@ -92,8 +99,8 @@ def abbreviate_arrays(msg: Any) -> dict[str, Any]:
 
 def check_field_path(type_name: str, path: str) -> None:
     """Raise GraphError unless ``a.b`` names a field (nested through messages) of ``type_name``."""
-    from .. import messages
-    from ..yamlconf import did_you_mean
+    from .. import messages  # lazy: see the module doc
+    from ..yamlconf import did_you_mean  # lazy: see the module doc
     cls = messages.get_message(type_name)
     parts = path.split('.')
     for i, part in enumerate(parts):
@@ -116,7 +123,7 @@ def select_field(data: Any, path: str) -> Any:
 
 
 def to_yaml(data: Any) -> str:
-    import yaml
+    import yaml  # lazy: see the module doc
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=False, width=sys.maxsize, allow_unicode=True)
 
 
@@ -160,10 +167,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.action in _GRAPH_QUERIES:
-        from ..daemon.client import graph_source
         with graph_source(f'topic_{args.action}', args.no_daemon) as source:
             return _GRAPH_QUERIES[args.action](source, args)
-    from ..dds.tool import GraphTool
+    from ..dds.tool import GraphTool  # lazy: see the module doc
     with GraphTool(f'topic_{args.action}') as tool:
         return {'echo': _echo, 'hz': _hz, 'pub': _pub}[args.action](tool, args)
 
@@ -180,8 +186,7 @@ def _list(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _info(tool: Any, args: argparse.Namespace) -> int:
-    from ..dds.graph import format_gid
-    from ..dds.qos import describe_qos
+    from ..dds.qos import describe_qos  # lazy: see the module doc
     info = tool.require_topic(args.topic)
     print(f'Type: {info.type_name}')
     for title, kind, endpoints in (('Publisher', 'PUBLISHER', info.publishers),
@@ -205,8 +210,7 @@ _GRAPH_QUERIES = {'list': _list, 'info': _info}
 
 
 def _echo(tool: Any, args: argparse.Namespace) -> int:
-    from .. import messages
-    from ..node_main import StopSignals
+    from .. import messages  # lazy: see the module doc
     limit = 1 if args.once else args.count
     type_name = messages.normalize_type_name(args.type) if args.type else None
     if type_name is None:
@@ -259,8 +263,7 @@ def _echo(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _hz(tool: Any, args: argparse.Namespace) -> int:
-    from ..messages import get_message
-    from ..node_main import StopSignals
+    from ..messages import get_message  # lazy: see the module doc
     info = tool.require_topic(args.topic)
     monitor = HzMonitor(args.window)
     seen = [0, 0]  # messages, messages at the last print
@@ -285,9 +288,8 @@ def _hz(tool: Any, args: argparse.Namespace) -> int:
 
 
 def _pub(tool: Any, args: argparse.Namespace) -> int:
-    from .. import messages
-    from ..node_main import StopSignals
-    from ..yamlconf import safe_load
+    from .. import messages  # lazy: see the module doc
+    from ..yamlconf import safe_load  # lazy: see the module doc
     type_name = messages.normalize_type_name(args.type)
     try:
         values = safe_load(args.values, 'the message values')

@@ -176,6 +176,6 @@ def graph_source(name: str, no_daemon: bool = False) -> Iterator[GraphQueries]:
         if view is not None:
             yield DaemonGraph(address, view)
             return
-    from ..dds.tool import GraphTool
+    from ..dds.tool import GraphTool  # lazy: a daemon's answer needs no Cyclone DDS, runtime or messages
     with GraphTool(name) as tool:
         yield tool

@@ -58,7 +58,7 @@ class _GraphCache:
 
     def complete_view(self) -> Any:
         """The graph once complete (:func:`~touch_graph.dds.tool.wait_for_complete_graph`)."""
-        from ..dds.tool import wait_for_complete_graph
+        from ..dds.tool import wait_for_complete_graph  # lazy: loaded by serve() (see there)
         wait_for_complete_graph(self.tool.discovery, DISCOVERY_TIMEOUT_S, started=self.started,
                                 last_change=self.last_change)
         return self.tool.graph()
@@ -143,7 +143,7 @@ def serve(domain_id: int, idle_timeout_s: float = IDLE_TIMEOUT_S) -> int:
     lock = _hold_lock(address.lock_path, LOCK_WAIT_S)
     if lock is None:
         return 0  # another daemon serves this address
-    from ..dds.tool import GraphTool
+    from ..dds.tool import GraphTool  # lazy: a second daemon returns above without loading Cyclone DDS
     address.socket_path.unlink(missing_ok=True)  # left by a daemon that was killed
     # After the address is known (the setting names the daemon): announce the daemon often, see DAEMON_SPDP.
     os.environ['CYCLONEDDS_URI'] = ','.join(filter(None, [os.environ.get('CYCLONEDDS_URI', ''), DAEMON_SPDP]))

@@ -17,11 +17,13 @@ from pathlib import Path
 
 from ..cli.options import clock_rate, non_negative_seconds
 from ..errors import ConfigError, LaunchError
+from ..node_main import StopSignals
 from ..paths import launch_share, prefer_checkout
 from ..yamlconf import did_you_mean
 from .entities import collect_arguments, evaluate_launch
 from .preflight import check_config_files
-from .runner import LaunchRunner
+from .processes import POLL_S, ProcessSupervisor
+from .runner import LaunchRunner, rclpy_runtime
 from .specs import DeclaredArgument
 
 __all__ = ['add_arguments', 'find_launch_file', 'parse_launch_arguments', 'run']
@@ -164,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
 def _in_process_runner(args: argparse.Namespace, specs: list, network: bool) -> LaunchRunner:
     """The runner of the nodes that run in this process: on real rclpy when ``touch_graph.compat`` uses it (a
     sourced ROS 2 without SOCIAL_TOUCH_SHIM=1: the node classes are rclpy nodes), else on our runtime."""
-    from .. import compat
+    from .. import compat  # lazy: a launch whose nodes all run in processes loads no runtime here
     if not compat.USING_ROS:
         return LaunchRunner(specs, sim_time=args.sim_time, rate=args.rate, network=network,
                             strict_params=args.strict_params)
@@ -176,14 +178,11 @@ def _in_process_runner(args: argparse.Namespace, specs: list, network: bool) -> 
         raise LaunchError('--no-network: real rclpy always joins the DDS domain (ROS 2 is sourced); set '
                           'ROS_AUTOMATIC_DISCOVERY_RANGE=OFF to keep it on this machine, or run with '
                           'SOCIAL_TOUCH_SHIM=1')
-    from .runner import rclpy_runtime
     return LaunchRunner(specs, runtime=rclpy_runtime(), strict_params=args.strict_params)
 
 
 def _run(args: argparse.Namespace, together: list, alone: list) -> int:
     """Start the in-process nodes, then the node processes; spin and watch until the end; stop everything."""
-    from ..node_main import StopSignals
-    from .processes import POLL_S, ProcessSupervisor
     supervisor = ProcessSupervisor(alone, strict_params=args.strict_params) if alone else None
     runner = None
     if together:

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from typing import TextIO
 
 from ..errors import SocialTouchError
+from ..node_main import StopSignals
+from .runner import LaunchRunner, rclpy_runtime
 from .specs import NodeSpec, ProcessOptions, spec_from_json, spec_to_json
 
 __all__ = ['FIRST_BACKOFF_S', 'MAX_BACKOFF_S', 'NODE_PROCESS_MAIN', 'STABLE_S', 'NodeProcess', 'ProcessSupervisor',
@@ -231,12 +233,9 @@ def node_process_main(argv: list[str] | None = None) -> int:
         sys.stderr.write('usage: node_process_main SPEC_JSON PARENT_PID [--strict-params] (the launcher starts it)\n')
         return 2
     die_with_parent(int(argv[1]))
-    from ..node_main import StopSignals
-    from .runner import LaunchRunner
     spec = spec_from_json(argv[0])
-    from .. import compat
+    from .. import compat  # lazy: the launcher imports this module without loading the runtime
     if compat.USING_ROS:  # a sourced ROS 2 and no SOCIAL_TOUCH_SHIM: the node is an rclpy node
-        from .runner import rclpy_runtime
         runner = LaunchRunner([spec], runtime=rclpy_runtime(), strict_params=strict)
     else:
         runner = LaunchRunner([spec], network=True, strict_params=strict)

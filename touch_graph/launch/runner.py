@@ -130,10 +130,11 @@ def rclpy_runtime() -> types.SimpleNamespace:
 
     The context is rclpy's default one, which a node with rclpy's plain ``__init__(self)`` joins.
     """
+    # rclpy or ours, chosen at run time: rclpy is imported only when compat uses it (a sourced ROS 2)
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-    from rclpy.node import Node
-    from rclpy.parameter import Parameter
-    from rclpy.utilities import get_default_context
+    from rclpy.node import Node  # rclpy: as above
+    from rclpy.parameter import Parameter  # rclpy: as above
+    from rclpy.utilities import get_default_context  # rclpy: as above
     return types.SimpleNamespace(Context=get_default_context, SingleThreadedExecutor=SingleThreadedExecutor,
                                  Node=Node, Parameter=Parameter, ExternalShutdownException=ExternalShutdownException,
                                  node_arguments=functools.partial(rclpy_node_arguments, Node))
@@ -307,6 +308,7 @@ class LaunchRunner:
         """A node class with rclpy's ``__init__(self)``: its arguments go through ``node_arguments``."""
         node_arguments = getattr(self.runtime, 'node_arguments', None)
         if node_arguments is None:
+            # lazy: a launcher whose nodes all run in processes imports this module without the runtime
             from ..runtime.node import node_arguments
         with node_arguments(context=self.context, cli_args=spec.cli_args(),
                             parameter_overrides=overrides) as pending:
@@ -318,8 +320,8 @@ class LaunchRunner:
 
     def _check_parameters(self) -> None:
         """Warn about (``strict_params``: refuse) launch or file parameters that no node declares."""
-        from ..runtime.logging import get_logger
-        from ..runtime.override_check import check_overrides
+        from ..runtime.logging import get_logger  # lazy: as in _create_plain
+        from ..runtime.override_check import check_overrides  # lazy: as in _create_plain
         ours = [node for node in self.nodes if hasattr(node, 'override_origins')]  # not under real rclpy
         try:
             check_overrides(ours, get_logger('launch'), strict=self.strict_params)
