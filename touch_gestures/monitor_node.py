@@ -19,6 +19,7 @@ import sys
 from typing import Any, TextIO
 
 from touch_graph.compat import Node, SetParametersResult, get_message, sensor_data_qos
+from touch_graph.node_main import run_node
 
 __all__ = ['TouchMonitorNode', 'main']
 
@@ -89,5 +90,4 @@ class TouchMonitorNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    from touch_graph.node_main import run_node
     return run_node(TouchMonitorNode, args)

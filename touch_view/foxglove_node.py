@@ -33,6 +33,7 @@ from foxglove.messages import RawImage, Timestamp
 
 from touch_graph import messages
 from touch_graph.compat import Node, get_message
+from touch_graph.node_main import run_node
 from touch_graph.offered_qos import OfferedQosSubscriptions
 
 from .colormap import heat_rgb
@@ -178,5 +179,4 @@ class FoxgloveServerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch foxglove_server`` / the ``foxglove_server`` console script."""
-    from touch_graph.node_main import run_node
     return run_node(FoxgloveServerNode, args)

@@ -28,6 +28,7 @@ from typing import Any
 from touch_driver.bear.body_map import BodyMap
 from touch_driver.patch.panels import PanelCalibrator
 from touch_graph.compat import Node, get_message
+from touch_graph.node_main import run_node
 from touch_graph.offered_qos import OfferedQosSubscriptions
 
 from .body_layout import VIEW_SIZE, sensor_layout
@@ -134,5 +135,4 @@ class TouchViewNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch touch_view`` / the ``touch_view`` console script."""
-    from touch_graph.node_main import run_node
     return run_node(TouchViewNode, args)

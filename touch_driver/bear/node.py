@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.node_main import run_node
 
 from ..driver_node import SerialDriverNode, ranged
 from ..serial_driver import DecodedFrame
@@ -58,5 +59,4 @@ class BearDriverNode(SerialDriverNode[BearScan]):
 
 
 def main(args: list[str] | None = None) -> int:
-    from touch_graph.node_main import run_node
     return run_node(BearDriverNode, args)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.node_main import run_node
 from touch_graph.paths import share_file
 
 from ..driver_node import SerialDriverNode, ranged
@@ -92,5 +93,4 @@ class PatchDriverNode(SerialDriverNode[PatchScan]):
 
 
 def main(args: list[str] | None = None) -> int:
-    from touch_graph.node_main import run_node
     return run_node(PatchDriverNode, args)

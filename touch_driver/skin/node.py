@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from touch_graph.compat import get_message, sensor_data_qos
+from touch_graph.node_main import run_node
 from touch_graph.paths import share_file
 
 from ..driver_node import SerialDriverNode
@@ -58,5 +59,4 @@ class SkinDriverNode(SerialDriverNode[SkinScan]):
 
 
 def main(args: list[str] | None = None) -> int:
-    from touch_graph.node_main import run_node
     return run_node(SkinDriverNode, args)

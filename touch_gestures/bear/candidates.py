@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from touch_graph.paths import share_file
 from touch_graph.yamlconf import YamlDict, check_keys, load_yaml, loads_yaml, typed
 
 __all__ = ['MAX_LEVEL', 'CandidateConfidence', 'laplace']
@@ -60,7 +61,6 @@ class CandidateConfidence:
     @classmethod
     def default(cls) -> CandidateConfidence:
         """The package's ``config/bear_candidates.yaml`` (no counts when a stripped install lacks it)."""
-        from touch_graph.paths import share_file
         path = share_file('config', 'bear_candidates.yaml')
         return cls.load(path) if Path(path).is_file() else cls(source='(no config/bear_candidates.yaml)')
 

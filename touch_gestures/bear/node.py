@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,8 @@ from touch_driver.bear.protocol import REAL_RATE_HZ
 from touch_graph.compat import Node, ParameterDescriptor, get_message, sensor_data_qos
 from touch_graph.errors import ParameterError
 from touch_graph.node_health import NodeHealth
+from touch_graph.node_main import run_node
+from touch_graph.paths import share_file
 from touch_graph.yamlconf import did_you_mean
 
 from ..model_card import card_log_line
@@ -67,7 +70,6 @@ _RULE_DEFAULTS = {k: v for k, v in PaperRuleClassifier().get_params().items()
 
 def default_model_path() -> Path:
     """The package's trained subtype model (may be missing in a stripped install)."""
-    from touch_graph.paths import share_file
     return share_file(*DEFAULT_MODEL)
 
 
@@ -392,7 +394,6 @@ class BearGesturesNode(Node):
 
 def _with_default_timing(library: GestureLibrary, dwell_s: float, gap_s: float) -> GestureLibrary:
     """``library`` with the default dwell / gap replaced (values < 0 keep the file's)."""
-    from dataclasses import replace
     if gap_s >= 0:
         library = library.with_default_gap(gap_s)
     if dwell_s >= 0:
@@ -404,6 +405,5 @@ def _with_default_timing(library: GestureLibrary, dwell_s: float, gap_s: float) 
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch bear_gestures`` / the ``bear_gestures`` console script."""
-    from touch_graph.node_main import run_node
     return run_node(BearGesturesNode, args)
 

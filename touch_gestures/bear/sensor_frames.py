@@ -24,6 +24,7 @@ from typing import Any
 from touch_driver.bear.body_map import BodyMap
 from touch_graph.compat import Node, ParameterDescriptor, get_message, latched_qos, stamp_now
 from touch_graph.errors import ParameterError
+from touch_graph.node_main import run_node
 
 __all__ = ['BearSensorFramesNode', 'main', 'quaternion_from_rpy']
 
@@ -103,5 +104,4 @@ def _transform(stamp: Any, parent: str, child: str, xyz: tuple[float, float, flo
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch bear_sensor_frames`` / the console script."""
-    from touch_graph.node_main import run_node
     return run_node(BearSensorFramesNode, args)

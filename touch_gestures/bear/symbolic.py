@@ -36,6 +36,7 @@ import numpy as np
 
 from touch_driver.bear.body_map import BodyMap
 from touch_graph.errors import ConfigError
+from touch_graph.paths import share_file
 from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, load_yaml, loads_yaml, typed
 
 from .candidates import CandidateConfidence
@@ -180,7 +181,6 @@ class GestureLibrary:
     @classmethod
     def default(cls, body_map: BodyMap | None = None) -> GestureLibrary:
         """The package's ``config/bear_gestures.yaml``."""
-        from touch_graph.paths import share_file
         return cls.load(share_file('config', 'bear_gestures.yaml'), body_map)
 
     @classmethod

@@ -45,6 +45,8 @@ from touch_graph.compat import (
 )
 from touch_graph.errors import ParameterError
 from touch_graph.node_health import NodeHealth
+from touch_graph.node_main import run_node
+from touch_graph.paths import share_file
 
 from ..model_card import card_log_line
 from .classifier import EventDetector
@@ -70,7 +72,6 @@ RATE_TOLERANCE = 0.2
 
 def default_model_path() -> Path:
     """The package's trained patch gesture model."""
-    from touch_graph.paths import share_file
     return share_file(*DEFAULT_MODEL)
 
 
@@ -310,5 +311,4 @@ class PatchGesturesNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch patch_gestures`` / the ``patch_gestures`` console script."""
-    from touch_graph.node_main import run_node
     return run_node(PatchGesturesNode, args)

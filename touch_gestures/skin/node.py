@@ -63,6 +63,8 @@ from touch_graph.compat import (
 )
 from touch_graph.errors import ConfigError, ParameterError
 from touch_graph.node_health import NodeHealth
+from touch_graph.node_main import run_node
+from touch_graph.paths import share_file
 
 from ..model_card import card_log_line
 from .base import Match, TemplateRecogniser
@@ -125,12 +127,10 @@ SAFETY_RANGES: dict[str, tuple[float, float, str]] = {
 
 
 def default_codebook_path() -> Path:
-    from touch_graph.paths import share_file
     return share_file(*DEFAULT_CODEBOOK)
 
 
 def default_commands_path() -> Path:
-    from touch_graph.paths import share_file
     return share_file(*DEFAULT_COMMANDS)
 
 
@@ -486,5 +486,4 @@ class HapticCommandsNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch haptic_commands`` / the ``haptic_commands`` console script."""
-    from touch_graph.node_main import run_node
     return run_node(HapticCommandsNode, args)

@@ -22,6 +22,7 @@ from typing import Any
 from touch_driver.bear.body_map import BodyMap
 from touch_graph.compat import Node, ParameterDescriptor, get_message, get_service, latched_qos, sensor_data_qos
 from touch_graph.errors import ParameterError
+from touch_graph.node_main import run_node
 
 from .tracker import Running, TouchStateTracker
 
@@ -126,5 +127,4 @@ class TouchStateNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """``ros2 run social_touch touch_state`` / the console script."""
-    from touch_graph.node_main import run_node
     return run_node(TouchStateNode, args)
