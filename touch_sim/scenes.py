@@ -38,10 +38,12 @@ for the first ``duty`` of every ``1/f`` period).
 
 from __future__ import annotations
 
+import inspect
 import math
 import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
@@ -355,7 +357,6 @@ GENERATOR_GROUP = 'social_touch.scene_generators'
 
 def scene_generators() -> dict[str, Any]:
     """``name -> entry point`` of every installed scene generator."""
-    from importlib.metadata import entry_points
     return {ep.name: ep for ep in entry_points(group=GENERATOR_GROUP)}
 
 
@@ -369,7 +370,6 @@ def generated_stimulus(doc: YamlDict, what: str, is_stimulus: Callable[[Any], bo
     refuses are ConfigErrors naming the file and line. A ``body_map`` is passed to functions that
     take one.
     """
-    import inspect
     spec = typed(doc, 'generator', str, what)
     generators = scene_generators()
     if spec not in generators:

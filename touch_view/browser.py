@@ -34,7 +34,7 @@ def headless_chromium(width: int = 1400, height: int = 1000) -> Iterator[Any]:
     Raises:
         ViewError: when selenium, chromium or chromedriver is missing (with how to install them).
     """
-    try:
+    try:  # optional: selenium is a test dependency, missing is a ViewError below
         from selenium import webdriver
         from selenium.webdriver.chrome.service import Service
     except ImportError as err:

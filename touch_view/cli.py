@@ -34,6 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # lazy: `social-touch view --help` and its argument errors load no node or runtime
     from touch_graph.node_main import run_node
 
     from .node import TouchViewNode

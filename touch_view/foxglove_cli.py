@@ -44,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     if args.layout:
         print(layout_path())
         return 0
+    # lazy: `social-touch foxglove --help` and its argument errors load no node or runtime
     from touch_graph.node_main import run_node
 
     from .foxglove_node import FoxgloveServerNode

@@ -28,7 +28,7 @@ POSTERIOR_CLASSES = ('push', 'slap', 'stroke', 'tickle')
 
 def build_layout() -> dict:
     """The layout as a JSON-ready dict (foxglove-sdk's layout format)."""
-    import foxglove.layouts as fl
+    import foxglove.layouts as fl  # lazy: only when a layout is written
 
     def split(direction: str, *items: tuple[float, object]) -> object:
         return fl.SplitContainer(direction=direction, items=[fl.SplitItem(proportion=p, content=c) for p, c in items])

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
 from .people import PERFORMANCES, Label, split_label
@@ -300,7 +301,6 @@ def hand_trial_scene(person_index: int, trials: list[tuple[str, float]], seed: i
     person's pressure (a "gentle" or "rough" variant).
     """
     if body_map is None:
-        from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
     rng = np.random.default_rng((seed, person_index, 0x4A4D))
     base = HandPerson.draw(person_index, rng)
@@ -349,7 +349,6 @@ def make_hand_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, ges
         labels += one.labels
         t = one.duration_s
     if body_map is None:
-        from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
     return HandScene(touches, labels, t, body_map, seed, f'synthetic: {n_people} hand-model people (seed {seed})',
                      sessions=tuple(starts))

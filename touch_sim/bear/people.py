@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
 __all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'SYMBOLIC_PREFIX', 'BearScene', 'Contact', 'GesturePerformance', 'Label',
@@ -344,7 +345,6 @@ def make_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, gesture_
     if n_people < 1:
         raise ValueError(f'n_people must be >= 1; got {n_people}')
     if body_map is None:
-        from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
     gestures = tuple(PERFORMANCES) if gestures is None else tuple(gestures)
     for name in gestures:
@@ -444,7 +444,6 @@ def trial_scene(person_index: int, trials: list[tuple[str, float]], seed: int = 
                          f'{", ".join(SUBTYPE_STATS)} and the gestures '
                          f'{", ".join(symbolic_label(g) for g in PERFORMANCES)}')
     if body_map is None:
-        from touch_driver.bear.body_map import BodyMap
         body_map = BodyMap.default()
     rng = np.random.default_rng((seed, person_index))
     person = Person(person_index, rng, person_share=person_share)
