@@ -102,8 +102,6 @@ def frame_stamps_ns(count: int, now_ns: int, period_ns: int, last_ns: int | None
     >>> frame_stamps_ns(2, 1_000, 100, 5_000)     # the clock went back
     [999, 1000]
     """
-    if count == 1:   # what a read on arrival finds: the loop below gives the same
-        return [max(now_ns, 0)]
     floor = -1 if last_ns is None else last_ns
     stamps = []
     for i in range(count):
