@@ -25,6 +25,11 @@ import statistics
 import time
 from typing import Any
 
+from touch_driver.skin.node import SkinDriverNode
+from touch_gestures.skin.node import HapticCommandsNode
+from touch_graph.runtime import Context, SingleThreadedExecutor
+from touch_graph.runtime.parameters import Parameter
+
 from .replay import PtyPort, record_scene
 
 __all__ = ['STEPS', 'bench_frame_steps', 'time_steps']
@@ -54,11 +59,6 @@ def time_steps(chunks: tuple[bytes, ...], pause_s: float) -> dict[str, list[int]
 
     Returns ``{step: [ns of frame 0, ns of frame 1, ...]}``; frames that decode to nothing are left out.
     """
-    from touch_driver.skin.node import SkinDriverNode
-    from touch_gestures.skin.node import HapticCommandsNode
-    from touch_graph.runtime import Context, SingleThreadedExecutor
-    from touch_graph.runtime.parameters import Parameter
-
     context = Context('wall')
     context.init()
     port = PtyPort()   # a real port, never written: the bench hands the driver its bytes itself

@@ -65,16 +65,7 @@ _TICK = os.sysconf('SC_CLK_TCK')
 
 def tree_cpu_s(pid: int) -> float:
     """User + system CPU seconds of process ``pid`` and its living descendants (``/proc``)."""
-    total, todo = 0.0, [pid]
-    while todo:
-        current = todo.pop()
-        try:
-            total += _stat_cpu_s(Path(f'/proc/{current}/stat'))
-            for task in Path(f'/proc/{current}/task').iterdir():
-                todo += [int(c) for c in (task / 'children').read_text().split()]
-        except (FileNotFoundError, ProcessLookupError, IndexError):
-            continue
-    return total
+    return sum(tree_thread_cpu_s(pid))
 
 
 def tree_thread_cpu_s(pid: int) -> tuple[float, float]:
@@ -212,9 +203,9 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
             feeder.stdin.flush()
             listener.executor.spin_for(WARMUP_S)
             load_before = os.getloadavg()[0]
-            threads0, cpu0, wall0 = tree_thread_cpu_s(launch.pid), tree_cpu_s(launch.pid), time.monotonic()
+            threads0, wall0 = tree_thread_cpu_s(launch.pid), time.monotonic()
             listener.executor.spin_for(seconds)
-            cpu1, wall1, threads1 = tree_cpu_s(launch.pid), time.monotonic(), tree_thread_cpu_s(launch.pid)
+            threads1, wall1 = tree_thread_cpu_s(launch.pid), time.monotonic()
             load_after = os.getloadavg()[0]
             fed = json.loads(feeder.stdout.readline())
             sent = dict.fromkeys(drivers, 0)
@@ -227,7 +218,8 @@ def measure(config: str, n: int, seconds: float, read_on_arrival: bool, processe
             listener.spin_until(lambda: published() == sent, DRAIN_S)
             got = published()
             missed = {name: int(listener.latest[name].get('frames_missed', 0)) for name in drivers}
-            return {'percent_of_core': 100.0 * (cpu1 - cpu0) / (wall1 - wall0), 'wall_s': wall1 - wall0,
+            return {'percent_of_core': 100.0 * (sum(threads1) - sum(threads0)) / (wall1 - wall0),
+                    'wall_s': wall1 - wall0,
                     'main_threads_percent': 100.0 * (threads1[0] - threads0[0]) / (wall1 - wall0),
                     'other_threads_percent': 100.0 * (threads1[1] - threads0[1]) / (wall1 - wall0),
                     'frames_sent': sum(sent.values()), 'frames_published': sum(got.values()),
