@@ -28,6 +28,7 @@ from touch_lab.collect.simulate import simulate_session
 from touch_lab.patch.evaluate import onset_ages, run_detector, score
 from touch_lab.patch.session_bags import trial_sessions
 from touch_lab.patch.training import PatchGestureClassifier
+from touch_lab.skin import sessions as skin_sessions
 
 from .adapt import adapt_bear, adapt_patch
 
@@ -110,18 +111,17 @@ def _subset(run, idx):
 
 
 def _skin(base_bags, new_bags, seed, say) -> dict[int, list[float]]:
-    from touch_lab.skin.sessions import fit_codebook, score, skin_trials
-
-    base_trials = [t for b in base_bags for t in skin_trials(read_session(b, 'skin'))]
-    base = fit_codebook(base_trials, 'trace')
+    base_trials = [t for b in base_bags for t in skin_sessions.skin_trials(read_session(b, 'skin'))]
+    base = skin_sessions.fit_codebook(base_trials, 'trace')
     out: dict[int, list[float]] = {k: [] for k in KS}
     for bag in new_bags:
         rec = read_session(bag, 'skin')
-        trials = skin_trials(rec)
+        trials = skin_sessions.skin_trials(rec)
         for k in KS:
             adapt_idx, test_idx = _split(rec.labels, k)
-            model = fit_codebook([trials[i] for i in adapt_idx], base.name, base=base) if adapt_idx else base
-            out[k].append(score(model, [trials[i] for i in test_idx])['accuracy'])
+            model = (skin_sessions.fit_codebook([trials[i] for i in adapt_idx], base.name, base=base)
+                     if adapt_idx else base)
+            out[k].append(skin_sessions.score(model, [trials[i] for i in test_idx])['accuracy'])
         say(f'{rec.people[0]}: ' + ', '.join(f'k={k} {out[k][-1]:.2f}' for k in KS))
     return out
 

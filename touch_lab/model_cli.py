@@ -14,6 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from touch_gestures.model_card import KINDS, attach_card, file_kind, format_card, make_card, read_card
+from touch_gestures.patch.model_io import load_model
+from touch_gestures.skin.codebook import load_codebook
 from touch_graph.errors import SocialTouchError
 
 __all__ = ['add_arguments', 'headline_figures', 'run']
@@ -57,17 +59,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _describe(path: Path, kind: str | None) -> list[str]:
     """What the file itself says, beside its card."""
     if kind == 'skin_codebook':
-        from touch_gestures.skin.codebook import load_codebook
         book = load_codebook(path)
         return [f'recogniser {book.name}; {len(book.classes_)} gestures, {len(book.templates_)} templates: '
                 f'{", ".join(book.classes_)}']
     if kind == 'bear_subtype_model':
-        from touch_lab.bear.subtype_training import SubtypeClassifier
+        from touch_lab.bear.subtype_training import SubtypeClassifier  # scikit-learn: only for a bear model
         model = SubtypeClassifier.load(path)
         return [f'classes {", ".join(model.classes_)}; trained at {model.trained_rate_hz_} Hz, buffer '
                 f'{model.trained_buffer_len_} cycles']
     if kind == 'patch_gesture_model':
-        from touch_gestures.patch.model_io import load_model
         model = load_model(path)
         return [f'classes {", ".join(model.classes)}; {model.rate_hz:g} Hz, window {model.window} frames']
     return []

@@ -89,13 +89,13 @@ def main(argv: list[str] | None = None, commands: dict[str, Command] | None = No
     args = parser.parse_args(rest)
     # Imported late: the top-level --help above needs nothing of the runtime.
     from ..errors import SocialTouchError
+    from ..files import is_disk_full
     try:
         return int(module.run(args) or 0)
     except SocialTouchError as err:
         print(f'social-touch {name}: error: {err}', file=sys.stderr)
         return 1
     except OSError as err:  # a writer without its own DiskFullError: still one clear line
-        from ..files import is_disk_full
         if not is_disk_full(err):
             raise
         print(f'social-touch {name}: error: {os.strerror(err.errno)} ({errno.errorcode[err.errno]}) writing '

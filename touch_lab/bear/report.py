@@ -35,6 +35,7 @@ from touch_lab.bear.evaluate import (
     stderr_progress,
 )
 from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_lab.bear.transfer import cross_population
 from touch_sim.bear.people import BearScene, Contact, make_scene
 
 __all__ = ['add_arguments', 'alias_table', 'compare_models', 'gap_sweep', 'populations_md', 'run',
@@ -491,7 +492,6 @@ def run(args: argparse.Namespace) -> int:
     say(f'main evaluation at 3.4 Hz, buffer 20: the shipped model {shipped}')
     main_result = evaluate(config, progress=say, model=SubtypeClassifier.load(shipped))
     say('across populations')
-    from .transfer import cross_population
     cross = cross_population(config, {'shipped model': SubtypeClassifier.load(shipped)}, progress=say)
     say('benchmark')
     bench = bench_cycle()

@@ -29,6 +29,7 @@ import contextlib
 import json
 import os
 import pickle
+import platform
 import random
 import signal
 import statistics
@@ -41,7 +42,11 @@ from typing import Any
 
 import yaml
 
+from touch_graph.cli.options import add_output, positive_int, seconds
+from touch_graph.files import write_text
+from touch_graph.messages import get_message
 from touch_graph.paths import share_file
+from touch_graph.runtime import Context, Node, SingleThreadedExecutor
 
 from .replay import PtyPort, Recording, record_scene
 
@@ -134,8 +139,6 @@ class _Diagnostics:
     """The latest /diagnostics status of each driver, in this process (a DDS participant of its own)."""
 
     def __init__(self) -> None:
-        from touch_graph.messages import get_message
-        from touch_graph.runtime import Context, Node, SingleThreadedExecutor
         self.context = Context('wall', network=True)
         self.context.init()
         self.node = Node('wall_clock_bench', context=self.context)
@@ -296,7 +299,7 @@ REPORT = Path(__file__).resolve().parents[2] / 'docs' / 'wall-clock.md'
 
 def _curve_png(figures: dict, path: Path) -> Path:
     """CPU (% of one core) against the number of patches, one line per configuration."""
-    from touch_lab.figures.png import drawing, note_synthetic, save_png
+    from touch_lab.figures.png import drawing, note_synthetic, save_png  # matplotlib: loaded only to draw the report
     with drawing(6.0, 3.6) as fig:
         axes = fig.add_subplot()
         for key, label in (('patches', 'one process'), ('patches_processes', 'processes of their own')):
@@ -376,7 +379,6 @@ def _counts(text: str) -> tuple[int, ...]:
 
 
 def add_arguments(parser: Any) -> None:
-    from touch_graph.cli.options import add_output, positive_int, seconds
     parser.add_argument('--repeats', type=positive_int, default=3, help='runs to take the median of (default 3)')
     parser.add_argument('--seconds', type=seconds, default=8.0, help='wall seconds each CPU window lasts (default 8)')
     parser.add_argument('--patches', type=_counts, default=(1, 2, 4, 8),
@@ -387,9 +389,6 @@ def add_arguments(parser: Any) -> None:
 
 
 def run(args: Any) -> int:
-    import platform
-
-    from touch_graph.files import write_text
     figures = bench_wall_clock(repeats=args.repeats, seconds=args.seconds, patches=args.patches,
                                process_patches=args.process_patches,
                                progress=lambda text: print(text, file=sys.stderr, flush=True))

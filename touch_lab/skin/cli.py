@@ -35,6 +35,7 @@ from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, le
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
 from touch_lab.skin.logged_times import logged_times
 from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
+from touch_lab.skin.sessions import run_eval_bags
 from touch_sim.skin.render import RenderedSample, RenderSettings, default_cache_dir, render_samples
 from touch_sim.skin.synthetic import random_touches
 
@@ -267,7 +268,6 @@ def run(args: argparse.Namespace) -> int:
     """Entry point of ``social-touch eval skin``; returns the exit status."""
     names = [n.strip() for n in str(args.recognisers).split(',') if n.strip()]
     if args.bags:
-        from .sessions import run_eval_bags
         return run_eval_bags(args, names[0] if len(names) == 1 else DEFAULT_RECOGNISER)
     if args.limit is not None and args.limit < 1:
         print('eval skin: --limit must be a positive number of samples', file=sys.stderr)

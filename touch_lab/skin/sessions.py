@@ -24,7 +24,7 @@ from touch_graph.errors import SocialTouchError
 from touch_lab.collect.coverage import read_checked
 from touch_lab.collect.session_bag import LabelRow, SessionError, SessionRecording
 from touch_lab.skin.codebook_tools import extend_codebook
-from touch_lab.skin.recognisers import make_recogniser
+from touch_lab.skin.recognisers import load_codebook, make_recogniser
 
 __all__ = ['GRACE_S', 'SkinTrial', 'leave_one_person_out', 'score', 'skin_trials']
 
@@ -205,7 +205,6 @@ def run_eval_bags(args, recogniser: str) -> int:
     try:
         trials, synthetic = load_trials(args.bags, say)
         if getattr(args, 'codebook', None):
-            from touch_lab.skin.recognisers import load_codebook
             book = load_codebook(args.codebook)
             result = score(book, trials)
             people = sorted({t.label.person for t in trials})

@@ -18,7 +18,7 @@ from touch_graph.errors import SocialTouchError
 from touch_lab.cards import session_data
 from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, load_codebook, save_codebook
 
-from .sessions import _say, fit_codebook, load_trials, usable
+from .sessions import _say, fit_codebook, leave_one_person_out, load_trials, usable
 
 __all__ = ['add_arguments', 'run']
 
@@ -53,7 +53,6 @@ def run(args: argparse.Namespace) -> int:
     path = save_codebook(args.output, model, description=description)
     evaluation = None
     if args.evaluate:
-        from .sessions import leave_one_person_out
         result = leave_one_person_out(trials, model.name, say)
         evaluation = {'method': 'leave-one-person-out on the training bags (`social-touch eval skin --bags ...`)',
                       'synthetic': synthetic, **{k: result[k] for k in ('accuracy', 'right', 'wrong', 'rejected',
