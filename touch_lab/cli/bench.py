@@ -43,6 +43,8 @@ BENCHES: dict[str, Command] = {
                           'the graph as launched on the wall clock, sensors fed through ptys: CPU share'),
     'frame-steps': Command('touch_lab.bench.frame_steps:bench_frame_steps',
                            "one skin frame's CPU per step (decode ... recognise), back to back and at 150 Hz"),
+    'message-floor': Command('touch_lab.bench.message_floor:bench_message_floor',
+                             "a SkinFrame at 150 Hz to a subscriber in one process, ours against rclpy: CPU share"),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
     'skin-acceptance': Command('touch_lab.skin.bench:bench_acceptance',
                                'one recognition with thresholds, the product score and the logistic score'),
