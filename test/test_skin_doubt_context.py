@@ -183,3 +183,33 @@ def test_the_fused_recogniser_gives_both_opinions():
     assert model.opinions(g, cloud)[0] is cloud
     plain, _ = people_codebook(name='trace')
     assert plain.opinions(g)[1] is None
+
+
+def test_the_transfer_check_adds_context_features_fold_by_fold():
+    from touch_lab.skin.acceptance_transfer import Fold, measure
+    rng = np.random.default_rng(5)
+    h = habits()
+
+    def opinions(n, gesture, people=('a', 'b')):
+        # Touches that are no gesture lie as near a class as gestures do; only their stroke counts tell.
+        true = rng.integers(0, 2, n)
+        d = rng.uniform(2.0, 3.0, (n, 2))
+        d[np.arange(n), true] = rng.uniform(0.8, 1.5, n)
+        context = np.array([context_features(h, c, STROKES[20 * c] if gesture else 2, CONTACT_S[20 * c])
+                            for c in true])
+        return HeldOut(d, true, true if gesture else np.full(n, -1), np.resize(np.array(people), n), context)
+
+    fold = Fold(held=opinions(200, True), stray=opinions(100, False), stray_made=100, test=opinions(60, True),
+                open=np.ones(60, dtype=bool), samples=60, randoms=opinions(50, False),
+                random_open=np.ones(50, dtype=bool), random_made=50)
+    plain, strokes = measure([fold], 0.005, 'own'), measure([fold], 0.005, 'own', ('strokes',))
+    assert strokes['right'] > plain['right'] and strokes['random_fired'] <= plain['random_fired']
+    assert strokes['right'] > 0.9
+
+
+def test_the_report_names_a_score_with_context():
+    from touch_lab.skin.rejection_report import _score
+    held = [{'score': 'odds', 'score_weights': [0.0] * (len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES))}]
+    assert _score(held) == 'logistic score with context, stray touches'
+    assert _score([{'score': 'odds', 'score_weights': [0.0] * len(PRODUCT_WEIGHTS)}]) == 'logistic score, stray touches'
+    assert _score([{}]).startswith('product score')
