@@ -213,3 +213,17 @@ def test_the_report_names_a_score_with_context():
     assert _score(held) == 'logistic score with context, stray touches'
     assert _score([{'score': 'odds', 'score_weights': [0.0] * len(PRODUCT_WEIGHTS)}]) == 'logistic score, stray touches'
     assert _score([{}]).startswith('product score')
+
+
+def test_the_default_calibration_adds_the_second_opinion_only_where_there_is_one():
+    from touch_lab.skin.acceptance import SCORE_CONTEXT
+    assert set(SCORE_CONTEXT) <= set(CONTEXT_FEATURES)
+    trace, rng = people_codebook(name='trace')
+    calibrate_acceptance(trace, 0.005, scribbles(rng, 80))
+    assert trace.acceptance_['score_features'] == list(DOUBT_FEATURES)   # no second opinion: the old record
+    fused, rng = people_codebook(name='fused')
+    calibrate_acceptance(fused, 0.005, scribbles(rng, 80))
+    weights = fused.acceptance_['score_weights']
+    assert len(weights) in (len(PRODUCT_WEIGHTS), len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES))
+    for name, w in zip(CONTEXT_FEATURES, weights[len(PRODUCT_WEIGHTS):], strict=False):
+        assert name in SCORE_CONTEXT or w == 0.0

@@ -243,8 +243,9 @@ def _features(held: HeldOut, scales: np.ndarray, context: Sequence[str]) -> tupl
 
 
 #: The context features a calibration adds to the distance features (:func:`fit_weights`): those that helped
-#: both ways across the development vocabularies (docs/skin-rejection.md).
-SCORE_CONTEXT: tuple[str, ...] = ()
+#: both ways across the development vocabularies (docs/skin-rejection.md, "Across vocabularies"; the stroke
+#: count and the duration did not).
+SCORE_CONTEXT: tuple[str, ...] = ('disagreement',)
 #: The L2 penalty of :func:`fit_weights` (on the weights of the features, not the intercept).
 L2_PENALTY = 1e-2
 
@@ -380,6 +381,8 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
     null = touch_opinions(target, randoms)
     scales = class_scales(held, len(target.classes_))
     weights = fit_weights(held, null, scales, context=context) if model else None
+    if weights is not None and not weights[len(PRODUCT_WEIGHTS):].any():
+        weights = weights[:len(PRODUCT_WEIGHTS)]   # no context weighs (one opinion): the record of distances alone
     limit = max_score(held, null, scales, max_wrong_rate, len(randoms), weights)
     outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms), model, context)
     fired = float(np.sum(scores(null, scales, weights) <= limit) / len(randoms)) if len(randoms) else None
