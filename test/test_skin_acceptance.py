@@ -328,5 +328,5 @@ def test_the_report_shows_the_cross_vocabulary_runs_with_their_command():
 def test_the_acceptance_bench_times_the_three_rules():
     from touch_lab.skin.bench import bench_acceptance
     result = bench_acceptance('trace', n_gestures=3, templates_per_gesture=3, queries=3, repeats=1)
-    assert set(result['us_per_recognition']) == {'thresholds', 'product', 'logistic'}
+    assert set(result['us_per_recognition']) == {'thresholds', 'product', 'logistic', 'context'}
     assert all(us > 0 for us in result['us_per_recognition'].values())

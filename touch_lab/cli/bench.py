@@ -45,7 +45,8 @@ BENCHES: dict[str, Command] = {
                            "one skin frame's CPU per step (decode ... recognise), back to back and at 150 Hz"),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
     'skin-acceptance': Command('touch_lab.skin.bench:bench_acceptance',
-                               'one recognition with thresholds, the product score and the logistic score'),
+                               'one recognition with thresholds, the product score, the logistic score '
+                               'with and without context'),
 }
 
 
