@@ -319,7 +319,8 @@ def test_the_report_shows_the_cross_vocabulary_runs_with_their_command():
                 'max_wrong_rate': 0.005, 'transferred_weights': [0.0] * 5,
                 'scores': {'own': {'right': 0.95, 'wrong': 0.004, 'rejected': 0.046, 'random_fired': 0.02}}}
     text = format_report([transfer])
-    assert '| multistroke_dev (fused) | unistroke_dev (trace) | own | **95.00 %** | 4.60 % | **0.40 %** |' in text
+    assert ('| multistroke_dev (fused) | unistroke_dev (trace) | 0.5 % | own | **95.00 %** | 4.60 % | **0.40 %** |'
+            in text)
     assert ('`social-touch eval skin-transfer --fit /d/unistroke_dev.csv.gz --fit-recogniser trace '
             '--measure /d/multistroke_dev.csv.gz --measure-recogniser fused --templates-per-gesture 30 '
             '--max-wrong-rate 0.005 --json`') in text
@@ -328,5 +329,5 @@ def test_the_report_shows_the_cross_vocabulary_runs_with_their_command():
 def test_the_acceptance_bench_times_the_three_rules():
     from touch_lab.skin.bench import bench_acceptance
     result = bench_acceptance('trace', n_gestures=3, templates_per_gesture=3, queries=3, repeats=1)
-    assert set(result['us_per_recognition']) == {'thresholds', 'product', 'logistic'}
+    assert set(result['us_per_recognition']) == {'thresholds', 'product', 'logistic', 'context'}
     assert all(us > 0 for us in result['us_per_recognition'].values())

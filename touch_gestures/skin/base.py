@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from ..estimator import NotFittedError, Params
-from .doubt import PRODUCT_WEIGHTS, doubt
+from .doubt import CONTEXT_FEATURES, PRODUCT_WEIGHTS, ClassHabits, context_features, doubt
 from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
@@ -249,13 +249,22 @@ class TemplateRecogniser(Params):
                                   or not 0 <= limit < math.inf):
             raise ValueError(f'an acceptance needs a max_score >= 0 (or None); got {limit!r}')
         weights = np.asarray(record.get('score_weights', PRODUCT_WEIGHTS), dtype=np.float64).reshape(-1)
-        if weights.shape != (len(PRODUCT_WEIGHTS),) or not np.all(np.isfinite(weights)):
-            raise ValueError(f'an acceptance needs {len(PRODUCT_WEIGHTS)} finite score_weights (.doubt); got '
+        sizes = (len(PRODUCT_WEIGHTS), len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES))
+        if len(weights) not in sizes or not np.all(np.isfinite(weights)):
+            raise ValueError(f'an acceptance needs {sizes[0]} or {sizes[1]} finite score_weights (.doubt); got '
                              f'{record.get("score_weights")!r}')
         self.acceptance_ = dict(record)
         self._acceptance_scales = scales.tolist()
         self._acceptance_weights = None if 'score_weights' not in record else weights.tolist()
         self._acceptance_limit = math.inf if limit is None else float(limit)
+        self._acceptance_habits = None if len(weights) == sizes[0] else ClassHabits(
+            self.template_labels_, len(self.classes_), self.template_strokes_, self.template_contact_s_)
+
+    def opinions(self, gesture: TouchGesture, deciding: np.ndarray | None = None
+                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(n_classes,) distances of ``gesture`` to each class by each opinion this recogniser asks: the deciding
+        one's (``deciding`` when already known) and a second one's (None here; the fused recogniser's trace)."""
+        return (self.class_distances(gesture) if deciding is None else deciding), None
 
     def class_distances(self, gesture: TouchGesture) -> np.ndarray | None:
         """(n_classes,) float64 distance to the nearest template of each class, or None if unusable."""
@@ -291,7 +300,7 @@ class TemplateRecogniser(Params):
         if allowed is not None and (allowed.all() or not allowed.any()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
         step('evidence')
-        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed)
+        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed, gesture)
         step('decision')
         if match.label is None:
             return match
@@ -329,13 +338,13 @@ class TemplateRecogniser(Params):
         candidates and the end of a gesture match prefixes of its templates (:mod:`.early`, :mod:`.ending`)."""
         return self
 
-    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None
-                ) -> tuple[Match, int]:
+    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None,
+                gesture: TouchGesture | None = None) -> tuple[Match, int]:
         """:meth:`decide` of the class ``best`` (default: the nearest), with its index (for the evidence
         checks of :meth:`predict`). The margin is over the nearest other class of all: negative when
         ``best`` is not the nearest, which the margin rule then rejects; as ``'strokes'`` where the nearest
         is a class ``allowed`` ((n_classes,) bool) rules out (the touch is nearer a symbol written with
-        another number of strokes)."""
+        another number of strokes). A score with context features reads them off ``gesture`` (none: 0)."""
         if best is None:
             best = int(np.argmin(per_class))
         distances = per_class.tolist()
@@ -347,8 +356,12 @@ class TemplateRecogniser(Params):
         scales = getattr(self, '_acceptance_scales', None)
         if scales is not None:
             weights = getattr(self, '_acceptance_weights', None)
+            habits = getattr(self, '_acceptance_habits', None)
+            context = () if habits is None else [0.0] * len(CONTEXT_FEATURES) if gesture is None else \
+                context_features(habits, best, gesture.strokes, gesture.contact_s,
+                                 self.opinions(gesture, per_class)[1])
             score = (acceptance_score(d1, margin, scales[best]) if weights is None
-                     else doubt(distances, best, scales, weights))
+                     else doubt(distances, best, scales, weights, context))
             if margin >= 0 and not score > self._acceptance_limit:
                 return Match(nearest, d1, margin, nearest, None), best
             ruled_out = margin < 0 and allowed is not None and not allowed[int(np.argmin(per_class))]

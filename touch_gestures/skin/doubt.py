@@ -12,6 +12,19 @@ codebook's own leave-one-person-out reading; :mod:`touch_lab.skin.acceptance` fi
 - ``crowd``: log of the distance over the median distance to the other classes (named class hardly nearer
   than any other: a shape like none of them).
 
+A calibration may add evidence the shape match throws away (:data:`CONTEXT_FEATURES`, :func:`context_features`),
+each in the codebook's own units so that it holds for people and vocabularies the codebook never saw:
+
+- ``disagreement``: log of the second opinion's distance to the named class over its distance to its own nearest
+  class (0 when it names the same class; the fused recogniser's trace, :meth:`.base.TemplateRecogniser.opinions`;
+  0 for a recogniser of one opinion);
+- ``strokes``: how rare the touch's stroke count is among the named class's templates, ``-log((k + 1/2) / (n + 1))``
+  (k of the class's n templates show it);
+- ``duration``: how far the log of the time in contact lies from the median of the named class's templates', in
+  robust spreads of theirs (1.4826 x the median absolute deviation, at least :data:`DURATION_SPREAD_FLOOR`).
+
+A value the codebook or the touch does not know (no strokes or times recorded, a NaN) is 0: no evidence either way.
+
 ``odds = exp(w0 + w . features)``. A codebook calibrated before the model existed has no weights: its score
 is :data:`PRODUCT_WEIGHTS`, the distance over the scale times the ratio to the runner-up. The score is 0 for
 an exact match and inf where the runner-up is nearer than the named class or a value is NaN (never accepted).
@@ -24,10 +37,20 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ['DOUBT_FEATURES', 'PRODUCT_WEIGHTS', 'doubt', 'doubt_features', 'scores_of']
+__all__ = ['CONTEXT_FEATURES', 'DOUBT_FEATURES', 'DURATION_SPREAD_FLOOR', 'MIN_CONTACT_S', 'PRODUCT_WEIGHTS',
+           'ClassHabits', 'context_features', 'disagreement', 'doubt', 'doubt_features', 'scores_of']
 
 #: The features of :func:`doubt_features`, in column order (module doc).
 DOUBT_FEATURES = ('distance', 'runner_up', 'runner_up_distance', 'crowd')
+#: The further features of :func:`context_features`, in column order after :data:`DOUBT_FEATURES` (module doc).
+CONTEXT_FEATURES = ('disagreement', 'strokes', 'duration')
+#: The least robust spread of a class's log contact times (a class whose templates all last the same would
+#: otherwise call any other duration impossible).
+DURATION_SPREAD_FLOOR = 0.05
+#: The time in contact, s, a touch of one frame counts as (the log of none is no number).
+MIN_CONTACT_S = 1e-3
+#: A class with fewer timed templates than this takes the median spread of the others.
+_MIN_TIMED = 3
 #: The weights (intercept first) of the score of a calibration without a model: distance / scale x distance /
 #: runner-up's distance.
 PRODUCT_WEIGHTS = (0.0, 1.0, 1.0, 0.0, 0.0)
@@ -83,9 +106,10 @@ def _others(d: np.ndarray, named: np.ndarray) -> np.ndarray:
 
 
 def doubt(distances: Sequence[float] | np.ndarray, best: int, scales: Sequence[float] | np.ndarray,
-          weights: Sequence[float] | np.ndarray) -> float:
+          weights: Sequence[float] | np.ndarray, context: Sequence[float] = ()) -> float:
     """The score of one touch: ``distances`` (C,) to each class, ``best`` the named class, ``scales`` (C,),
-    ``weights`` (5,) intercept first (module doc). Plain Python over the C numbers: one call per touch on the
+    ``weights`` (5 + K,) intercept first, ``context`` (K,) the touch's :data:`CONTEXT_FEATURES` the weights go on
+    with (module doc). Plain Python over the C numbers: one call per touch on the
     robot, where numpy's per-call overhead would cost more than the arithmetic (the same as :func:`scores_of`
     of :func:`doubt_features`)."""
     d = distances.tolist() if isinstance(distances, np.ndarray) else [float(v) for v in distances]
@@ -113,6 +137,8 @@ def doubt(distances: Sequence[float] | np.ndarray, best: int, scales: Sequence[f
     z = (w[0] + w[1] * _clip(log_d1 - math.log(float(scales[best]))) + w[2] * _clip(log_d1 - log_d2)
          + w[3] * _clip(log_d2 - math.log(float(scales[runner])))
          + w[4] * _clip(log_d1 - math.log(max(crowd, _TINY))))
+    for weight, value in zip(w[5:], context, strict=True):
+        z += weight * _clip(value)
     if math.isnan(z):
         return math.inf
     return math.exp(z) if z < 709.0 else math.inf
@@ -133,3 +159,81 @@ def scores_of(features: np.ndarray, usable: np.ndarray, weights: np.ndarray) -> 
     out[exact] = 0.0
     out[~usable | np.isnan(out)] = math.inf
     return out
+
+
+class ClassHabits:
+    """Per class, the stroke counts and log contact times of its templates: the ``strokes`` and ``duration``
+    features of :func:`context_features` (module doc).
+
+    Args:
+        template_labels: (T,) class index of each template.
+        n_classes: C.
+        strokes: (T,) strokes of each template, or None (not recorded: the feature is 0).
+        contact_s: (T,) s, each template's time in contact (NaN where not recorded), or None.
+    """
+
+    def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
+                 contact_s: np.ndarray | None = None) -> None:
+        labels = np.asarray(template_labels, dtype=np.intp)
+        self.n_templates = np.bincount(labels, minlength=n_classes)
+        self.stroke_counts: list[dict[int, int]] | None = None
+        if strokes is not None:
+            strokes = np.asarray(strokes, dtype=np.int64)
+            self.stroke_counts = [dict(zip(*(v.tolist() for v in np.unique(strokes[labels == c], return_counts=True)),
+                                           strict=True)) for c in range(n_classes)]
+        self.log_contact_median = self.log_contact_spread = None
+        if contact_s is not None:
+            contact_s = np.asarray(contact_s, dtype=np.float64)
+            median, spread = np.full(n_classes, np.nan), np.full(n_classes, np.nan)
+            for c in range(n_classes):
+                own = contact_s[(labels == c) & np.isfinite(contact_s) & (contact_s > 0)]
+                if own.size:
+                    logs = np.log(own)
+                    median[c] = np.median(logs)
+                    if own.size >= _MIN_TIMED:
+                        spread[c] = 1.4826 * np.median(np.abs(logs - median[c]))
+            known = spread[np.isfinite(spread)]
+            spread[np.isnan(spread)] = np.median(known) if known.size else DURATION_SPREAD_FLOOR
+            self.log_contact_median = median
+            self.log_contact_spread = np.maximum(spread, DURATION_SPREAD_FLOOR)
+
+    def strokes_feature(self, named: int, strokes: float) -> float:
+        """``-log((k + 1/2) / (n + 1))`` of a touch of ``strokes`` named ``named`` (module doc); 0 when unknown."""
+        if self.stroke_counts is None or strokes != strokes:
+            return 0.0
+        k = self.stroke_counts[named].get(int(strokes), 0)
+        return -math.log((k + 0.5) / (int(self.n_templates[named]) + 1))
+
+    def duration_feature(self, named: int, contact_s: float) -> float:
+        """``|log contact_s - median| / spread`` of the named class (module doc); 0 when unknown. A touch of no
+        time in contact (one frame) counts as :data:`MIN_CONTACT_S`."""
+        if self.log_contact_median is None or contact_s != contact_s:
+            return 0.0
+        median = float(self.log_contact_median[named])
+        if median != median:
+            return 0.0
+        return abs(math.log(max(float(contact_s), MIN_CONTACT_S)) - median) / float(self.log_contact_spread[named])
+
+
+def disagreement(second: np.ndarray | None, named: int) -> float:
+    """The ``disagreement`` feature (module doc): log of ``second`` (C,)'s distance to ``named`` over its smallest;
+    0 without a second opinion, :data:`FEATURE_BOUND` where it cannot be read (NaN, or an exact match elsewhere)."""
+    if second is None:
+        return 0.0
+    d = np.asarray(second, dtype=np.float64)
+    if np.isnan(d).any():
+        return FEATURE_BOUND
+    nearest, own = float(d.min()), float(d[named])
+    if own == nearest:
+        return 0.0
+    if nearest <= 0 or not math.isfinite(own):
+        return FEATURE_BOUND
+    return _clip(math.log(own / nearest))
+
+
+def context_features(habits: ClassHabits, named: int, strokes: float, contact_s: float,
+                     second: np.ndarray | None = None) -> list[float]:
+    """The :data:`CONTEXT_FEATURES` of one touch named ``named`` (module doc): its ``strokes`` and ``contact_s``
+    (s), and the second opinion's (C,) distances (None: a recogniser of one opinion)."""
+    return [disagreement(second, named), _clip(habits.strokes_feature(named, strokes)),
+            _clip(habits.duration_feature(named, contact_s))]

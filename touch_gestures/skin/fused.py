@@ -161,6 +161,13 @@ class FusedRecogniser(TemplateRecogniser):
     def distances(self, query: np.ndarray) -> np.ndarray:
         return self.cloud_.distances(query[:self.cloud_width])   # a template's or a query's: the cloud comes first
 
+    def opinions(self, gesture: TouchGesture, deciding: np.ndarray | None = None
+                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(n_classes,) distances of ``gesture`` to each class by the order-free cloud (``deciding`` when already
+        known) and by the ordered trace (None where either cannot read it)."""
+        cloud = self.cloud_.class_distances(gesture) if deciding is None else deciding
+        return cloud, self.trace_.class_distances(gesture)
+
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         return sum_rule_nearest(per_class, self.trace_.class_distances(gesture), allowed)
 

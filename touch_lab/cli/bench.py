@@ -47,7 +47,8 @@ BENCHES: dict[str, Command] = {
                              "a SkinFrame at 150 Hz to a subscriber in one process, ours against rclpy: CPU share"),
     'skin-latency': Command('touch_lab.skin.latency:bench_latency', "the skin's decision after the gesture's end"),
     'skin-acceptance': Command('touch_lab.skin.bench:bench_acceptance',
-                               'one recognition with thresholds, the product score and the logistic score'),
+                               'one recognition with thresholds, the product score, the logistic score '
+                               'with and without context'),
 }
 
 

@@ -5,8 +5,10 @@ deciding distance to every class and the class named. From those:
 
 - each class's **scale**: the :data:`SCALE_QUANTILE` quantile of its held-out templates' distances to it;
 - a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command,
-  a logistic model (:func:`fit_weights`) on distances in scale units, fit on held-out templates named
-  right against those named wrong and synthetic touches that are no gesture;
+  a logistic model (:func:`fit_weights`) on distances in scale units and, where the calibration adds them,
+  the touch's context (:data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`: the second opinion's disagreement,
+  how plausible its strokes and duration are for the named class), fit on held-out templates named right
+  against those named wrong and synthetic touches that are no gesture;
 - the **limit**: the largest score keeping held-out wrong commands at most ``max_wrong_rate`` and
   no-gesture touches firing at most :data:`MAX_RANDOM_FIRING` (:func:`null_touches`).
 
@@ -27,7 +29,15 @@ from types import SimpleNamespace
 import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser, nearest_allowed
-from touch_gestures.skin.doubt import DOUBT_FEATURES, PRODUCT_WEIGHTS, doubt_features, scores_of
+from touch_gestures.skin.doubt import (
+    CONTEXT_FEATURES,
+    DOUBT_FEATURES,
+    PRODUCT_WEIGHTS,
+    ClassHabits,
+    context_features,
+    doubt_features,
+    scores_of,
+)
 from touch_gestures.skin.fused import FusedRecogniser, sum_rule_nearest
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
@@ -38,9 +48,9 @@ from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samp
 from touch_sim.skin.stray import stray_touches
 from touch_sim.skin.traces import TraceSample
 
-__all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'HeldOut', 'calibrate', 'calibrate_acceptance', 'class_scales',
-           'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches', 'scores',
-           'skin_touches', 'touch_opinions', 'wrong_rate']
+__all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'SCORE_CONTEXT', 'HeldOut', 'calibrate', 'calibrate_acceptance',
+           'class_scales', 'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches',
+           'scores', 'skin_touches', 'touch_opinions', 'wrong_rate']
 
 #: A class's scale is this quantile of its held-out templates' distances to it.
 SCALE_QUANTILE = 0.9
@@ -61,15 +71,26 @@ class HeldOut:
         named: (N,) the class the recogniser names (its naming rule and stroke evidence).
         true: (N,) the touch's class (-1: a touch that is no gesture).
         people: (N,) who drew it ('' for random touches).
+        context: (N, K) each touch's :data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES` for its named class
+            (None: all 0, no evidence).
     """
 
     distances: np.ndarray
     named: np.ndarray
     true: np.ndarray
     people: np.ndarray
+    context: np.ndarray | None = None
 
     def subset(self, mask: np.ndarray) -> HeldOut:
-        return HeldOut(self.distances[mask], self.named[mask], self.true[mask], self.people[mask])
+        return HeldOut(self.distances[mask], self.named[mask], self.true[mask], self.people[mask],
+                       None if self.context is None else self.context[mask])
+
+    def context_of(self, names: Sequence[str]) -> np.ndarray:
+        """(N, len(names)) the context features ``names`` (of :data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`)."""
+        columns = [CONTEXT_FEATURES.index(n) for n in names]
+        if self.context is None:
+            return np.zeros((len(self.named), len(columns)))
+        return self.context[:, columns]
 
 
 def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = None) -> HeldOut:
@@ -91,15 +112,18 @@ def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = No
     classes = recogniser.classes_
     labels = recogniser.template_labels_
     strokes = recogniser.template_strokes_
-    rows, named, true, who = [], [], [], []
+    contacts = getattr(recogniser, 'template_contact_s_', None)
+    rows, named, true, who, context = [], [], [], [], []
     for person in known:
         out = people == person
         keep = ~out
         sub = type(recogniser)(**recogniser.get_params())
         sub.set_codebook(recogniser.templates_[keep], classes[labels[keep]],
                          class_thresholds=np.full(len(np.unique(labels[keep])), np.inf),
-                         template_strokes=None if strokes is None else strokes[keep])
+                         template_strokes=None if strokes is None else strokes[keep],
+                         template_contact_s=None if contacts is None else contacts[keep])
         index = np.searchsorted(classes, sub.classes_)   # the sub-codebook's classes among all
+        habits = ClassHabits(sub.template_labels_, len(sub.classes_), sub.template_strokes_, sub.template_contact_s_)
         for i in _spread(np.flatnonzero(out), labels, per_class):
             row = recogniser.templates_[i]
             d_sub = sub.query_class_distances(row)
@@ -107,16 +131,23 @@ def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = No
             d = np.full(len(classes), np.inf)
             d[index] = d_sub
             rows.append(d)
-            named.append(index[_named(sub, row, d_sub, allowed)])
+            second = _second_opinion(sub, row)
+            best = _named(sub, d_sub, second, allowed)
+            named.append(index[best])
             true.append(labels[i])
             who.append(person)
-    return HeldOut(np.array(rows), np.array(named), np.array(true), np.array(who))
+            context.append(context_features(habits, best, np.nan if strokes is None else int(strokes[i]),
+                                            np.nan if contacts is None else float(contacts[i]), second))
+    return HeldOut(np.array(rows), np.array(named), np.array(true), np.array(who),
+                   np.array(context).reshape(-1, len(CONTEXT_FEATURES)))
 
 
 def touch_opinions(recogniser: TemplateRecogniser, touches: Sequence[TouchGesture]) -> HeldOut:
     """The whole codebook's opinions of ``touches`` that are no gesture (screened ones left out: the skin
     node never reads them)."""
-    rows, named = [], []
+    rows, named, context = [], [], []
+    habits = ClassHabits(recogniser.template_labels_, len(recogniser.classes_), recogniser.template_strokes_,
+                         getattr(recogniser, 'template_contact_s_', None))
     for touch in touches:
         if screen_gesture(touch) is not None:
             continue
@@ -127,10 +158,14 @@ def touch_opinions(recogniser: TemplateRecogniser, touches: Sequence[TouchGestur
         evidence = getattr(recogniser, 'codebook_evidence_', None)
         allowed = None if evidence is None else _usable_mask(evidence.allowed(touch))
         rows.append(per_class)
-        named.append(recogniser._nearest(touch, per_class, allowed))
+        best = recogniser._nearest(touch, per_class, allowed)
+        named.append(best)
+        context.append(context_features(habits, best, touch.strokes, touch.contact_s,
+                                        recogniser.opinions(touch, per_class)[1]))
     n_classes = len(recogniser.classes_)
     return HeldOut(np.array(rows).reshape(-1, n_classes), np.array(named, dtype=np.intp),
-                   np.full(len(named), -1), np.full(len(named), ''))
+                   np.full(len(named), -1), np.full(len(named), ''),
+                   np.array(context).reshape(-1, len(CONTEXT_FEATURES)))
 
 
 def _allowed(sub: TemplateRecogniser, strokes: int) -> np.ndarray | None:
@@ -153,12 +188,20 @@ def _spread(indices: np.ndarray, labels: np.ndarray, per_class: int | None) -> l
     return out
 
 
-def _named(sub: TemplateRecogniser, row: np.ndarray, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
-    """The class ``sub`` names for a template's features ``row`` (its ``_nearest`` without the gesture)."""
+def _second_opinion(sub: TemplateRecogniser, row: np.ndarray) -> np.ndarray | None:
+    """``sub``'s second opinion (:meth:`~touch_gestures.skin.base.TemplateRecogniser.opinions`) of a template's
+    features ``row``: the fused recogniser's trace of the order traced; None for a recogniser of one opinion."""
     if isinstance(sub, FusedRecogniser):
         start = sub.cloud_width
-        trace = sub.trace_.query_class_distances(row[start:start + 2 * sub.trace_points])
-        return sum_rule_nearest(per_class, trace, allowed)
+        return sub.trace_.query_class_distances(row[start:start + 2 * sub.trace_points])
+    return None
+
+
+def _named(sub: TemplateRecogniser, per_class: np.ndarray, second: np.ndarray | None,
+           allowed: np.ndarray | None) -> int:
+    """The class ``sub`` names for a template (its ``_nearest`` without the gesture)."""
+    if isinstance(sub, FusedRecogniser):
+        return sum_rule_nearest(per_class, second, allowed)
     return nearest_allowed(per_class, allowed)
 
 
@@ -180,23 +223,58 @@ def class_scales(held: HeldOut, n_classes: int) -> np.ndarray:
 
 def scores(held: HeldOut, scales: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
     """(N,) :func:`~touch_gestures.skin.doubt.doubt` of each touch with ``weights`` (default
-    :data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`); inf where the named class is not the nearest (a negative
-    margin is rejected whatever the score)."""
+    :data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`; longer ones go on with the context features); inf where the
+    named class is not the nearest (a negative margin is rejected whatever the score)."""
+    w = np.asarray(PRODUCT_WEIGHTS if weights is None else weights, dtype=np.float64)
+    features, usable = _features(held, scales, CONTEXT_FEATURES[:len(w) - len(PRODUCT_WEIGHTS)])
+    return scores_of(features, usable, w)
+
+
+def _features(held: HeldOut, scales: np.ndarray, context: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`~touch_gestures.skin.doubt.doubt_features` of ``held``, then its ``context`` features (an exact match
+    stays all -inf)."""
     features, usable = doubt_features(held.distances, held.named, scales)
-    return scores_of(features, usable, PRODUCT_WEIGHTS if weights is None else weights)
+    if not context:
+        return features, usable
+    extra = held.context_of(context)
+    exact = np.isneginf(features).all(axis=1)
+    extra = np.where(exact[:, None], -np.inf, extra)
+    return np.hstack([features, extra]), usable
 
 
+#: The context features a calibration adds to the distance features (:func:`fit_weights`): those that helped
+#: both ways across the development vocabularies (docs/skin-rejection.md, "Across vocabularies"; the stroke
+#: count and the duration did not).
+SCORE_CONTEXT: tuple[str, ...] = ('disagreement',)
 #: The L2 penalty of :func:`fit_weights` (on the weights of the features, not the intercept).
 L2_PENALTY = 1e-2
 
 
-def fit_weights(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations: int = 30) -> np.ndarray:
-    """(5,) the score's logistic weights, intercept first (:data:`~touch_gestures.skin.doubt.DOUBT_FEATURES`): the
-    odds of no right command, the held-out templates named right (0) against those named wrong and ``randoms``
-    (1), each side weighing half (Newton's method, :data:`L2_PENALTY`). The product's weights
-    (:data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`) when either side has no touch that can be accepted."""
-    fh, uh = doubt_features(held.distances, held.named, scales)
-    fr, ur = doubt_features(randoms.distances, randoms.named, scales)
+def fit_weights(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations: int = 30,
+                context: Sequence[str] = ()) -> np.ndarray:
+    """The score's logistic weights, intercept first (:data:`~touch_gestures.skin.doubt.DOUBT_FEATURES`, then
+    with ``context`` (names of :data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`) all context features, those not
+    named weighing 0): (5,) or (8,). The odds of no right command, the held-out templates named right (0) against
+    those named wrong and ``randoms`` (1), each side weighing half (Newton's method, :data:`L2_PENALTY`). The
+    product's weights (:data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`, padded with 0) when either side has no
+    touch that can be accepted."""
+    unknown = set(context) - set(CONTEXT_FEATURES)
+    if unknown:
+        raise ValueError(f'unknown context features {sorted(unknown)}; known: {list(CONTEXT_FEATURES)}')
+    used = [n for n in CONTEXT_FEATURES if n in context]
+    columns = list(range(len(DOUBT_FEATURES))) + [len(DOUBT_FEATURES) + CONTEXT_FEATURES.index(n) for n in used]
+    width = len(PRODUCT_WEIGHTS) + (len(CONTEXT_FEATURES) if context else 0)
+    beta = _fit(held, randoms, scales, iterations, used)
+    out = np.zeros(width)
+    out[0] = beta[0]
+    out[1 + np.array(columns)] = beta[1:]
+    return out
+
+
+def _fit(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations: int, context: Sequence[str]) -> np.ndarray:
+    """:func:`fit_weights` of the distance features and the ``context`` ones, in that order."""
+    fh, uh = _features(held, scales, context)
+    fr, ur = _features(randoms, scales, context)
     right = uh & (held.named == held.true)
     bad = np.r_[uh & ~right, ur]
     x = np.vstack([fh[right], np.vstack([fh, fr])[bad]])
@@ -204,7 +282,7 @@ def fit_weights(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations:
     finite = np.isfinite(x).all(axis=1)
     x, y = x[finite], y[finite]
     if not (y == 0).any() or not (y == 1).any():
-        return np.asarray(PRODUCT_WEIGHTS, dtype=np.float64)
+        return np.r_[PRODUCT_WEIGHTS, np.zeros(len(context))]
     w = np.where(y == 0, 0.5 / np.sum(y == 0), 0.5 / np.sum(y == 1))
     design = np.column_stack([np.ones(len(x)), x])
     penalty = np.diag([0.0] + [L2_PENALTY] * x.shape[1])
@@ -243,16 +321,18 @@ def max_score(held: HeldOut, randoms: HeldOut, scales: np.ndarray, max_wrong_rat
 
 
 def cross_person_outcomes(held: HeldOut, randoms: HeldOut, max_wrong_rate: float,
-                          random_touches: int | None = None, model: bool = True) -> np.ndarray:
-    """(N,) what each held-out template gets, judged by scales, weights (``model``; else the product's) and a
-    limit set from everyone else's: 1 the right command, -1 a wrong one, 0 rejected."""
+                          random_touches: int | None = None, model: bool = True,
+                          context: Sequence[str] = ()) -> np.ndarray:
+    """(N,) what each held-out template gets, judged by scales, weights (``model``, with the ``context`` features
+    of :func:`fit_weights`; else the product's) and a limit set from everyone else's: 1 the right command, -1 a
+    wrong one, 0 rejected."""
     n_classes = held.distances.shape[1]
     accepted = np.zeros(len(held.true), dtype=bool)
     for person in np.unique(held.people):
         mine = held.people == person
         rest = held.subset(~mine)
         scales = class_scales(rest, n_classes)
-        weights = fit_weights(rest, randoms, scales) if model else None
+        weights = fit_weights(rest, randoms, scales, context=context) if model else None
         accepted[mine] = scores(held.subset(mine), scales, weights) <= max_score(
             rest, randoms, scales, max_wrong_rate, random_touches, weights)
     return np.where(accepted, np.where(held.named == held.true, 1, -1), 0)
@@ -274,7 +354,8 @@ def skin_touches(samples: Sequence[TraceSample], render_seed: int, gap_s: float)
 
 def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
                          randoms: Sequence[TouchGesture] = (), per_class: int | None = None,
-                         held: HeldOut | None = None, model: bool = True) -> TemplateRecogniser:
+                         held: HeldOut | None = None, model: bool = True,
+                         context: Sequence[str] = SCORE_CONTEXT) -> TemplateRecogniser:
     """Set ``recogniser``'s acceptance for at most ``max_wrong_rate`` wrong commands (module doc); returns it.
 
     Args:
@@ -286,6 +367,7 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
         held: opinions already computed for this codebook (skips :func:`held_out_opinions`).
         model: fit the score's weights (:func:`fit_weights`); False: the product score (distance over scale
             times the ratio to the runner-up), as codebooks calibrated before the model.
+        context: the context features the model adds (:func:`fit_weights`; () the four distance features alone).
 
     Raises:
         ValueError: a rate out of range, or a codebook without two people.
@@ -298,14 +380,17 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
         held = held_out_opinions(target, per_class)
     null = touch_opinions(target, randoms)
     scales = class_scales(held, len(target.classes_))
-    weights = fit_weights(held, null, scales) if model else None
+    weights = fit_weights(held, null, scales, context=context) if model else None
+    if weights is not None and not weights[len(PRODUCT_WEIGHTS):].any():
+        weights = weights[:len(PRODUCT_WEIGHTS)]   # no context weighs (one opinion): the record of distances alone
     limit = max_score(held, null, scales, max_wrong_rate, len(randoms), weights)
-    outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms), model)
+    outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms), model, context)
     fired = float(np.sum(scores(null, scales, weights) <= limit) / len(randoms)) if len(randoms) else None
     record = {'max_wrong_rate': float(max_wrong_rate), 'max_score': limit if math.isfinite(limit) else None,
               'class_scales': scales.tolist(), 'scale_quantile': SCALE_QUANTILE,
               **({} if weights is None else {'score': 'odds of no right command (logistic)',
-                                             'score_features': list(DOUBT_FEATURES),
+                                             'score_features': list(DOUBT_FEATURES) + list(
+                                                 CONTEXT_FEATURES[:len(weights) - len(PRODUCT_WEIGHTS)]),
                                              'score_weights': weights.tolist()}),
               'max_random_firing': MAX_RANDOM_FIRING, 'random_touches': len(randoms), 'random_fired': fired,
               'held_out': len(held.true), 'people': len(np.unique(held.people)),

@@ -6,7 +6,10 @@ codebook calibrated for ``--max-wrong-rate`` three ways:
 
 - **own**: weights fit on the fold's codebook (:func:`.acceptance.calibrate_acceptance`);
 - **transferred**: weights fit once on the ``--fit`` file's codebook, only the limit set per fold;
-- **product**: the score before the model (distance over scale times the ratio to the runner-up).
+- **product**: the score before the model (distance over scale times the ratio to the runner-up);
+- the first two again with each context feature (:data:`touch_gestures.skin.doubt.CONTEXT_FEATURES`) added
+  alone and with all of them (``own+strokes``, ``transferred+all``, ...): a feature is worth keeping only when it
+  helps both ways.
 
 Held-out samples are cut at the longest lift a gesture may have, so the figures compare the three
 scores with each other; ``eval skin`` gives the absolute ones.
@@ -23,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.doubt import CONTEXT_FEATURES, ClassHabits, context_features
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
@@ -71,8 +75,8 @@ class Fold:
     random_made: int
 
 
-def _render(path: str):
-    samples = read_traces(path).samples
+def _render(path: str, limit: int | None = None):
+    samples = read_traces(path, limit=limit).samples
     multi = max(s.n_strokes for s in samples) > 1
     gap = ENDING_GAP_S if multi else SINGLE_STROKE_GAP_S   # as ``eval skin``
     rendered = _joined(render_samples(samples, RenderSettings(mode='sensor', seed=0, gap_s=PIECE_GAP_S,
@@ -87,24 +91,29 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
     """The whole codebook's opinions of ``gestures`` and which are open to the score (module doc)."""
     n = len(model.classes_)
     model.set_acceptance({'class_scales': [1.0] * n, 'max_score': None})   # only the other rules reject
-    rows, named, true, open_ = [], [], [], []
+    habits = ClassHabits(model.template_labels_, n, model.template_strokes_, model.template_contact_s_)
+    rows, named, true, open_, context = [], [], [], [], []
     for k, g in enumerate(gestures):
         query = model._query_features(g)
         if query is None:
             continue
         match = model.predict(g)
-        rows.append(model.query_class_distances(query))
+        per_class = model.query_class_distances(query)
+        rows.append(per_class)
         named.append(int(np.searchsorted(model.classes_, match.nearest)) if match.nearest is not None else 0)
+        context.append(context_features(habits, named[-1], g.strokes, g.contact_s, model.opinions(g, per_class)[1]))
         true.append(-1 if labels is None else labels[k])
         open_.append(screen_gesture(g) is None and match.label is not None)
     held = HeldOut(np.array(rows).reshape(-1, n), np.array(named, dtype=np.intp), np.array(true, dtype=np.intp),
-                   np.full(len(named), ''))
+                   np.full(len(named), ''), np.array(context).reshape(-1, len(CONTEXT_FEATURES)))
     return held, np.array(open_, dtype=bool)
 
 
-def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=print) -> list[Fold]:
-    """Every leave-one-person-out fold of ``path`` read by ``recogniser`` (module doc)."""
-    rendered, randoms, gap = _render(path)
+def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=print,
+          limit: int | None = None) -> list[Fold]:
+    """Every leave-one-person-out fold of ``path`` (its first ``limit`` samples) read by ``recogniser`` (module
+    doc)."""
+    rendered, randoms, gap = _render(path, limit)
     stray = null_touches(gap_s=gap)
     subjects = sorted({r.subject for r in rendered})
     out = []
@@ -126,25 +135,30 @@ def folds(path: str, recogniser: str, templates_per_gesture: int | None, say=pri
     return out
 
 
-def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | None) -> np.ndarray:
-    """The score's weights fit on ``path``'s whole codebook (everyone, read by each other) against stray touches."""
-    rendered, _, gap = _render(path)
+def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | None, limit: int | None = None,
+                       contexts: tuple[tuple[str, ...], ...] = ((),)) -> list[np.ndarray]:
+    """The score's weights fit on ``path``'s whole codebook (everyone, read by each other) against stray touches,
+    one per tuple of context features of ``contexts`` (:func:`.acceptance.fit_weights`)."""
+    rendered, _, gap = _render(path, limit)
     book = choose_codebook(rendered, templates_per_gesture, np.random.default_rng(0))
     model = make_recogniser(recogniser).fit([r.gestures[0] for r in book], [r.label for r in book],
                                             [r.subject for r in book])
     model = getattr(model, 'chosen_', model)
     held = held_out_opinions(model)
     stray, stray_open = _opinions(model, null_touches(gap_s=gap))
-    return fit_weights(held, stray.subset(stray_open), class_scales(held, len(model.classes_)))
+    scales = class_scales(held, len(model.classes_))
+    return [fit_weights(held, stray.subset(stray_open), scales, context=c) for c in contexts]
 
 
-def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndarray) -> dict:
+def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndarray,
+            context: tuple[str, ...] = ()) -> dict:
     """Right, wrong, rejected over the held-out samples and random touches firing, each fold's limit set on its
-    codebook with ``weights``: 'own' (fit per fold), 'product', or (5,) fixed weights."""
+    codebook with ``weights``: 'own' (fit per fold, with the ``context`` features), 'product', or (5,) or (8,)
+    fixed weights."""
     right = wrong = samples = fired = made = 0
     for f in all_folds:
         scales = class_scales(f.held, f.held.distances.shape[1])
-        w = (fit_weights(f.held, f.stray, scales) if isinstance(weights, str) and weights == 'own'
+        w = (fit_weights(f.held, f.stray, scales, context=context) if isinstance(weights, str) and weights == 'own'
              else None if isinstance(weights, str) else weights)
         limit = max_score(f.held, f.stray, scales, max_wrong_rate, f.stray_made, w)
         accepted = f.open & (scores(f.test, scales, w) <= limit)
@@ -169,6 +183,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='codebook size per gesture of --measure (0: all)')
     parser.add_argument('--max-wrong-rate', type=wrong_rate, default=0.005, metavar='RATE',
                         help='share of wrong commands each fold is calibrated for (0.005)')
+    parser.add_argument('--limit', type=non_negative_int, default=0,
+                        help='use only the first N samples of each file (0: all): for trying things out')
     parser.add_argument('--json', action='store_true', help='print one JSON object instead of text')
 
 
@@ -177,20 +193,31 @@ def run(args: argparse.Namespace) -> int:
     def say(line: str) -> None:
         print(f'[acceptance transfer] {line}', file=sys.stderr, flush=True)
 
-    transferred = whole_file_weights(args.fit, args.fit_recogniser, args.fit_templates_per_gesture or None)
-    say(f'weights fit on {args.fit}: {np.round(transferred, 3).tolist()}')
-    measured = folds(args.measure, args.measure_recogniser, args.templates_per_gesture or None, say)
+    limit = args.limit or None
+    variants = [(), *((n,) for n in CONTEXT_FEATURES), CONTEXT_FEATURES]
+    names = ['', *(f'+{n}' for n in CONTEXT_FEATURES), '+all']
+    fitted = whole_file_weights(args.fit, args.fit_recogniser, args.fit_templates_per_gesture or None, limit,
+                                tuple(variants))
+    transferred = fitted[0]
+    say(f'weights fit on {args.fit}: {np.round(transferred, 3).tolist()}; with all context features '
+        f'{np.round(fitted[-1], 3).tolist()}')
+    measured = folds(args.measure, args.measure_recogniser, args.templates_per_gesture or None, say, limit)
+    scored = {}
+    for name, context, fixed in zip(names, variants, fitted, strict=True):
+        scored[f'own{name}'] = measure(measured, args.max_wrong_rate, 'own', context)
+        scored[f'transferred{name}'] = measure(measured, args.max_wrong_rate, fixed)
+    scored['product'] = measure(measured, args.max_wrong_rate, 'product')
     result = {'fit': args.fit, 'fit_recogniser': args.fit_recogniser, 'measure': args.measure,
               'measure_recogniser': args.measure_recogniser,
               'fit_templates_per_gesture': args.fit_templates_per_gesture or 'all',
               'templates_per_gesture': args.templates_per_gesture or 'all',
+              **({'limit': limit} if limit else {}),
               'max_wrong_rate': args.max_wrong_rate, 'transferred_weights': transferred.tolist(),
-              'scores': {name: measure(measured, args.max_wrong_rate, w)
-                         for name, w in (('own', 'own'), ('transferred', transferred), ('product', 'product'))}}
+              'transferred_weights_context': fitted[-1].tolist(), 'scores': scored}
     if args.json:
         print(json.dumps(result, indent=1))
     else:
         for name, r in result['scores'].items():
-            print(f"{name:12s} right {r['right']:.2%} wrong {r['wrong']:.2%} rejected {r['rejected']:.2%} "
+            print(f"{name:26s} right {r['right']:.2%} wrong {r['wrong']:.2%} rejected {r['rejected']:.2%} "
                   f"random touches firing {r['random_fired']:.2%}")
     return 0

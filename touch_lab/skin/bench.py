@@ -173,20 +173,23 @@ def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int =
                      queries: int = 64, repeats: int = 7, seed: int = 0) -> dict:
     """What the calibrated score costs one recognition (SYNTHETIC gestures; issue 26, the 50 ms goal).
 
-    Median us per ``predict`` on a synthetic codebook, three ways interleaved in one run: the recogniser's own
-    thresholds, the product score, the logistic score (:mod:`touch_gestures.skin.doubt`); the acceptance
+    Median us per ``predict`` on a synthetic codebook, four ways interleaved in one run: the recogniser's own
+    thresholds, the product score, the logistic score (:mod:`touch_gestures.skin.doubt`), and the logistic score
+    with its context features (``context``: the second opinion, strokes, duration); the acceptance
     records are set by hand (the cost does not depend on them). A JSON-ready dict.
     """
     gestures, labels = synthetic_codebook(n_gestures, templates_per_gesture, seed)
     probe, _ = synthetic_codebook(n_gestures, max(1, -(-queries // n_gestures)), seed + 1)
     probe = probe[:queries]
     models = {}
-    for rule in ('thresholds', 'product', 'logistic'):
+    for rule in ('thresholds', 'product', 'logistic', 'context'):
         model = make_recogniser(recogniser).fit(gestures, labels)
         n = len(model.classes_)
         if rule != 'thresholds':
             model.set_acceptance({'class_scales': [1.0] * n, 'max_score': 1.0,
-                                  **({'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5]} if rule == 'logistic' else {})})
+                                  **({'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5]} if rule == 'logistic' else
+                                     {'score_weights': [0.5, 1.0, 1.0, 0.5, 0.5, 0.5, 0.5, 0.5]} if rule == 'context'
+                                     else {})})
         models[rule] = model
     times: dict[str, list[float]] = {rule: [] for rule in models}
     for _ in range(repeats):
@@ -199,4 +202,5 @@ def bench_acceptance(recogniser: str = MULTISTROKE_RECOGNISER, n_gestures: int =
     return {'data': 'synthetic gestures (SYNTHETIC)', 'recogniser': recogniser, 'gestures': n_gestures,
             'templates_per_gesture': templates_per_gesture, 'queries': len(probe), 'repeats': repeats,
             'us_per_recognition': us, 'ratio_logistic_to_thresholds': us['logistic'] / us['thresholds'],
-            'ratio_logistic_to_product': us['logistic'] / us['product']}
+            'ratio_logistic_to_product': us['logistic'] / us['product'],
+            'ratio_context_to_logistic': us['context'] / us['logistic']}

@@ -12,9 +12,10 @@ import json
 import sys
 from pathlib import Path
 
+from touch_gestures.skin.doubt import CONTEXT_FEATURES, PRODUCT_WEIGHTS
 from touch_graph.cli.options import add_output
 
-from .acceptance import MAX_RANDOM_FIRING, SCALE_QUANTILE
+from .acceptance import MAX_RANDOM_FIRING, SCALE_QUANTILE, SCORE_CONTEXT
 
 __all__ = ['add_arguments', 'format_report', 'run']
 
@@ -51,10 +52,13 @@ def _goals(run: dict, r: dict) -> str:
 
 
 def _score(held: list[dict]) -> str:
-    """Which score a calibrated run limited: the logistic odds (calibrated on stray touches), or the product
-    score of runs made before it (calibrated on random touches of the evaluation's own generator)."""
-    return ('logistic score, stray touches' if held and all(a.get('score') for a in held)
-            else 'product score, random touches (same generator)')
+    """Which score a calibrated run limited: the logistic odds (calibrated on stray touches; *with context* when
+    its weights go on past the distance features), or the product score of runs made before it (calibrated on
+    random touches of the evaluation's own generator)."""
+    if not (held and all(a.get('score') for a in held)):
+        return 'product score, random touches (same generator)'
+    context = any(len(a.get('score_weights') or ()) > len(PRODUCT_WEIGHTS) for a in held)
+    return 'logistic score with context, stray touches' if context else 'logistic score, stray touches'
 
 
 def format_report(runs: list[dict]) -> str:
@@ -107,7 +111,11 @@ def format_report(runs: list[dict]) -> str:
         'wrong and synthetic touches that are no gesture (`touch_sim.skin.stray.stray_touches`: presses, swipes, '
         'spirals, rubbing, taps). Runs made before it (*product score*, made with main at 600e2cf; the same '
         'command now calibrates the logistic score) limited the distance over the scale times the ratio to the '
-        "runner-up's distance, calibrated on `random_touches` of another seed;",
+        "runner-up's distance, calibrated on `random_touches` of another seed. The model may add context "
+        '(*with context*, touch_gestures.skin.doubt.CONTEXT_FEATURES, in the codebook\'s own units too): how much '
+        "the fused recogniser's second opinion (the trace) finds another class nearer, how rare the touch's stroke "
+        "count is among the named class's templates, and how far its log time in contact lies from theirs in "
+        'robust spreads; the size of a touch is not among them (a codebook does not record its templates\' size);',
         '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and the synthetic touches '
         f'that are no gesture firing at {100 * MAX_RANDOM_FIRING:g} %.',
         '',
@@ -150,6 +158,7 @@ def _transfer_command(t: dict) -> str:
                else f" --fit-templates-per-gesture {t['fit_templates_per_gesture']}")
             + f" --measure {t['measure']} --measure-recogniser {t['measure_recogniser']}"
             + ('' if per == 'all' else f' --templates-per-gesture {per}')
+            + (f" --limit {t['limit']}" if t.get('limit') else '')
             + f" --max-wrong-rate {t['max_wrong_rate']:g} --json`")
 
 
@@ -158,11 +167,13 @@ def _transfer_section(transfers: list[dict]) -> list[str]:
     if not transfers:
         return []
     rows, commands = [], []
-    for t in sorted(transfers, key=lambda t: (t['measure'], t['fit'])):
+    for t in sorted(transfers, key=lambda t: (t['measure'], t['measure_recogniser'], t['fit'], -t['max_wrong_rate'])):
         fit, measured = Path(t['fit']).name.split('.')[0], Path(t['measure']).name.split('.')[0]
-        commands.append(f'- {measured}, weights fit on {fit}: {_transfer_command(t)}')
+        commands.append(f"- {measured} ({t['measure_recogniser']}), weights fit on {fit}, "
+                        f"{t['max_wrong_rate']:g}: {_transfer_command(t)}")
         for name, r in t['scores'].items():
-            rows.append(f"| {measured} ({t['measure_recogniser']}) | {fit} ({t['fit_recogniser']}) | {name} | "
+            rows.append(f"| {measured} ({t['measure_recogniser']}) | {fit} ({t['fit_recogniser']}) | "
+                        f"{100 * t['max_wrong_rate']:g} % | {name} | "
                         f"**{_pct(r['right'])}** | {_pct(r['rejected'])} | **{_pct(r['wrong'])}** | "
                         f"**{_pct(r['random_fired'])}** |")
     return [
@@ -172,12 +183,20 @@ def _transfer_section(transfers: list[dict]) -> list[str]:
         '(touch_lab.skin.acceptance_transfer): leave-one-person-out over the measured file, each fold\'s limit set '
         'on its own codebook for the same `max_wrong_rate`, with the weights fit on the fold\'s codebook (*own*, '
         'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*); '
-        'all three calibrated on the stray touches. '
+        'all three calibrated on the stray touches. *own+X* and *transferred+X* add the context feature X '
+        f"({', '.join(CONTEXT_FEATURES)}; *all*: the three) to the model; a feature is kept for the calibration "
+        f"(now: {', '.join(SCORE_CONTEXT) or 'none'}) only where it helps in both directions: the second "
+        "opinion's disagreement (the fused recogniser's; a recogniser of one opinion has none) raised the right "
+        'share without more wrong commands or random touches firing wherever the limit binds; the stroke count '
+        'tells nothing on a single-stroke vocabulary and, transferred, cost the fused recogniser right commands; '
+        "the duration's weight changes sign between the files (the unistroke file's people trace at three "
+        'speeds), so transferred it costs either way. On the multistroke file at 0.5 % no score binds (every '
+        'row the same): the other rules reject first; the 0.1 % run shows the scores there. '
         'Held-out samples are cut at the longest lift a gesture may have (not the end-of-gesture rule of `eval '
         "skin`): compare the rows with each other, the table above gives the absolute figures.",
         '',
-        '| measured on | weights fit on | score | right | rejected | wrong | random touches firing |',
-        '|---|---|---|---|---|---|---|',
+        '| measured on | weights fit on | max_wrong_rate | score | right | rejected | wrong | random touches firing |',
+        '|---|---|---|---|---|---|---|---|',
         *rows,
         '',
         *commands,
