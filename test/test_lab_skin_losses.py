@@ -85,3 +85,17 @@ def test_a_class_the_codebook_lacks_is_lost_by_naming(rendered):
 
 def test_doctests_of_the_evaluation():
     check_doctests(touch_lab.skin.evaluate)
+
+
+def test_the_multistroke_report_tables_the_losses_of_each_recogniser(rendered):
+    from touch_lab.skin.multistroke_report import _vocabulary_section
+
+    res = leave_one_subject_out(rendered, {'trace': lambda: make_recogniser('trace')})['trace']
+    res.losses['strokes'] = 2   # as if two were lost to the stroke check: shown, in its column
+    r = {'vocabulary': 'v', 'traces': 'v.csv', 'samples': res.samples, 'gestures': list(SHAPES), 'subjects': ['a'],
+         'multi_stroke_samples': 0, 'gap_s': 0.15, 'gestures_per_sample': {'1': res.samples}, 'data': 'synthetic',
+         'recognisers': {'trace': res.to_dict()}, 'best': 'trace'}
+    lines = _vocabulary_section(r)
+    head = next(i for i, line in enumerate(lines) if line.startswith('| recogniser | lost |'))
+    assert 'strokes' in lines[head].split(' | ') and 'split' not in lines[head]
+    assert lines[head + 2].startswith(f"| trace | {sum(res.losses.values())} |")

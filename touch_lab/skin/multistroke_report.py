@@ -24,6 +24,7 @@ from touch_lab.skin.collision_eval import evaluate_collisions
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.ending_eval import CAUSES, PIECE_GAP_S, ending_causes, ending_table
+from touch_lab.skin.evaluate import LOSS_REASONS
 from touch_lab.skin.latency import bench_latency
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
@@ -71,6 +72,16 @@ def _vocabulary_section(r: dict) -> list[str]:
         out.append(f"| {name} | {_pct(v['accuracy'])} | {_pct(v['accuracy_with_rejection'])} | "
                    f"{_pct(v['rejection_rate'])} | {_pct(v['error_rate'])} | {_pct(v['random_touch_acceptance'])} | "
                    f"{latency} | {v['us_per_recognition']:.0f} |")
+    losses = [(name, v['losses']) for name, v in recs.items() if v.get('losses')]
+    if losses:
+        shown = [k for k in LOSS_REASONS if any(lost.get(k) for _, lost in losses)]
+        out += ['', 'Where the right commands are lost (genuine gestures that fired no right command, counted by the '
+                'first reason, touch_lab.skin.evaluate.LOSS_REASONS: split = cut into more than one gesture; '
+                'named_wrong = the nearest class is not the one traced; disagreement = named right, but the '
+                "deciding distances put another class first; then the evidence checks and the thresholds):", '',
+                '| recogniser | lost | ' + ' | '.join(shown) + ' |', '|---|---|' + '---|' * len(shown)]
+        out += [f"| {name} | {sum(lost.values())} | " + ' | '.join(str(lost.get(k, 0)) for k in shown) + ' |'
+                for name, lost in losses]
     if r.get('default'):
         choices = recs[r['default']].get('choices', {})
         out += ['', f"Default (`{DEFAULT}`, the rule of touch_lab.skin.recognisers.auto) chose: "
