@@ -10,10 +10,11 @@ named. Nothing is fitted for it.
 The combination names the class only: distances, thresholds, margins, the end of a gesture and
 early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
 :meth:`FusedRecogniser.deciding_recogniser`), so a class the cloud does not put first is named but
-rejected (negative margin): the **disagreement rule**. With ``disagreement='confused'`` it holds only
-where the two classes are a pair the codebook confuses (:attr:`FusedRecogniser.confused_`: a template
-whose nearest other template, by the cloud or by the trace, is of the other class); elsewhere the
-class named is decided against the classes other than the cloud's first.
+rejected (negative margin): the **disagreement rule**. With ``disagreement='confused'`` (the
+default; ``'always'``: everywhere) it holds only where the two classes are a pair the codebook
+confuses (:attr:`FusedRecogniser.confused_`: a template whose nearest other template, by the cloud
+or by the trace, is of the other class); elsewhere the class named is decided against the classes
+other than the cloud's first.
 
 The trace holds each template of up to ``stroke_orders`` strokes in every order of its strokes
 (:mod:`.stroke_orders`; each stroke keeps its direction). A template's features are the cloud's
@@ -97,7 +98,7 @@ class FusedRecogniser(TemplateRecogniser):
     n_points: int = 32
     trace_points: int = 32
     stroke_orders: int = 3
-    disagreement: str = 'always'
+    disagreement: str = 'confused'
 
     def _check_params(self) -> None:
         super()._check_params()
