@@ -6,7 +6,7 @@ codebook alone, says what each class allows:
 
 - **strokes**: a stroke count the class shows in fewer than ``min_share`` of its templates (in a
   class of fewer than 1 / ``min_share`` templates: in none) is taken for an accident of the
-  recording and not allowed; with ``stroke_tolerance`` k, :meth:`~CodebookEvidence.check` also passes
+  recording and not allowed; with ``stroke_tolerance`` k (default 1), :meth:`~CodebookEvidence.check` passes
   a count within k strokes of an allowed one (a stroke the skin broke or joined), while
   :meth:`~CodebookEvidence.allowed`, which picks the class, keeps to the counts shown;
 - **duration**: the time in contact (:attr:`~.gesture.TouchGesture.contact_s`, the pauses between
@@ -49,7 +49,7 @@ class CodebookEvidence:
     def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
                  contact_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
                  slack: float = 1.5, min_templates: int = 30, min_share: float = 0.01,
-                 stroke_tolerance: int = 0) -> None:
+                 stroke_tolerance: int = 1) -> None:
         if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1 and 0 <= min_share < 1):
             raise ValueError(f'need 0 <= low <= high <= 1, slack >= 1 and 0 <= min_share < 1; got {low}, {high}, '
                              f'{slack}, {min_share}')

@@ -56,10 +56,11 @@ def _vocabulary_section(r: dict) -> list[str]:
            f"(`{r.get('default')}`): {default.get('gestures_per_sample', r['gestures_per_sample'])} (a sample cut into "
            f"other than one gesture counts as wrong). Codebook per fold: every sample of the other people. "
            f"{r['data']}.", '',
-           'Rejection: distance over the class threshold, too small a margin, a stroke count or time in contact '
-           '(pauses between strokes left out) the nearest class never (or, for a stroke count, hardly ever: under '
-           '1 % of its templates) shows in the '
-           'codebook (touch_gestures.skin.evidence), or, for the order-free cloud, a one-stroke touch whose path is '
+           'Rejection: distance over the class threshold, too small a margin, a time in contact (pauses between '
+           'strokes left out) out of the range the nearest class shows in the codebook, a stroke count more than '
+           'one stroke from every count it shows in 1 % of its templates or more (touch_gestures.skin.evidence), '
+           'for fused the cloud putting first another class the codebook confuses with the one named '
+           '(touch_gestures.skin.fused), or, for the order-free cloud, a one-stroke touch whose path is '
            "far from every one-stroke path of the nearest class (touch_gestures.skin.order_evidence); touches the "
            'node screens out (a dab, two fingers) fire nothing. Latency: the lift after the last stroke at which the '
            'gesture ended.',
