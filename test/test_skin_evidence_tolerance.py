@@ -66,3 +66,13 @@ def test_a_zero_length_stroke_counts_as_a_stroke_and_a_zero_time_is_too_short():
     one = touch(1, seconds=1.5, points=1)       # a single point: one stroke of no length
     assert one.strokes == 1 and ev.check(one, 0) == 'duration'
     assert CodebookEvidence(LABELS, 2, STROKES, stroke_tolerance=1).check(one, 0) is None
+
+
+def test_the_duration_bound_is_the_class_range_widened_by_the_slack():
+    ev = CodebookEvidence(LABELS, 2, STROKES, CONTACT_S, slack=2.0)   # class 0 traced in 1.0-2.0 s
+    lo, hi = ev.contact_bounds_s[0]
+    q_lo, q_hi = np.quantile(CONTACT_S[:40], [0.01, 0.99])
+    assert (lo, hi) == pytest.approx((q_lo / 2, q_hi * 2))   # down to half the fastest, up to twice the slowest
+    # (the touch's time in contact is its span less the one step between its strokes)
+    assert ev.check(touch(2, 0.55), 0) is None and ev.check(touch(2, 3.9), 0) is None
+    assert ev.check(touch(2, 0.45), 0) == 'duration' and ev.check(touch(2, 4.5), 0) == 'duration'
