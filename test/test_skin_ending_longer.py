@@ -11,7 +11,7 @@ import pytest
 from test_skin_multistroke import RATE, SYMBOLS, codebook, feed, polyline, symbol
 
 from touch_gestures.skin.clouds import CloudRecogniser
-from touch_gestures.skin.ending import GestureEnd
+from touch_gestures.skin.ending import ENDING_MARGIN, GestureEnd
 from touch_gestures.skin.segmentation import GestureSegmenter, Verdict
 
 GAP, WAIT = 0.5, 3.0
@@ -80,3 +80,12 @@ def test_the_margin_decides_between_whole_and_prefix(recogniser, margin, verdict
     rng = np.random.default_rng(9)
     x = symbol('X', rng, shuffle=False)
     assert GestureEnd(recogniser, margin=margin).verdict(x) is verdict
+
+
+def test_the_default_rule_waits_for_a_longer_gesture_nearly_as_near(recogniser):
+    # A whole X must be ENDING_MARGIN nearer than the asterisk's beginning to end at the short gap.
+    end = GestureEnd(recogniser)
+    assert end.margin == ENDING_MARGIN > 0
+    rng = np.random.default_rng(11)
+    verdicts = {end.verdict(symbol('X', rng, shuffle=False)) for _ in range(10)}
+    assert Verdict.PREFIX in verdicts

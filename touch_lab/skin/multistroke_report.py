@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from touch_gestures.skin.ending import ENDING_MARGIN
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.cli.options import add_output, non_negative_int, positive_int
 from touch_graph.files import write_text
@@ -152,7 +153,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
              'calibrator and the segmenter. Collisions and the cost benchmark use synthetic contacts and '
              'gestures. Leave-one-person-out only.', '',
              f'End of a gesture: in a vocabulary with multi-stroke gestures a lift of {ENDING_GAP_S} s ends strokes '
-             f'the codebook calls a whole gesture, strokes that look like the beginning of a longer one wait up to '
+             f'the codebook calls a whole gesture (a whole template {ENDING_MARGIN:g} nearer, relative, than the '
+             f'beginning of every longer one), strokes that may be the beginning of a longer one wait up to '
              f'{ENDING_WAIT_S} s (the templates cut between strokes tell which), strokes fewer than the nearest class '
              'was ever written with wait until the limit of '
              f'a gesture (10 s from its start; touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every '
