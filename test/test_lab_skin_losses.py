@@ -5,11 +5,15 @@ Synthetic only: hand-made matches, and a few synthetic performers through the vi
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from doctest_testing import check_doctests
 
 import touch_lab.skin.evaluate
 from touch_gestures.skin.base import Match
+from touch_lab.cli.main import main as social_touch
+from touch_lab.skin.datasets import write_traces
 from touch_lab.skin.evaluate import LOSS_REASONS, format_losses, leave_one_subject_out, loss_reason
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, render_samples
@@ -99,3 +103,15 @@ def test_the_multistroke_report_tables_the_losses_of_each_recogniser(rendered):
     head = next(i for i, line in enumerate(lines) if line.startswith('| recogniser | lost |'))
     assert 'strokes' in lines[head].split(' | ') and 'split' not in lines[head]
     assert lines[head + 2].startswith(f"| trace | {sum(res.losses.values())} |")
+
+
+def test_eval_skin_says_where_right_commands_are_lost_in_json_and_text(tmp_path, capsys):
+    path = tmp_path / 'traces.csv.gz'
+    write_traces(path, synthetic_traces(SHAPES, performers=2, repetitions=2, seed=6))
+    argv = ['eval', 'skin', '--traces', str(path), '--recognisers', 'trace', '--no-cache', '--random-touches', '3']
+    assert social_touch([*argv, '--json']) == 0
+    r = json.loads(capsys.readouterr().out)['recognisers']['trace']
+    assert set(r['losses']) == set(LOSS_REASONS)
+    assert sum(r['losses'].values()) == r['samples'] - round(r['accuracy_with_rejection'] * r['samples'])
+    assert social_touch(argv) == 0
+    assert format_losses(r['losses'], r['samples']) in capsys.readouterr().out
