@@ -113,7 +113,10 @@ def _vocabulary_section(r: dict) -> list[str]:
                 'samples, rejection off; a fixed gap has no bound; rule `fractions`: whole templates against '
                 'prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the '
                 'bound like any prefix; `-unfinished`: those wait until the limit of a gesture, 10 s from its start; '
-                '`strokes-`: prefixes cut between strokes; waits after: whole samples after which the segmenter '
+                '`strokes-`: prefixes cut between strokes; `fractions*` and `-nomargin` (the rules before): strokes '
+                'that make a whole gesture end at the gap however near the beginning of a longer one, '
+                f'`strokes-unfinished` waits for the longer one unless a whole template is {ENDING_MARGIN:g} nearer '
+                '(relative); waits after: whole samples after which the segmenter '
                 'still waited, so that a next touch within the wait would have joined them, of them to the limit):', '',
                 '| gap s | bound s | rule | whole % | accuracy % | latency s mean | latency s median | '
                 'waits after % (to the limit) |', '|---|---|---|---|---|---|---|---|']
