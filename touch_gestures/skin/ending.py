@@ -9,7 +9,8 @@ a finished X) or like the beginning of one with more strokes (the first bar of a
   strokes cut at k/n of its ink; ``'fractions'``, where the codebook does not know its templates'
   strokes: cut at a quarter, half and three quarters, :class:`~.early.PrefixMatcher`). The strokes
   are complete when a whole template is nearer than every prefix by ``margin`` relative to the
-  prefix's distance;
+  prefix's distance (default :data:`ENDING_MARGIN`: strokes that make a whole gesture but are nearly as
+  near the beginning of a longer one, the X of an asterisk, wait for it up to the bound);
 - **stroke counts** (``strokes``, where the codebook knows ``template_strokes_``): and the nearest
   whole class has templates of no more strokes than traced so far.
 
@@ -29,10 +30,13 @@ from .early import PrefixMatcher, ordered_recogniser, prefix_recogniser
 from .gesture import TouchGesture
 from .segmentation import ENDING_GAP_S, ENDING_WAIT_S, MULTISTROKE_GAP_S, SINGLE_STROKE_GAP_S, Verdict
 
-__all__ = ['PREFIXES', 'GestureEnd', 'vocabulary_ending']
+__all__ = ['ENDING_MARGIN', 'PREFIXES', 'GestureEnd', 'vocabulary_ending']
 
 #: The prefixes the whole templates are compared with (module doc).
 PREFIXES = ('strokes', 'fractions')
+#: How much nearer (relative) the whole gesture must be than a longer one's beginning to end at the short gap
+#: (its cost in latency and the samples it keeps whole: docs/skin-multistroke.md).
+ENDING_MARGIN = 0.25
 
 
 class GestureEnd:
@@ -53,7 +57,7 @@ class GestureEnd:
         ValueError: a recogniser without ordered points (:func:`~.early.ordered_recogniser`), bad options.
     """
 
-    def __init__(self, recogniser: TemplateRecogniser, margin: float = 0.0, strokes: bool = True,
+    def __init__(self, recogniser: TemplateRecogniser, margin: float = ENDING_MARGIN, strokes: bool = True,
                  unfinished: bool = True, prefixes: str = 'strokes') -> None:
         if not (np.isfinite(margin) and margin >= 0):
             raise ValueError(f'margin must be a finite fraction >= 0, got {margin}')

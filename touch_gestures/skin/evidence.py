@@ -6,7 +6,9 @@ codebook alone, says what each class allows:
 
 - **strokes**: a stroke count the class shows in fewer than ``min_share`` of its templates (in a
   class of fewer than 1 / ``min_share`` templates: in none) is taken for an accident of the
-  recording and not allowed;
+  recording and not allowed; with ``stroke_tolerance`` k (default 1), :meth:`~CodebookEvidence.check` passes
+  a count within k strokes of an allowed one (a stroke the skin broke or joined), while
+  :meth:`~CodebookEvidence.allowed`, which picks the class, keeps to the counts shown;
 - **duration**: the time in contact (:attr:`~.gesture.TouchGesture.contact_s`, the pauses between
   strokes left out) must lie between the ``low`` and ``high`` quantiles of the class's contact
   times, widened by ``slack`` (1.5: half again faster than the fastest, slower than the slowest);
@@ -40,14 +42,20 @@ class CodebookEvidence:
         min_templates: ...for classes with at least this many templates (the others: no bound).
         min_share: a stroke count is allowed when at least this fraction of the class's templates
             show it (and always when one does in a class of fewer than ``1 / min_share``).
+        stroke_tolerance: strokes (>= 0) a touch's count may differ from an allowed one and still pass
+            :meth:`check`.
     """
 
     def __init__(self, template_labels: np.ndarray, n_classes: int, strokes: np.ndarray | None = None,
                  contact_s: np.ndarray | None = None, low: float = 0.01, high: float = 0.99,
-                 slack: float = 1.5, min_templates: int = 30, min_share: float = 0.01) -> None:
+                 slack: float = 1.5, min_templates: int = 30, min_share: float = 0.01,
+                 stroke_tolerance: int = 1) -> None:
         if not (0 <= low <= high <= 1 and np.isfinite(slack) and slack >= 1 and 0 <= min_share < 1):
             raise ValueError(f'need 0 <= low <= high <= 1, slack >= 1 and 0 <= min_share < 1; got {low}, {high}, '
                              f'{slack}, {min_share}')
+        if isinstance(stroke_tolerance, bool) or not isinstance(stroke_tolerance, int | np.integer) \
+                or stroke_tolerance < 0:
+            raise ValueError(f'stroke_tolerance must be a whole number of strokes >= 0, got {stroke_tolerance!r}')
         labels = np.asarray(template_labels)
         self.stroke_counts: list[frozenset[int]] | None = None
         if strokes is not None:
@@ -57,6 +65,10 @@ class CodebookEvidence:
                 counts, seen = np.unique(strokes[labels == c], return_counts=True)
                 enough = seen >= max(1.0, min_share * seen.sum())
                 self.stroke_counts.append(frozenset(counts[enough].tolist()))
+        # What check() passes: the counts shown, each widened by the tolerance (never below one stroke).
+        self.plausible_strokes: list[frozenset[int]] | None = None if self.stroke_counts is None else [
+            frozenset(k + d for k in shown for d in range(-stroke_tolerance, stroke_tolerance + 1) if k + d >= 1)
+            for shown in self.stroke_counts]
         self.contact_bounds_s: np.ndarray | None = None
         if contact_s is not None:
             contact_s = np.asarray(contact_s, dtype=np.float64)
@@ -88,7 +100,7 @@ class CodebookEvidence:
 
     def check(self, gesture: TouchGesture, label: int) -> str | None:
         """Why ``gesture`` cannot be class ``label`` (one of :data:`EVIDENCE_REASONS`), or None."""
-        if self.stroke_counts is not None and int(gesture.strokes) not in self.stroke_counts[label]:
+        if self.plausible_strokes is not None and int(gesture.strokes) not in self.plausible_strokes[label]:
             return 'strokes'
         if self.contact_bounds_s is not None:
             lo, hi = self.contact_bounds_s[label].tolist()   # Python floats: cheaper to compare

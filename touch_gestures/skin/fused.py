@@ -10,7 +10,11 @@ named. Nothing is fitted for it.
 The combination names the class only: distances, thresholds, margins, the end of a gesture and
 early candidates are the cloud's (:attr:`FusedRecogniser.cloud_`,
 :meth:`FusedRecogniser.deciding_recogniser`), so a class the cloud does not put first is named but
-rejected (negative margin).
+rejected (negative margin): the **disagreement rule**. With ``disagreement='confused'`` (the
+default; ``'always'``: everywhere) it holds only where the two classes are a pair the codebook
+confuses (:attr:`FusedRecogniser.confused_`: a template whose nearest other template, by the cloud
+or by the trace, is of the other class); elsewhere the class named is decided against the classes
+other than the cloud's first.
 
 The trace holds each template of up to ``stroke_orders`` strokes in every order of its strokes
 (:mod:`.stroke_orders`; each stroke keeps its direction). A template's features are the cloud's
@@ -25,16 +29,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import TemplateRecogniser, nearest_allowed
+from .base import Match, TemplateRecogniser, nearest_allowed
 from .clouds import CloudRecogniser
 from .gesture import TouchGesture
 from .proposed import TraceRecogniser, trace_features
 from .stroke_orders import every_order
 
-__all__ = ['MAX_STROKE_ORDERS', 'FusedRecogniser', 'relative_distances', 'relative_sum', 'sum_rule_nearest']
+__all__ = ['DISAGREEMENT_RULES', 'MAX_STROKE_ORDERS', 'FusedRecogniser', 'confused_pairs', 'relative_distances',
+           'relative_sum', 'sum_rule_nearest']
 
 #: The most strokes of a template the trace may hold in every order (4! = 24 readings of the template).
 MAX_STROKE_ORDERS = 4
+
+#: Where the cloud's first class, other than the class named, rejects the touch (module doc).
+DISAGREEMENT_RULES = ('always', 'confused')
 
 
 def relative_distances(per_class: np.ndarray) -> np.ndarray:
@@ -71,6 +79,8 @@ class FusedRecogniser(TemplateRecogniser):
         trace_points: points of the trace (:class:`~.proposed.TraceRecogniser`).
         stroke_orders: the trace holds each template of up to this many strokes in every order of its strokes
             (:mod:`.stroke_orders`; k! readings of k strokes, each class at its nearest); 1: only as traced.
+        disagreement: where the cloud putting another class first rejects the class named (:data:`DISAGREEMENT_RULES`,
+            module doc).
         max_distance, auto_scale, auto_quantile, min_margin: rejection, see :mod:`.base` (the cloud's distances).
 
     Attributes:
@@ -78,6 +88,8 @@ class FusedRecogniser(TemplateRecogniser):
             decide.
         trace_: the fitted trace, asked on every recognition to name the class. Its codebook: the templates'
             trace slots, the order traced first, then the others, less the copies.
+        confused_: (n_classes, n_classes) bool, symmetric: pairs of classes the codebook confuses
+            (:func:`confused_pairs`; with ``disagreement='confused'``, else None).
     """
 
     name = 'fused'
@@ -86,6 +98,7 @@ class FusedRecogniser(TemplateRecogniser):
     n_points: int = 32
     trace_points: int = 32
     stroke_orders: int = 3
+    disagreement: str = 'confused'
 
     def _check_params(self) -> None:
         super()._check_params()
@@ -96,6 +109,8 @@ class FusedRecogniser(TemplateRecogniser):
                 or not 1 <= self.stroke_orders <= MAX_STROKE_ORDERS:
             raise ValueError(f'stroke_orders must be an integer from 1 to {MAX_STROKE_ORDERS} (the most strokes '
                              f'of a template held in every order), got {self.stroke_orders!r}')
+        if self.disagreement not in DISAGREEMENT_RULES:
+            raise ValueError(f'disagreement must be one of {DISAGREEMENT_RULES}, got {self.disagreement!r}')
         for part in self.parts():
             part._check_params()
 
@@ -148,6 +163,12 @@ class FusedRecogniser(TemplateRecogniser):
                            template_strokes=None if strokes is None else strokes[template],
                            template_contact_s=None if contacts is None else contacts[template])
         self.cloud_, self.trace_ = cloud, trace
+        self.confused_ = None
+        if self.disagreement == 'confused':
+            rows_of = np.arange(len(self.templates_))
+            self.confused_ = confused_pairs(
+                self.template_labels_, len(self.classes_),
+                [(cloud, self.templates_[:, :split], rows_of), (trace, slots[:, 0], template)])
 
     def deciding_recogniser(self) -> TemplateRecogniser:
         return self.cloud_
@@ -170,6 +191,45 @@ class FusedRecogniser(TemplateRecogniser):
 
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         return sum_rule_nearest(per_class, self.trace_.class_distances(gesture), allowed)
+
+    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None
+                ) -> tuple[Match, int]:
+        match, best = super()._decide(per_class, best, allowed)
+        confused = getattr(self, 'confused_', None)
+        if confused is None or match.label is not None or not match.margin < 0:
+            return match, best
+        first = int(np.argmin(per_class))
+        if first == best or confused[best, first]:
+            return match, best
+        # A pair the codebook never confuses: the cloud's first is no rival; the others decide.
+        others = per_class.copy()
+        others[first] = np.inf
+        return super()._decide(others, best, allowed)[0], best
+
+
+def confused_pairs(template_labels: np.ndarray, n_classes: int,
+                   readings: list[tuple[TemplateRecogniser, np.ndarray, np.ndarray]]) -> np.ndarray:
+    """(n_classes, n_classes) bool, symmetric: classes ``a``, ``b`` where a template of ``a`` has its nearest
+    other template in ``b`` by one of the ``readings``.
+
+    Args:
+        template_labels: (T,) class index of each template.
+        readings: per reading, a fitted recogniser, (T, d) each template's query features for it, and (R,) the
+            template each row of its codebook holds (rows of the template itself are left out).
+    """
+    labels = np.asarray(template_labels)
+    out = np.zeros((n_classes, n_classes), dtype=bool)
+    for recogniser, queries, row_template in readings:
+        row_labels = labels[row_template]
+        for i, query in enumerate(queries):
+            d = np.asarray(recogniser.distances(query), dtype=np.float64)
+            d[row_template == i] = np.inf
+            if not np.isfinite(d).any():
+                continue
+            other = int(row_labels[int(np.argmin(d))])
+            out[labels[i], other] = out[other, labels[i]] = True
+    np.fill_diagonal(out, False)
+    return out
 
 
 def sum_rule_nearest(first: np.ndarray | None, second: np.ndarray | None, allowed: np.ndarray | None) -> int:

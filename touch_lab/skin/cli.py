@@ -31,7 +31,7 @@ from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import early_decisions
 from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.ending_eval import PIECE_GAP_S, join_pieces
-from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, leave_one_subject_out
+from touch_lab.skin.evaluate import REJECTED, SEGMENTATION, RecogniserResult, format_losses, leave_one_subject_out
 from touch_lab.skin.gaps import gap_table, pause_percentiles_s
 from touch_lab.skin.logged_times import logged_times
 from touch_lab.skin.recognisers import DEFAULT_RECOGNISER, RECOGNISERS, make_recogniser
@@ -247,6 +247,7 @@ def format_text(report: dict) -> str:
         for g, st in r['per_gesture'].items():
             lines.append(f"  {g:20s} mu {100 * st['mu']:6.2f}  sigma {100 * st['sigma']:6.2f}")
         lines.append('  per performer: ' + ', '.join(f'{s}: {100 * a:.2f}' for s, a in r['per_performer'].items()))
+        lines.append('  ' + format_losses(r['losses'], r['samples']))
         lines += _confusion_lines(r['confusion'])
     return '\n'.join(lines)
 

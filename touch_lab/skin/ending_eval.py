@@ -140,10 +140,14 @@ def join_pieces(pieces: Sequence[TouchGesture], gap_s: float, wait_s: float | No
 #: The end-of-gesture rules compared (:class:`GestureEnd` options). ``fractions``: whole templates against
 #: prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the bound
 #: like any prefix (the rule before); ``fractions-unfinished``: those wait until the gesture's limit;
-#: ``strokes-unfinished`` (the default): prefixes cut between strokes, and the limit.
+#: ``strokes-unfinished-nomargin``: prefixes cut between strokes, and the limit; ``strokes-unfinished``
+#: (the default): and strokes that make a whole gesture wait for a longer one nearly as near
+#: (:data:`~touch_gestures.skin.ending.ENDING_MARGIN`). The rules before the default end whole strokes at the
+#: gap however near a longer gesture's beginning (margin 0).
 RULES: dict[str, dict[str, object]] = {
-    'fractions': {'prefixes': 'fractions', 'unfinished': False},
-    'fractions-unfinished': {'prefixes': 'fractions', 'unfinished': True},
+    'fractions': {'prefixes': 'fractions', 'unfinished': False, 'margin': 0.0},
+    'fractions-unfinished': {'prefixes': 'fractions', 'unfinished': True, 'margin': 0.0},
+    'strokes-unfinished-nomargin': {'prefixes': 'strokes', 'unfinished': True, 'margin': 0.0},
     'strokes-unfinished': {'prefixes': 'strokes', 'unfinished': True}}
 #: The rule of :class:`GestureEnd`'s defaults.
 DEFAULT_RULE = 'strokes-unfinished'
@@ -151,7 +155,8 @@ DEFAULT_RULE = 'strokes-unfinished'
 #: (gap_s, wait_s, rule) the report compares: fixed gaps (wait None) and the rules at a few bounds.
 ENDING_CONFIGS: tuple[tuple[float, float | None, str | None], ...] = (
     (1.0, None, None), (1.5, None, None), (3.0, None, None), (1.0, 3.0, 'fractions'),
-    (1.0, 3.0, 'fractions-unfinished'), (0.75, 3.0, DEFAULT_RULE), (1.0, 3.0, DEFAULT_RULE), (1.0, 5.0, DEFAULT_RULE))
+    (1.0, 3.0, 'fractions-unfinished'), (1.0, 3.0, 'strokes-unfinished-nomargin'), (0.75, 3.0, DEFAULT_RULE),
+    (1.0, 3.0, DEFAULT_RULE), (1.0, 5.0, DEFAULT_RULE))
 
 #: Why a sample is not one gesture (:func:`ending_causes`), in table order.
 CAUSES = ('ended as whole', 'pause over the bound', 'pause over the limit', 'longer than the limit',

@@ -12,7 +12,9 @@ Per held-out subject, each recogniser gets a codebook of the others' gestures (a
 - **random-touch acceptance**: random touches that fire a command, over all folds (screened touches,
   :func:`~touch_gestures.skin.screening.screen_gesture`, fire nothing);
 - with ``segment`` (:mod:`.ending_eval`): the samples cut per fold and recogniser, and each whole
-  one's **latency**.
+  one's **latency**;
+- **losses**: the genuine gestures that fired no right command, counted by the first reason
+  (:data:`LOSS_REASONS`, :func:`loss_reason`), so that they add up to ``samples - accepted_correct``.
 """
 
 from __future__ import annotations
@@ -23,15 +25,30 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from touch_gestures.skin.base import TemplateRecogniser
+from touch_gestures.skin.base import Match, TemplateRecogniser
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_sim.skin.render import RenderedSample
 
-__all__ = ['REJECTED', 'SEGMENTATION', 'RecogniserResult', 'choose_codebook', 'leave_one_subject_out']
+__all__ = ['LOSS_REASONS', 'REJECTED', 'SEGMENTATION', 'RecogniserResult', 'choose_codebook', 'format_losses',
+           'leave_one_subject_out', 'loss_reason']
 
 REJECTED = '<rejected>'
 SEGMENTATION = '<segmentation>'
+
+#: Why a genuine gesture fired no right command, the first that applies, in this order:
+#: ``split``: the segmenter cut the sample into more than one gesture; ``no_gesture``: into none (each
+#: sample is cut on its own, so a sample merged with the next cannot happen here);
+#: ``named_wrong``: the nearest class (the one named) is not the sample's, rejected or not;
+#: ``disagreement``: named right but rejected because the deciding distances put another class first
+#: (a negative margin; for ``fused``, the cloud disagrees with the sum rule);
+#: ``strokes``, ``duration``, ``order``: rejected by that evidence check (:mod:`touch_gestures.skin.evidence`,
+#: :mod:`touch_gestures.skin.order_evidence`); ``threshold``: by the distance, margin or calibrated score
+#: limits; ``screened``: the node screens the touch out (a dab, two fingers); ``unusable``: no features.
+LOSS_REASONS = ('split', 'no_gesture', 'named_wrong', 'disagreement', 'strokes', 'duration', 'order', 'threshold',
+                'screened', 'unusable')
+
+_THRESHOLD_REASONS = frozenset({'distance', 'margin', 'score'})
 
 
 @dataclass
@@ -55,6 +72,7 @@ class RecogniserResult:
     screened: int = 0                                       # held-out samples screened out (counted as rejected)
     latencies_s: list[float] = field(default_factory=list)  # with ``segment``: per whole sample, s
     acceptance: list[dict] = field(default_factory=list)    # with ``calibrate``: each fold's calibration record
+    losses: dict[str, int] = field(default_factory=lambda: dict.fromkeys(LOSS_REASONS, 0))
 
     @property
     def accuracy(self) -> float:
@@ -98,7 +116,8 @@ class RecogniserResult:
             'per_gesture': self.gesture_stats(),
             'per_performer': {s: float(np.mean(list(r.values()))) for s, r in self.per_performer.items()},
             'confusion': self.confusion, **({'choices': self.choices} if self.choices else {}),
-            'screened': self.screened, 'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
+            'screened': self.screened, 'losses': dict(self.losses),
+            'gestures_per_sample': dict(sorted(self.gestures_per_sample.items())),
             **({'latency_s': _summary(self.latencies_s)} if self.latencies_s else {}),
             **({'acceptance': [{k: a.get(k) for k in _ACCEPTANCE_KEYS} for a in self.acceptance]}
                if self.acceptance else {}),
@@ -110,6 +129,45 @@ class RecogniserResult:
 #: What the JSON keeps of each fold's calibration record (:mod:`.acceptance`).
 _ACCEPTANCE_KEYS = ('max_wrong_rate', 'max_score', 'right', 'wrong', 'rejected', 'random_fired', 'people', 'score',
                     'score_weights')
+
+
+def loss_reason(label: str, cut: int, match: Match | None = None, screened: bool = False) -> str | None:
+    """Why a genuine gesture of class ``label`` fired no right command (one of :data:`LOSS_REASONS`), or None
+    when it did: the sample was cut into ``cut`` gestures; ``match`` is the recogniser's answer for the one
+    gesture (None unless ``cut`` is 1); ``screened``: the node screened that gesture out.
+
+    >>> loss_reason('x', 2)
+    'split'
+    >>> loss_reason('x', 1, Match(None, 0.5, -0.1, 'x', 'margin'))
+    'disagreement'
+    """
+    if cut > 1:
+        return 'split'
+    if cut < 1 or match is None:
+        return 'no_gesture'
+    if match.rejected == 'unusable':
+        return 'unusable'
+    if match.nearest != label:
+        return 'named_wrong'
+    if screened:
+        return 'screened'
+    if match.label is not None:
+        return None
+    if match.rejected == 'margin' and match.margin < 0:
+        return 'disagreement'
+    if match.rejected in _THRESHOLD_REASONS:
+        return 'threshold'
+    return match.rejected if match.rejected in LOSS_REASONS else 'threshold'
+
+
+def format_losses(losses: Mapping[str, int], samples: int) -> str:
+    """One line of the counts of :data:`LOSS_REASONS` (those above 0) over ``samples`` genuine gestures.
+
+    >>> format_losses({'split': 2, 'strokes': 0, 'duration': 1}, 300)
+    'right commands lost: 3 of 300 (split 2, duration 1)'
+    """
+    shown = [f'{k} {n}' for k, n in losses.items() if n]
+    return f'right commands lost: {sum(losses.values())} of {samples}' + (f' ({", ".join(shown)})' if shown else '')
 
 
 def _summary(values: Sequence[float]) -> dict[str, float]:
@@ -208,6 +266,7 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
                 cut, latencies = segment(r, recogniser) if segment is not None else (r.gestures, [])
                 n = str(len(cut))
                 res.gestures_per_sample[n] = res.gestures_per_sample.get(n, 0) + 1
+                match, screened = None, False
                 if len(cut) != 1:
                     predicted = SEGMENTATION
                     res.segmentation_failures += 1
@@ -221,6 +280,9 @@ def leave_one_subject_out(rendered: Sequence[RenderedSample],
                     res.screened += screened
                     res.rejected += match.label is None or screened
                     res.accepted_correct += match.label == r.label and not screened
+                reason = loss_reason(r.label, len(cut), match, screened)
+                if reason is not None:
+                    res.losses[reason] += 1
                 ok = predicted == r.label
                 res.correct += ok
                 row = res.confusion[r.label]

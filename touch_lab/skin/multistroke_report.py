@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from touch_gestures.skin.ending import ENDING_MARGIN
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
 from touch_graph.cli.options import add_output, non_negative_int, positive_int
 from touch_graph.files import write_text
@@ -24,6 +25,7 @@ from touch_lab.skin.collision_eval import evaluate_collisions
 from touch_lab.skin.datasets import read_traces
 from touch_lab.skin.early_eval import summary as early_summary
 from touch_lab.skin.ending_eval import CAUSES, PIECE_GAP_S, ending_causes, ending_table
+from touch_lab.skin.evaluate import LOSS_REASONS
 from touch_lab.skin.latency import bench_latency
 from touch_lab.skin.recognisers import make_recogniser
 from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samples
@@ -55,10 +57,11 @@ def _vocabulary_section(r: dict) -> list[str]:
            f"(`{r.get('default')}`): {default.get('gestures_per_sample', r['gestures_per_sample'])} (a sample cut into "
            f"other than one gesture counts as wrong). Codebook per fold: every sample of the other people. "
            f"{r['data']}.", '',
-           'Rejection: distance over the class threshold, too small a margin, a stroke count or time in contact '
-           '(pauses between strokes left out) the nearest class never (or, for a stroke count, hardly ever: under '
-           '1 % of its templates) shows in the '
-           'codebook (touch_gestures.skin.evidence), or, for the order-free cloud, a one-stroke touch whose path is '
+           'Rejection: distance over the class threshold, too small a margin, a time in contact (pauses between '
+           'strokes left out) out of the range the nearest class shows in the codebook, a stroke count more than '
+           'one stroke from every count it shows in 1 % of its templates or more (touch_gestures.skin.evidence), '
+           'for fused the cloud putting first another class the codebook confuses with the one named '
+           '(touch_gestures.skin.fused), or, for the order-free cloud, a one-stroke touch whose path is '
            "far from every one-stroke path of the nearest class (touch_gestures.skin.order_evidence); touches the "
            'node screens out (a dab, two fingers) fire nothing. Latency: the lift after the last stroke at which the '
            'gesture ended.',
@@ -71,6 +74,16 @@ def _vocabulary_section(r: dict) -> list[str]:
         out.append(f"| {name} | {_pct(v['accuracy'])} | {_pct(v['accuracy_with_rejection'])} | "
                    f"{_pct(v['rejection_rate'])} | {_pct(v['error_rate'])} | {_pct(v['random_touch_acceptance'])} | "
                    f"{latency} | {v['us_per_recognition']:.0f} |")
+    losses = [(name, v['losses']) for name, v in recs.items() if v.get('losses')]
+    if losses:
+        shown = [k for k in LOSS_REASONS if any(lost.get(k) for _, lost in losses)]
+        out += ['', 'Where the right commands are lost (genuine gestures that fired no right command, counted by the '
+                'first reason, touch_lab.skin.evaluate.LOSS_REASONS: split = cut into more than one gesture; '
+                'named_wrong = the nearest class is not the one traced; disagreement = named right, but the '
+                "deciding distances put another class first; then the evidence checks and the thresholds):", '',
+                '| recogniser | lost | ' + ' | '.join(shown) + ' |', '|---|---|' + '---|' * len(shown)]
+        out += [f"| {name} | {sum(lost.values())} | " + ' | '.join(str(lost.get(k, 0)) for k in shown) + ' |'
+                for name, lost in losses]
     if r.get('default'):
         choices = recs[r['default']].get('choices', {})
         out += ['', f"Default (`{DEFAULT}`, the rule of touch_lab.skin.recognisers.auto) chose: "
@@ -100,7 +113,10 @@ def _vocabulary_section(r: dict) -> list[str]:
                 'samples, rejection off; a fixed gap has no bound; rule `fractions`: whole templates against '
                 'prefixes cut at fractions of their ink, strokes fewer than the nearest class ever shows wait the '
                 'bound like any prefix; `-unfinished`: those wait until the limit of a gesture, 10 s from its start; '
-                '`strokes-`: prefixes cut between strokes; waits after: whole samples after which the segmenter '
+                '`strokes-`: prefixes cut between strokes; `fractions*` and `-nomargin` (the rules before): strokes '
+                'that make a whole gesture end at the gap however near the beginning of a longer one, '
+                f'`strokes-unfinished` waits for the longer one unless a whole template is {ENDING_MARGIN:g} nearer '
+                '(relative); waits after: whole samples after which the segmenter '
                 'still waited, so that a next touch within the wait would have joined them, of them to the limit):', '',
                 '| gap s | bound s | rule | whole % | accuracy % | latency s mean | latency s median | '
                 'waits after % (to the limit) |', '|---|---|---|---|---|---|---|---|']
@@ -140,7 +156,8 @@ def write_report(traces: list[str], out: str | Path = 'docs/skin-multistroke.md'
              'calibrator and the segmenter. Collisions and the cost benchmark use synthetic contacts and '
              'gestures. Leave-one-person-out only.', '',
              f'End of a gesture: in a vocabulary with multi-stroke gestures a lift of {ENDING_GAP_S} s ends strokes '
-             f'the codebook calls a whole gesture, strokes that look like the beginning of a longer one wait up to '
+             f'the codebook calls a whole gesture (a whole template {ENDING_MARGIN:g} nearer, relative, than the '
+             f'beginning of every longer one), strokes that may be the beginning of a longer one wait up to '
              f'{ENDING_WAIT_S} s (the templates cut between strokes tell which), strokes fewer than the nearest class '
              'was ever written with wait until the limit of '
              f'a gesture (10 s from its start; touch_gestures.skin.ending); {SINGLE_STROKE_GAP_S} s ends every '
