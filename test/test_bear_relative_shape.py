@@ -164,3 +164,13 @@ def test_a_population_of_one_style_sets_every_contact() -> None:
         assert c1.amplitude == pytest.approx(c0.amplitude * 0.5)
         assert c1.frequency_hz == pytest.approx(c0.frequency_hz * 2.0)
         assert c1.end_s - c1.start_s == pytest.approx(c0.end_s - c0.start_s)
+
+
+def test_training_populations_are_named_and_seeded_apart() -> None:
+    from touch_lab.bear.transfer import POPULATIONS, population_scene, train_seed
+    assert POPULATIONS == ('script', 'hands', 'wide')
+    wide = population_scene('wide', 1, 3, 1, 0)
+    assert 'wide population' in wide.description and any(c.jitter_s > 0 for c in wide.contacts)
+    assert len({train_seed(p, 0) for p in ('script', 'wide')}) == 2       # other people, not restyled ones
+    with pytest.raises(ValueError, match='unknown population'):
+        population_scene('crowd', 1, 3, 1, 0)
