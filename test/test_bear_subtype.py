@@ -9,7 +9,7 @@ from sklearn.base import clone
 from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.subtype import PaperRuleClassifier, SubtypeTracker
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import MODEL_FORMAT, RELATIVE_FEATURES
+from touch_gestures.bear.subtype_model import DEFAULT_FEATURES, MODEL_FORMAT, RELATIVE_FEATURES
 from touch_gestures.estimator import NotFittedError
 from touch_lab.bear.subtype_training import SubtypeClassifier
 
@@ -131,10 +131,11 @@ def test_relative_features_see_the_shape_of_a_touch_not_its_strength(tmp_path) -
     cols = [FEATURE_NAMES.index(n) for n in ('peak_amplitude', *RELATIVE_FEATURES)]
     light[:, cols] *= 0.5                      # the same touches by a lighter hand
     model = SubtypeClassifier().fit(X, y)
-    assert model.coef_.shape[1] == F + len(RELATIVE_FEATURES)
+    assert model.coef_.shape[1] == len(DEFAULT_FEATURES) + len(RELATIVE_FEATURES)
     from touch_gestures.bear.subtype_model import _transform
     keep = X[:, 0] >= 0.1
-    np.testing.assert_allclose(_transform(light, True)[keep, F:], _transform(firm, True)[keep, F:], rtol=1e-5)
+    ratios = slice(len(DEFAULT_FEATURES), None)
+    np.testing.assert_allclose(_transform(light, True)[keep, ratios], _transform(firm, True)[keep, ratios], rtol=1e-5)
     # A format-1 file (no relative columns) still loads and predicts as it did.
     old = SubtypeClassifier(columns=FEATURE_NAMES[:12]).fit(X, y)
     path = tmp_path / 'format1.npz'

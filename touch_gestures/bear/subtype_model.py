@@ -8,9 +8,12 @@ Why this model: docs/bear-evaluation.md, "Choice of the subtype model".
 The model's input columns (its *design*, :func:`design_names`) are named and stored in the model file:
 a column is a feature of the table (``duration_s`` and ``since_active_s`` through ``log1p``) or
 ``<feature>/peak``, a level feature over the buffer's own peak (the shape of a touch, not how hard this
-person touches). ``columns=None`` takes the default design: every feature, and with ``relative=True``
-:data:`RELATIVE_FEATURES` over the peak too. Files of formats 1 (12 inputs) and 2 (16 inputs) load
-and predict as they did.
+person touches). ``columns=None`` takes the default design: the features of :data:`DEFAULT_FEATURES`,
+and with ``relative=True`` :data:`RELATIVE_FEATURES` over the peak too. The features relative to the
+touch's own peak (``features.RELATIVE_SHAPE``) are columns a model may be given, not in the default:
+across families of simulated people they did not make a model that holds on both
+(``python -m touch_lab.bear.transfer``). Files of formats 1 (12 inputs) and 2 (16 inputs) load and
+predict as they did.
 
 >>> from touch_graph.paths import share_file
 >>> model = SubtypeModel.load(share_file('config', 'bear_subtype_model.npz'))   # the shipped model
@@ -34,12 +37,13 @@ from .features import FEATURE_NAMES
 from .subtype import check_feature_table
 from .subtype_labels import SUBTYPES, subtype_index
 
-__all__ = ['MODEL_FORMAT', 'RELATIVE_FEATURES', 'SubtypeModel', 'check_design', 'design_names']
+__all__ = ['DEFAULT_FEATURES', 'MODEL_FORMAT', 'RELATIVE_FEATURES', 'SubtypeModel', 'check_design', 'design_names']
 
 #: Version of the .npz model file written by :meth:`SubtypeModel.save` (3: named input columns, any subset).
 MODEL_FORMAT = 3
-#: The first 12 features: the columns of every format-1 and format-2 file.
+#: The first 12 features: the columns of every format-1 and format-2 file, and of the default design.
 _OLD_FEATURES = FEATURE_NAMES[:12]
+DEFAULT_FEATURES = _OLD_FEATURES
 _LOG_FEATURES = ('duration_s', 'since_active_s')
 #: Level features the model also sees divided by the buffer's peak (``relative=True``), named ``<feature>/peak``.
 RELATIVE_FEATURES = ('mean_level', 'std_level', 'latest_level', 'roughness_per_s')
@@ -47,7 +51,7 @@ RELATIVE_FEATURES = ('mean_level', 'std_level', 'latest_level', 'roughness_per_s
 _PEAK_FLOOR = 0.05
 
 
-def design_names(relative: bool, features: tuple[str, ...] = FEATURE_NAMES) -> tuple[str, ...]:
+def design_names(relative: bool, features: tuple[str, ...] = DEFAULT_FEATURES) -> tuple[str, ...]:
     """The default design: the names of ``features``, then (``relative``) :data:`RELATIVE_FEATURES` over the peak."""
     return tuple(features) + (tuple(f'{n}/peak' for n in RELATIVE_FEATURES) if relative else ())
 

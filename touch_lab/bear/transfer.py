@@ -218,11 +218,12 @@ PERSON_LEVEL = ('peak_amplitude', 'latest_level', 'base_frequency_hz')
 
 #: Candidate input columns of :func:`compare_candidates`, by name.
 CANDIDATE_COLUMNS: dict[str, tuple[str, ...]] = {
-    'format-2 inputs': design_names(True, FEATURE_NAMES[:12]),
-    'all inputs': design_names(True),
-    'without person level': _without(design_names(True), PERSON_LEVEL),
-    'without person level or shape': _without(design_names(True), PERSON_LEVEL + RELATIVE_SHAPE),
-    'without person or mean level': _without(design_names(True), (*PERSON_LEVEL, 'mean_level', 'std_level')),
+    'format-2 inputs': design_names(True),
+    'all inputs': design_names(True, FEATURE_NAMES),
+    'without person level': _without(design_names(True, FEATURE_NAMES), PERSON_LEVEL),
+    'without person level or shape': _without(design_names(True, FEATURE_NAMES), PERSON_LEVEL + RELATIVE_SHAPE),
+    'without person or mean level': _without(design_names(True, FEATURE_NAMES),
+                                             (*PERSON_LEVEL, 'mean_level', 'std_level')),
 }
 #: Candidate training sets of :func:`compare_candidates`: name -> populations.
 CANDIDATE_TRAINING: dict[str, tuple[str, ...]] = {
