@@ -123,7 +123,8 @@ def _across_families(config: EvalConfig, populations: tuple[str, ...], columns: 
                                            train_people=config.train_people, seed=config.seed),
                                 {'these columns': columns}, training, progress=stderr_progress)
     command = ' '.join(['social-touch train bear -o', str(args.output), '--population', *populations,
-                        '--people', str(args.people), '--seed', str(args.seed), '--evaluate'])
+                        *(['--columns', *args.columns] if args.columns else []), '--people', str(args.people),
+                        '--seed', str(args.seed), '--evaluate'])
     return {'method': 'the same input columns fit on each training set below (scene seeds of '
             'touch_lab.bear.transfer.train_seed) and measured on 6 held-out people of each family (scene seed '
             f'{config.seed}); a family left out of a training set is one it never met', 'command': command,
