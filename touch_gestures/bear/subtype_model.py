@@ -82,7 +82,9 @@ class _Design:
 
     def transform(self, X: np.ndarray) -> np.ndarray:
         """(n, len(columns)) float32 model inputs of (n, len(FEATURE_NAMES)) finite feature rows."""
-        out = X[:, self.source].astype(np.float32)
+        # Row-major as the fit has always seen it: column indexing returns column-major, and a float32
+        # mean over another memory order rounds differently (the fit would not reproduce a shipped file).
+        out = np.ascontiguousarray(X[:, self.source], dtype=np.float32)
         if self.logged.any():
             out[:, self.logged] = np.log1p(np.maximum(out[:, self.logged], 0.0))
         if self.ratio.any():
