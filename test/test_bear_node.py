@@ -11,6 +11,7 @@ import pytest
 import touch_gestures.bear.gate
 import touch_gestures.bear.node as node_module
 from touch_driver.bear.body_map import BodyMap
+from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.node import BearGesturesNode
 from touch_gestures.bear.symbolic import CANDIDATE, END, START, WITHDRAWN, SymbolicRecogniser
 from touch_graph.errors import ParameterError
@@ -270,7 +271,7 @@ def test_bad_parameters_give_one_clear_error(name, value, expected) -> None:
 
 def _tiny_model(path: Path, rate_hz: float) -> None:
     rng = np.random.default_rng(0)
-    X = rng.random((40, 12), dtype=np.float32)
+    X = rng.random((40, len(FEATURE_NAMES)), dtype=np.float32)
     SubtypeClassifier().fit(X, np.where(X[:, 0] < 0.5, 'none', 'hold')).save(path, rate_hz=rate_hz, buffer_len=20)
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from touch_driver.bear.body_map import BodyMap
+from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.subtype_labels import subtype_index
 from touch_sim.bear.render import BearCycles
@@ -101,7 +102,7 @@ def test_first_cycles_with_a_short_buffer() -> None:
     levels = np.zeros(64, dtype=np.float32)
     levels[ch('paw_left_palm')] = 0.7
     outs = [rec.update(i / 25.0, levels) for i in range(3)]
-    assert [o.features.table.shape for o in outs] == [(64, 12)] * 3
+    assert [o.features.table.shape for o in outs] == [(64, len(FEATURE_NAMES))] * 3
     assert outs[-1].subtype_of(ch('paw_left_palm')) == 'poke'
 
 
@@ -117,7 +118,7 @@ def test_trained_classifier_plugs_in(rate: float) -> None:
     from touch_lab.bear.subtype_training import SubtypeClassifier
 
     rng = np.random.default_rng(0)
-    X = rng.random((200, 12)).astype(np.float32)
+    X = rng.random((200, len(FEATURE_NAMES))).astype(np.float32)
     y = np.where(X[:, 0] > 0.5, 'hold', 'none')
     rec = BearRecogniser(rate, classifier=SubtypeClassifier().fit(X, y))
     levels = np.zeros(64, dtype=np.float32)

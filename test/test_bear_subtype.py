@@ -9,7 +9,7 @@ from sklearn.base import clone
 from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.subtype import PaperRuleClassifier, SubtypeTracker
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import RELATIVE_FEATURES
+from touch_gestures.bear.subtype_model import DEFAULT_FEATURES, MODEL_FORMAT, RELATIVE_FEATURES
 from touch_gestures.estimator import NotFittedError
 from touch_lab.bear.subtype_training import SubtypeClassifier
 
@@ -120,7 +120,7 @@ def test_model_file_round_trip_without_pickle(tmp_path) -> None:
     np.testing.assert_array_equal(loaded.predict(X), model.predict(X))
     assert (loaded.trained_rate_hz_, loaded.trained_buffer_len_) == (3.4, 20)
     with np.load(path, allow_pickle=False) as data:      # every array loads without pickle
-        assert int(data['format']) == 2 and tuple(data['feature_names']) == FEATURE_NAMES
+        assert int(data['format']) == MODEL_FORMAT and tuple(data['feature_names']) == FEATURE_NAMES
         assert tuple(data['design_names'])[-len(RELATIVE_FEATURES):] == tuple(f'{n}/peak' for n in RELATIVE_FEATURES)
 
 
@@ -131,17 +131,18 @@ def test_relative_features_see_the_shape_of_a_touch_not_its_strength(tmp_path) -
     cols = [FEATURE_NAMES.index(n) for n in ('peak_amplitude', *RELATIVE_FEATURES)]
     light[:, cols] *= 0.5                      # the same touches by a lighter hand
     model = SubtypeClassifier().fit(X, y)
-    assert model.coef_.shape[1] == F + len(RELATIVE_FEATURES)
+    assert model.coef_.shape[1] == len(DEFAULT_FEATURES) + len(RELATIVE_FEATURES)
     from touch_gestures.bear.subtype_model import _transform
     keep = X[:, 0] >= 0.1
-    np.testing.assert_allclose(_transform(light, True)[keep, F:], _transform(firm, True)[keep, F:], rtol=1e-5)
+    ratios = slice(len(DEFAULT_FEATURES), None)
+    np.testing.assert_allclose(_transform(light, True)[keep, ratios], _transform(firm, True)[keep, ratios], rtol=1e-5)
     # A format-1 file (no relative columns) still loads and predicts as it did.
-    old = SubtypeClassifier(relative=False).fit(X, y)
+    old = SubtypeClassifier(columns=FEATURE_NAMES[:12]).fit(X, y)
     path = tmp_path / 'format1.npz'
     old.save(path)
     data = dict(np.load(path, allow_pickle=False))
     del data['design_names']
-    np.savez(path, **{**data, 'format': np.int64(1)})
+    np.savez(path, **{**data, 'format': np.int64(1), 'feature_names': np.array(FEATURE_NAMES[:12])})
     loaded = SubtypeClassifier.load(path)
     assert loaded.relative is False
     np.testing.assert_array_equal(loaded.predict(X), old.predict(X))

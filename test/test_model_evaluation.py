@@ -137,7 +137,7 @@ def bear_inputs(rng) -> np.ndarray:
 def test_bear_probabilities_equal_scikit_learn_on_the_shipped_model(bear):
     model, reference = bear
     X = bear_inputs(np.random.default_rng(2))
-    design = _transform(X, model.relative).astype(np.float64)
+    design = _transform(X, model.relative, model.design_).astype(np.float64)
     standard = (design - model.mean_) / model.scale_
     logits = reference.decision_function(standard)                              # scikit-learn's, float64
     theirs = logits - np.logaddexp.reduce(logits, axis=1, keepdims=True)         # log predict_proba, no underflow

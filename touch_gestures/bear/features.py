@@ -11,6 +11,16 @@ channel's buffer ``x`` of ``n`` samples at ``rate_hz``:
 - ``duration_s``: kept by :class:`FeatureExtractor`: cycles in a row with the peak >= the activation
   threshold, over ``rate_hz`` (may exceed the buffer span).
 
+Three more are relative to the touch's own peak ``p`` (the largest level of the current touch's samples,
+see ``touch_cycles``), so they describe the shape of a touch rather than how hard this person presses:
+
+- ``relative_onset_rate_hz``: up-crossings of ``p / 2`` per second of touch (the touch's first rise
+  counts), Hz;
+- ``trough_over_peak``: the touch's lowest level over ``p`` (1 for a steady hold, 0 when the hand lifts);
+- ``dip_fraction``: share of the touch's samples below ``0.8 p``.
+
+All three are 0 where there is no touch.
+
 Never NaN nor an exception: an empty buffer gives zeros, a constant signal 0 Hz; NaN or inf read as 0.
 
 >>> ext = FeatureExtractor(rate_hz=10.0, n_channels=2, window='buffer')
@@ -29,21 +39,26 @@ import numpy as np
 
 from .sensor_level import ACTIVATION_THRESHOLD
 
-__all__ = ['FEATURE_NAMES', 'MIN_COMPONENT', 'PAPER_FEATURES', 'BufferFeatures', 'FeatureExtractor',
+__all__ = ['FEATURE_NAMES', 'MIN_COMPONENT', 'PAPER_FEATURES', 'RELATIVE_SHAPE', 'BufferFeatures', 'FeatureExtractor',
            'spectral_features']
 
 #: The four features of knight2009 V.D / Table II, the rule classifier's inputs.
 PAPER_FEATURES = ('peak_amplitude', 'base_frequency_hz', 'spectral_spread_hz', 'duration_s')
+#: Features relative to the touch's own peak (module doc), the last columns of the table.
+RELATIVE_SHAPE = ('relative_onset_rate_hz', 'trough_over_peak', 'dip_fraction')
 #: Every feature, column order of :attr:`BufferFeatures.table`. The last eight feed the trainable
 #: classifier only: mean and standard deviation of the level; fraction of the buffer at or above the
 #: threshold; latest level; threshold up-crossings per second (pats, taps); share of the non-DC power
 #: in the dominant bin (a clean periodic touch vs noise); mean absolute change per second (level/s);
 #: seconds since the level was last at or above the threshold (buffer span if never).
+#: Then the three relative to the touch's own peak (module doc).
 FEATURE_NAMES = (*PAPER_FEATURES, 'mean_level', 'std_level', 'active_fraction', 'latest_level', 'onset_rate_hz',
-                 'spectral_peakiness', 'roughness_per_s', 'since_active_s')
+                 'spectral_peakiness', 'roughness_per_s', 'since_active_s', *RELATIVE_SHAPE)
 #: Smallest sinusoid amplitude (level units, 0..1) that counts as a frequency component. Not from the
 #: paper: 0.02 of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
 MIN_COMPONENT = 0.02
+#: Level (over the touch's peak) a touch rises through to count as an onset, and below which a sample dips.
+HALF_PEAK, DIP_LEVEL = 0.5, 0.8
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,11 +173,15 @@ def spectral_features(window: np.ndarray, rate_hz: float, threshold: float = ACT
     newest = active[::-1].argmax(axis=0)
     rows[11] = np.where(rows[6] > 0, newest, n) * (1.0 / rate_hz)
 
+    keep = None
+    if touch_cycles is not None:
+        keep = grid.age[:, None] < np.asarray(touch_cycles)[None, :]       # (n, channels): inside the touch
+    _relative_shape(x, keep, touch_cycles, rate_hz, rows[12:15])
+
     m = n // 2
     if m == 0:       # one sample: no non-DC bin, so base frequency, spread and peakiness stay 0
         return rows.T
-    if touch_cycles is not None:
-        keep = grid.age[:, None] < np.asarray(touch_cycles)[None, :]       # (n, channels): inside the touch
+    if keep is not None:
         kept = ones @ keep.astype(np.float32)
         touch_mean = (ones @ np.where(keep, x, 0.0)) / np.maximum(kept, 1.0)
         ac = np.where(keep, x - touch_mean, 0.0).astype(np.float32)
@@ -188,6 +207,34 @@ def spectral_features(window: np.ndarray, rate_hz: float, threshold: float = ACT
     rows[2] = np.where(periodic, np.sqrt(np.maximum(variance, 0.0)), 0.0)
     rows[9] = np.where(periodic, peak_power * inv_total, 0.0)
     return rows.T
+
+
+def _relative_shape(x: np.ndarray, keep: np.ndarray | None, touch_cycles: np.ndarray | None, rate_hz: float,
+                    out: np.ndarray) -> None:
+    """Write the three features of :data:`RELATIVE_SHAPE` into ``out`` ((3, channels)).
+
+    ``x``: (n, channels) finite levels; ``keep``: (n, channels) bool, the samples of the current touch,
+    which has lasted ``touch_cycles`` ((channels,) int) cycles (both None: the whole buffer is the touch,
+    when it reached the activation threshold at all).
+    """
+    n = x.shape[0]
+    if keep is None:
+        keep = np.broadcast_to(x.max(axis=0) >= ACTIVATION_THRESHOLD, x.shape)
+        began_inside = True
+    else:     # a touch older than the buffer was already up at its first sample: that is no onset
+        began_inside = np.asarray(touch_cycles) <= n
+    inside = np.where(keep, x, 0.0)
+    kept = keep.sum(axis=0)
+    peak = inside.max(axis=0)
+    touched = (kept > 0) & (peak > 0)
+    scale = np.where(touched, 1.0 / np.where(touched, peak, 1.0), 0.0).astype(np.float32)
+    rel = inside * scale                                           # (n, channels): 0 outside the touch
+    high = (rel >= HALF_PEAK).astype(np.int8)
+    onsets = high[0] * began_inside + (np.diff(high, axis=0) > 0).sum(axis=0)
+    span_s = np.maximum(kept, 1) / rate_hz
+    out[0] = np.where(touched, onsets / span_s, 0.0)
+    out[1] = np.where(touched, np.where(keep, rel, np.inf).min(axis=0), 0.0)
+    out[2] = np.where(touched, (keep & (rel < DIP_LEVEL)).sum(axis=0) / np.maximum(kept, 1), 0.0)
 
 
 class FeatureExtractor:

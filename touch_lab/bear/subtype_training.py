@@ -23,7 +23,7 @@ from sklearn.linear_model import LogisticRegression
 
 from touch_gestures.bear.subtype import check_feature_table
 from touch_gestures.bear.subtype_labels import SUBTYPES, subtype_index
-from touch_gestures.bear.subtype_model import SubtypeModel, _transform
+from touch_gestures.bear.subtype_model import SubtypeModel, _Design
 
 __all__ = ['SubtypeClassifier']
 
@@ -41,7 +41,7 @@ class SubtypeClassifier(ClassifierMixin, BaseEstimator, SubtypeModel):
         classes = [s for s in SUBTYPES if s in set(names)]
         if len(classes) < 2:
             raise ValueError(f'need at least two subtypes to train; got only {classes}')
-        Z = _transform(X, self.relative)
+        Z = _Design(self.design_).transform(X)
         mean = Z.mean(axis=0)
         scale = Z.std(axis=0)
         scale = np.where(scale > 1e-6, scale, 1.0)   # a constant feature: leave it unscaled, not divided by 0

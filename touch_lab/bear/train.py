@@ -24,13 +24,16 @@ from touch_lab.cards import session_data
 from touch_lab.collect.session_bag import SessionError
 
 from .cli import train_families
-from .evaluate import FAMILIES, EvalConfig, stderr_progress, train_subtype_model
+from .evaluate import FAMILIES, EvalConfig, stderr_progress
 from .sessions import fit_model, fold_models, load_runs
 from .suggest_report import card_entry, default_output, format_table, run_suggestions, write_config
+from .transfer import POPULATIONS, compare_candidates, fit_populations, train_seed
 
-#: What each family of simulated people is, for the model card.
+#: What each population of simulated people is, for the model card.
 FAMILY_TEXT = {'script': 'touch_sim/bear/people.py: level waveforms, knight2009 Table II statistics',
-               'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009'}
+               'hands': 'touch_sim/bear/hand_people.py: hands over plates, written independently from knight2009',
+               'wide': 'touch_sim/bear/people.py with population=WIDE: the script people with pressure, tempo, '
+                       'persistence, rhythm, level noise, drift and scan jitter drawn per person from wide ranges'}
 
 __all__ = ['add_arguments', 'run']
 
@@ -45,6 +48,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--family', choices=(*FAMILIES, 'both'), default='both',
                         help='families of simulated people to train on, --people of each: script '
                         '(touch_sim/bear/people.py), hands (touch_sim/bear/hand_people.py) or both (both)')
+    parser.add_argument('--population', nargs='+', choices=POPULATIONS, metavar='NAME',
+                        help='train on these populations of simulated people instead of --family, --people of each: '
+                        f'{", ".join(POPULATIONS)} (wide: the script family with a wide population of styles)')
+    parser.add_argument('--columns', nargs='+', metavar='COLUMN',
+                        help="the model's input columns (features, or <level feature>/peak; default: all features "
+                        'and the level ratios)')
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='train on these session bags (social-touch collect bear) instead of simulated people')
     parser.add_argument('--gestures-config', metavar='YAML',
@@ -63,16 +72,20 @@ def run(args: argparse.Namespace) -> int:
     """Train and write the model; progress on stderr."""
     if args.bags:
         return _run_bags(args)
-    families = train_families(args.family)
-    config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed,
-                        train_families=families)
-    model = train_subtype_model(config, progress=stderr_progress)
+    families = tuple(dict.fromkeys(args.population)) if args.population else train_families(args.family)
+    config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed)
+    try:
+        model = fit_populations(config, families, tuple(args.columns) if args.columns else None,
+                                progress=stderr_progress)
+    except ValueError as err:
+        print(f'social-touch train bear: error: {err}', file=sys.stderr)
+        return 2
     model.save(args.output, rate_hz=args.rate, buffer_len=args.buffer)
-    reps = config.subtype_reps + 1   # train_subtype_model's scene
-    population = '; '.join(f'{args.people} of the {f!r} family ({FAMILY_TEXT[f]})' for f in families)
-    data = {'synthetic': True, 'source': 'simulated people through the virtual bear and bear_driver, scene seed '
-            f'{args.seed + 1000}: {population}',
-            'families': list(families), 'people': args.people * len(families),
+    reps = config.subtype_reps + 1   # the training scenes' repetitions
+    population = '; '.join(f'{args.people} of the {f!r} population ({FAMILY_TEXT[f]}), scene seed '
+                           f'{train_seed(f, args.seed)}' for f in families)
+    data = {'synthetic': True, 'source': f'simulated people through the virtual bear and bear_driver: {population}',
+            'families': list(families), 'people': args.people * len(families), 'columns': list(model.design_),
             'trials_per_class': {s: reps * args.people * len(families) for s in TOUCH_SUBTYPES},
             'rate_hz': args.rate, 'buffer_cycles': args.buffer}
     evaluation = None
@@ -91,10 +104,34 @@ def run(args: argparse.Namespace) -> int:
                 'symbolic_false_alarms': m['symbolic']['false_alarms'],
                 'median_symbolic_latency_s': m['symbolic']['median_latency_s'],
                 'paper_rule_subtype_accuracy': result['rule']['subtype']['accuracy']}
+        evaluation['across_families'] = _across_families(config, families, model.design_, args)
     attach_card(args.output, make_card('bear_subtype_model', data=data, evaluation=evaluation))
     print(f'wrote {args.output}: classes {", ".join(model.classes_)}; trained at {args.rate} Hz, buffer {args.buffer} '
           f'on {args.people} simulated people of each of {", ".join(families)} (synthetic)', file=sys.stderr)
     return 0
+
+
+def _across_families(config: EvalConfig, populations: tuple[str, ...], columns: tuple[str, ...],
+                      args: argparse.Namespace) -> dict:
+    """The model's recipe (its columns) fit without each family and measured on it, and on all its populations."""
+    training = {'+'.join(populations): populations}
+    for family in FAMILIES:
+        rest = tuple(p for p in populations if p != family)
+        if rest and family in populations:
+            training['+'.join(rest)] = rest
+    result = compare_candidates(EvalConfig(rate_hz=config.rate_hz, buffer_len=config.buffer_len,
+                                           train_people=config.train_people, seed=config.seed),
+                                {'these columns': columns}, training, progress=stderr_progress)
+    command = ' '.join(['social-touch train bear -o', str(args.output), '--population', *populations,
+                        *(['--columns', *args.columns] if args.columns else []), '--people', str(args.people),
+                        '--seed', str(args.seed), '--evaluate'])
+    return {'method': 'the same input columns fit on each training set below (scene seeds of '
+            'touch_lab.bear.transfer.train_seed) and measured on 6 held-out people of each family (scene seed '
+            f'{config.seed}); a family left out of a training set is one it never met', 'command': command,
+            'synthetic': True,
+            'scores': {row['training']: {f: {k: row['scores'][f][k] for k in ('subtype_accuracy', 'lowest_class_recall',
+                                                                             'recall')}
+                                         for f in FAMILIES} for row in result['rows']}}
 
 
 def _run_bags(args: argparse.Namespace) -> int:

@@ -5,6 +5,11 @@
 classifies every test scene behind the ``NoTouchGate`` and the symbolic gestures are replayed from
 those codes through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`. Scores as in
 :mod:`.evaluate`. All data is synthetic.
+
+Training populations (:data:`POPULATIONS`) are the families and ``wide``: the script generator's people
+with every :class:`~touch_sim.bear.people.Style` drawn from :data:`~touch_sim.bear.people.WIDE`.
+:func:`compare_candidates` scores candidate models (input columns x training populations) across
+families: ``python -m touch_lab.bear.transfer --help``.
 """
 
 from __future__ import annotations
@@ -14,11 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from touch_gestures.bear.features import FEATURE_NAMES, RELATIVE_SHAPE
 from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
+from touch_gestures.bear.subtype_model import design_names
 from touch_gestures.bear.symbolic import GestureLibrary, SymbolicRecogniser
 from touch_lab.bear.subtype_training import SubtypeClassifier
+from touch_sim.bear.people import WIDE, make_scene
 
 from .evaluate import (
     FAMILIES,
@@ -32,7 +40,39 @@ from .evaluate import (
     score_symbolic,
 )
 
-__all__ = ['Rendered', 'cross_population', 'format_cross', 'render', 'replay']
+__all__ = [
+    'POPULATIONS',
+    'Rendered',
+    'compare_candidates',
+    'cross_population',
+    'fit_populations',
+    'format_candidates',
+    'format_cross',
+    'main',
+    'population_scene',
+    'render',
+    'replay',
+    'train_seed',
+]
+
+#: Populations a model can be trained on: the families of :data:`~.evaluate.FAMILIES` and ``wide``.
+POPULATIONS = (*FAMILIES, 'wide')
+
+
+def train_seed(population: str, seed: int) -> int:
+    """Scene seed of ``population``'s training people: seed + 1000 (the families), seed + 2000 (``wide``, so
+    its people are not the script family's training people with styles added)."""
+    return seed + (2000 if population == 'wide' else 1000)
+
+
+def population_scene(population: str, n_people: int, seed: int, subtype_reps: int, gesture_reps: int):
+    """A labelled scene of ``n_people`` of ``population`` (:data:`POPULATIONS`). Synthetic."""
+    if population == 'wide':
+        return make_scene(n_people=n_people, seed=seed, subtype_reps=subtype_reps, gesture_reps=gesture_reps,
+                          population=WIDE)
+    if population not in FAMILIES:
+        raise ValueError(f'unknown population {population!r}; populations: {", ".join(POPULATIONS)}')
+    return family_scene(population, n_people, seed, subtype_reps, gesture_reps)
 
 
 @dataclass
@@ -46,8 +86,9 @@ class Rendered:
 
 def render(family: str, config: EvalConfig, seed: int, subtype_reps: int, gesture_reps: int, n_people: int,
            progress: Callable[[str], None] | None = None) -> Rendered:
-    """Render a ``family`` scene through the virtual bear and driver, keeping features and active sensors."""
-    scene = family_scene(family, n_people, seed, subtype_reps, gesture_reps)
+    """Render a scene of ``family`` (one of :data:`POPULATIONS`) through the virtual bear and driver, keeping
+    features and active sensors."""
+    scene = population_scene(family, n_people, seed, subtype_reps, gesture_reps)
     rec = BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend, named_outputs=False,
                          symbolic=False)
     run = run_scene(scene, bear_cycles(scene, config, seed), {'features': rec}, keep_features=True,
@@ -69,13 +110,22 @@ def replay(rendered: Rendered, predictor, library, body_map) -> tuple[np.ndarray
     return codes, events
 
 
-def _fit(parts: list[Rendered], seed: int) -> SubtypeClassifier:
+def _fit(parts: list[Rendered], seed: int, columns: tuple[str, ...] | None = None) -> SubtypeClassifier:
     rows, codes = [], []
     for r in parts:
         X, y = collect_training_rows(r.run, r.recogniser.fitted, seed=seed)
         rows.append(X)
         codes.append(y)
-    return SubtypeClassifier().fit(np.concatenate(rows), np.concatenate(codes))
+    return SubtypeClassifier(columns=columns).fit(np.concatenate(rows), np.concatenate(codes))
+
+
+def fit_populations(config: EvalConfig, populations: tuple[str, ...], columns: tuple[str, ...] | None = None,
+                    progress: Callable[[str], None] | None = None) -> SubtypeClassifier:
+    """The subtype model on training scenes of ``populations`` (``config.train_people`` each, seeds of
+    :func:`train_seed`, ``config.subtype_reps + 1`` repetitions), with input ``columns`` (None: the default)."""
+    parts = [render(p, config, train_seed(p, config.seed), config.subtype_reps + 1, 1, config.train_people, progress)
+             for p in populations]
+    return _fit(parts, config.seed, columns)
 
 
 def _summary(scores: dict) -> dict:
@@ -143,8 +193,117 @@ def format_cross(result: dict) -> str:
             cells.append(f"{_pct(s['subtype_accuracy'])} / {_pct(s['lowest_class_recall'])} / "
                          f"{_pct(s['symbolic_detected'])} / {s['symbolic_false_alarms']:3d}")
         lines.append(f'{name:24s} ' + ' '.join(f'{c:>58s}' for c in cells))
+    classes = list(dict.fromkeys(c for per in result['scores'].values() for s in per.values() for c in s['recall']))
+    lines += ['', 'Recall per subtype (rows: model and test family)',
+              f"{'':24s} {'':7s} " + ' '.join(f'{c[:6]:>6s}' for c in classes)]
+    for name, per in result['scores'].items():
+        for f in fams:
+            recall = per[f]['recall']
+            lines.append(f'{name:24s} {f:7s} ' + ' '.join(
+                f'{100 * recall[c]:5.0f}%' if recall.get(c) is not None else f"{'n/a':>6s}" for c in classes))
     return '\n'.join(lines)
 
 
 def _pct(value) -> str:
     return '  n/a ' if value is None else f'{100 * value:5.1f} %'
+
+
+def _without(columns: tuple[str, ...], dropped: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(c for c in columns if c not in dropped)
+
+
+#: Input columns that read how hard or how fast a person touches rather than what the touch is: the
+#: candidates below leave them out (the buffer's peak stays, as the gate's threshold and in every ratio).
+PERSON_LEVEL = ('peak_amplitude', 'latest_level', 'base_frequency_hz')
+
+#: Candidate input columns of :func:`compare_candidates`, by name.
+CANDIDATE_COLUMNS: dict[str, tuple[str, ...]] = {
+    'format-2 inputs': design_names(True),
+    'all inputs': design_names(True, FEATURE_NAMES),
+    'without person level': _without(design_names(True, FEATURE_NAMES), PERSON_LEVEL),
+    'without person level or shape': _without(design_names(True, FEATURE_NAMES), PERSON_LEVEL + RELATIVE_SHAPE),
+    'without person or mean level': _without(design_names(True, FEATURE_NAMES),
+                                             (*PERSON_LEVEL, 'mean_level', 'std_level')),
+}
+#: Candidate training sets of :func:`compare_candidates`: name -> populations.
+CANDIDATE_TRAINING: dict[str, tuple[str, ...]] = {
+    'script': ('script',), 'hands': ('hands',), 'wide': ('wide',), 'script+wide': ('script', 'wide'),
+    'script+hands': ('script', 'hands'), 'script+hands+wide': ('script', 'hands', 'wide'),
+}
+
+
+def compare_candidates(config: EvalConfig, columns: dict[str, tuple[str, ...]] | None = None,
+                       training: dict[str, tuple[str, ...]] | None = None,
+                       progress: Callable[[str], None] | None = None) -> dict:
+    """Every candidate (input columns x training populations) on the held-out people of every family.
+
+    Returns ``{'rows': [{'columns', 'training', 'scores': {family: summary without the confusion}}], 'config'}``.
+    """
+    say = progress or (lambda _m: None)
+    columns = CANDIDATE_COLUMNS if columns is None else columns
+    training = CANDIDATE_TRAINING if training is None else training
+    needed = sorted({p for pops in training.values() for p in pops}, key=POPULATIONS.index)
+    train = {p: render(p, config, train_seed(p, config.seed), config.subtype_reps + 1, 1, config.train_people, say)
+             for p in needed}
+    test = {f: render(f, config, config.seed, config.subtype_reps, config.gesture_reps, config.n_people, say)
+            for f in FAMILIES}
+    body_map = next(iter(test.values())).recogniser.body_map
+    library = GestureLibrary.default(body_map)
+    rows = []
+    for cname, cols in columns.items():
+        for tname, pops in training.items():
+            say(f'fitting {cname!r} on {tname}')
+            gated = NoTouchGate(_fit([train[p] for p in pops], config.seed, cols), ACTIVATION_THRESHOLD)
+            scores = {}
+            for family, r in test.items():
+                codes, events = replay(r, gated, library, body_map)
+                summary = _summary({
+                    'subtype': score_subtypes(r.scene, r.run, codes, r.recogniser.fitted, body_map, config.rate_hz),
+                    'symbolic': score_symbolic(r.scene, r.run, events, library)})
+                scores[family] = {k: v for k, v in summary.items() if k not in ('confusion', 'labels')}
+            rows.append({'columns': cname, 'training': tname, 'scores': scores})
+    return {'data': 'synthetic: simulated people, not recordings of real people', 'rows': rows,
+            'columns': {k: list(v) for k, v in columns.items()}, 'training': {k: list(v) for k, v in training.items()},
+            'config': {'rate_hz': config.rate_hz, 'buffer_len': config.buffer_len, 'n_people': config.n_people,
+                       'train_people': config.train_people, 'seed': config.seed, 'reps': config.subtype_reps}}
+
+
+def format_candidates(result: dict) -> str:
+    """The text table of :func:`compare_candidates`: subtype accuracy / lowest class recall per test family."""
+    lines = ['Candidate subtype models across families (SYNTHETIC simulated people; held-out people of each family)',
+             f"{'input columns':32s} {'trained on':18s} " + ' '.join(f'{f + ": subtypes / lowest":>26s}'
+                                                                   for f in FAMILIES)]
+    for row in result['rows']:
+        cells = [f"{_pct(row['scores'][f]['subtype_accuracy'])} / {_pct(row['scores'][f]['lowest_class_recall'])}"
+                 for f in FAMILIES]
+        lines.append(f"{row['columns']:32s} {row['training']:18s} " + ' '.join(f'{c:>26s}' for c in cells))
+    return '\n'.join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m touch_lab.bear.transfer``: the candidate table of :func:`compare_candidates`."""
+    import argparse
+    import json
+    import sys
+
+    from .evaluate import stderr_progress
+    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.transfer', description=main.__doc__)
+    parser.add_argument('--people', type=int, default=6, help='held-out people of each family (6)')
+    parser.add_argument('--train-people', type=int, default=8, help='training people of each population (8)')
+    parser.add_argument('--repetitions', type=int, default=2, help='repetitions per subtype and person (2)')
+    parser.add_argument('--seed', type=int, default=0, help='test scene seed (0)')
+    parser.add_argument('--columns', nargs='+', choices=CANDIDATE_COLUMNS, help='candidate input columns (all)')
+    parser.add_argument('--training', nargs='+', choices=CANDIDATE_TRAINING, help='candidate training sets (all)')
+    parser.add_argument('--json', action='store_true', help='print one JSON object')
+    args = parser.parse_args(argv)
+    config = EvalConfig(n_people=args.people, train_people=args.train_people, seed=args.seed,
+                        subtype_reps=args.repetitions, gesture_reps=args.repetitions)
+    columns = {k: CANDIDATE_COLUMNS[k] for k in args.columns} if args.columns else None
+    training = {k: CANDIDATE_TRAINING[k] for k in args.training} if args.training else None
+    result = compare_candidates(config, columns, training, progress=stderr_progress)
+    print(json.dumps(result) if args.json else format_candidates(result), file=sys.stdout)
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -9,6 +9,12 @@ A person performs single-sensor subtypes and the symbolic gestures of :data:`PER
 pauses between them. A contact may *stray* to a neighbouring sensor outside the gesture's filter
 (``stray_prob``); a second attempt "with explanation" (Table III) strays four times less.
 
+Where knight2009 leaves a person open (how large and firm their contact is, their tempo, rhythm and
+persistence, a noisy or drifting level, when in the scan each sensor is read), ``make_scene(...,
+population=WIDE)`` draws every person's :class:`Style` from a :class:`Population` of ranges, so a
+model can be trained on people wider than Table II's spread alone. The default (``population=None``)
+keeps the people of earlier versions, draw for draw.
+
 :class:`BearScene` implements ``touch_sim.scenes.BearStimulus`` (``proximity(t) -> (64,) float32 in
 [0, 1]``) and carries the ground truth as :class:`Label` rows.
 
@@ -30,8 +36,9 @@ import numpy as np
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
 
-__all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'SYMBOLIC_PREFIX', 'BearScene', 'Contact', 'GesturePerformance', 'Label',
-           'Person', 'SubtypeStats', 'make_scene', 'split_label', 'symbolic_label', 'trial_scene']
+__all__ = ['PERFORMANCES', 'SUBTYPE_STATS', 'SYMBOLIC_PREFIX', 'WIDE', 'BearScene', 'Contact', 'GesturePerformance',
+           'Label', 'Person', 'Population', 'Style', 'SubtypeStats', 'make_scene', 'split_label', 'symbolic_label',
+           'trial_scene']
 
 N_CHANNELS = 64
 
@@ -172,7 +179,11 @@ class Contact:
 
     ``amplitude`` is the peak proximity (0..1), ``frequency_hz`` the base frequency of the motion,
     ``depth`` the modulation depth, ``phase`` radians; ``ratio`` and ``phase2`` shape tickle's second
-    component; ``taps`` the number of taps of a tap contact.
+    component; ``taps`` the number of taps of a tap contact. A :class:`Style` adds (all 0 by default:
+    the contact is then exactly that of earlier versions): ``rhythm``, the relative swing of the motion's
+    tempo within the contact; ``noise``, level noise as a fraction of the peak; ``drift``, the level's
+    change from the start to the end of the contact as a fraction of the peak (leaning in or easing off);
+    ``jitter_s``, how far (s) the time a sensor is read strays from the scan's schedule.
     """
 
     channel: int
@@ -186,43 +197,120 @@ class Contact:
     ratio: float = 1.6
     phase2: float = 0.0
     taps: int = 1
+    rhythm: float = 0.0
+    noise: float = 0.0
+    drift: float = 0.0
+    jitter_s: float = 0.0
 
     def level(self, t: np.ndarray | float) -> np.ndarray:
         """Proximity of this contact at times ``t`` (s, any shape), float64 in [0, 1]; 0 outside the contact."""
         t = np.asarray(t, dtype=np.float64)
+        if self.jitter_s:
+            t = t + self.jitter_s * _hash_noise(t, self.channel)
         u = t - self.start_s
         d = self.end_s - self.start_s
         inside = (u >= 0) & (u < d)
-        a, f, s = self.amplitude, self.frequency_hz, self.subtype
+        a = self.amplitude
         # Hand approach and release: 0.15 s smooth ramps (capacitive level grows with proximity, IV.D).
         ramp = np.clip(np.minimum(u, d - u) / 0.15, 0.0, 1.0)
         env = ramp * ramp * (3 - 2 * ramp)
+        out = self._motion(u, d, env)
+        if self.drift:
+            out = out * (1 + self.drift * (np.clip(u / max(d, 1e-9), 0, 1) - 0.5))
+        if self.noise:
+            out = out + self.noise * a * env * _hash_noise(t, self.channel + 101)
+        return np.where(inside, np.clip(out, 0.0, 1.0), 0.0)
+
+    def _motion(self, u: np.ndarray, d: float, env: np.ndarray) -> np.ndarray:
+        """The level of this subtype's motion at contact times ``u`` (s), before drift, noise and clipping."""
+        a, f, s = self.amplitude, self.frequency_hz, self.subtype
+        um = u                # motion time: runs faster and slower than u when the tempo swings
+        if self.rhythm:
+            um = u + self.rhythm * np.sin(2 * np.pi * _RHYTHM_HZ * u + self.phase2) / (2 * np.pi * _RHYTHM_HZ)
         if s == 'hold':
             out = a * env * (1 - 0.02 * (1 - np.cos(2 * np.pi * 0.2 * u)))   # a steady hand sways 2 %
         elif s in ('pet', 'rub'):   # a stroke / rub passes over the sensor: level dips by `depth` each cycle
-            out = a * env * (1 - self.depth * 0.5 * (1 - np.cos(2 * np.pi * f * u + self.phase)))
+            out = a * env * (1 - self.depth * 0.5 * (1 - np.cos(2 * np.pi * f * um + self.phase)))
         elif s == 'tickle':         # wiggling fingers: two incommensurate components ("noise", Table II)
-            out = a * env * (0.55 + 0.25 * np.sin(2 * np.pi * f * u + self.phase)
-                             + 0.2 * np.sin(2 * np.pi * f * self.ratio * u + self.phase2))
+            out = a * env * (0.55 + 0.25 * np.sin(2 * np.pi * f * um + self.phase)
+                             + 0.2 * np.sin(2 * np.pi * f * self.ratio * um + self.phase2))
         elif s == 'shake':
-            out = a * env * (1 - self.depth * 0.5 * (1 - np.sin(2 * np.pi * f * u + self.phase)))
+            out = a * env * (1 - self.depth * 0.5 * (1 - np.sin(2 * np.pi * f * um + self.phase)))
         elif s == 'poke':           # one blip
             out = a * np.sin(np.pi * np.clip(u / d, 0, 1)) ** 2
         elif s == 'pat':            # the hand lifts off between pats: raised-cosine contacts, duty `depth`
-            cycle = np.mod(u * f, 1.0)
+            cycle = np.mod(um * f, 1.0)
             out = a * np.where(cycle < self.depth, np.sin(np.pi * cycle / max(self.depth, 1e-6)) ** 2, 0.0)
         elif s == 'tap':            # `taps` short contacts of d / taps seconds each
             width = d / self.taps
-            out = a * np.sin(np.pi * np.mod(u, width) / width) ** 2
+            out = a * np.sin(np.pi * np.mod(um, width) / width) ** 2
         else:
             raise ValueError(f'unknown subtype {s!r} in a contact')
-        return np.where(inside, np.clip(out, 0.0, 1.0), 0.0)
+        return out
+
+
+#: How often a person's tempo swings (``Contact.rhythm``), Hz: a slow drift of pace, not a tremor.
+_RHYTHM_HZ = 0.3
+
+
+def _hash_noise(t: np.ndarray, salt: int) -> np.ndarray:
+    """Deterministic noise in [-1, 1] for times ``t`` (s): the same scene reads the same, run after run."""
+    x = np.sin(np.round(np.asarray(t) * 1e4) * 12.9898 + salt * 78.233) * 43758.5453
+    return 2.0 * (x - np.floor(x)) - 1.0
 
 
 def _draw(rng: np.random.Generator, mean: float, sd: float, lo: float, hi: float) -> float:
     """A normal draw clipped to [lo, hi] (reflection would distort the table's means less than
     rejection does for wide std devs; clipping is simplest and keeps the limits exact)."""
     return float(np.clip(rng.normal(mean, sd), lo, hi))
+
+
+@dataclass(frozen=True)
+class Style:
+    """What knight2009 leaves open about one person, drawn from a :class:`Population`.
+
+    Attributes:
+        pressure: factor on every contact's peak proximity (contact size and how firmly they press).
+        tempo: factor on the frequency of every motion (pets, rubs, pats, tickles, shakes).
+        persistence: factor on how long each touch lasts.
+        rhythm: relative swing of their tempo within a touch (0: a metronome).
+        noise: level noise, fraction of a contact's peak.
+        drift: (signed) change of the level from the start to the end of a touch, fraction of the peak.
+        jitter_s: how far (s) the reading of a sensor strays from the scan's schedule.
+    """
+
+    pressure: float = 1.0
+    tempo: float = 1.0
+    persistence: float = 1.0
+    rhythm: float = 0.0
+    noise: float = 0.0
+    drift: float = 0.0
+    jitter_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class Population:
+    """Ranges (min, max; each person draws uniformly) of every :class:`Style` field, and ``person_share``
+    (the share of Table II's variance that lies between people). Assumptions, not from the paper: wide
+    enough to hold people who press lightly or hard, touch slowly or briskly, briefly or at length.
+    """
+
+    pressure: tuple[float, float] = (0.55, 1.2)
+    tempo: tuple[float, float] = (0.65, 1.5)
+    persistence: tuple[float, float] = (0.6, 1.6)
+    rhythm: tuple[float, float] = (0.0, 0.35)
+    noise: tuple[float, float] = (0.0, 0.12)
+    drift: tuple[float, float] = (-0.4, 0.4)
+    jitter_s: tuple[float, float] = (0.0, 0.06)
+    person_share: float = 0.5
+
+    def draw(self, rng: np.random.Generator) -> Style:
+        """One person's style."""
+        return Style(**{name: float(rng.uniform(*getattr(self, name))) for name in Style.__dataclass_fields__})
+
+
+#: The wide population of simulated people (:class:`Population`'s defaults).
+WIDE = Population()
 
 
 @dataclass
@@ -234,6 +322,7 @@ class Person:
         rng: the person's random generator (seeded by the scene).
         person_share: fraction of Table II's variance that lies between people (assumption: 0.25).
         stray_prob: chance that a contact of a symbolic gesture lands outside the filter.
+        style: what the paper leaves open (:class:`Style`; None: Table II's people, as in earlier versions).
     """
 
     index: int
@@ -241,6 +330,7 @@ class Person:
     person_share: float = 0.25
     stray_prob: float = 0.15
     means: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    style: Style | None = None
 
     def __post_init__(self) -> None:
         k = math.sqrt(self.person_share)
@@ -273,9 +363,17 @@ class Person:
         elif subtype == 'tap':
             taps = int(rng.integers(1, 3))
             duration = duration * taps
-        return Contact(channel, start_s, start_s + duration, subtype, amplitude, frequency, depth,
-                       phase=float(rng.uniform(0, 2 * np.pi)), ratio=float(rng.uniform(1.3, 1.9)),
-                       phase2=float(rng.uniform(0, 2 * np.pi)), taps=taps)
+        contact = Contact(channel, start_s, start_s + duration, subtype, amplitude, frequency, depth,
+                          phase=float(rng.uniform(0, 2 * np.pi)), ratio=float(rng.uniform(1.3, 1.9)),
+                          phase2=float(rng.uniform(0, 2 * np.pi)), taps=taps)
+        if self.style is None:
+            return contact
+        st = self.style
+        # A given duration (a gesture's) is the gesture's own; otherwise the person keeps at it longer or less.
+        held = duration if duration_s is not None else duration * st.persistence
+        return replace(contact, end_s=start_s + held, amplitude=min(1.0, amplitude * st.pressure),
+                       frequency_hz=frequency * st.tempo, rhythm=st.rhythm, noise=st.noise, drift=st.drift,
+                       jitter_s=st.jitter_s)
 
 
 class BearScene:
@@ -325,7 +423,8 @@ class BearScene:
 def make_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, gesture_reps: int = 2,
                pause_s: tuple[float, float] = (2.0, 5.0), gestures: tuple[str, ...] | None = None,
                subtypes: tuple[str, ...] = TOUCH_SUBTYPES, body_map=None, person_share: float = 0.25,
-               stray_prob: tuple[float, float] = (0.0, 0.35), lead_in_s: float = 4.0) -> BearScene:
+               stray_prob: tuple[float, float] = (0.0, 0.35), lead_in_s: float = 4.0,
+               population: Population | None = None) -> BearScene:
     """Script a scene: each of ``n_people`` performs every subtype ``subtype_reps`` times on a random
     fitted sensor, and every gesture ``gesture_reps`` times (attempt 1 = first try, later attempts "with
     explanation", straying a quarter as often), in a shuffled order with pauses. Synthetic.
@@ -341,6 +440,8 @@ def make_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, gesture_
         person_share: share of Table II variance between people.
         stray_prob: (min, max) of each person's stray probability (uniform).
         lead_in_s: untouched seconds at the start (the calibrator learns its baseline there).
+        population: draw each person's :class:`Style` from it (and its ``person_share`` replaces
+            ``person_share``); None: the people of earlier versions, unchanged.
     """
     if n_people < 1:
         raise ValueError(f'n_people must be >= 1; got {n_people}')
@@ -360,7 +461,12 @@ def make_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, gesture_
     t = lead_in_s
     for p in range(n_people):
         rng = np.random.default_rng(root.integers(1 << 63))
-        person = Person(p, rng, person_share=person_share, stray_prob=float(rng.uniform(*stray_prob)))
+        stray = float(rng.uniform(*stray_prob))
+        if population is None:
+            person = Person(p, rng, person_share=person_share, stray_prob=stray)
+        else:   # styles from their own generator: the other draws stay those of population=None
+            person = Person(p, rng, person_share=population.person_share, stray_prob=stray,
+                            style=population.draw(np.random.default_rng((seed, p, 28))))
         plan = [('subtype', s, 1) for s in subtypes for _ in range(subtype_reps)]
         order = rng.permutation(len(plan))
         plan = [plan[i] for i in order]
@@ -383,8 +489,9 @@ def make_scene(n_people: int = 6, seed: int = 0, subtype_reps: int = 2, gesture_
                 contacts.extend(new)
                 labels.append(Label(t, end, 'symbolic', name, touched, p, attempt))
             t = end + float(rng.uniform(*pause_s))
+    styles = 'Table II styles' if population is None else 'Table II styles and a wide population of styles'
     return BearScene(contacts, labels, t + pause_s[1],
-                     f'synthetic: {n_people} simulated people (seed {seed}), Table II styles')
+                     f'synthetic: {n_people} simulated people (seed {seed}), {styles}')
 
 
 def _perform_gesture(person: Person, perf: GesturePerformance, t: float, attempt: int,
