@@ -18,6 +18,7 @@ from touch_graph.cli.options import deprecated_alias, positive_float, positive_i
 from touch_graph.errors import SocialTouchError
 from touch_graph.paths import share_file
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, percent_text, seconds_text, stderr_progress
+from touch_lab.bear.false_starts import format_gesture_starts
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_lab.collect.session_bag import SessionError
 
@@ -109,6 +110,7 @@ def format_text(result: dict) -> str:
         pc = m['symbolic']['per_class'][g]
         lines.append(f"  {g:13s} {percent_text(pc['precision'])} / {percent_text(pc['recall'])} / "
                      f"{seconds_text(m['symbolic']['median_latency_by_gesture_s'][g])}")
+    lines += ['', *format_gesture_starts(m['symbolic']['gestures'])]
     lines += ['', 'Subtype confusion (trained model, per interaction; rows true, columns predicted)',
               '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *m['subtype']['labels']])]
     for name, row in zip(m['subtype']['labels'], m['subtype']['confusion'], strict=True):
