@@ -3,6 +3,8 @@ per-gesture false starts. Hand-made, synthetic sensor sequences."""
 
 from __future__ import annotations
 
+import argparse
+import json
 import math
 from dataclasses import replace
 
@@ -13,6 +15,8 @@ from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.symbolic import CANDIDATE, START, GestureLibrary, SymbolicRecogniser
 from touch_graph.errors import ConfigError
+from touch_graph.paths import share_file
+from touch_lab.bear import cli
 from touch_lab.bear.false_starts import format_gesture_starts, gesture_starts, summarise
 
 BODY = BodyMap.default()
@@ -163,3 +167,29 @@ def test_false_starts_are_counted_per_gesture_with_the_touch_that_caused_them() 
     assert set(s['statistics']) >= {'trials', 'detected', 'false_starts', 'false_starts_by_touch'}
     text = '\n'.join(format_gesture_starts(s))
     assert 'shoulder_tap    0 / 1     3  (none 1, subtype/pat 1, symbolic/hug 1)' in text
+
+
+def _eval_bear(argv: list[str]):
+    parser = argparse.ArgumentParser()
+    cli.add_arguments(parser)
+    return cli.run(parser.parse_args(argv))
+
+
+def test_eval_bear_scores_a_given_gesture_library_per_gesture(tmp_path, capsys) -> None:
+    """--gestures on simulated people: the JSON and text give trials, detected and false starts per gesture."""
+    only = tmp_path / 'gestures.yaml'
+    only.write_text('gestures:\n  head_pat:\n    sensors: [head1, head2, head3]\n    lift_s: 1.0\n')
+    assert _eval_bear(['--json', '--quiet', '--people', '1', '--reps', '1', '--seed', '2', '--gestures', str(only),
+                       '--model', str(share_file('config', 'bear_subtype_model.npz'))]) == 0
+    out = json.loads(capsys.readouterr().out)
+    scores = out['model']['symbolic']['gestures']
+    assert list(scores['per_gesture']) == ['head_pat'] and scores['per_gesture']['head_pat']['trials'] == 1
+    assert out['symbolic_false_starts'] == scores['false_starts']
+    assert 'Per symbolic gesture: detected / trials, false starts' in cli.format_text(out)
+
+
+def test_eval_bear_says_which_gesture_key_is_misspelt(tmp_path, capsys) -> None:
+    typo = tmp_path / 'gestures.yaml'
+    typo.write_text('gestures:\n  head_pat:\n    sensors: [head1]\n    lift_sec: 1\n')
+    assert _eval_bear(['--quiet', '--gestures', str(typo)]) == 2          # before any training
+    assert "did you mean 'lift_s'" in capsys.readouterr().err

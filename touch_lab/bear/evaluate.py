@@ -92,6 +92,8 @@ class EvalConfig:
             (knight2009 V.D's first rule line, :class:`~.gate.NoTouchGate`), as the node does.
         family: the family of simulated people of the test scene (:data:`FAMILIES`).
         train_families: the families of the training scene (one scene of ``train_people`` each).
+        gestures: the symbolic gesture library file (None: config/bear_gestures.yaml), e.g. to score
+            another version of it on the same people.
     """
 
     rate_hz: float = REAL_RATE_HZ
@@ -106,6 +108,7 @@ class EvalConfig:
     no_touch_gate: bool = True
     family: str = 'script'
     train_families: tuple[str, ...] = ('script',)
+    gestures: str | None = None
 
     def __post_init__(self) -> None:
         for name in (self.family, *self.train_families):
@@ -368,6 +371,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
     ``us_per_cycle``; then ``model`` and ``rule`` with the full scores of each, and the config.
     """
     say = progress or (lambda msg: None)
+    library = GestureLibrary.load(config.gestures) if config.gestures else None   # a typo fails before training
     if model is None:
         say(f'training scene: {config.train_people} simulated people at {config.rate_hz} Hz, '
             f'buffer {config.buffer_len}')
@@ -377,8 +381,9 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
     say(f'test scene: {config.n_people} simulated people ({config.family}), {len(scene.labels)} labelled interactions, '
         f'{scene.duration_s:.0f} s')
     recognisers = {
-        'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
-        'rule': BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend),
+        'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, library=library,
+                                detrend=config.detrend),
+        'rule': BearRecogniser(config.rate_hz, config.buffer_len, library=library, detrend=config.detrend),
     }
     source = bear_cycles(scene, config, config.seed)
     run = run_scene(scene, source, recognisers, progress=say)
