@@ -221,8 +221,9 @@ def test_a_candidate_on_the_first_match_then_start_confirms_it() -> None:
 def test_a_candidate_released_before_its_dwell_is_withdrawn_and_no_decision_follows() -> None:
     rec = SymbolicRecogniser(LIB, BODY)
     events = drive(rec, lambda t: ['head2'] if 1.0 <= t < 2.5 else [], 6.0, decisions_only=False)
-    # WITHDRAWN gap_s after the last match (2.4 s)
-    assert states(events) == [('head_pat', 'CANDIDATE', 1.0, ''), ('head_pat', 'WITHDRAWN', 4.0, 'released')]
+    # WITHDRAWN head_pat's lift_s (2.5 s) after the last match (2.4 s): before START a lift that long is a pause
+    assert LIB['head_pat'].lift_s == 2.5
+    assert states(events) == [('head_pat', 'CANDIDATE', 1.0, ''), ('head_pat', 'WITHDRAWN', 5.0, 'released')]
     assert events[1].onset == 1.0 and events[1].confidence == 0.0 and rec.announced_gestures() == {}
 
 

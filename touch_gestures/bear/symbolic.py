@@ -8,20 +8,24 @@ Per cycle, for every gesture ``g`` (all at once, as (G, 64) masks):
 
 - a filter sensor *counts* when it is active and, if ``g`` requires subtypes, carries one of them;
 - ``g`` *matches* when at least ``min_active`` sensors count (with ``both_sides``, one on each side);
-- ``g`` is a *candidate* from its first match (its onset) while no gap between matches exceeds ``gap_s``;
+- ``g`` is a *candidate* from its first match (its onset) while no lift between matches exceeds ``lift_s``
+  (before START: the dwell goes on through a patting hand's lifts) or, once started, ``gap_s``;
 - ``g`` is suppressed while a candidate that supersedes it is itself not suppressed (visited in
   topological order of "supersedes");
 - START when a candidate, not suppressed, has ``t - onset >= dwell_s`` and matches now, or is in a
-  lift of at most ``gap_s`` after at least two separate contacts spanning half the dwell (a patting
-  hand lifts between pats; at 3.4 Hz a dwell holds few touched scans); END when it stops being a
-  candidate or becomes suppressed;
+  lift after at least two separate contacts spanning half the dwell (a patting hand lifts between
+  pats; at 3.4 Hz a dwell holds few touched scans); END when it stops being a candidate or becomes
+  suppressed;
 - a *brief* gesture (``max_s`` set, a shoulder tap) STARTs and ENDs when its candidate is released
-  after matching for between ``dwell_s`` and ``max_s`` seconds; a longer touch never STARTs it.
+  (no match for ``gap_s``: that joins the pats of a patting hand into one touch) after matching for
+  between ``dwell_s`` and ``max_s`` seconds, with no other contact in its filter for ``quiet_s`` before
+  its onset (a tap is isolated: the last pat of a slow series is not one); a longer touch never STARTs it.
 
-Before START, a gesture whose filter is touched, not suppressed, is announced with CANDIDATE and a
-confidence (:class:`CandidateConfidence`); WITHDRAWN follows when it is superseded, when nothing has
-held it for ``gap_s``, or (brief) when it matched longer than ``max_s``. A gesture that STARTs in the
-cycle it is first touched sends no CANDIDATE. Code that waits for the decision reads START and END only.
+Before START, a gesture whose filter is touched, not suppressed (brief: and quiet before), is announced
+with CANDIDATE and a confidence (:class:`CandidateConfidence`); WITHDRAWN follows when it is superseded,
+when nothing has held it for ``lift_s`` (brief: ``gap_s``), or (brief) when it matched longer than
+``max_s``. A gesture that STARTs in the cycle it is first touched sends no CANDIDATE. Code that waits
+for the decision reads START and END only.
 """
 
 from __future__ import annotations
@@ -42,13 +46,16 @@ from touch_graph.yamlconf import YamlDict, YamlList, check_keys, did_you_mean, l
 from .candidates import CandidateConfidence
 from .subtype_labels import SUBTYPES, TOUCH_SUBTYPES
 
-__all__ = ['CANDIDATE', 'DECISIONS', 'DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'END', 'START', 'STATE_NAMES', 'WITHDRAWN',
-           'CandidateConfidence', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent', 'SymbolicRecogniser']
+__all__ = ['CANDIDATE', 'DECISIONS', 'DEFAULT_DWELL_S', 'DEFAULT_GAP_S', 'DEFAULT_LIFT_S', 'END', 'START',
+           'STATE_NAMES', 'WITHDRAWN', 'CandidateConfidence', 'GestureFilter', 'GestureLibrary', 'SymbolicEvent',
+           'SymbolicRecogniser']
 
 #: "active for at least two seconds, an increment informally chosen to parallel human recognition time" (V.E).
 DEFAULT_DWELL_S = 2.0
-#: Not in the paper: tolerated dropout between matches, so pats and tickles do not restart the dwell.
+#: Not in the paper: tolerated dropout between matches of a started gesture before it ENDs.
 DEFAULT_GAP_S = 1.5
+#: Not in the paper: tolerated lift between matches before START, so pats and tickles do not restart the dwell.
+DEFAULT_LIFT_S = DEFAULT_GAP_S
 #: Event states, as in msg/SymbolicGesture.msg: START is the confirmed decision, END its end; CANDIDATE
 #: and WITHDRAWN come before a decision (module doc).
 START, END, CANDIDATE, WITHDRAWN = 1, 2, 3, 4
@@ -58,7 +65,8 @@ DECISIONS = (START, END)
 FORMAT_VERSION = 1
 
 _NAME = re.compile(r'^[a-z][a-z0-9_]*$')
-_GESTURE_KEYS = ('sensors', 'regions', 'min_active', 'dwell_s', 'gap_s', 'max_s', 'both_sides', 'subtype',
+_GESTURE_KEYS = ('sensors', 'regions', 'min_active', 'dwell_s', 'lift_s', 'gap_s', 'max_s', 'quiet_s', 'both_sides',
+                 'subtype',
                  'supersedes', 'detectable', 'table_i', 'paper', 'note')
 
 
@@ -72,7 +80,7 @@ class GestureFilter:
         sensor_names: the filter's sensor names, channel order.
         min_active: sensors that must count at once.
         dwell_s: seconds the filter must hold before START.
-        gap_s: dropouts up to this long do not end the candidate.
+        gap_s: once started (brief: always), dropouts up to this long do not end the candidate, s.
         both_sides: require counting sensors on both the bear's left and right.
         subtypes: required subtypes (empty: any touch counts).
         supersedes: gestures suppressed while this one's filter holds.
@@ -81,6 +89,8 @@ class GestureFilter:
         paper: one of the four the paper implemented.
         note: free text from the config.
         max_s: for a brief gesture, the longest it may match and still be it (None: no limit; module doc).
+        lift_s: before START, lifts up to this long do not restart the dwell, s (brief gestures: ``gap_s``).
+        quiet_s: for a brief gesture, how long its filter must have been untouched before its onset, s.
     """
 
     name: str
@@ -97,6 +107,8 @@ class GestureFilter:
     paper: bool
     note: str
     max_s: float | None = None
+    lift_s: float = DEFAULT_LIFT_S
+    quiet_s: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -193,14 +205,15 @@ class GestureLibrary:
             raise doc.error(f'gesture library format {version} is not supported; this code reads format '
                             f'{FORMAT_VERSION}', 'format')
         defaults = doc.get('defaults', YamlDict())
-        check_keys(defaults, optional=('dwell_s', 'gap_s'), what='defaults')
+        check_keys(defaults, optional=('dwell_s', 'lift_s', 'gap_s'), what='defaults')
         default_dwell = _non_negative(defaults, 'dwell_s', 'defaults', DEFAULT_DWELL_S)
         default_gap = _non_negative(defaults, 'gap_s', 'defaults', DEFAULT_GAP_S)
+        default_lift = _non_negative(defaults, 'lift_s', 'defaults', DEFAULT_LIFT_S)
         items = doc['gestures']
         if not isinstance(items, YamlDict) or not items:
             raise doc.error('gestures must be a non-empty mapping: gesture name -> {sensors, min_active, ...}',
                             'gestures')
-        parsed = {name: _parse_gesture(name, spec, items, body_map, default_dwell, default_gap)
+        parsed = {name: _parse_gesture(name, spec, items, body_map, default_dwell, default_gap, default_lift)
                   for name, spec in items.items()}
         for name, g in parsed.items():
             for i, other in enumerate(g.supersedes):
@@ -231,7 +244,8 @@ def _string_list(spec, key: str, what: str) -> YamlList:
     return value
 
 
-def _parse_gesture(name, spec, items, body_map: BodyMap, default_dwell: float, default_gap: float) -> GestureFilter:
+def _parse_gesture(name, spec, items, body_map: BodyMap, default_dwell: float, default_gap: float,
+                   default_lift: float) -> GestureFilter:
     what = f"gesture '{name}'"
     if not isinstance(name, str) or not _NAME.match(name):
         raise items.error(f'gesture name {name!r} must be lower case letters, digits and _ (e.g. head_pat)', name)
@@ -297,9 +311,17 @@ def _parse_gesture(name, spec, items, body_map: BodyMap, default_dwell: float, d
     max_s = _non_negative(spec, 'max_s', what, 0.0) if 'max_s' in spec else None
     if max_s is not None and max_s < dwell:
         raise spec.error(f'{what}: max_s ({max_s} s) must be at least dwell_s ({dwell} s)', 'max_s')
+    gap = _non_negative(spec, 'gap_s', what, default_gap)
+    if max_s is None and 'quiet_s' in spec:
+        raise spec.error(f'{what}: quiet_s is for brief gestures (with max_s): how long the filter must be '
+                         'untouched before one', 'quiet_s')
+    if max_s is not None and 'lift_s' in spec:
+        raise spec.error(f'{what}: a brief gesture (max_s) joins its contacts with gap_s; lift_s is the tolerated '
+                         'lift in the dwell of the others', 'lift_s')
+    lift = gap if max_s is not None else _non_negative(spec, 'lift_s', what, default_lift)
+    quiet = _non_negative(spec, 'quiet_s', what, 0.0)
     return GestureFilter(name, np.array(order, dtype=np.intp), tuple(channels[c] for c in order), min_active,
-                         dwell, _non_negative(spec, 'gap_s', what, default_gap), both_sides, subtypes, supersedes,
-                         True, table_i, paper, note, max_s)
+                         dwell, gap, both_sides, subtypes, supersedes, True, table_i, paper, note, max_s, lift, quiet)
 
 
 def _regions_of(body_map: BodyMap) -> set[str]:
@@ -385,6 +407,7 @@ class SymbolicRecogniser:
         self._previous_t: float | None = None             # the previous cycle's time
         self._last_touch = [-math.inf] * G                # time of the latest contact in the filter, s
         self._spent = [False] * G           # a brief gesture held past max_s: not announced again until released
+        self._quiet = [True] * G            # a brief gesture's episode began quiet_s or more after a contact
 
     def _sensor_names(self, i: int) -> tuple[str, ...]:
         row = self._last_counting[i]
@@ -435,18 +458,20 @@ class SymbolicRecogniser:
         starts: list[SymbolicEvent] = []
         live = [False] * len(self.gestures)          # candidate and not suppressed
         for i, g in enumerate(self.gestures):        # priority order: supersessors are decided first
+            touched_before = self._last_touch[i]
             if touched_l[i]:
                 self._last_touch[i] = t
             if matched_l[i]:
                 if onset[i] is None:
                     onset[i] = t
                     self._contacts[i] = 0
+                    self._quiet[i] = t - touched_before >= g.quiet_s - 1e-9
                 if last[i] != self._previous_t:     # a new contact after a lift
                     self._contacts[i] += 1
                 last[i] = t
                 self._last_counting[i] = counting[i]
-            elif last[i] is not None and t - last[i] > g.gap_s + 1e-9:   # 1e-9: float time steps
-                if g.max_s is not None and not self._suppressed(i, live) and \
+            elif last[i] is not None and t - last[i] > (g.gap_s if started[i] else g.lift_s) + 1e-9:   # 1e-9: float
+                if g.max_s is not None and self._quiet[i] and not self._suppressed(i, live) and \
                         g.dwell_s <= last[i] - onset[i] <= g.max_s + 1e-9:
                     announced[i] = False
                     starts += self._brief(g, i, t, onset[i])
@@ -455,14 +480,15 @@ class SymbolicRecogniser:
             by = [h for h in self._superseded_by[i] if live[h]]
             live[i] = onset[i] is not None and not by
             # A CANDIDATE out is withdrawn when superseded, or once neither a match nor a contact holds it.
-            released = onset[i] is None and t - self._last_touch[i] > g.gap_s + 1e-9
+            released = onset[i] is None and t - self._last_touch[i] > g.lift_s + 1e-9
             if g.max_s is not None:                  # brief gestures START only at their release (above)
                 if announced[i] and (by or released or last[i] - onset[i] > g.max_s + 1e-9):
                     reason = (f'superseded by {self.gestures[by[0]].name}' if by else 'released' if released
                               else 'longer than max_s')
                     ends.append(self._withdrawn(i, t, reason))
                     self._spent[i] = not by and not released   # held too long: not a tap until released
-                elif touched_l[i] and not by and not announced[i] and not self._spent[i]:
+                elif touched_l[i] and not by and not announced[i] and not self._spent[i] and (
+                        self._quiet[i] if onset[i] is not None else t - touched_before >= g.quiet_s - 1e-9):
                     starts.append(self._candidate(g, i, t, matched_l[i], counts_l[i]))
                 continue
             if started[i] and not live[i]:

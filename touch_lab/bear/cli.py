@@ -18,6 +18,7 @@ from touch_graph.cli.options import deprecated_alias, positive_float, positive_i
 from touch_graph.errors import SocialTouchError
 from touch_graph.paths import share_file
 from touch_lab.bear.evaluate import FAMILIES, EvalConfig, evaluate, percent_text, seconds_text, stderr_progress
+from touch_lab.bear.false_starts import format_gesture_starts
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_lab.collect.session_bag import SessionError
 
@@ -49,7 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help='with --bags: score this subtype model (.npz, e.g. config/bear_subtype_model.npz) as it '
                         'is, on people it has not seen, instead of retraining leave-one-person-out')
     parser.add_argument('--gestures', metavar='YAML',
-                        help='with --bags: the symbolic gesture library (default: config/bear_gestures.yaml)')
+                        help='the symbolic gesture library (default: config/bear_gestures.yaml)')
     parser.add_argument('--family', choices=FAMILIES, default='script',
                         help='family of simulated people in the test scene: script (touch_sim/bear/people.py) or '
                         'hands (touch_sim/bear/hand_people.py, written independently) (script)')
@@ -65,7 +66,7 @@ def _config(args: argparse.Namespace) -> EvalConfig:
     return EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, n_people=args.people,
                       train_people=args.train_people, seed=args.seed, subtype_reps=args.repetitions,
                       gesture_reps=args.repetitions, family=args.family,
-                      train_families=train_families(args.train_family))
+                      train_families=train_families(args.train_family), gestures=args.gestures)
 
 
 def train_families(choice: str) -> tuple[str, ...]:
@@ -109,6 +110,7 @@ def format_text(result: dict) -> str:
         pc = m['symbolic']['per_class'][g]
         lines.append(f"  {g:13s} {percent_text(pc['precision'])} / {percent_text(pc['recall'])} / "
                      f"{seconds_text(m['symbolic']['median_latency_by_gesture_s'][g])}")
+    lines += ['', *format_gesture_starts(m['symbolic']['gestures'])]
     lines += ['', 'Subtype confusion (trained model, per interaction; rows true, columns predicted)',
               '  ' + ' '.join(f'{s[:6]:>6s}' for s in ['', *m['subtype']['labels']])]
     for name, row in zip(m['subtype']['labels'], m['subtype']['confusion'], strict=True):
@@ -127,9 +129,6 @@ def run(args: argparse.Namespace) -> int:
     """Run the evaluation; 0 on success, 2 on a configuration error (message on stderr)."""
     if args.bags:
         return _run_bags(args)
-    if args.gestures:
-        print('social-touch eval bear: error: --gestures goes with --bags', file=sys.stderr)
-        return 2
     if args.cross:
         return _run_cross(args)
     try:

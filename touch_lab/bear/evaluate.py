@@ -13,7 +13,8 @@ and the trained model on the second. All figures are on **synthetic** data. Scor
 - *Symbolic*: detected when a START of the gesture falls between its start and 1 s after its end; else
   the first other START is its confusion. A START outside every gesture is a false alarm, except during
   subtype interactions (``starts_during_subtype_touches``). Latency includes the dwell. CANDIDATE and
-  WITHDRAWN are scored in :mod:`.first_word`.
+  WITHDRAWN are scored in :mod:`.first_word`. ``gestures``: per gesture, trials, detected and false starts
+  (STARTs no trial of the gesture explains, by the performed touch that caused them), :mod:`.false_starts`.
 - *Table III* (knight2009 VI.C): activated on first try, with explanation (first or second attempt),
   and regional accuracy (share of active sensor-cycles inside the gesture's locational filter).
 - *Compute*: median wall time of one recogniser step, microseconds.
@@ -34,10 +35,11 @@ from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_labels import SUBTYPES, TOUCH_SUBTYPES, subtype_index
 from touch_gestures.bear.symbolic import START, GestureLibrary
+from touch_lab.bear.false_starts import gesture_starts, summarise
 from touch_lab.bear.first_word import SYMBOLIC_GRACE_S, score_first_word, start_grace_s
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.hand_people import PORT_OPTIONS, HandScene, make_hand_scene
-from touch_sim.bear.people import BearScene, make_scene
+from touch_sim.bear.people import PERFORMANCES, BearScene, make_scene
 from touch_sim.bear.render import BearCycles
 
 __all__ = [
@@ -90,6 +92,8 @@ class EvalConfig:
             (knight2009 V.D's first rule line, :class:`~.gate.NoTouchGate`), as the node does.
         family: the family of simulated people of the test scene (:data:`FAMILIES`).
         train_families: the families of the training scene (one scene of ``train_people`` each).
+        gestures: the symbolic gesture library file (None: config/bear_gestures.yaml), e.g. to score
+            another version of it on the same people.
     """
 
     rate_hz: float = REAL_RATE_HZ
@@ -104,6 +108,7 @@ class EvalConfig:
     no_touch_gate: bool = True
     family: str = 'script'
     train_families: tuple[str, ...] = ('script',)
+    gestures: str | None = None
 
     def __post_init__(self) -> None:
         for name in (self.family, *self.train_families):
@@ -304,6 +309,11 @@ def score_symbolic(scene: BearScene, run: SceneRun, events: list, library: Gestu
             pred.append(e.gesture)
     labels = [*names, 'none']
     confusion = _confusion(truth, pred, labels)
+    trials = [(lab.start_s, lab.end_s + (start_grace_s(library[lab.label]) if lab.kind == 'symbolic' else
+                                         SYMBOLIC_GRACE_S), lab.kind, lab.label)
+              for lab in scene.labels if lab.kind == 'subtype' or lab.label in names]
+    own = {n: perf.subtype for n, perf in PERFORMANCES.items()}
+    gestures = summarise(gesture_starts(trials, [(e.gesture, e.t) for e in starts], names, own))
     n_labelled = len(sym)
     correct = sum(1 for a, b in zip(truth, pred, strict=True) if a == b and a != 'none')
     all_latencies = [v for vs in latencies.values() for v in vs]
@@ -318,6 +328,7 @@ def score_symbolic(scene: BearScene, run: SceneRun, events: list, library: Gestu
         'median_latency_s': float(np.median(all_latencies)) if all_latencies else None,
         'median_latency_by_gesture_s': {k: (float(np.median(v)) if v else None) for k, v in latencies.items()},
         'table_iii': _table_iii(scene, run, library, detected_by_attempt),
+        'gestures': gestures,
     }
 
 
@@ -354,11 +365,13 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
     ``model``, when given, is scored as it is (no training scene).
 
     Top-level keys (the trained model's figures): ``subtype_accuracy``, ``symbolic_accuracy``,
+    ``symbolic_false_starts`` (:mod:`.false_starts`),
     ``median_detection_latency_s`` (symbolic START from gesture start), ``median_first_message_s``
     (the gesture's first CANDIDATE or START, :mod:`.first_word`), ``median_subtype_latency_s``,
     ``us_per_cycle``; then ``model`` and ``rule`` with the full scores of each, and the config.
     """
     say = progress or (lambda msg: None)
+    library = GestureLibrary.load(config.gestures) if config.gestures else None   # a typo fails before training
     if model is None:
         say(f'training scene: {config.train_people} simulated people at {config.rate_hz} Hz, '
             f'buffer {config.buffer_len}')
@@ -368,8 +381,9 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
     say(f'test scene: {config.n_people} simulated people ({config.family}), {len(scene.labels)} labelled interactions, '
         f'{scene.duration_s:.0f} s')
     recognisers = {
-        'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, detrend=config.detrend),
-        'rule': BearRecogniser(config.rate_hz, config.buffer_len, detrend=config.detrend),
+        'model': BearRecogniser(config.rate_hz, config.buffer_len, classifier=classifier, library=library,
+                                detrend=config.detrend),
+        'rule': BearRecogniser(config.rate_hz, config.buffer_len, library=library, detrend=config.detrend),
     }
     source = bear_cycles(scene, config, config.seed)
     run = run_scene(scene, source, recognisers, progress=say)
@@ -394,6 +408,7 @@ def evaluate(config: EvalConfig, progress: Callable[[str], None] | None = None,
         'median_first_message_s': best['first_word']['median_first_message_s'],
         'median_subtype_latency_s': best['subtype']['median_latency_s'],
         'us_per_cycle': best['us_per_cycle'],
+        'symbolic_false_starts': best['symbolic']['gestures']['false_starts'],
         'rule_subtype_accuracy': results['rule']['subtype']['accuracy'],
         'rule_symbolic_accuracy': results['rule']['symbolic']['accuracy'],
         'cycles': len(run.times),

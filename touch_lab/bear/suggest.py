@@ -66,8 +66,9 @@ class GestureStats:
     active_sensors: dict[str, int] = field(default_factory=dict)
     other_peaks: list[int] = field(default_factory=list)
 
-    def reach_hold(self, m: int, gap_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched)."""
+    def reach_hold(self, m: int, lift_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched); a lift longer
+        than ``lift_s`` s ends the hold, as it restarts the recogniser's dwell."""
         reach, hold = np.full(len(self.counts), np.nan), np.full(len(self.counts), np.nan)
         for i, (count, t, sides) in enumerate(zip(self.counts, self.times, self.sides, strict=True)):
             hits = np.flatnonzero((count >= m) & sides)
@@ -75,7 +76,7 @@ class GestureStats:
                 continue
             reach[i] = t[hits[0]]
             matched = t[hits]
-            breaks = np.flatnonzero(np.diff(matched) > gap_s + 1e-9)   # 1e-9: float time steps, as the recogniser
+            breaks = np.flatnonzero(np.diff(matched) > lift_s + 1e-9)   # 1e-9: float time steps, as the recogniser
             last = matched[breaks[0]] if breaks.size else matched[-1]
             hold[i] = last - matched[0]
         return reach, hold
@@ -192,7 +193,7 @@ def suggest(st: GestureStats, g: GestureFilter) -> Suggestion:
     # Raise it while that loses fewer of the gesture's own trials than other gestures' trials it stops matching.
     gain = [int((peaks >= k).sum()) - int((others >= k).sum()) for k in range(m, int(peaks.max()) + 1)]
     m += int(np.argmax(gain))
-    reach, hold = st.reach_hold(m, g.gap_s)
+    reach, hold = st.reach_hold(m, g.lift_s)     # the dwell goes on through lifts up to lift_s
     ok = ~np.isnan(reach)
     dwell = min(float(np.quantile(hold[ok], QUANTILE)), REACTION_S - float(np.quantile(reach[ok], 1 - QUANTILE)))
     dwell = max(0.0, math.floor(dwell / DWELL_STEP_S + 1e-9) * DWELL_STEP_S)

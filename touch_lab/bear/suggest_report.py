@@ -31,7 +31,7 @@ __all__ = ['METHOD', 'card_entry', 'default_output', 'format_table', 'run_sugges
 METHOD = (f'min_active: the {sg.QUANTILE:.0%} quantile of the trials\' peak count of active filter sensors; '
           f'dwell_s: min({sg.QUANTILE:.0%} quantile of how long that match holds, {sg.REACTION_S:g} s (knight2009 '
           f'V.E) - {1 - sg.QUANTILE:.0%} quantile of the time to reach it), rounded down to {sg.DWELL_STEP_S:g} s; '
-          'gap_s, both_sides, subtype and supersedes as configured')
+          'lift_s, gap_s, max_s, quiet_s, both_sides, subtype and supersedes as configured')
 
 
 def default_output(model_path: str | os.PathLike) -> Path:
