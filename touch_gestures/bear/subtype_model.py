@@ -12,7 +12,7 @@ person touches). ``columns=None`` takes the default design: the features of :dat
 and with ``relative=True`` :data:`RELATIVE_FEATURES` over the peak too. The features relative to the
 touch's own peak (``features.RELATIVE_SHAPE``) are columns a model may be given, not in the default:
 across families of simulated people they did not make a model that holds on both
-(``python -m touch_lab.bear.transfer``). Files of formats 1 (12 inputs) and 2 (16 inputs) load and
+(``social-touch eval bear-models``). Files of formats 1 (12 inputs) and 2 (16 inputs) load and
 predict as they did.
 
 >>> from touch_graph.paths import share_file

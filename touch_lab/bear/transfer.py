@@ -9,11 +9,13 @@ those codes through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecog
 Training populations (:data:`POPULATIONS`) are the families and ``wide``: the script generator's people
 with every :class:`~touch_sim.bear.people.Style` drawn from :data:`~touch_sim.bear.people.WIDE`.
 :func:`compare_candidates` scores candidate models (input columns x training populations) across
-families: ``python -m touch_lab.bear.transfer --help``.
+families: ``social-touch eval bear-models --help``.
 """
 
 from __future__ import annotations
 
+import argparse
+import json
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -25,6 +27,7 @@ from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.sensor_level import ACTIVATION_THRESHOLD
 from touch_gestures.bear.subtype_model import design_names
 from touch_gestures.bear.symbolic import GestureLibrary, SymbolicRecogniser
+from touch_graph.cli.options import positive_int, seed
 from touch_lab.bear.subtype_training import SubtypeClassifier
 from touch_sim.bear.people import WIDE, make_scene
 
@@ -38,17 +41,18 @@ from .evaluate import (
     run_scene,
     score_subtypes,
     score_symbolic,
+    stderr_progress,
 )
 
 __all__ = [
     'POPULATIONS',
     'Rendered',
+    'add_arguments',
     'compare_candidates',
     'cross_population',
     'fit_populations',
     'format_candidates',
     'format_cross',
-    'main',
     'population_scene',
     'render',
     'replay',
@@ -280,30 +284,24 @@ def format_candidates(result: dict) -> str:
     return '\n'.join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m touch_lab.bear.transfer``: the candidate table of :func:`compare_candidates`."""
-    import argparse
-    import json
-    import sys
-
-    from .evaluate import stderr_progress
-    parser = argparse.ArgumentParser(prog='python -m touch_lab.bear.transfer', description=main.__doc__)
-    parser.add_argument('--people', type=int, default=6, help='held-out people of each family (6)')
-    parser.add_argument('--train-people', type=int, default=8, help='training people of each population (8)')
-    parser.add_argument('--repetitions', type=int, default=2, help='repetitions per subtype and person (2)')
-    parser.add_argument('--seed', type=int, default=0, help='test scene seed (0)')
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``social-touch eval bear-models``."""
+    parser.add_argument('--people', type=positive_int, default=6, help='held-out people of each family (6)')
+    parser.add_argument('--train-people', type=positive_int, default=8,
+                        help='training people of each population (8)')
+    parser.add_argument('--repetitions', type=positive_int, default=2, help='repetitions per subtype and person (2)')
+    parser.add_argument('--seed', type=seed, default=0, help='test scene seed (0)')
     parser.add_argument('--columns', nargs='+', choices=CANDIDATE_COLUMNS, help='candidate input columns (all)')
     parser.add_argument('--training', nargs='+', choices=CANDIDATE_TRAINING, help='candidate training sets (all)')
     parser.add_argument('--json', action='store_true', help='print one JSON object')
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``social-touch eval bear-models``: the candidate table of :func:`compare_candidates`."""
     config = EvalConfig(n_people=args.people, train_people=args.train_people, seed=args.seed,
                         subtype_reps=args.repetitions, gesture_reps=args.repetitions)
     columns = {k: CANDIDATE_COLUMNS[k] for k in args.columns} if args.columns else None
     training = {k: CANDIDATE_TRAINING[k] for k in args.training} if args.training else None
     result = compare_candidates(config, columns, training, progress=stderr_progress)
-    print(json.dumps(result) if args.json else format_candidates(result), file=sys.stdout)
+    print(json.dumps(result) if args.json else format_candidates(result))
     return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

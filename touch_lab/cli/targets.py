@@ -32,6 +32,8 @@ EVAL_TARGETS: dict[str, Command] = {
                                                         'gesture, per class; the end-of-gesture rules compared'),
     'skin-transfer': Command('touch_lab.skin.acceptance_transfer', 'the calibrated acceptance score across '
                              'vocabularies: weights fit on one trace file, measured on another'),
+    'bear-models': Command('touch_lab.bear.transfer', 'candidate bear subtype models (input columns x training '
+                                                      'populations) across families of simulated people (SYNTHETIC)'),
     'adapt': Command('touch_lab.adapt_measure', 'accuracy for a new person after adapting to 0, 1, 3, 5 examples per '
                                                 'class (simulated people, SYNTHETIC)'),
 }
