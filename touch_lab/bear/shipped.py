@@ -15,8 +15,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import numpy as np
-
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.gate import NoTouchGate
 from touch_gestures.bear.subtype import PaperRuleClassifier
@@ -26,6 +24,7 @@ from touch_lab.bear.evaluate import percent_text, seconds_text
 from touch_sim.bear.people import PERFORMANCES, split_label
 
 from .evaluate import SYMBOLIC_GRACE_S, start_grace_s
+from .false_starts import CAUSES, gesture_starts, summarise
 from .sessions import BearTrials, pool_scores, score_trials
 from .suggest import _run_library, trial_codes
 
@@ -50,59 +49,27 @@ def _own_subtype(gesture: str) -> str | None:
 
 def score_symbolic_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]],
                           library: GestureLibrary) -> dict[str, dict]:
-    """Per detectable gesture of ``library``: trials, detected, false starts (and by cause), latencies
-    (module doc). ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
+    """Per detectable gesture of ``library``: trials, detected, false starts (by cause and by performed
+    touch) and latencies over every run, as :func:`~.false_starts.gesture_starts` counts them in one.
+    ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
     """
     names = [g.name for g in library.detectable]
     grace = {n: start_grace_s(library[n]) for n in names}
-    out = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
-               'false_starts_by_cause': {'other_gesture': 0, 'subtype_trial': 0, 'outside_trials': 0}}
-           for n in names}
+    own = {n: _own_subtype(n) for n in names}
+    total = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
+                 'false_starts_by_cause': dict.fromkeys(CAUSES, 0), 'false_starts_by_touch': {}} for n in names}
     for run, run_starts in zip(runs, starts, strict=True):
         spans = [(lab.start_s, lab.end_s + grace.get(split_label(lab.gesture)[1], SYMBOLIC_GRACE_S),
                   *split_label(lab.gesture)) for lab in (*run.labels, *run.gestures)]
-        explained = np.zeros(len(run_starts), dtype=bool)
-        for lo, hi, kind, name in spans:
-            if kind != 'symbolic' or name not in out:
-                continue
-            out[name]['trials'] += 1
-            own = [i for i, (g, t) in enumerate(run_starts) if g == name and lo <= t <= hi]
-            if own:
-                out[name]['detected'] += 1
-                out[name]['latencies_s'].append(run_starts[own[0]][1] - lo)
-                explained[own] = True
-        for i, (g, t) in enumerate(run_starts):
-            if explained[i] or g not in out:
-                continue
-            during = [(kind, name) for lo, hi, kind, name in spans if lo <= t <= hi]
-            if not during:
-                cause = 'outside_trials'
-            elif any(kind == 'subtype' and name == _own_subtype(g) for kind, name in during):
-                continue                     # the gesture's own touch on its filter: not false
-            elif any(kind == 'symbolic' for kind, _ in during):
-                cause = 'other_gesture'
-            else:
-                cause = 'subtype_trial'
-            out[g]['false_starts'] += 1
-            out[g]['false_starts_by_cause'][cause] += 1
-    return out
-
-
-def _summarise(per_gesture: dict[str, dict]) -> dict:
-    """Per gesture and in total: detected / trials, false starts, latency medians (over all trials)."""
-    gestures = {}
-    for name, s in per_gesture.items():
-        lat = s['latencies_s']
-        gestures[name] = {'trials': s['trials'], 'detected': s['detected'],
-                          'detected_fraction': s['detected'] / s['trials'] if s['trials'] else None,
-                          'false_starts': s['false_starts'], 'false_starts_by_cause': s['false_starts_by_cause'],
-                          'median_latency_s': float(np.median(lat)) if lat else None}
-    trials = sum(s['trials'] for s in per_gesture.values())
-    detected = sum(s['detected'] for s in per_gesture.values())
-    lat = [v for s in per_gesture.values() for v in s['latencies_s']]
-    return {'trials': trials, 'detected': detected, 'detected_fraction': detected / trials if trials else None,
-            'false_starts': sum(s['false_starts'] for s in per_gesture.values()),
-            'median_latency_s': float(np.median(lat)) if lat else None, 'per_gesture': gestures}
+        for name, part in gesture_starts(spans, run_starts, names, own).items():
+            row = total[name]
+            for key in ('trials', 'detected', 'false_starts'):
+                row[key] += part[key]
+            row['latencies_s'] += part['latencies_s']
+            for key in ('false_starts_by_cause', 'false_starts_by_touch'):
+                for what, n in part[key].items():
+                    row[key][what] = row[key].get(what, 0) + n
+    return total
 
 
 def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map: BodyMap | None = None,
@@ -130,7 +97,7 @@ def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map
             say(f'symbolic gestures over {run.session.path}')
             starts.append(_run_library(run, trial_codes(run, predictor), library, body_map))
             runs_in_order.append(run)
-    symbolic = _summarise(score_symbolic_starts(runs_in_order, starts, library))
+    symbolic = summarise(score_symbolic_starts(runs_in_order, starts, library))
     return {'people': people, 'model': pool_scores(subtype), 'rule': pool_scores(rule),
             'per_person': {p: subtype[p]['accuracy'] for p in people},
             'symbolic': symbolic, 'statistics': STATISTICS}
