@@ -23,9 +23,9 @@ known), its margin taken over the nearest other class of all; no command when
   made by :func:`touch_lab.skin.acceptance.calibrate_acceptance`), the two rules above are one:
   the score (:func:`.doubt.doubt` with the record's ``score_weights``, else :func:`acceptance_score`)
   exceeds ``acceptance_['max_score']`` (``'score'``) or the margin is negative;
-- the stroke count is rare or unseen for the class (``'strokes'``) or the time in contact is out
-  of its range (``'duration'``; it rejects but does not name: people trace at their own pace)
-  (:mod:`.evidence`);
+- the stroke count is more than ``stroke_tolerance`` strokes from every count the class allows
+  (``'strokes'``) or the time in contact is out of its range (``'duration'``; it rejects but does not
+  name: people trace at their own pace) (:mod:`.evidence`);
 - for an order-free recogniser (``direction_aware`` False) with distance limits, a one-stroke
   touch whose path in tracing order is far from every one-stroke path of the class
   (``'order'``, :mod:`.order_evidence`).
