@@ -192,9 +192,9 @@ class FusedRecogniser(TemplateRecogniser):
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         return sum_rule_nearest(per_class, self.trace_.class_distances(gesture), allowed)
 
-    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None
-                ) -> tuple[Match, int]:
-        match, best = super()._decide(per_class, best, allowed)
+    def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None,
+                gesture: TouchGesture | None = None) -> tuple[Match, int]:
+        match, best = super()._decide(per_class, best, allowed, gesture)
         confused = getattr(self, 'confused_', None)
         if confused is None or match.label is not None or not match.margin < 0:
             return match, best
@@ -204,7 +204,7 @@ class FusedRecogniser(TemplateRecogniser):
         # A pair the codebook never confuses: the cloud's first is no rival; the others decide.
         others = per_class.copy()
         others[first] = np.inf
-        return super()._decide(others, best, allowed)[0], best
+        return super()._decide(others, best, allowed, gesture)[0], best
 
 
 def confused_pairs(template_labels: np.ndarray, n_classes: int,
