@@ -13,6 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_bear_node import Graph, frame
 
+from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.skin.codebook import load_codebook
 from touch_gestures.skin.errors import CodebookError
 from touch_lab.bear.subtype_training import SubtypeClassifier
@@ -20,7 +21,7 @@ from touch_lab.bear.subtype_training import SubtypeClassifier
 
 def tiny_model(path: Path) -> Path:
     rng = np.random.default_rng(0)
-    X = rng.random((40, 12), dtype=np.float32)
+    X = rng.random((40, len(FEATURE_NAMES)), dtype=np.float32)   # one column per bear feature
     SubtypeClassifier().fit(X, np.where(X[:, 0] < 0.5, 'none', 'hold')).save(path, rate_hz=3.4, buffer_len=20)
     return path
 
