@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from touch_gestures.bear.features import FEATURE_NAMES
 from touch_gestures.bear.pipeline import BearRecogniser
 from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import TOUCH_SUBTYPES
@@ -363,8 +364,8 @@ def evaluation_md(main_result: dict, bench: dict, sweep: list[dict], models: lis
         '',
         f"`bench_cycle(buffer_len={bench['buffer_len']}, rate_hz={bench['rate_hz']}, repeats={bench['repeats']})`: "
         f"**{bench['us_per_cycle']:.0f} us per cycle** with the trained model, {bench['us_per_cycle_rule']:.0f} us "
-        f"with the rule, {bench['us_features']:.0f} us for buffer + features alone (all 56 sensors, 12 features, "
-        f"one core; goal {bench['goal_us']:.0f} us). Machines are shared: rerun "
+        f"with the rule, {bench['us_features']:.0f} us for buffer + features alone (all 56 sensors, "
+        f"{len(FEATURE_NAMES)} features, one core; goal {bench['goal_us']:.0f} us). Machines are shared: rerun "
         '`social-touch bench bear` to measure on yours.',
         '',
         '## Speed against error: scan rate and buffer length',
