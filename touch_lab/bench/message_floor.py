@@ -5,13 +5,14 @@ skin driver's message: 144 raw counts, 144 pressures, 108 forces, the contact) a
 150 Hz and a subscription in the same process takes each one, with no driver and no recogniser.
 Each run is a process of its own on the wall clock, a DDS participant in its own domain, as a
 launched node lives; its CPU (user + system, ``getrusage``) over ``seconds`` after a warm-up is
-given as % of one core, with the frames received (a starved process receives fewer).
+given as % of one core, with the frames published and received (a starved process has fewer). With
+one pair and with two, the difference is what one more skin patch's frames cost, the process's
+own share (its DDS participant, its executor) taken out.
 
 Two clients, run alternately so both see the same machine: this project's runtime
-(``SOCIAL_TOUCH_SHIM=1``) and real rclpy, in the Python named by ``--ros2-python`` or
-``SOCIAL_TOUCH_ROS2_PYTHON`` (one where ``import rclpy`` and ``social_touch_msgs`` work: a sourced
-ROS 2 environment with this package installed; ``.ci/ros2-jazzy`` builds one). Without it only
-ours is measured, and the output says so.
+(``SOCIAL_TOUCH_SHIM=1``) and real rclpy, in the Python named by ``SOCIAL_TOUCH_ROS2_PYTHON`` (one
+where ``import rclpy`` and ``social_touch_msgs`` work: a sourced ROS 2 environment with this package
+installed; ``.ci/ros2-jazzy`` builds one). Without it only ours is measured, and the output says so.
 """
 
 from __future__ import annotations
@@ -115,28 +116,41 @@ def measure(python: str, shim: bool, seconds: float, pairs: int) -> dict[str, An
     return {**json.loads(lines[-1]), 'load_average_1min': os.getloadavg()[0]}
 
 
-def bench_message_floor(repeats: int = 3, seconds: float = 8.0, pairs: int = 1,
+def bench_message_floor(repeats: int = 3, seconds: float = 8.0, pairs: tuple[int, ...] = (1, 2),
                         ros2_python: str | None = None) -> dict:
-    """Medians over ``repeats`` alternating runs of ours and rclpy (module doc)."""
-    if repeats < 1 or not seconds > 0 or pairs < 1:
-        raise ValueError(f'repeats >= 1, seconds > 0 and pairs >= 1 are required; got {repeats}, {seconds}, {pairs}')
+    """Medians over ``repeats`` alternating runs of ours and rclpy (module doc), for each count of
+    publisher/subscriber ``pairs`` in one process; with two counts or more, ``per_extra_pair``: the
+    slope between the first and the last (what one more skin patch's frames cost, the process's own
+    share taken out)."""
+    if repeats < 1 or not seconds > 0 or not pairs or min(pairs) < 1:
+        raise ValueError(f'repeats >= 1, seconds > 0 and pair counts >= 1 are required; '
+                         f'got {repeats}, {seconds}, {pairs}')
+    pairs = tuple(sorted(set(pairs)))
     ros2_python = ros2_python or os.environ.get('SOCIAL_TOUCH_ROS2_PYTHON') or None
     clients = [('ours', sys.executable, True)] + ([('rclpy', ros2_python, False)] if ros2_python else [])
-    runs: dict[str, list[dict]] = {name: [] for name, _, _ in clients}
+    runs: dict[tuple[str, int], list[dict]] = {(name, n): [] for name, _, _ in clients for n in pairs}
     for _ in range(repeats):
-        for name, python, shim in clients:
-            run = measure(python, shim, seconds, pairs)
-            if run['client'] != name:
-                raise RuntimeError(f'{python} ran {run["client"]}, not {name}: is rclpy importable there?')
-            runs[name].append(run)
-    out: dict[str, Any] = {'message': 'social_touch_msgs/msg/SkinFrame', 'rate_hz': RATE_HZ, 'pairs': pairs,
+        for n in pairs:
+            for name, python, shim in clients:
+                run = measure(python, shim, seconds, n)
+                if run['client'] != name:
+                    raise RuntimeError(f'{python} ran {run["client"]}, not {name}: is rclpy importable there?')
+                runs[name, n].append(run)
+    out: dict[str, Any] = {'message': 'social_touch_msgs/msg/SkinFrame', 'rate_hz': RATE_HZ,
                            'seconds': seconds, 'repeats': repeats}
-    for name, rows in runs.items():
-        out[name] = {'percent_of_core': round(statistics.median(r['percent_of_core'] for r in rows), 2),
-                     'runs': [round(r['percent_of_core'], 2) for r in rows],
-                     'received': [r['received'] for r in rows], 'published': [r['published'] for r in rows],
-                     'expected': [r['expected'] for r in rows],
-                     'load_average_1min': [round(r['load_average_1min'], 2) for r in rows]}
+    for name, _, _ in clients:
+        curve: dict[Any, Any] = {}
+        for n in pairs:
+            rows = runs[name, n]
+            curve[n] = {'percent_of_core': round(statistics.median(r['percent_of_core'] for r in rows), 2),
+                        'runs': [round(r['percent_of_core'], 2) for r in rows],
+                        'received': [r['received'] for r in rows], 'published': [r['published'] for r in rows],
+                        'expected': [r['expected'] for r in rows],
+                        'load_average_1min': [round(r['load_average_1min'], 2) for r in rows]}
+        if len(pairs) >= 2:
+            curve['per_extra_pair'] = round((curve[pairs[-1]]['percent_of_core'] - curve[pairs[0]]['percent_of_core'])
+                                            / (pairs[-1] - pairs[0]), 2)
+        out[name] = curve
     if 'rclpy' not in out:
         out['rclpy'] = 'not measured: set SOCIAL_TOUCH_ROS2_PYTHON to a Python with rclpy and social_touch_msgs'
     return out
