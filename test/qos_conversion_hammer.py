@@ -5,7 +5,9 @@ reader thread; a churn thread creates and deletes writers whose user data and pa
 say which topic they belong to (their lengths vary, so a pointer read in the wrong thread
 shows). Each reader thread takes the publications' built-in topic (through
 ``touch_graph.dds.cdds.take_builtin``, or bare with ``unguarded``) and checks every sample's
-QoS against its topic. Prints one JSON line: ``checked``, ``mismatched``, ``errors``.
+QoS against its topic. Runs SECONDS, and on past them until the readers have checked
+``ENOUGH`` samples in all (discovery of the churned writers can take seconds on a busy machine), at most
+``LONGEST`` seconds. Prints one JSON line: ``checked``, ``mismatched``, ``errors``.
 A separate process, because a race in the conversion can corrupt the heap.
 """
 
@@ -28,6 +30,8 @@ from touch_graph.dds.domain import acquire_domain, release_domain
 
 READERS = 6
 TOPICS = 24
+ENOUGH = 100  # samples checked before the hammer may stop
+LONGEST = 90.0  # s; the test's timeout is above it
 
 
 @dataclass
@@ -60,6 +64,7 @@ def read(participant: DomainParticipant, guarded: bool, stop: threading.Event, c
     reader = BuiltinDataReader(participant, BuiltinTopicDcpsPublication)
     checked = mismatched = errors = 0
     while not stop.is_set():
+        checked_before = checked
         try:
             samples = take_builtin(reader, 64) if guarded else reader.take(N=64)
         except Exception:
@@ -74,6 +79,8 @@ def read(participant: DomainParticipant, guarded: bool, stop: threading.Event, c
                     or Policy.Partition not in sample.qos
                     or list(sample.qos[Policy.Partition].partitions) != partitions):
                 mismatched += 1
+        with lock:
+            counts['progress'] += checked - checked_before
     with lock:
         counts['checked'] += checked
         counts['mismatched'] += mismatched
@@ -86,18 +93,26 @@ def main() -> None:
     acquire_domain(domain, DiscoveryOptions(range='LOCALHOST'))
     participants = [DomainParticipant(domain) for _ in range(READERS + 1)]
     stop, lock = threading.Event(), threading.Lock()
-    counts = {'checked': 0, 'mismatched': 0, 'errors': 0}
+    counts = {'checked': 0, 'mismatched': 0, 'errors': 0, 'progress': 0}
     threads = [threading.Thread(target=churn, args=(participants[0], stop))]
     threads += [threading.Thread(target=read, args=(p, guarded, stop, counts, lock)) for p in participants[1:]]
     for thread in threads:
         thread.start()
-    time.sleep(seconds)
+    start = time.monotonic()
+    while True:
+        time.sleep(0.1)
+        elapsed = time.monotonic() - start
+        with lock:
+            progress = counts['progress']
+        if (elapsed >= seconds and progress >= ENOUGH) or elapsed >= LONGEST:
+            break
     stop.set()
     for thread in threads:
         thread.join(30)
     for participant in participants:
         delete_entity(participant)
     release_domain(domain)
+    del counts['progress']
     print(json.dumps(counts), flush=True)
 
 

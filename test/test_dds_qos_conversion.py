@@ -21,7 +21,7 @@ HERE = Path(__file__).resolve().parent
 
 def test_threads_taking_builtin_topics_at_once_read_every_qos_right(dds_domain):
     child = subprocess.run([sys.executable, str(HERE / 'qos_conversion_hammer.py'), str(dds_domain), '3'],
-                           capture_output=True, text=True, timeout=120)
+                           capture_output=True, text=True, timeout=150)
     assert child.returncode == 0, child.stderr[-3000:]
     counts = json.loads(child.stdout.strip().splitlines()[-1])
     assert counts['errors'] == 0 and counts['mismatched'] == 0, counts
