@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser
-from touch_gestures.skin.doubt import CONTEXT_FEATURES, ClassHabits, context_features
+from touch_gestures.skin.doubt import CONTEXT_FEATURES, context_features, touch_size_mm
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
@@ -43,6 +43,7 @@ from .acceptance import (
     HeldOut,
     class_scales,
     fit_weights,
+    habits_of,
     held_out_opinions,
     max_score,
     null_touches,
@@ -91,7 +92,7 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
     """The whole codebook's opinions of ``gestures`` and which are open to the score (module doc)."""
     n = len(model.classes_)
     model.set_acceptance({'class_scales': [1.0] * n, 'max_score': None})   # only the other rules reject
-    habits = ClassHabits(model.template_labels_, n, model.template_strokes_, model.template_contact_s_)
+    habits = habits_of(model)
     rows, named, true, open_, context = [], [], [], [], []
     for k, g in enumerate(gestures):
         query = model._query_features(g)
@@ -101,7 +102,8 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
         per_class = model.query_class_distances(query)
         rows.append(per_class)
         named.append(int(np.searchsorted(model.classes_, match.nearest)) if match.nearest is not None else 0)
-        context.append(context_features(habits, named[-1], g.strokes, g.contact_s, model.opinions(g, per_class)[1]))
+        context.append(context_features(habits, named[-1], g.strokes, g.contact_s, model.opinions(g, per_class)[1],
+                                        touch_size_mm(g.trajectory)))
         true.append(-1 if labels is None else labels[k])
         open_.append(screen_gesture(g) is None and match.label is not None)
     held = HeldOut(np.array(rows).reshape(-1, n), np.array(named, dtype=np.intp), np.array(true, dtype=np.intp),
@@ -153,7 +155,7 @@ def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | 
 def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndarray,
             context: tuple[str, ...] = ()) -> dict:
     """Right, wrong, rejected over the held-out samples and random touches firing, each fold's limit set on its
-    codebook with ``weights``: 'own' (fit per fold, with the ``context`` features), 'product', or (5,) or (8,)
+    codebook with ``weights``: 'own' (fit per fold, with the ``context`` features), 'product', or (5 + K,)
     fixed weights."""
     right = wrong = samples = fired = made = 0
     for f in all_folds:
