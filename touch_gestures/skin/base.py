@@ -315,7 +315,8 @@ class TemplateRecogniser(Params):
         if allowed is not None and (allowed.all() or not allowed.any()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
         step('evidence')
-        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed, gesture)
+        named, second = self._named(gesture, per_class, allowed)
+        match, best = self._decide(per_class, named, allowed, gesture, second)
         step('decision')
         if match.label is None:
             return match
@@ -342,6 +343,13 @@ class TemplateRecogniser(Params):
         """The features :meth:`predict` hands to ``distances`` (default: all of ``features``)."""
         return self.features(gesture)
 
+    def _named(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None
+               ) -> tuple[int, np.ndarray | None]:
+        """:meth:`_nearest`, and the second opinion's (n_classes,) distances of ``gesture`` (``opinions()[1]``)
+        for the score's context: a recogniser whose naming reads the second opinion hands it on rather than
+        search the codebook for it again (:mod:`.fused`)."""
+        return self._nearest(gesture, per_class, allowed), self.opinions(gesture, per_class)[1]
+
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         """Index of the class :meth:`predict` names: the nearest of those ``allowed`` ((n_classes,) bool,
         at least one; None: all). A subclass may ask other opinions (:mod:`.fused`)."""
@@ -354,12 +362,13 @@ class TemplateRecogniser(Params):
         return self
 
     def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None,
-                gesture: TouchGesture | None = None) -> tuple[Match, int]:
+                gesture: TouchGesture | None = None, second: np.ndarray | None = None) -> tuple[Match, int]:
         """:meth:`decide` of the class ``best`` (default: the nearest), with its index (for the evidence
         checks of :meth:`predict`). The margin is over the nearest other class of all: negative when
         ``best`` is not the nearest, which the margin rule then rejects; as ``'strokes'`` where the nearest
         is a class ``allowed`` ((n_classes,) bool) rules out (the touch is nearer a symbol written with
-        another number of strokes). A score with context features reads them off ``gesture`` (none: 0)."""
+        another number of strokes). A score with context features reads them off ``gesture`` (none: 0) and
+        ``second``, the second opinion's distances of it (:meth:`_named`; None: there is none)."""
         if best is None:
             best = int(np.argmin(per_class))
         distances = per_class.tolist()
@@ -373,8 +382,7 @@ class TemplateRecogniser(Params):
             weights = getattr(self, '_acceptance_weights', None)
             habits = getattr(self, '_acceptance_habits', None)
             context = () if habits is None else [0.0] * len(CONTEXT_FEATURES) if gesture is None else \
-                context_features(habits, best, gesture.strokes, gesture.contact_s,
-                                 self.opinions(gesture, per_class)[1],
+                context_features(habits, best, gesture.strokes, gesture.contact_s, second,
                                  touch_size_mm(gesture.trajectory) if len(weights) > _SIZE_WEIGHT else math.nan)
             score = (acceptance_score(d1, margin, scales[best]) if weights is None
                      else doubt(distances, best, scales, weights, context))
