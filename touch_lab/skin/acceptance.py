@@ -7,7 +7,7 @@ deciding distance to every class and the class named. From those:
 - a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command,
   a logistic model (:func:`fit_weights`) on distances in scale units and, where the calibration adds them,
   the touch's context (:data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`: the second opinion's disagreement,
-  how plausible its strokes and duration are for the named class), fit on held-out templates named right
+  how plausible its strokes, duration and size are for the named class), fit on held-out templates named right
   against those named wrong and synthetic touches that are no gesture;
 - the **limit**: the largest score keeping held-out wrong commands at most ``max_wrong_rate`` and
   no-gesture touches firing at most :data:`MAX_RANDOM_FIRING` (:func:`null_touches`).
