@@ -8,7 +8,8 @@ codebook calibrated for ``--max-wrong-rate`` three ways:
 - **transferred**: weights fit once on the ``--fit`` file's codebook, only the limit set per fold;
 - **product**: the score before the model (distance over scale times the ratio to the runner-up);
 - the first two again with each context feature (:data:`touch_gestures.skin.doubt.CONTEXT_FEATURES`) added
-  alone and with all of them (``own+strokes``, ``transferred+all``, ...): a feature is worth keeping only when it
+  alone, with all of them, and added to those the calibration keeps (:data:`.acceptance.SCORE_CONTEXT`)
+  (``own+strokes``, ``transferred+all``, ``own+disagreement+size``, ...): a feature is worth keeping only when it
   helps both ways.
 
 Held-out samples are cut at the longest lift a gesture may have, so the figures compare the three
@@ -40,6 +41,7 @@ from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samp
 from touch_sim.skin.synthetic import random_touches
 
 from .acceptance import (
+    SCORE_CONTEXT,
     HeldOut,
     class_scales,
     fit_weights,
@@ -196,13 +198,16 @@ def run(args: argparse.Namespace) -> int:
         print(f'[acceptance transfer] {line}', file=sys.stderr, flush=True)
 
     limit = args.limit or None
-    variants = [(), *((n,) for n in CONTEXT_FEATURES), CONTEXT_FEATURES]
-    names = ['', *(f'+{n}' for n in CONTEXT_FEATURES), '+all']
+    # No context, each feature alone, all of them, and each other feature added to the calibration's (SCORE_CONTEXT).
+    extra = [n for n in CONTEXT_FEATURES if n not in SCORE_CONTEXT]
+    variants = [(), *((n,) for n in CONTEXT_FEATURES), CONTEXT_FEATURES, *((*SCORE_CONTEXT, n) for n in extra)]
+    names = ['', *(f'+{n}' for n in CONTEXT_FEATURES), '+all', *(f'+{"+".join(SCORE_CONTEXT)}+{n}' for n in extra)]
+    with_all = variants.index(CONTEXT_FEATURES)
     fitted = whole_file_weights(args.fit, args.fit_recogniser, args.fit_templates_per_gesture or None, limit,
                                 tuple(variants))
     transferred = fitted[0]
     say(f'weights fit on {args.fit}: {np.round(transferred, 3).tolist()}; with all context features '
-        f'{np.round(fitted[-1], 3).tolist()}')
+        f'{np.round(fitted[with_all], 3).tolist()}')
     measured = folds(args.measure, args.measure_recogniser, args.templates_per_gesture or None, say, limit)
     scored = {}
     for name, context, fixed in zip(names, variants, fitted, strict=True):
@@ -215,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
               'templates_per_gesture': args.templates_per_gesture or 'all',
               **({'limit': limit} if limit else {}),
               'max_wrong_rate': args.max_wrong_rate, 'transferred_weights': transferred.tolist(),
-              'transferred_weights_context': fitted[-1].tolist(), 'scores': scored}
+              'transferred_weights_context': fitted[with_all].tolist(), 'scores': scored}
     if args.json:
         print(json.dumps(result, indent=1))
     else:
