@@ -27,6 +27,7 @@ from touch_gestures.skin.doubt import (
     context_features,
     disagreement,
     doubt,
+    touch_size_mm,
 )
 from touch_lab.skin.acceptance import HeldOut, calibrate_acceptance, fit_weights, scores
 
@@ -118,13 +119,14 @@ def test_rarer_strokes_and_odder_durations_raise_a_fitted_score():
     plain = fit_weights(held, randoms, scales)
     full = fit_weights(held, randoms, scales, context=CONTEXT_FEATURES)
     assert plain.shape == (len(PRODUCT_WEIGHTS),) and full.shape == (len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES),)
-    assert full[-2] > 0 and full[-1] > 0   # strokes and duration weigh for doubt
+    column = {n: len(PRODUCT_WEIGHTS) + k for k, n in enumerate(CONTEXT_FEATURES)}
+    assert full[column['strokes']] > 0 and full[column['duration']] > 0   # strokes and duration weigh for doubt
     right, odd_scores = scores(held, scales, full), scores(randoms, scales, full)
     assert np.mean(right[:, None] < odd_scores[None, :]) > 0.99
     only = fit_weights(held, randoms, scales, context=('duration',))
-    assert only[len(PRODUCT_WEIGHTS)] == 0 and only[len(PRODUCT_WEIGHTS) + 1] == 0 and only[-1] > 0
+    assert [only[column[n]] > 0 for n in CONTEXT_FEATURES] == [n == 'duration' for n in CONTEXT_FEATURES]
     with pytest.raises(ValueError, match='unknown context'):
-        fit_weights(held, randoms, scales, context=('size',))
+        fit_weights(held, randoms, scales, context=('pressure',))
 
 
 def test_an_old_record_decides_exactly_as_before(tmp_path):
@@ -160,14 +162,15 @@ def test_a_calibration_with_context_keeps_it_and_the_robot_decides_by_it(tmp_pat
     assert loaded.acceptance_['score_weights'] == record['score_weights']
     touches = scribbles(rng, 30)
     assert [m.rejected for m in loaded.predict_many(touches)] == [m.rejected for m in model.predict_many(touches)]
-    h = ClassHabits(model.template_labels_, len(model.classes_), model.template_strokes_, model.template_contact_s_)
+    h = ClassHabits(model.template_labels_, len(model.classes_), model.template_strokes_, model.template_contact_s_,
+                    model.template_sizes_mm_)
     for g in touches:
         match = model.predict(g)
         if match.rejected in (None, 'score'):
             cloud, second = model.opinions(g)
             best = int(np.searchsorted(model.classes_, match.nearest))
             score = doubt(cloud, best, np.asarray(record['class_scales']), record['score_weights'],
-                          context_features(h, best, g.strokes, g.contact_s, second))
+                          context_features(h, best, g.strokes, g.contact_s, second, touch_size_mm(g.trajectory)))
             assert (match.rejected is None) == (score <= (record['max_score'] or math.inf))
     # Distances alone (no gesture to read the context off): no evidence, the context features are 0.
     per_class = model.class_distances(touches[0])
@@ -224,6 +227,8 @@ def test_the_default_calibration_adds_the_second_opinion_only_where_there_is_one
     fused, rng = people_codebook(name='fused')
     calibrate_acceptance(fused, 0.005, scribbles(rng, 80))
     weights = fused.acceptance_['score_weights']
-    assert len(weights) in (len(PRODUCT_WEIGHTS), len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES))
+    # Context features weighing nothing after the last that weighs are left off the record.
+    assert len(PRODUCT_WEIGHTS) <= len(weights) <= len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES)
+    assert len(weights) == len(PRODUCT_WEIGHTS) or weights[-1] != 0.0
     for name, w in zip(CONTEXT_FEATURES, weights[len(PRODUCT_WEIGHTS):], strict=False):
         assert name in SCORE_CONTEXT or w == 0.0

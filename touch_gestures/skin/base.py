@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from ..estimator import NotFittedError, Params
-from .doubt import CONTEXT_FEATURES, PRODUCT_WEIGHTS, ClassHabits, context_features, doubt
+from .doubt import CONTEXT_FEATURES, PRODUCT_WEIGHTS, ClassHabits, context_features, doubt, touch_size_mm
 from .evidence import CodebookEvidence
 from .gesture import TouchGesture
 from .order_evidence import PATH_POINTS, OrderEvidence, one_stroke_path
@@ -57,6 +57,8 @@ __all__ = ['PREDICT_STEPS', 'Match', 'TemplateRecogniser', 'acceptance_score', '
 #: The steps of :meth:`TemplateRecogniser.predict`, in its order (the evidence comes before the decision,
 #: the classes the strokes allow, and after it, the named class's strokes and duration).
 PREDICT_STEPS = ('features', 'search', 'minima', 'evidence', 'decision', 'order')
+#: Index of the ``size`` feature's weight in a score's weights (a record this short does not read the touch's size).
+_SIZE_WEIGHT = len(PRODUCT_WEIGHTS) + CONTEXT_FEATURES.index('size')
 
 
 @dataclass(frozen=True, slots=True)
@@ -130,7 +132,7 @@ class TemplateRecogniser(Params):
         if len(gestures) != len(labels) or (people is not None and len(people) != len(labels)):
             raise ValueError(f'fit needs one label (and person, if given) per gesture; got {len(gestures)} gestures, '
                              f'{len(labels)} labels{"" if people is None else f", {len(people)} people"}')
-        feats, names, who, strokes, contacts, paths, dropped = [], [], [], [], [], [], 0
+        feats, names, who, strokes, contacts, sizes, paths, dropped = [], [], [], [], [], [], [], 0
         for i, (gesture, label) in enumerate(zip(gestures, labels, strict=True)):
             f = self.features(gesture)
             if f is None:
@@ -141,6 +143,7 @@ class TemplateRecogniser(Params):
             who.append('' if people is None else str(people[i]))
             strokes.append(int(getattr(gesture, 'strokes', 1)))
             contacts.append(float(getattr(gesture, 'contact_s', np.nan)))
+            sizes.append(touch_size_mm(gesture.trajectory))
             if not self.direction_aware:
                 path = one_stroke_path(gesture)
                 paths.append(np.full((PATH_POINTS, 2), np.nan) if path is None else path)
@@ -149,7 +152,7 @@ class TemplateRecogniser(Params):
                              'trajectories?); record the codebook again')
         self.set_codebook(np.stack(feats), names, template_strokes=strokes, template_contact_s=contacts,
                           template_paths=np.stack(paths) if paths else None,
-                          template_people=None if people is None else who)
+                          template_people=None if people is None else who, template_sizes_mm=sizes)
         self.n_dropped_ = dropped
         # Most strokes of a gesture of the codebook: a multi-stroke vocabulary needs the longer gap.
         self.max_strokes_ = max(int(getattr(g, 'strokes', 1)) for g in gestures)
@@ -160,7 +163,7 @@ class TemplateRecogniser(Params):
                      template_contact_s: Sequence[float] | None = None,
                      template_paths: np.ndarray | None = None,
                      template_people: Sequence[str] | None = None,
-                     acceptance: dict | None = None) -> None:
+                     acceptance: dict | None = None, template_sizes_mm: Sequence[float] | None = None) -> None:
         """Install precomputed templates (T, d) and labels (from a codebook file or ``fit``);
         ``class_thresholds`` (n_classes,), in sorted class order, skips the calibration;
         ``template_strokes`` (T,) and ``template_contact_s`` (T,) s give each template's strokes and
@@ -169,7 +172,9 @@ class TemplateRecogniser(Params):
         (:func:`~.order_evidence.one_stroke_path`; ``template_paths_`` and ``order_evidence_`` for an
         order-free recogniser with distance limits, else None: no order check); ``template_people``
         (T,), who drew each template ('' unknown: ``template_people_``, else None); ``acceptance``: a calibrated
-        acceptance for this codebook (:meth:`set_acceptance`; None: the thresholds and ``min_margin`` decide)."""
+        acceptance for this codebook (:meth:`set_acceptance`; None: the thresholds and ``min_margin`` decide);
+        ``template_sizes_mm`` (T,) mm, each template's size (:func:`~.doubt.touch_size_mm`, NaN not known:
+        ``template_sizes_mm_``, else None; the acceptance score's ``size`` feature)."""
         self._check_params()
         templates = np.asarray(templates, dtype=np.float32)
         labels = np.asarray([str(x) for x in labels])
@@ -199,6 +204,13 @@ class TemplateRecogniser(Params):
                 raise ValueError(f'template_contact_s must give each of the {len(labels)} templates a time; '
                                  f'got {contacts.shape}')
             self.template_contact_s_ = contacts[order]
+        self.template_sizes_mm_ = None
+        if template_sizes_mm is not None:
+            sizes = np.asarray(template_sizes_mm, dtype=np.float64).reshape(-1)
+            if sizes.shape != labels.shape or (sizes < 0).any():
+                raise ValueError(f'template_sizes_mm must give each of the {len(labels)} templates a size >= 0 mm '
+                                 f'(NaN: not known); got {sizes.shape}')
+            self.template_sizes_mm_ = sizes[order]
         self.template_people_ = None
         if template_people is not None:
             people = np.asarray([str(p) for p in template_people])
@@ -249,16 +261,19 @@ class TemplateRecogniser(Params):
                                   or not 0 <= limit < math.inf):
             raise ValueError(f'an acceptance needs a max_score >= 0 (or None); got {limit!r}')
         weights = np.asarray(record.get('score_weights', PRODUCT_WEIGHTS), dtype=np.float64).reshape(-1)
+        # The distance features' weights, then those of the first K context features (a codebook calibrated
+        # before a feature existed has fewer).
         sizes = (len(PRODUCT_WEIGHTS), len(PRODUCT_WEIGHTS) + len(CONTEXT_FEATURES))
-        if len(weights) not in sizes or not np.all(np.isfinite(weights)):
-            raise ValueError(f'an acceptance needs {sizes[0]} or {sizes[1]} finite score_weights (.doubt); got '
+        if not sizes[0] <= len(weights) <= sizes[1] or not np.all(np.isfinite(weights)):
+            raise ValueError(f'an acceptance needs {sizes[0]} to {sizes[1]} finite score_weights (.doubt); got '
                              f'{record.get("score_weights")!r}')
         self.acceptance_ = dict(record)
         self._acceptance_scales = scales.tolist()
         self._acceptance_weights = None if 'score_weights' not in record else weights.tolist()
         self._acceptance_limit = math.inf if limit is None else float(limit)
         self._acceptance_habits = None if len(weights) == sizes[0] else ClassHabits(
-            self.template_labels_, len(self.classes_), self.template_strokes_, self.template_contact_s_)
+            self.template_labels_, len(self.classes_), self.template_strokes_, self.template_contact_s_,
+            getattr(self, 'template_sizes_mm_', None))
 
     def opinions(self, gesture: TouchGesture, deciding: np.ndarray | None = None
                  ) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -300,7 +315,8 @@ class TemplateRecogniser(Params):
         if allowed is not None and (allowed.all() or not allowed.any()):
             allowed = None   # every class fits, or none does (the evidence check below rejects it)
         step('evidence')
-        match, best = self._decide(per_class, self._nearest(gesture, per_class, allowed), allowed, gesture)
+        named, second = self._named(gesture, per_class, allowed)
+        match, best = self._decide(per_class, named, allowed, gesture, second)
         step('decision')
         if match.label is None:
             return match
@@ -327,6 +343,13 @@ class TemplateRecogniser(Params):
         """The features :meth:`predict` hands to ``distances`` (default: all of ``features``)."""
         return self.features(gesture)
 
+    def _named(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None
+               ) -> tuple[int, np.ndarray | None]:
+        """:meth:`_nearest`, and the second opinion's (n_classes,) distances of ``gesture`` (``opinions()[1]``)
+        for the score's context: a recogniser whose naming reads the second opinion hands it on rather than
+        search the codebook for it again (:mod:`.fused`)."""
+        return self._nearest(gesture, per_class, allowed), self.opinions(gesture, per_class)[1]
+
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
         """Index of the class :meth:`predict` names: the nearest of those ``allowed`` ((n_classes,) bool,
         at least one; None: all). A subclass may ask other opinions (:mod:`.fused`)."""
@@ -339,12 +362,13 @@ class TemplateRecogniser(Params):
         return self
 
     def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None,
-                gesture: TouchGesture | None = None) -> tuple[Match, int]:
+                gesture: TouchGesture | None = None, second: np.ndarray | None = None) -> tuple[Match, int]:
         """:meth:`decide` of the class ``best`` (default: the nearest), with its index (for the evidence
         checks of :meth:`predict`). The margin is over the nearest other class of all: negative when
         ``best`` is not the nearest, which the margin rule then rejects; as ``'strokes'`` where the nearest
         is a class ``allowed`` ((n_classes,) bool) rules out (the touch is nearer a symbol written with
-        another number of strokes). A score with context features reads them off ``gesture`` (none: 0)."""
+        another number of strokes). A score with context features reads them off ``gesture`` (none: 0) and
+        ``second``, the second opinion's distances of it (:meth:`_named`; None: there is none)."""
         if best is None:
             best = int(np.argmin(per_class))
         distances = per_class.tolist()
@@ -358,8 +382,8 @@ class TemplateRecogniser(Params):
             weights = getattr(self, '_acceptance_weights', None)
             habits = getattr(self, '_acceptance_habits', None)
             context = () if habits is None else [0.0] * len(CONTEXT_FEATURES) if gesture is None else \
-                context_features(habits, best, gesture.strokes, gesture.contact_s,
-                                 self.opinions(gesture, per_class)[1])
+                context_features(habits, best, gesture.strokes, gesture.contact_s, second,
+                                 touch_size_mm(gesture.trajectory) if len(weights) > _SIZE_WEIGHT else math.nan)
             score = (acceptance_score(d1, margin, scales[best]) if weights is None
                      else doubt(distances, best, scales, weights, context))
             if margin >= 0 and not score > self._acceptance_limit:

@@ -22,6 +22,8 @@ in an ``.npz`` read with ``allow_pickle=False``::
     template_paths      (T, n, 2)   float32   optional: each one-stroke template's path, NaN for
                                               the others (:mod:`.order_evidence`)
     template_people     (T,)        str       optional: who drew each template ('' not known)
+    template_sizes_mm   (T,)        float64   optional: each template's size, mm (the diagonal of its
+                                              bounding box, :func:`.doubt.touch_size_mm`; NaN not known)
     acceptance          ()          str       optional: JSON record of a calibrated acceptance
                                               (:mod:`.base`, :mod:`touch_lab.skin.acceptance`)
 
@@ -110,6 +112,8 @@ def save_codebook(path: str | Path, recogniser: TemplateRecogniser, description:
                else {'template_paths': np.asarray(recogniser.template_paths_, dtype=np.float32)}),
             **({} if getattr(recogniser, 'template_people_', None) is None
                else {'template_people': np.asarray(recogniser.template_people_, dtype=str)}),
+            **({} if getattr(recogniser, 'template_sizes_mm_', None) is None
+               else {'template_sizes_mm': np.asarray(recogniser.template_sizes_mm_, dtype=np.float64)}),
             **({} if getattr(recogniser, 'acceptance_', None) is None
                else {'acceptance': np.array(json.dumps(recogniser.acceptance_, sort_keys=True))}))
     return path
@@ -190,7 +194,8 @@ def load_codebook(path: str | Path, recogniser: str | None = None,
                            template_strokes=data.get('template_strokes'),
                            template_contact_s=data.get('template_contact_s'),
                            template_paths=data.get('template_paths'),
-                           template_people=data.get('template_people'), acceptance=acceptance)
+                           template_people=data.get('template_people'), acceptance=acceptance,
+                           template_sizes_mm=data.get('template_sizes_mm'))
     except ValueError as err:
         raise CodebookError(str(err), where) from err
     model.description_ = str(data['description']) if 'description' in data else None

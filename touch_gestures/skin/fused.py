@@ -189,12 +189,17 @@ class FusedRecogniser(TemplateRecogniser):
         cloud = self.cloud_.class_distances(gesture) if deciding is None else deciding
         return cloud, self.trace_.class_distances(gesture)
 
+    def _named(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None
+               ) -> tuple[int, np.ndarray | None]:
+        trace = self.trace_.class_distances(gesture)   # one search of the trace: it names, then it is the context
+        return sum_rule_nearest(per_class, trace, allowed), trace
+
     def _nearest(self, gesture: TouchGesture, per_class: np.ndarray, allowed: np.ndarray | None) -> int:
-        return sum_rule_nearest(per_class, self.trace_.class_distances(gesture), allowed)
+        return self._named(gesture, per_class, allowed)[0]
 
     def _decide(self, per_class: np.ndarray, best: int | None = None, allowed: np.ndarray | None = None,
-                gesture: TouchGesture | None = None) -> tuple[Match, int]:
-        match, best = super()._decide(per_class, best, allowed, gesture)
+                gesture: TouchGesture | None = None, second: np.ndarray | None = None) -> tuple[Match, int]:
+        match, best = super()._decide(per_class, best, allowed, gesture, second)
         confused = getattr(self, 'confused_', None)
         if confused is None or match.label is not None or not match.margin < 0:
             return match, best
@@ -204,7 +209,7 @@ class FusedRecogniser(TemplateRecogniser):
         # A pair the codebook never confuses: the cloud's first is no rival; the others decide.
         others = per_class.copy()
         others[first] = np.inf
-        return super()._decide(others, best, allowed, gesture)[0], best
+        return super()._decide(others, best, allowed, gesture, second)[0], best
 
 
 def confused_pairs(template_labels: np.ndarray, n_classes: int,

@@ -7,7 +7,7 @@ deciding distance to every class and the class named. From those:
 - a touch's **score** (:func:`touch_gestures.skin.doubt.doubt`): the odds that it fires no right command,
   a logistic model (:func:`fit_weights`) on distances in scale units and, where the calibration adds them,
   the touch's context (:data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`: the second opinion's disagreement,
-  how plausible its strokes and duration are for the named class), fit on held-out templates named right
+  how plausible its strokes, duration and size are for the named class), fit on held-out templates named right
   against those named wrong and synthetic touches that are no gesture;
 - the **limit**: the largest score keeping held-out wrong commands at most ``max_wrong_rate`` and
   no-gesture touches firing at most :data:`MAX_RANDOM_FIRING` (:func:`null_touches`).
@@ -37,6 +37,7 @@ from touch_gestures.skin.doubt import (
     context_features,
     doubt_features,
     scores_of,
+    touch_size_mm,
 )
 from touch_gestures.skin.fused import FusedRecogniser, sum_rule_nearest
 from touch_gestures.skin.gesture import TouchGesture
@@ -49,8 +50,8 @@ from touch_sim.skin.stray import stray_touches
 from touch_sim.skin.traces import TraceSample
 
 __all__ = ['MAX_RANDOM_FIRING', 'SCALE_QUANTILE', 'SCORE_CONTEXT', 'HeldOut', 'calibrate', 'calibrate_acceptance',
-           'class_scales', 'cross_person_outcomes', 'fit_weights', 'held_out_opinions', 'max_score', 'null_touches',
-           'scores', 'skin_touches', 'touch_opinions', 'wrong_rate']
+           'class_scales', 'cross_person_outcomes', 'fit_weights', 'habits_of', 'held_out_opinions', 'max_score',
+           'null_touches', 'scores', 'skin_touches', 'touch_opinions', 'wrong_rate']
 
 #: A class's scale is this quantile of its held-out templates' distances to it.
 SCALE_QUANTILE = 0.9
@@ -113,6 +114,7 @@ def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = No
     labels = recogniser.template_labels_
     strokes = recogniser.template_strokes_
     contacts = getattr(recogniser, 'template_contact_s_', None)
+    sizes = getattr(recogniser, 'template_sizes_mm_', None)
     rows, named, true, who, context = [], [], [], [], []
     for person in known:
         out = people == person
@@ -121,9 +123,10 @@ def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = No
         sub.set_codebook(recogniser.templates_[keep], classes[labels[keep]],
                          class_thresholds=np.full(len(np.unique(labels[keep])), np.inf),
                          template_strokes=None if strokes is None else strokes[keep],
-                         template_contact_s=None if contacts is None else contacts[keep])
+                         template_contact_s=None if contacts is None else contacts[keep],
+                         template_sizes_mm=None if sizes is None else sizes[keep])
         index = np.searchsorted(classes, sub.classes_)   # the sub-codebook's classes among all
-        habits = ClassHabits(sub.template_labels_, len(sub.classes_), sub.template_strokes_, sub.template_contact_s_)
+        habits = habits_of(sub)
         for i in _spread(np.flatnonzero(out), labels, per_class):
             row = recogniser.templates_[i]
             d_sub = sub.query_class_distances(row)
@@ -137,7 +140,8 @@ def held_out_opinions(recogniser: TemplateRecogniser, per_class: int | None = No
             true.append(labels[i])
             who.append(person)
             context.append(context_features(habits, best, np.nan if strokes is None else int(strokes[i]),
-                                            np.nan if contacts is None else float(contacts[i]), second))
+                                            np.nan if contacts is None else float(contacts[i]), second,
+                                            np.nan if sizes is None else float(sizes[i])))
     return HeldOut(np.array(rows), np.array(named), np.array(true), np.array(who),
                    np.array(context).reshape(-1, len(CONTEXT_FEATURES)))
 
@@ -146,8 +150,7 @@ def touch_opinions(recogniser: TemplateRecogniser, touches: Sequence[TouchGestur
     """The whole codebook's opinions of ``touches`` that are no gesture (screened ones left out: the skin
     node never reads them)."""
     rows, named, context = [], [], []
-    habits = ClassHabits(recogniser.template_labels_, len(recogniser.classes_), recogniser.template_strokes_,
-                         getattr(recogniser, 'template_contact_s_', None))
+    habits = habits_of(recogniser)
     for touch in touches:
         if screen_gesture(touch) is not None:
             continue
@@ -161,11 +164,18 @@ def touch_opinions(recogniser: TemplateRecogniser, touches: Sequence[TouchGestur
         best = recogniser._nearest(touch, per_class, allowed)
         named.append(best)
         context.append(context_features(habits, best, touch.strokes, touch.contact_s,
-                                        recogniser.opinions(touch, per_class)[1]))
+                                        recogniser.opinions(touch, per_class)[1], touch_size_mm(touch.trajectory)))
     n_classes = len(recogniser.classes_)
     return HeldOut(np.array(rows).reshape(-1, n_classes), np.array(named, dtype=np.intp),
                    np.full(len(named), -1), np.full(len(named), ''),
                    np.array(context).reshape(-1, len(CONTEXT_FEATURES)))
+
+
+def habits_of(recogniser: TemplateRecogniser) -> ClassHabits:
+    """The :class:`~touch_gestures.skin.doubt.ClassHabits` of ``recogniser``'s codebook."""
+    return ClassHabits(recogniser.template_labels_, len(recogniser.classes_), recogniser.template_strokes_,
+                       getattr(recogniser, 'template_contact_s_', None),
+                       getattr(recogniser, 'template_sizes_mm_', None))
 
 
 def _allowed(sub: TemplateRecogniser, strokes: int) -> np.ndarray | None:
@@ -244,7 +254,8 @@ def _features(held: HeldOut, scales: np.ndarray, context: Sequence[str]) -> tupl
 
 #: The context features a calibration adds to the distance features (:func:`fit_weights`): those that helped
 #: both ways across the development vocabularies (docs/skin-rejection.md, "Across vocabularies"; the stroke
-#: count and the duration did not).
+#: count and the duration did not; the size helped each file's own weights both ways, but weights fit on the
+#: multistroke file cost the unistroke file right commands, so it stays available, not kept).
 SCORE_CONTEXT: tuple[str, ...] = ('disagreement',)
 #: The L2 penalty of :func:`fit_weights` (on the weights of the features, not the intercept).
 L2_PENALTY = 1e-2
@@ -254,7 +265,7 @@ def fit_weights(held: HeldOut, randoms: HeldOut, scales: np.ndarray, iterations:
                 context: Sequence[str] = ()) -> np.ndarray:
     """The score's logistic weights, intercept first (:data:`~touch_gestures.skin.doubt.DOUBT_FEATURES`, then
     with ``context`` (names of :data:`~touch_gestures.skin.doubt.CONTEXT_FEATURES`) all context features, those not
-    named weighing 0): (5,) or (8,). The odds of no right command, the held-out templates named right (0) against
+    named weighing 0): (5,) or (5 + K,). The odds of no right command, the held-out templates named right (0) against
     those named wrong and ``randoms`` (1), each side weighing half (Newton's method, :data:`L2_PENALTY`). The
     product's weights (:data:`~touch_gestures.skin.doubt.PRODUCT_WEIGHTS`, padded with 0) when either side has no
     touch that can be accepted."""
@@ -381,8 +392,11 @@ def calibrate_acceptance(recogniser: TemplateRecogniser, max_wrong_rate: float,
     null = touch_opinions(target, randoms)
     scales = class_scales(held, len(target.classes_))
     weights = fit_weights(held, null, scales, context=context) if model else None
-    if weights is not None and not weights[len(PRODUCT_WEIGHTS):].any():
-        weights = weights[:len(PRODUCT_WEIGHTS)]   # no context weighs (one opinion): the record of distances alone
+    if weights is not None:
+        # Context features that weigh nothing (not asked for, or one opinion's disagreement) are left off the
+        # record, so the robot does not compute them.
+        weighing = np.flatnonzero(weights[len(PRODUCT_WEIGHTS):])
+        weights = weights[:len(PRODUCT_WEIGHTS) + (weighing[-1] + 1 if weighing.size else 0)]
     limit = max_score(held, null, scales, max_wrong_rate, len(randoms), weights)
     outcome = cross_person_outcomes(held, null, max_wrong_rate, len(randoms), model, context)
     fired = float(np.sum(scores(null, scales, weights) <= limit) / len(randoms)) if len(randoms) else None

@@ -8,7 +8,8 @@ codebook calibrated for ``--max-wrong-rate`` three ways:
 - **transferred**: weights fit once on the ``--fit`` file's codebook, only the limit set per fold;
 - **product**: the score before the model (distance over scale times the ratio to the runner-up);
 - the first two again with each context feature (:data:`touch_gestures.skin.doubt.CONTEXT_FEATURES`) added
-  alone and with all of them (``own+strokes``, ``transferred+all``, ...): a feature is worth keeping only when it
+  alone, with all of them, and added to those the calibration keeps (:data:`.acceptance.SCORE_CONTEXT`)
+  (``own+strokes``, ``transferred+all``, ``own+disagreement+size``, ...): a feature is worth keeping only when it
   helps both ways.
 
 Held-out samples are cut at the longest lift a gesture may have, so the figures compare the three
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from touch_gestures.skin.base import TemplateRecogniser
-from touch_gestures.skin.doubt import CONTEXT_FEATURES, ClassHabits, context_features
+from touch_gestures.skin.doubt import CONTEXT_FEATURES, context_features, touch_size_mm
 from touch_gestures.skin.gesture import TouchGesture
 from touch_gestures.skin.screening import screen_gesture
 from touch_gestures.skin.segmentation import ENDING_GAP_S, ENDING_WAIT_S, SINGLE_STROKE_GAP_S
@@ -40,9 +41,11 @@ from touch_sim.skin.render import RenderSettings, default_cache_dir, render_samp
 from touch_sim.skin.synthetic import random_touches
 
 from .acceptance import (
+    SCORE_CONTEXT,
     HeldOut,
     class_scales,
     fit_weights,
+    habits_of,
     held_out_opinions,
     max_score,
     null_touches,
@@ -91,7 +94,7 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
     """The whole codebook's opinions of ``gestures`` and which are open to the score (module doc)."""
     n = len(model.classes_)
     model.set_acceptance({'class_scales': [1.0] * n, 'max_score': None})   # only the other rules reject
-    habits = ClassHabits(model.template_labels_, n, model.template_strokes_, model.template_contact_s_)
+    habits = habits_of(model)
     rows, named, true, open_, context = [], [], [], [], []
     for k, g in enumerate(gestures):
         query = model._query_features(g)
@@ -101,7 +104,8 @@ def _opinions(model: TemplateRecogniser, gestures: list[TouchGesture], labels: l
         per_class = model.query_class_distances(query)
         rows.append(per_class)
         named.append(int(np.searchsorted(model.classes_, match.nearest)) if match.nearest is not None else 0)
-        context.append(context_features(habits, named[-1], g.strokes, g.contact_s, model.opinions(g, per_class)[1]))
+        context.append(context_features(habits, named[-1], g.strokes, g.contact_s, model.opinions(g, per_class)[1],
+                                        touch_size_mm(g.trajectory)))
         true.append(-1 if labels is None else labels[k])
         open_.append(screen_gesture(g) is None and match.label is not None)
     held = HeldOut(np.array(rows).reshape(-1, n), np.array(named, dtype=np.intp), np.array(true, dtype=np.intp),
@@ -153,7 +157,7 @@ def whole_file_weights(path: str, recogniser: str, templates_per_gesture: int | 
 def measure(all_folds: list[Fold], max_wrong_rate: float, weights: str | np.ndarray,
             context: tuple[str, ...] = ()) -> dict:
     """Right, wrong, rejected over the held-out samples and random touches firing, each fold's limit set on its
-    codebook with ``weights``: 'own' (fit per fold, with the ``context`` features), 'product', or (5,) or (8,)
+    codebook with ``weights``: 'own' (fit per fold, with the ``context`` features), 'product', or (5 + K,)
     fixed weights."""
     right = wrong = samples = fired = made = 0
     for f in all_folds:
@@ -194,13 +198,16 @@ def run(args: argparse.Namespace) -> int:
         print(f'[acceptance transfer] {line}', file=sys.stderr, flush=True)
 
     limit = args.limit or None
-    variants = [(), *((n,) for n in CONTEXT_FEATURES), CONTEXT_FEATURES]
-    names = ['', *(f'+{n}' for n in CONTEXT_FEATURES), '+all']
+    # No context, each feature alone, all of them, and each other feature added to the calibration's (SCORE_CONTEXT).
+    extra = [n for n in CONTEXT_FEATURES if n not in SCORE_CONTEXT]
+    variants = [(), *((n,) for n in CONTEXT_FEATURES), CONTEXT_FEATURES, *((*SCORE_CONTEXT, n) for n in extra)]
+    names = ['', *(f'+{n}' for n in CONTEXT_FEATURES), '+all', *(f'+{"+".join(SCORE_CONTEXT)}+{n}' for n in extra)]
+    with_all = variants.index(CONTEXT_FEATURES)
     fitted = whole_file_weights(args.fit, args.fit_recogniser, args.fit_templates_per_gesture or None, limit,
                                 tuple(variants))
     transferred = fitted[0]
     say(f'weights fit on {args.fit}: {np.round(transferred, 3).tolist()}; with all context features '
-        f'{np.round(fitted[-1], 3).tolist()}')
+        f'{np.round(fitted[with_all], 3).tolist()}')
     measured = folds(args.measure, args.measure_recogniser, args.templates_per_gesture or None, say, limit)
     scored = {}
     for name, context, fixed in zip(names, variants, fitted, strict=True):
@@ -213,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
               'templates_per_gesture': args.templates_per_gesture or 'all',
               **({'limit': limit} if limit else {}),
               'max_wrong_rate': args.max_wrong_rate, 'transferred_weights': transferred.tolist(),
-              'transferred_weights_context': fitted[-1].tolist(), 'scores': scored}
+              'transferred_weights_context': fitted[with_all].tolist(), 'scores': scored}
     if args.json:
         print(json.dumps(result, indent=1))
     else:
