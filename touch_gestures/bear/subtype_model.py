@@ -208,7 +208,8 @@ class SubtypeModel:
         if version not in (1, 2, MODEL_FORMAT):
             raise ValueError(f'{path}: model format {version}, this code reads formats 1 to {MODEL_FORMAT}; '
                              'retrain it')
-        expected = _OLD_FEATURES if version < 3 else FEATURE_NAMES
+        # Features are only ever appended: a format-3 file of fewer features reads the same columns by name.
+        expected = _OLD_FEATURES if version < 3 else FEATURE_NAMES[:len(features)]
         if features != expected:
             raise ValueError(f'{path}: trained on features {features}, this code computes {expected}; retrain it')
         unknown = [c for c in classes if c not in SUBTYPES]
