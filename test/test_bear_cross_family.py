@@ -1,4 +1,4 @@
-"""``band_share`` (periodic touches in contact), format-3 model files of fewer features, the feature spread.
+"""Across families: ``band_share``, format-3 files of fewer features, the feature spread, C chosen across families.
 
 All signals and people here are synthetic, made by hand or by the seeded simulation.
 """
@@ -102,3 +102,18 @@ def test_c_is_chosen_across_families_on_training_people_only(monkeypatch) -> Non
     assert set(result['grid'][1.0]) == {'script -> hands', 'hands -> script'}
     assert worse[result['chosen']] == max(worse.values())
     assert 'chosen' in transfer.format_choose_c(result)
+
+
+def test_train_bear_writes_its_c_into_the_file_and_card(tmp_path, capsys) -> None:
+    from touch_gestures.model_card import read_card
+    from touch_lab.cli.main import main as cli_main
+    out = tmp_path / 'm.npz'
+    assert cli_main(['train', 'bear', '-o', str(out), '--population', 'hands', '--people', '1', '--C', '0.03',
+                     '--columns', 'peak_amplitude', 'duration_s', 'band_share']) == 0
+    with np.load(out) as data:
+        assert float(data['params'][0]) == pytest.approx(0.03)
+    assert SubtypeModel.load(out).design_ == ('peak_amplitude', 'duration_s', 'band_share')
+    assert read_card(out)['data']['C'] == 0.03
+    assert cli_main(['train', 'bear', '--bags', str(tmp_path / 'none'), '-o', str(tmp_path / 'b.npz'),
+                     '--C', '0.1']) == 2
+    assert '--C applies to simulated people' in capsys.readouterr().err
