@@ -9,7 +9,10 @@ those codes through the real :class:`~touch_gestures.bear.symbolic.SymbolicRecog
 Training populations (:data:`POPULATIONS`) are the families and ``wide``: the script generator's people
 with every :class:`~touch_sim.bear.people.Style` drawn from :data:`~touch_sim.bear.people.WIDE`.
 :func:`compare_candidates` scores candidate models (input columns x training populations) across
-families: ``social-touch eval bear-models --help``.
+families: ``social-touch eval bear-models --help``. Two questions before a candidate: why one family's
+subtypes read as another's (:func:`feature_spread`, ``--features``: every feature's quartiles per subtype
+and family) and how strongly to regularise (:func:`choose_c`, ``--choose-c``: ``C`` chosen by fitting on
+one family and measuring on the other, both ways, on training people only).
 """
 
 from __future__ import annotations
