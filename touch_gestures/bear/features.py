@@ -21,6 +21,12 @@ see ``touch_cycles``), so they describe the shape of a touch rather than how har
 
 All three are 0 where there is no touch.
 
+One more is for periodic touches that keep contact (a squeezing shake, a rub; knight2009 Table I):
+
+- ``band_share``: share of the touch's non-DC power at frequencies from :data:`BAND_HZ` [0] to [1] Hz
+  (at 3.4 Hz only 1 Hz to the scan's Nyquist of 1.7 Hz is seen; faster motion folds below it); 0 for a
+  touch without a frequency component (same test as ``base_frequency_hz``).
+
 Never NaN nor an exception: an empty buffer gives zeros, a constant signal 0 Hz; NaN or inf read as 0.
 
 >>> ext = FeatureExtractor(rate_hz=10.0, n_channels=2, window='buffer')
@@ -39,26 +45,31 @@ import numpy as np
 
 from .sensor_level import ACTIVATION_THRESHOLD
 
-__all__ = ['FEATURE_NAMES', 'MIN_COMPONENT', 'PAPER_FEATURES', 'RELATIVE_SHAPE', 'BufferFeatures', 'FeatureExtractor',
+__all__ = ['BAND_HZ', 'FEATURE_NAMES', 'MIN_COMPONENT', 'PAPER_FEATURES', 'PERIODIC_CONTACT', 'RELATIVE_SHAPE',
+           'BufferFeatures', 'FeatureExtractor',
            'spectral_features']
 
 #: The four features of knight2009 V.D / Table II, the rule classifier's inputs.
 PAPER_FEATURES = ('peak_amplitude', 'base_frequency_hz', 'spectral_spread_hz', 'duration_s')
 #: Features relative to the touch's own peak (module doc), the last columns of the table.
 RELATIVE_SHAPE = ('relative_onset_rate_hz', 'trough_over_peak', 'dip_fraction')
+#: Features of periodic touches in contact (module doc), after :data:`RELATIVE_SHAPE`.
+PERIODIC_CONTACT = ('band_share',)
 #: Every feature, column order of :attr:`BufferFeatures.table`. The last eight feed the trainable
 #: classifier only: mean and standard deviation of the level; fraction of the buffer at or above the
 #: threshold; latest level; threshold up-crossings per second (pats, taps); share of the non-DC power
 #: in the dominant bin (a clean periodic touch vs noise); mean absolute change per second (level/s);
 #: seconds since the level was last at or above the threshold (buffer span if never).
-#: Then the three relative to the touch's own peak (module doc).
+#: Then the three relative to the touch's own peak and ``band_share`` (module doc).
 FEATURE_NAMES = (*PAPER_FEATURES, 'mean_level', 'std_level', 'active_fraction', 'latest_level', 'onset_rate_hz',
-                 'spectral_peakiness', 'roughness_per_s', 'since_active_s', *RELATIVE_SHAPE)
+                 'spectral_peakiness', 'roughness_per_s', 'since_active_s', *RELATIVE_SHAPE, *PERIODIC_CONTACT)
 #: Smallest sinusoid amplitude (level units, 0..1) that counts as a frequency component. Not from the
 #: paper: 0.02 of full scale, about 20 ADC counts of the 10-bit bear, above sensor noise.
 MIN_COMPONENT = 0.02
 #: Level (over the touch's peak) a touch rises through to count as an onset, and below which a sample dips.
 HALF_PEAK, DIP_LEVEL = 0.5, 0.8
+#: Band of ``band_share``, Hz: pats, rubs and squeezes of knight2009 Table I (1-3 Hz), above a pet's strokes.
+BAND_HZ = (1.0, 3.0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,6 +117,7 @@ class _Grid:
         self.n = n
         self.freqs = (k * (rate_hz / n)).astype(np.float32)   # non-DC bins, Hz
         self.freqs_sq = self.freqs * self.freqs
+        self.in_band = ((self.freqs >= BAND_HZ[0]) & (self.freqs <= BAND_HZ[1])).astype(np.float32)
         ramp = np.arange(n, dtype=np.float32) - (n - 1) / 2.0
         denom = float(ramp @ ramp)
         self.ramp = ramp
@@ -206,6 +218,7 @@ def spectral_features(window: np.ndarray, rate_hz: float, threshold: float = ACT
     rows[1] = np.where(periodic, grid.freqs[dominant], 0.0)
     rows[2] = np.where(periodic, np.sqrt(np.maximum(variance, 0.0)), 0.0)
     rows[9] = np.where(periodic, peak_power * inv_total, 0.0)
+    rows[15] = np.where(periodic, (grid.in_band @ power) * inv_total, 0.0)
     return rows.T
 
 

@@ -10,10 +10,11 @@ a column is a feature of the table (``duration_s`` and ``since_active_s`` throug
 ``<feature>/peak``, a level feature over the buffer's own peak (the shape of a touch, not how hard this
 person touches). ``columns=None`` takes the default design: the features of :data:`DEFAULT_FEATURES`,
 and with ``relative=True`` :data:`RELATIVE_FEATURES` over the peak too. The features relative to the
-touch's own peak (``features.RELATIVE_SHAPE``) are columns a model may be given, not in the default:
-across families of simulated people they did not make a model that holds on both
+touch's own peak (``features.RELATIVE_SHAPE``) and ``band_share`` are columns a model may be given, not in
+the default: across families of simulated people they did not make a model that holds on both
 (``social-touch eval bear-models``). Files of formats 1 (12 inputs) and 2 (16 inputs) load and
-predict as they did.
+predict as they did; a format-3 file reads its columns by name, so features appended since it was
+written change nothing for it.
 
 >>> from touch_graph.paths import share_file
 >>> model = SubtypeModel.load(share_file('config', 'bear_subtype_model.npz'))   # the shipped model
@@ -208,7 +209,8 @@ class SubtypeModel:
         if version not in (1, 2, MODEL_FORMAT):
             raise ValueError(f'{path}: model format {version}, this code reads formats 1 to {MODEL_FORMAT}; '
                              'retrain it')
-        expected = _OLD_FEATURES if version < 3 else FEATURE_NAMES
+        # Features are only ever appended: a format-3 file of fewer features reads the same columns by name.
+        expected = _OLD_FEATURES if version < 3 else FEATURE_NAMES[:len(features)]
         if features != expected:
             raise ValueError(f'{path}: trained on features {features}, this code computes {expected}; retrain it')
         unknown = [c for c in classes if c not in SUBTYPES]

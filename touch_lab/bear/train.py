@@ -54,6 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--columns', nargs='+', metavar='COLUMN',
                         help="the model's input columns (features, or <level feature>/peak; default: all features "
                         'and the level ratios)')
+    parser.add_argument('--C', type=positive_float, default=1.0,
+                        help='inverse regularisation (1; `eval bear-models --choose-c` chooses one across families)')
     parser.add_argument('--bags', nargs='+', metavar='BAG',
                         help='train on these session bags (social-touch collect bear) instead of simulated people')
     parser.add_argument('--gestures-config', metavar='YAML',
@@ -71,12 +73,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Train and write the model; progress on stderr."""
     if args.bags:
+        if args.C != 1.0:
+            print('social-touch train bear: error: --C applies to simulated people, not yet to --bags', file=sys.stderr)
+            return 2
         return _run_bags(args)
     families = tuple(dict.fromkeys(args.population)) if args.population else train_families(args.family)
     config = EvalConfig(rate_hz=args.rate, buffer_len=args.buffer, train_people=args.people, seed=args.seed)
     try:
         model = fit_populations(config, families, tuple(args.columns) if args.columns else None,
-                                progress=stderr_progress)
+                                progress=stderr_progress, C=args.C)
     except ValueError as err:
         print(f'social-touch train bear: error: {err}', file=sys.stderr)
         return 2
@@ -86,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
                            f'{train_seed(f, args.seed)}' for f in families)
     data = {'synthetic': True, 'source': f'simulated people through the virtual bear and bear_driver: {population}',
             'families': list(families), 'people': args.people * len(families), 'columns': list(model.design_),
+            'C': args.C,
             'trials_per_class': {s: reps * args.people * len(families) for s in TOUCH_SUBTYPES},
             'rate_hz': args.rate, 'buffer_cycles': args.buffer}
     evaluation = None
@@ -121,9 +127,10 @@ def _across_families(config: EvalConfig, populations: tuple[str, ...], columns: 
             training['+'.join(rest)] = rest
     result = compare_candidates(EvalConfig(rate_hz=config.rate_hz, buffer_len=config.buffer_len,
                                            train_people=config.train_people, seed=config.seed),
-                                {'these columns': columns}, training, progress=stderr_progress)
+                                {'these columns': columns}, training, progress=stderr_progress, C=args.C)
     command = ' '.join(['social-touch train bear -o', str(args.output), '--population', *populations,
-                        *(['--columns', *args.columns] if args.columns else []), '--people', str(args.people),
+                        *(['--columns', *args.columns] if args.columns else []),
+                        *(['--C', f'{args.C:g}'] if args.C != 1.0 else []), '--people', str(args.people),
                         '--seed', str(args.seed), '--evaluate'])
     return {'method': 'the same input columns fit on each training set below (scene seeds of '
             'touch_lab.bear.transfer.train_seed) and measured on 6 held-out people of each family (scene seed '
