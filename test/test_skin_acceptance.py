@@ -14,7 +14,15 @@ from test_skin_codebook_people import LETTERS, drawn, stroke
 
 from touch_gestures.skin import load_codebook, make_recogniser, save_codebook
 from touch_gestures.skin.base import acceptance_score
-from touch_gestures.skin.doubt import DOUBT_FEATURES, PRODUCT_WEIGHTS, doubt, doubt_features
+from touch_gestures.skin.doubt import (
+    CONTEXT_FEATURES,
+    DOUBT_FEATURES,
+    PRODUCT_WEIGHTS,
+    context_features,
+    doubt,
+    doubt_features,
+    touch_size_mm,
+)
 from touch_lab.skin.acceptance import (
     MAX_RANDOM_FIRING,
     HeldOut,
@@ -247,16 +255,19 @@ def test_a_calibration_keeps_its_weights_and_the_robot_decides_by_them(tmp_path)
     model, rng = people_codebook()
     calibrate_acceptance(model, 0.005, scribbles(rng, 120))
     record = model.acceptance_
-    assert record['score_features'] == list(DOUBT_FEATURES) and len(record['score_weights']) == 5
+    assert record['score_features'] == list(DOUBT_FEATURES) + list(CONTEXT_FEATURES)[:len(record['score_weights']) - 5]
     loaded = load_codebook(save_codebook(tmp_path / 'c.npz', model))
     assert loaded.acceptance_['score_weights'] == record['score_weights']
     touches = scribbles(rng, 40)
     assert [m.rejected for m in loaded.predict_many(touches)] == [m.rejected for m in model.predict_many(touches)]
-    # The decision is the record's score against its limit.
+    # The decision is the record's score against its limit (one opinion: no second one to disagree).
+    habits = model._acceptance_habits
     for g in touches:
         per_class = model.class_distances(g)
         best = int(np.argmin(per_class))
-        score = doubt(per_class, best, np.asarray(record['class_scales']), record['score_weights'])
+        context = () if habits is None else context_features(habits, best, g.strokes, g.contact_s, None,
+                                                             touch_size_mm(g.trajectory))
+        score = doubt(per_class, best, np.asarray(record['class_scales']), record['score_weights'], context)
         match = model.predict(g)
         if match.rejected in (None, 'score'):
             assert (match.rejected is None) == (score <= (record['max_score'] or math.inf))

@@ -223,7 +223,12 @@ def test_the_default_calibration_adds_the_second_opinion_only_where_there_is_one
     assert set(SCORE_CONTEXT) <= set(CONTEXT_FEATURES)
     trace, rng = people_codebook(name='trace')
     calibrate_acceptance(trace, 0.005, scribbles(rng, 80))
-    assert trace.acceptance_['score_features'] == list(DOUBT_FEATURES)   # no second opinion: the old record
+    weights = trace.acceptance_['score_weights']
+    # One opinion: the disagreement weighs nothing, whatever else the calibration keeps.
+    assert trace.acceptance_['score_features'][:len(weights)] == (list(DOUBT_FEATURES) + list(CONTEXT_FEATURES))[
+        :len(weights)]
+    if len(weights) > len(PRODUCT_WEIGHTS):
+        assert weights[len(PRODUCT_WEIGHTS) + CONTEXT_FEATURES.index('disagreement')] == 0.0
     fused, rng = people_codebook(name='fused')
     calibrate_acceptance(fused, 0.005, scribbles(rng, 80))
     weights = fused.acceptance_['score_weights']

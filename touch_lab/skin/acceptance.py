@@ -253,10 +253,10 @@ def _features(held: HeldOut, scales: np.ndarray, context: Sequence[str]) -> tupl
 
 
 #: The context features a calibration adds to the distance features (:func:`fit_weights`): those that helped
-#: both ways across the development vocabularies (docs/skin-rejection.md, "Across vocabularies"; the stroke
-#: count and the duration did not; the size helped each file's own weights both ways, but weights fit on the
-#: multistroke file cost the unistroke file right commands, so it stays available, not kept).
-SCORE_CONTEXT: tuple[str, ...] = ('disagreement',)
+#: both ways across the development vocabularies with the weights fit on the codebook itself, as every
+#: calibration fits them (docs/skin-rejection.md, "Across vocabularies"; the stroke count and the duration did
+#: not). The size's weights do not carry from one vocabulary to another, which no calibration asks of them.
+SCORE_CONTEXT: tuple[str, ...] = ('disagreement', 'size')
 #: The L2 penalty of :func:`fit_weights` (on the weights of the features, not the intercept).
 L2_PENALTY = 1e-2
 
