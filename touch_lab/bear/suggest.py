@@ -205,7 +205,8 @@ def suggested_library(library: GestureLibrary, suggestions: Iterable[Suggestion]
     by_name = {s.name: s for s in suggestions if s.min_active is not None}
     gestures = [replace(g, min_active=by_name[g.name].min_active, dwell_s=by_name[g.name].dwell_s)
                 if g.name in by_name else g for g in library.gestures]
-    return GestureLibrary(gestures, library.source, library.default_dwell_s, library.default_gap_s)
+    return GestureLibrary(gestures, library.source, library.default_dwell_s, library.default_gap_s,
+                          library.default_lift_s)
 
 
 def _run_library(run: BearTrials, codes: np.ndarray | None, library: GestureLibrary,
