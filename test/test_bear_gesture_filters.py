@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import pytest
+import test_bear_node
 from test_bear_node import EPOCH_S, Graph, ch, frame
 
 from touch_driver.bear.body_map import BodyMap
@@ -16,19 +17,8 @@ from touch_graph.errors import ParameterError
 from touch_graph.runtime import Context, Parameter
 
 BODY = BodyMap.default()
+graph = test_bear_node.graph      # the fixture: graphs of the node, closed after the test
 ONE_PLAIN_GESTURE = 'format: 1\ngestures:\n  crown:\n    sensors: [head1]\n'
-
-
-@pytest.fixture
-def graph():
-    made = []
-
-    def make(**params):
-        made.append(Graph(**params))
-        return made[-1]
-    yield make
-    for g in made:
-        g.close()
 
 
 def _starts(g: Graph) -> list[tuple[str, float]]:
