@@ -26,7 +26,6 @@ from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import DEFAULT_DWELL_S, START, GestureFilter, GestureLibrary, SymbolicRecogniser
 from touch_graph.yamlconf import did_you_mean
 
-from .evaluate import SYMBOLIC_GRACE_S
 from .sessions import BearTrials
 
 __all__ = ['DWELL_STEP_S', 'QUANTILE', 'REACTION_S', 'GestureStats', 'Suggestion', 'gesture_stats',
@@ -221,27 +220,10 @@ def _run_library(run: BearTrials, codes: np.ndarray | None, library: GestureLibr
     return starts
 
 
-def score_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]], names: list[str],
-                 person: str) -> dict:
-    """Per gesture: ``person``'s trials detected, START latencies (s from the trial's start), and the other
-    gestures' trials of ``person`` during which it STARTed (``false_starts``)."""
-    out = {n: {'trials': 0, 'detected': 0, 'latencies': [], 'false_starts': 0} for n in names}
-    for run, run_starts in zip(runs, starts, strict=True):
-        for lab in run.gestures:
-            if lab.person != person:
-                continue
-            name = lab.gesture.split('/', 1)[1]
-            lo, hi = lab.start_s, lab.end_s + SYMBOLIC_GRACE_S
-            during = [(g, t) for g, t in run_starts if lo <= t <= hi]
-            if name in out:
-                out[name]['trials'] += 1
-                own = [t for g, t in during if g == name]
-                if own:
-                    out[name]['detected'] += 1
-                    out[name]['latencies'].append(own[0] - lab.start_s)
-            for other in {g for g, _ in during if g != name and g in out}:
-                out[other]['false_starts'] += 1
-    return out
+def persons_trials(run: BearTrials, person: str) -> BearTrials:
+    """``run`` with only ``person``'s trials (subtype and symbolic) labelled."""
+    return replace(run, labels=[lab for lab in run.labels if lab.person == person],
+                   gestures=[lab for lab in run.gestures if lab.person == person])
 
 
 def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_map: BodyMap,
@@ -256,17 +238,19 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
         fold_predictors: person -> subtype predictor trained without them (None: no subtype codes).
         progress: lines of progress and warnings.
 
-    Returns: ``{'people': [...], 'suggested': per gesture scores, 'configured': per gesture scores}``
-    (scores of :func:`score_starts`, pooled over the held-out people), or None for fewer than two people.
+    Returns: ``{'people': [...], 'suggested': per gesture scores, 'configured': per gesture scores}``, or
+    None for fewer than two people. The scores, pooled over the held-out people, are what ``eval bear``
+    reports (:func:`~.shipped.score_symbolic_starts`, :mod:`.false_starts`: detected, false starts by cause
+    and by touch) plus ``median_start_latency_s`` over the detected trials.
     """
+    from .shipped import score_symbolic_starts  # here, not at the top: shipped imports this module
     people = sorted({lab.person for run in runs for lab in run.gestures})
     if len(people) < 2:
         progress(f'warning: suggested gesture settings are checked leave-one-person-out, which needs trials of '
                  f'two people or more; got {people}: not checked')
         return None
     names = [g.name for g in library.detectable]
-    pooled = {which: {n: {'trials': 0, 'detected': 0, 'latencies': [], 'false_starts': 0} for n in names}
-              for which in ('suggested', 'configured')}
+    held: dict[str, tuple[list[BearTrials], list]] = {'suggested': ([], []), 'configured': ([], [])}
     for k, person in enumerate(people):
         progress(f'gesture settings, person {person} ({k + 1}/{len(people)}): suggested from the others')
         predictor = (fold_predictors or {}).get(person)
@@ -277,16 +261,11 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
                               lambda _m: None)
         fold = suggested_library(library, [suggest(stats[n], library[n]) for n in names])
         for which, lib in (('suggested', fold), ('configured', library)):
-            held = [runs[i] for i in mine]
-            starts = [_run_library(runs[i], codes[i], lib, body_map) for i in mine]
-            for n, s in score_starts(held, starts, names, person).items():
-                acc = pooled[which][n]
-                acc['trials'] += s['trials']
-                acc['detected'] += s['detected']
-                acc['false_starts'] += s['false_starts']
-                acc['latencies'] += s['latencies']
+            held[which][0].extend(persons_trials(runs[i], person) for i in mine)
+            held[which][1].extend(_run_library(runs[i], codes[i], lib, body_map) for i in mine)
+    pooled = {which: score_symbolic_starts(held_runs, starts, library) for which, (held_runs, starts) in held.items()}
     for which in pooled.values():
         for s in which.values():
-            s['median_start_latency_s'] = float(np.median(s['latencies'])) if s['latencies'] else None
-            del s['latencies']
+            s['median_start_latency_s'] = float(np.median(s['latencies_s'])) if s['latencies_s'] else None
+            del s['latencies_s']
     return {'people': people, **pooled}
