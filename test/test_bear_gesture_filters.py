@@ -1,19 +1,23 @@
-"""Bear gesture filters (issue 28): the node's lift_s parameter, and the default lift of a library.
-Hand-made, synthetic frames and sensor sequences."""
+"""Bear gesture filters (issue 28): foot_rub and feeding need continuous contact (a rub on one foot or
+both against a pet that lifts, a hand held at the mouth against a pat), the node's lift_s parameter, the
+default lift of a library. Hand-made, synthetic frames and sensor sequences."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 import test_bear_node
 from test_bear_node import EPOCH_S, Graph, ch, frame
 
 from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.node import BearGesturesNode
-from touch_gestures.bear.symbolic import START, GestureLibrary
-from touch_graph.errors import ParameterError
+from touch_gestures.bear.pipeline import BearRecogniser
+from touch_gestures.bear.symbolic import START, GestureLibrary, SymbolicRecogniser
+from touch_graph.errors import ConfigError, ParameterError
 from touch_graph.runtime import Context, Parameter
 
 BODY = BodyMap.default()
@@ -74,3 +78,90 @@ def test_a_library_with_another_default_gap_moves_a_brief_gestures_lift_with_it(
     moved = brief.with_default_gap(0.7)['tap']
     assert moved.gap_s == moved.lift_s == 0.7
     assert brief.with_default_lift(3.0)['tap'].lift_s == 1.5
+
+
+# --- foot_rub and feeding: continuous contact (lift_s 0), hand-made sequences at the real 3.4 Hz ---------------
+
+LIB = GestureLibrary.default(BODY)
+SCAN_S = 1 / 3.4
+
+
+def _run(touched, seconds: float = 12.0, lib: GestureLibrary = LIB) -> list:
+    """Events of the shipped gestures over scans ``i`` whose active sensors are ``touched(i)`` (names)."""
+    rec = SymbolicRecogniser(lib, BODY)
+    events = []
+    for i in range(int(seconds / SCAN_S)):
+        mask = np.zeros(64, dtype=bool)
+        mask[[BODY.by_name(n).channel for n in touched(i)]] = True
+        events += rec.update(i * SCAN_S, mask)
+    return events
+
+
+def _started(events: list, gesture: str) -> list[float]:
+    return [round(e.t / SCAN_S) for e in events if e.gesture == gesture and e.state == START]
+
+
+def _during(first: int, last: int, sensors: list[str], lifted=lambda i: False):
+    return lambda i: sensors if first <= i <= last and not lifted(i) else []
+
+
+@pytest.mark.parametrize('feet', [['foot_left_sole'], ['foot_right_sole'], ['foot_left_sole', 'foot_right_sole']])
+def test_a_rub_on_one_foot_or_both_starts_foot_rub_after_the_dwell(feet) -> None:
+    """A rub keeps contact: 20 scans (5.9 s) on one sole or both, START at the first scan 2 s after the onset."""
+    assert LIB['foot_rub'].lift_s == 0.0 and LIB['foot_rub'].min_active == 1
+    assert _started(_run(_during(5, 25, feet)), 'foot_rub') == [5 + 7]      # 7 scans = 2.06 s >= dwell_s
+
+
+@pytest.mark.parametrize('every', [2, 3, 4])
+def test_a_pet_or_pat_that_lifts_off_the_sole_is_no_foot_rub(every: int) -> None:
+    """Strokes that leave the sole for one scan in ``every`` (a pet at 3.4 Hz / every): each lift restarts the
+    dwell, so however long it goes on it is no foot rub (it was one with the default 1.5 s lift)."""
+    petting = _during(5, 35, ['foot_left_sole'], lifted=lambda i: i % every == 0)
+    assert _started(_run(petting), 'foot_rub') == []
+    tolerant = GestureLibrary([replace(g, lift_s=1.5) if g.name == 'foot_rub' else g for g in LIB.gestures],
+                              LIB.source, LIB.default_dwell_s, LIB.default_gap_s, LIB.default_lift_s)
+    assert _started(_run(petting, lib=tolerant), 'foot_rub') != []
+
+
+def test_a_hand_held_at_the_mouth_is_feeding_and_a_pat_on_it_is_not() -> None:
+    holding = _during(5, 25, ['mouth', 'snout'])
+    assert _started(_run(holding), 'feeding') == [12]
+    patting = _during(5, 40, ['mouth'], lifted=lambda i: i % 3 == 0)       # a pat about every 0.9 s
+    assert _started(_run(patting), 'feeding') == []
+
+
+def test_one_scan_without_the_hand_restarts_the_feeding_dwell() -> None:
+    """A held hand missing from one scan (scan 9): the dwell starts again at scan 10, START 2 s after it."""
+    held = _during(5, 30, ['snout'], lifted=lambda i: i == 9)
+    assert _started(_run(held), 'feeding') == [10 + 7]
+
+
+def test_nan_and_empty_frames_through_the_pipeline_read_as_no_touch() -> None:
+    """Levels NaN for one scan in a rub (counted, read as 0): the dwell restarts; empty frames START nothing."""
+    rec = BearRecogniser(3.4, subtypes=False, classify=False)
+    sole = BODY.by_name('foot_left_sole').channel
+    starts = []
+    for i in range(40):
+        levels = np.zeros(64, dtype=np.float32)
+        if 5 <= i <= 30:
+            levels[sole] = math.nan if i == 8 else 0.9
+        if i == 35:
+            levels[:] = math.nan                                            # a garbage frame
+        starts += [round(e.t / SCAN_S) for e in rec.update(i * SCAN_S, levels).symbolic_events
+                   if e.state == START]
+    assert starts == [9 + 7]
+    assert rec.buffer.invalid_counts[sole] == 2 and rec.buffer.invalid_counts.sum() == 65
+    assert not any(rec.update(i * SCAN_S, np.zeros(64, np.float32)).symbolic_events for i in range(40, 60))
+
+
+@pytest.mark.parametrize('line, expected', [
+    ('    lift: 0.0', "did you mean 'lift_s'"),
+    ('    lift_s: -0.3', "'lift_s' in gesture 'foot_rub' must be a number of seconds >= 0"),
+    ('    lift_s: .nan', "'lift_s' in gesture 'foot_rub' must be a number of seconds >= 0"),
+    ('    lift_s: none', "'lift_s'"),
+])
+def test_a_typo_in_foot_rubs_lift_is_a_clear_error_with_the_line(line: str, expected: str) -> None:
+    text = f'format: 1\ngestures:\n  foot_rub:\n    sensors: [foot_left_sole, foot_right_sole]\n{line}\n'
+    with pytest.raises(ConfigError) as err:
+        GestureLibrary.loads(text, BODY, source='g.yaml')
+    assert expected in str(err.value) and 'g.yaml:5' in str(err.value)
