@@ -194,3 +194,20 @@ def test_the_check_counts_false_starts_as_eval_bear_does():
     assert configured['false_starts'] == 6
     assert configured['false_starts_by_touch'] == {'subtype/pet': 4, 'none': 2}
     assert configured['false_starts_by_cause'] == {'other_gesture': 0, 'subtype_trial': 4, 'outside_trials': 2}
+
+
+def test_the_hold_is_the_longest_episode_so_a_first_touch_that_lifts_does_not_make_the_dwell_zero():
+    """foot_rub restarts its dwell at every lift (lift_s 0): a first touch of the sole (one scan, 0.59 s into the
+    trial) that lifts for two scans is an episode of its own, the rub after it (from 1.47 s, 4.4 s long) the one
+    that STARTs it."""
+    runs = []
+    for p in ('p1', 'p2'):
+        one = session(p, [('foot_rub', 5.0 + 12 * k, 11.0 + 12 * k, ['foot_left_sole']) for k in range(3)])
+        for k in range(3):
+            one.active[(one.times > 5.6 + 12 * k) & (one.times < 6.3 + 12 * k), channel('foot_left_sole')] = False
+        runs.append(one)
+    result, _said = run(runs)
+    reach, hold = result['stats']['foot_rub'].reach_hold(1, GestureLibrary.default(BODY)['foot_rub'].lift_s)
+    assert np.all(np.abs(reach - 1.47) <= 1 / RATE) and np.all(hold >= 4.4 - 1 / RATE)
+    # min(hold, 2 s - reach): the reach bounds it, not the one-scan first touch (a hold of 0 s)
+    assert result['suggestions']['foot_rub'].dwell_s >= 2.0 - 1.47 - 1 / RATE - sg.DWELL_STEP_S > 0

@@ -4,8 +4,9 @@ from labelled trials (``social-touch collect bear --symbolic``, labels ``symboli
 Per gesture ``g`` and trial of ``g``, counted as :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`
 counts: *count* (the filter's active sensors in a cycle), *match m* (count >= m), *peak* (the largest
 count). ``min_active`` = the :data:`QUANTILE` quantile of the peaks (>= 1), raised while that loses
-fewer of ``g``'s trials than it stops matching other gestures' trials. For that ``m``: *reach* (start to
-first match, s) and *hold* (first to last match of that episode, s); ``dwell_s`` = min(QUANTILE quantile
+fewer of ``g``'s trials than it stops matching other gestures' trials. For that ``m``, of the trial's
+longest episode (matches with no lift longer than ``lift_s`` between them): *reach* (start of the trial
+to the episode's first match, s) and *hold* (its first to last match, s); ``dwell_s`` = min(QUANTILE quantile
 of the holds, :data:`REACTION_S` - (1 - QUANTILE) quantile of the reaches), >= 0, rounded down to
 :data:`DWELL_STEP_S`. Other settings stay as configured.
 
@@ -66,18 +67,22 @@ class GestureStats:
     other_peaks: list[int] = field(default_factory=list)
 
     def reach_hold(self, m: int, lift_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched); a lift longer
-        than ``lift_s`` s ends the hold, as it restarts the recogniser's dwell."""
+        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched) of each trial's
+        longest episode: a lift longer than ``lift_s`` s ends an episode, as it restarts the recogniser's
+        dwell, and the gesture STARTs in the longest if in any."""
         reach, hold = np.full(len(self.counts), np.nan), np.full(len(self.counts), np.nan)
         for i, (count, t, sides) in enumerate(zip(self.counts, self.times, self.sides, strict=True)):
             hits = np.flatnonzero((count >= m) & sides)
             if not hits.size:
                 continue
-            reach[i] = t[hits[0]]
             matched = t[hits]
-            breaks = np.flatnonzero(np.diff(matched) > lift_s + 1e-9)   # 1e-9: float time steps, as the recogniser
-            last = matched[breaks[0]] if breaks.size else matched[-1]
-            hold[i] = last - matched[0]
+            # The recogniser restarts at a cycle without a match more than lift_s after the last match: between
+            # two matches, the latest cycle before the second (1e-9: float time steps, as the recogniser).
+            breaks = np.flatnonzero((np.diff(hits) > 1) & (t[hits[1:] - 1] - matched[:-1] > lift_s + 1e-9))
+            firsts = matched[np.concatenate([[0], breaks + 1])]
+            lasts = matched[np.concatenate([breaks, [len(matched) - 1]])]
+            longest = int(np.argmax(lasts - firsts))
+            reach[i], hold[i] = firsts[longest], lasts[longest] - firsts[longest]
         return reach, hold
 
 
