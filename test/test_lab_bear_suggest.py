@@ -173,3 +173,41 @@ def test_train_evaluate_with_one_person_saves_the_model_and_says_why_no_evaluati
     assert cli_main(['train', 'bear', '--bags', *map(str, bags.iterdir()), '--evaluate', '-o', str(model)]) == 0
     assert '--evaluate holds out one person at a time and the bags hold 1' in capsys.readouterr().err
     assert model.exists()
+
+
+def test_the_check_counts_false_starts_as_eval_bear_does():
+    """One definition (touch_lab/bear/false_starts.py): every START of foot_rub no foot rub explains is false,
+    each counted (two in one pet on a sole), by the touch it fell in, also outside every trial; a START in a
+    rub on the sole (foot_rub's own subtype) is none."""
+    sole = ['foot_left_sole']
+    runs = []
+    for p in ('p1', 'p2'):
+        one = session(p, [('foot_rub', 5.0, 11.0, sole), ('foot_rub', 15.0, 21.0, sole)], seconds=75.0)
+        touches = [(25.0, 29.0), (31.0, 35.0), (45.0, 51.0), (60.0, 66.0)]   # two in the pet, one in the rub, one out
+        for lo, hi in touches:
+            one.active[(one.times >= lo) & (one.times <= hi), channel('foot_left_sole')] = True
+        one.labels[:] = [LabelRow(p, 'pet', 'normal', 24.5, 36.0), LabelRow(p, 'rub', 'normal', 44.5, 52.0)]
+        runs.append(one)
+    result, _said = run(runs)
+    configured = result['lopo']['configured']['foot_rub']
+    assert (configured['trials'], configured['detected']) == (4, 4)
+    assert configured['false_starts'] == 6
+    assert configured['false_starts_by_touch'] == {'subtype/pet': 4, 'none': 2}
+    assert configured['false_starts_by_cause'] == {'other_gesture': 0, 'subtype_trial': 4, 'outside_trials': 2}
+
+
+def test_the_hold_is_the_longest_episode_so_a_first_touch_that_lifts_does_not_make_the_dwell_zero():
+    """foot_rub restarts its dwell at every lift (lift_s 0): a first touch of the sole (one scan, 0.59 s into the
+    trial) that lifts for two scans is an episode of its own, the rub after it (from 1.47 s, 4.4 s long) the one
+    that STARTs it."""
+    runs = []
+    for p in ('p1', 'p2'):
+        one = session(p, [('foot_rub', 5.0 + 12 * k, 11.0 + 12 * k, ['foot_left_sole']) for k in range(3)])
+        for k in range(3):
+            one.active[(one.times > 5.6 + 12 * k) & (one.times < 6.3 + 12 * k), channel('foot_left_sole')] = False
+        runs.append(one)
+    result, _said = run(runs)
+    reach, hold = result['stats']['foot_rub'].reach_hold(1, GestureLibrary.default(BODY)['foot_rub'].lift_s)
+    assert np.all(np.abs(reach - 1.47) <= 1 / RATE) and np.all(hold >= 4.4 - 1 / RATE)
+    # min(hold, 2 s - reach): the reach bounds it, not the one-scan first touch (a hold of 0 s)
+    assert result['suggestions']['foot_rub'].dwell_s >= 2.0 - 1.47 - 1 / RATE - sg.DWELL_STEP_S > 0

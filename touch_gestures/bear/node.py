@@ -162,6 +162,8 @@ class BearGesturesNode(Node):
             'dwell_s': self._param('dwell_s', -1.0, 'dwell for gestures without their own; < 0: the gesture '
                                                     "file's default (2 s, knight2009 V.E)"),
             'gap_s': self._param('gap_s', -1.0, "tolerated dropout for gestures without their own; < 0: the file's"),
+            'lift_s': self._param('lift_s', -1.0, 'seconds a lift before START may last without restarting the '
+                                                  "dwell, for gestures without their own; < 0: the file's default"),
             'max_gap_s': self._param('max_gap_s', 5.0, 'no frame for this long (s): end what is under way, start '
                                                        'afresh'),
         }
@@ -185,7 +187,7 @@ class BearGesturesNode(Node):
             raise bad('min_component', 'in [0, 1), level units')
         if p['subtype_classifier'] not in CLASSIFIERS:
             raise bad('subtype_classifier', "'model' or 'rule'", did_you_mean(p['subtype_classifier'], CLASSIFIERS))
-        for name in ('dwell_s', 'gap_s'):
+        for name in ('dwell_s', 'gap_s', 'lift_s'):
             if not math.isfinite(p[name]):
                 raise bad(name, 'a number of seconds (< 0: keep the gesture file\'s default)')
         if not (p['max_gap_s'] > 0 and math.isfinite(p['max_gap_s'])):
@@ -206,7 +208,7 @@ class BearGesturesNode(Node):
             library = GestureLibrary.load(p['gestures'], body_map) if p['gestures'] else \
                 GestureLibrary.default(body_map)
             self.loaded_files.append(f'gestures {library.source}')
-            library = _with_default_timing(library, p['dwell_s'], p['gap_s'])
+            library = _with_default_timing(library, p['dwell_s'], p['gap_s'], p['lift_s'])
         else:
             library = GestureLibrary([], source='(publish_symbolic is false)')
         need_classifier = p['publish_subtypes'] or (p['publish_symbolic'] and any(g.subtypes for g in
@@ -392,14 +394,16 @@ class BearGesturesNode(Node):
             self._restart()
 
 
-def _with_default_timing(library: GestureLibrary, dwell_s: float, gap_s: float) -> GestureLibrary:
-    """``library`` with the default dwell / gap replaced (values < 0 keep the file's)."""
+def _with_default_timing(library: GestureLibrary, dwell_s: float, gap_s: float, lift_s: float) -> GestureLibrary:
+    """``library`` with the default dwell / gap / lift replaced (values < 0 keep the file's)."""
     if gap_s >= 0:
         library = library.with_default_gap(gap_s)
+    if lift_s >= 0:
+        library = library.with_default_lift(lift_s)
     if dwell_s >= 0:
         gestures = [replace(g, dwell_s=dwell_s) if g.dwell_s == library.default_dwell_s else g
                     for g in library.gestures]
-        library = GestureLibrary(gestures, library.source, dwell_s, library.default_gap_s)
+        library = GestureLibrary(gestures, library.source, dwell_s, library.default_gap_s, library.default_lift_s)
     return library
 
 

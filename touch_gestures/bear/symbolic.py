@@ -149,11 +149,13 @@ class GestureLibrary:
     """The gestures of a config file, checked against a body map, in priority (topological) order."""
 
     def __init__(self, gestures: Iterable[GestureFilter], source: str | None = None,
-                 default_dwell_s: float = DEFAULT_DWELL_S, default_gap_s: float = DEFAULT_GAP_S) -> None:
+                 default_dwell_s: float = DEFAULT_DWELL_S, default_gap_s: float = DEFAULT_GAP_S,
+                 default_lift_s: float = DEFAULT_LIFT_S) -> None:
         self.gestures: tuple[GestureFilter, ...] = tuple(gestures)
         self.source = source
         self.default_dwell_s = default_dwell_s
         self.default_gap_s = default_gap_s
+        self.default_lift_s = default_lift_s
         self._by_name = {g.name: g for g in self.gestures}
 
     def __len__(self) -> int:
@@ -167,9 +169,19 @@ class GestureLibrary:
                            f'({self.source}) has: {", ".join(self._by_name)}') from None
 
     def with_default_gap(self, gap_s: float) -> GestureLibrary:
-        """A copy in which every gesture that used the default ``gap_s`` uses ``gap_s`` instead."""
-        changed = [replace(g, gap_s=gap_s) if g.gap_s == self.default_gap_s else g for g in self.gestures]
-        return GestureLibrary(changed, self.source, self.default_dwell_s, gap_s)
+        """A copy in which every gesture that used the default ``gap_s`` uses ``gap_s`` instead (a brief
+        gesture's lift is its gap, so it follows)."""
+        changed = [g if g.gap_s != self.default_gap_s else
+                   replace(g, gap_s=gap_s, lift_s=gap_s) if g.max_s is not None else replace(g, gap_s=gap_s)
+                   for g in self.gestures]
+        return GestureLibrary(changed, self.source, self.default_dwell_s, gap_s, self.default_lift_s)
+
+    def with_default_lift(self, lift_s: float) -> GestureLibrary:
+        """A copy in which every gesture that used the default ``lift_s`` uses ``lift_s`` instead (brief
+        gestures keep theirs: it is their ``gap_s``)."""
+        changed = [replace(g, lift_s=lift_s) if g.max_s is None and g.lift_s == self.default_lift_s else g
+                   for g in self.gestures]
+        return GestureLibrary(changed, self.source, self.default_dwell_s, self.default_gap_s, lift_s)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -223,7 +235,7 @@ class GestureLibrary:
                                       f'{did_you_mean(other, parsed)}; gestures are: {", ".join(parsed)}', i)
                 if other == name:
                     raise where.error(f"gesture '{name}' cannot supersede itself", i)
-        return cls(_priority_order(parsed, items), source, default_dwell, default_gap)
+        return cls(_priority_order(parsed, items), source, default_dwell, default_gap, default_lift)
 
 
 def _non_negative(mapping, key: str, what: str, default: float) -> float:

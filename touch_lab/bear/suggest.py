@@ -4,8 +4,9 @@ from labelled trials (``social-touch collect bear --symbolic``, labels ``symboli
 Per gesture ``g`` and trial of ``g``, counted as :class:`~touch_gestures.bear.symbolic.SymbolicRecogniser`
 counts: *count* (the filter's active sensors in a cycle), *match m* (count >= m), *peak* (the largest
 count). ``min_active`` = the :data:`QUANTILE` quantile of the peaks (>= 1), raised while that loses
-fewer of ``g``'s trials than it stops matching other gestures' trials. For that ``m``: *reach* (start to
-first match, s) and *hold* (first to last match of that episode, s); ``dwell_s`` = min(QUANTILE quantile
+fewer of ``g``'s trials than it stops matching other gestures' trials. For that ``m``, of the trial's
+longest episode (matches with no lift longer than ``lift_s`` between them): *reach* (start of the trial
+to the episode's first match, s) and *hold* (its first to last match, s); ``dwell_s`` = min(QUANTILE quantile
 of the holds, :data:`REACTION_S` - (1 - QUANTILE) quantile of the reaches), >= 0, rounded down to
 :data:`DWELL_STEP_S`. Other settings stay as configured.
 
@@ -25,8 +26,10 @@ from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import DEFAULT_DWELL_S, START, GestureFilter, GestureLibrary, SymbolicRecogniser
 from touch_graph.yamlconf import did_you_mean
+from touch_sim.bear.people import PERFORMANCES, split_label
 
-from .evaluate import SYMBOLIC_GRACE_S
+from .false_starts import gesture_starts
+from .first_word import SYMBOLIC_GRACE_S, start_grace_s
 from .sessions import BearTrials
 
 __all__ = ['DWELL_STEP_S', 'QUANTILE', 'REACTION_S', 'GestureStats', 'Suggestion', 'gesture_stats',
@@ -39,6 +42,8 @@ QUANTILE = 0.1
 REACTION_S = DEFAULT_DWELL_S
 #: Suggested dwells are rounded down to this step, s (a config a person reads and edits).
 DWELL_STEP_S = 0.05
+#: Seconds between two runs laid on one clock by :func:`score_starts` (longer than any START's grace).
+_RUN_SPACING_S = 1000.0
 #: Fewest trials of a gesture to suggest its settings from.
 MIN_TRIALS = 2
 
@@ -67,18 +72,22 @@ class GestureStats:
     other_peaks: list[int] = field(default_factory=list)
 
     def reach_hold(self, m: int, lift_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched); a lift longer
-        than ``lift_s`` s ends the hold, as it restarts the recogniser's dwell."""
+        """(trials,) reach and hold seconds at ``min_active = m`` (NaN: the trial never matched) of each trial's
+        longest episode: a lift longer than ``lift_s`` s ends an episode, as it restarts the recogniser's
+        dwell, and the gesture STARTs in the longest if in any."""
         reach, hold = np.full(len(self.counts), np.nan), np.full(len(self.counts), np.nan)
         for i, (count, t, sides) in enumerate(zip(self.counts, self.times, self.sides, strict=True)):
             hits = np.flatnonzero((count >= m) & sides)
             if not hits.size:
                 continue
-            reach[i] = t[hits[0]]
             matched = t[hits]
-            breaks = np.flatnonzero(np.diff(matched) > lift_s + 1e-9)   # 1e-9: float time steps, as the recogniser
-            last = matched[breaks[0]] if breaks.size else matched[-1]
-            hold[i] = last - matched[0]
+            # The recogniser restarts at a cycle without a match more than lift_s after the last match: between
+            # two matches, the latest cycle before the second (1e-9: float time steps, as the recogniser).
+            breaks = np.flatnonzero((np.diff(hits) > 1) & (t[hits[1:] - 1] - matched[:-1] > lift_s + 1e-9))
+            firsts = matched[np.concatenate([[0], breaks + 1])]
+            lasts = matched[np.concatenate([breaks, [len(matched) - 1]])]
+            longest = int(np.argmax(lasts - firsts))
+            reach[i], hold[i] = firsts[longest], lasts[longest] - firsts[longest]
         return reach, hold
 
 
@@ -205,7 +214,8 @@ def suggested_library(library: GestureLibrary, suggestions: Iterable[Suggestion]
     by_name = {s.name: s for s in suggestions if s.min_active is not None}
     gestures = [replace(g, min_active=by_name[g.name].min_active, dwell_s=by_name[g.name].dwell_s)
                 if g.name in by_name else g for g in library.gestures]
-    return GestureLibrary(gestures, library.source, library.default_dwell_s, library.default_gap_s)
+    return GestureLibrary(gestures, library.source, library.default_dwell_s, library.default_gap_s,
+                          library.default_lift_s)
 
 
 def _run_library(run: BearTrials, codes: np.ndarray | None, library: GestureLibrary,
@@ -220,27 +230,29 @@ def _run_library(run: BearTrials, codes: np.ndarray | None, library: GestureLibr
     return starts
 
 
-def score_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]], names: list[str],
-                 person: str) -> dict:
-    """Per gesture: ``person``'s trials detected, START latencies (s from the trial's start), and the other
-    gestures' trials of ``person`` during which it STARTed (``false_starts``)."""
-    out = {n: {'trials': 0, 'detected': 0, 'latencies': [], 'false_starts': 0} for n in names}
+def score_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]], library: GestureLibrary) -> dict:
+    """Per detectable gesture of ``library``: trials, detected, latencies (s) and false starts over every run,
+    as ``eval bear`` counts them (:func:`~.false_starts.gesture_starts`). ``starts[i]``: the ``(gesture, t)``
+    STARTs over ``runs[i]``. The runs are laid one after another on one clock, so one call counts them all.
+    """
+    names = [g.name for g in library.detectable]
+    own = {n: perf.subtype for n, perf in PERFORMANCES.items()}
+    trials, shifted, offset = [], [], 0.0
     for run, run_starts in zip(runs, starts, strict=True):
-        for lab in run.gestures:
-            if lab.person != person:
-                continue
-            name = lab.gesture.split('/', 1)[1]
-            lo, hi = lab.start_s, lab.end_s + SYMBOLIC_GRACE_S
-            during = [(g, t) for g, t in run_starts if lo <= t <= hi]
-            if name in out:
-                out[name]['trials'] += 1
-                own = [t for g, t in during if g == name]
-                if own:
-                    out[name]['detected'] += 1
-                    out[name]['latencies'].append(own[0] - lab.start_s)
-            for other in {g for g, _ in during if g != name and g in out}:
-                out[other]['false_starts'] += 1
-    return out
+        for lab in (*run.labels, *run.gestures):
+            kind, name = split_label(lab.gesture)
+            grace = start_grace_s(library[name]) if kind == 'symbolic' and name in names else SYMBOLIC_GRACE_S
+            trials.append((lab.start_s + offset, lab.end_s + grace + offset, kind, name))
+        shifted += [(g, t + offset) for g, t in run_starts]
+        ends = [lab.end_s for lab in (*run.labels, *run.gestures)] + [t for _g, t in run_starts]
+        offset += max([float(run.times[-1]) if len(run.times) else 0.0, *ends]) + _RUN_SPACING_S
+    return gesture_starts(trials, shifted, names, own)
+
+
+def persons_trials(run: BearTrials, person: str) -> BearTrials:
+    """``run`` with only ``person``'s trials (subtype and symbolic) labelled."""
+    return replace(run, labels=[lab for lab in run.labels if lab.person == person],
+                   gestures=[lab for lab in run.gestures if lab.person == person])
 
 
 def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_map: BodyMap,
@@ -255,8 +267,10 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
         fold_predictors: person -> subtype predictor trained without them (None: no subtype codes).
         progress: lines of progress and warnings.
 
-    Returns: ``{'people': [...], 'suggested': per gesture scores, 'configured': per gesture scores}``
-    (scores of :func:`score_starts`, pooled over the held-out people), or None for fewer than two people.
+    Returns: ``{'people': [...], 'suggested': per gesture scores, 'configured': per gesture scores}``, or
+    None for fewer than two people. The scores, pooled over the held-out people, are what ``eval bear``
+    reports (:func:`score_starts`: detected, false starts by cause and by touch) plus
+    ``median_start_latency_s`` over the detected trials.
     """
     people = sorted({lab.person for run in runs for lab in run.gestures})
     if len(people) < 2:
@@ -264,8 +278,7 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
                  f'two people or more; got {people}: not checked')
         return None
     names = [g.name for g in library.detectable]
-    pooled = {which: {n: {'trials': 0, 'detected': 0, 'latencies': [], 'false_starts': 0} for n in names}
-              for which in ('suggested', 'configured')}
+    held: dict[str, tuple[list[BearTrials], list]] = {'suggested': ([], []), 'configured': ([], [])}
     for k, person in enumerate(people):
         progress(f'gesture settings, person {person} ({k + 1}/{len(people)}): suggested from the others')
         predictor = (fold_predictors or {}).get(person)
@@ -276,16 +289,11 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
                               lambda _m: None)
         fold = suggested_library(library, [suggest(stats[n], library[n]) for n in names])
         for which, lib in (('suggested', fold), ('configured', library)):
-            held = [runs[i] for i in mine]
-            starts = [_run_library(runs[i], codes[i], lib, body_map) for i in mine]
-            for n, s in score_starts(held, starts, names, person).items():
-                acc = pooled[which][n]
-                acc['trials'] += s['trials']
-                acc['detected'] += s['detected']
-                acc['false_starts'] += s['false_starts']
-                acc['latencies'] += s['latencies']
+            held[which][0].extend(persons_trials(runs[i], person) for i in mine)
+            held[which][1].extend(_run_library(runs[i], codes[i], lib, body_map) for i in mine)
+    pooled = {which: score_starts(held_runs, starts, library) for which, (held_runs, starts) in held.items()}
     for which in pooled.values():
         for s in which.values():
-            s['median_start_latency_s'] = float(np.median(s['latencies'])) if s['latencies'] else None
-            del s['latencies']
+            s['median_start_latency_s'] = float(np.median(s['latencies_s'])) if s['latencies_s'] else None
+            del s['latencies_s']
     return {'people': people, **pooled}

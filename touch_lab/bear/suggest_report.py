@@ -23,6 +23,7 @@ from touch_graph.files import write_text
 from touch_graph.yamlconf import read_text, safe_load
 
 from . import suggest as sg
+from .false_starts import STATISTICS as FALSE_STARTS
 from .sessions import BearTrials
 
 __all__ = ['METHOD', 'card_entry', 'default_output', 'format_table', 'run_suggestions', 'write_config']
@@ -86,7 +87,7 @@ def format_table(result: dict, library: GestureLibrary, synthetic: bool) -> str:
     if lopo:
         lines.append(f"checked leave-one-person-out over {len(lopo['people'])} people: settings suggested from the "
                      "others, run through the recogniser (priority logic included) over the person's sessions; "
-                     "false starts: other gestures' trials during which it STARTed")
+                     f"false starts as eval bear counts them: {FALSE_STARTS['false_starts']}")
     lines += ['', f"{'':14s}{'':>7s}{'':>7s} {'peak active':>11s} {'min_active':>11s} {'dwell_s':>12s}"
                   f" {'held-out detected':>17s} {'false starts':>13s} {'median START latency':>21s}",
               f"{'gesture':14s}{'trials':>7s}{'people':>7s} {'min/med/max':>11s} {'conf -> sug':>11s} "
