@@ -190,34 +190,15 @@ class TemplateRecogniser(Params):
         self.template_labels_ = codes[order]
         self.class_starts_ = np.searchsorted(self.template_labels_, np.arange(len(classes)))
         self.n_features_in_ = templates.shape[1]
-        self.template_strokes_ = None
-        if template_strokes is not None:
-            counts = np.asarray(template_strokes, dtype=np.int64).reshape(-1)
-            if counts.shape != labels.shape or (counts < 1).any():
-                raise ValueError(f'template_strokes must give each of the {len(labels)} templates >= 1 strokes; '
-                                 f'got {counts.shape}')
-            self.template_strokes_ = counts[order]
-        self.template_contact_s_ = None
-        if template_contact_s is not None:
-            contacts = np.asarray(template_contact_s, dtype=np.float64).reshape(-1)
-            if contacts.shape != labels.shape:
-                raise ValueError(f'template_contact_s must give each of the {len(labels)} templates a time; '
-                                 f'got {contacts.shape}')
-            self.template_contact_s_ = contacts[order]
-        self.template_sizes_mm_ = None
-        if template_sizes_mm is not None:
-            sizes = np.asarray(template_sizes_mm, dtype=np.float64).reshape(-1)
-            if sizes.shape != labels.shape or (sizes < 0).any():
-                raise ValueError(f'template_sizes_mm must give each of the {len(labels)} templates a size >= 0 mm '
-                                 f'(NaN: not known); got {sizes.shape}')
-            self.template_sizes_mm_ = sizes[order]
-        self.template_people_ = None
-        if template_people is not None:
-            people = np.asarray([str(p) for p in template_people])
-            if people.shape != labels.shape:
-                raise ValueError(f'template_people must name who drew each of the {len(labels)} templates; '
-                                 f'got {people.shape}')
-            self.template_people_ = people[order]
+        n = len(labels)
+        self.template_strokes_ = _per_template(template_strokes, np.int64, order, n, 'template_strokes',
+                                               '>= 1 strokes', lambda a: (a >= 1).all())
+        self.template_contact_s_ = _per_template(template_contact_s, np.float64, order, n, 'template_contact_s',
+                                                 'a time')
+        self.template_sizes_mm_ = _per_template(template_sizes_mm, np.float64, order, n, 'template_sizes_mm',
+                                                'a size >= 0 mm (NaN: not known)', lambda a: not (a < 0).any())
+        self.template_people_ = None if template_people is None else _per_template(
+            [str(p) for p in template_people], str, order, n, 'template_people', 'who drew it')
         self.codebook_evidence_ = CodebookEvidence(self.template_labels_, len(classes), self.template_strokes_,
                                           self.template_contact_s_)
         self.template_paths_ = self.order_evidence_ = None
@@ -465,6 +446,18 @@ class TemplateRecogniser(Params):
                 within[i] = d[same].min() if same.any() else np.inf
                 between[i] = d[other].min() if other.any() else np.inf
         return within, between
+
+
+def _per_template(values: Sequence[Any] | None, dtype: Any, order: np.ndarray, n: int, name: str, what: str,
+                  valid: Callable[[np.ndarray], bool] = lambda a: True) -> np.ndarray | None:
+    """``values`` (n,) of one per template, in the codebook's ``order``; None for None; ValueError naming
+    ``name`` and ``what`` each template must have when the shape is wrong or ``valid`` fails."""
+    if values is None:
+        return None
+    column = np.asarray(values, dtype=dtype).reshape(-1)
+    if column.shape != (n,) or not valid(column):
+        raise ValueError(f'{name} must give each of the {n} templates {what}; got {column.shape}')
+    return column[order]
 
 
 def nearest_allowed(per_class: np.ndarray, allowed: np.ndarray | None) -> int:

@@ -114,8 +114,9 @@ def format_report(runs: list[dict]) -> str:
         "runner-up's distance, calibrated on `random_touches` of another seed. The model may add context "
         '(*with context*, touch_gestures.skin.doubt.CONTEXT_FEATURES, in the codebook\'s own units too): how much '
         "the fused recogniser's second opinion (the trace) finds another class nearer, how rare the touch's stroke "
-        "count is among the named class's templates, and how far its log time in contact lies from theirs in "
-        'robust spreads; the size of a touch is not among them (a codebook does not record its templates\' size);',
+        "count is among the named class's templates, how far its log time in contact lies from theirs in "
+        "robust spreads, and how far its log size (the diagonal of its path's box, mm; codebooks made since "
+        'record their templates\' sizes) lies from theirs;',
         '- the largest score that keeps the held-out wrong commands at `max_wrong_rate` and the synthetic touches '
         f'that are no gesture firing at {100 * MAX_RANDOM_FIRING:g} %.',
         '',
@@ -184,13 +185,18 @@ def _transfer_section(transfers: list[dict]) -> list[str]:
         'on its own codebook for the same `max_wrong_rate`, with the weights fit on the fold\'s codebook (*own*, '
         'what `eval skin` does), fit on the whole other file (*transferred*), or the product score (*product*); '
         'all three calibrated on the stray touches. *own+X* and *transferred+X* add the context feature X '
-        f"({', '.join(CONTEXT_FEATURES)}; *all*: the three) to the model; a feature is kept for the calibration "
+        f"({', '.join(CONTEXT_FEATURES)}; *all*: every one) to the model; a feature is kept for the calibration "
         f"(now: {', '.join(SCORE_CONTEXT) or 'none'}) only where it helps in both directions: the second "
         "opinion's disagreement (the fused recogniser's; a recogniser of one opinion has none) raised the right "
         'share without more wrong commands or random touches firing wherever the limit binds; the stroke count '
         'tells nothing on a single-stroke vocabulary and, transferred, cost the fused recogniser right commands; '
         "the duration's weight changes sign between the files (the unistroke file's people trace at three "
-        'speeds), so transferred it costs either way. On the multistroke file at 0.5 % no score binds (every '
+        "speeds), so transferred it costs either way. The size is kept: fit on the codebook itself (what every "
+        'calibration does), it kept the wrong commands where they were, cut the random touches firing on the '
+        'unistroke file (most for the trace, where without it they fire over the goal) and raised the right '
+        'share on the multistroke one at 0.1 %; its weight is about twice as large on the multistroke file, so '
+        'weights fit there and carried to the unistroke file cost right commands (*transferred+size*), which no '
+        'calibration does. On the multistroke file at 0.5 % no score binds the right commands (the same in every '
         'row the same): the other rules reject first; the 0.1 % run shows the scores there. '
         'Held-out samples are cut at the longest lift a gesture may have (not the end-of-gesture rule of `eval '
         "skin`): compare the rows with each other, the table above gives the absolute figures.",
