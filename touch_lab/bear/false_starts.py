@@ -18,10 +18,20 @@ touch subtype). Per detectable gesture ``g``:
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-__all__ = ['CAUSES', 'STATISTICS', 'Trial', 'format_gesture_starts', 'gesture_starts', 'summarise']
+from touch_gestures.bear.symbolic import GestureLibrary
+from touch_sim.bear.people import PERFORMANCES, split_label
+
+from .first_word import SYMBOLIC_GRACE_S, start_grace_s
+
+if TYPE_CHECKING:   # sessions reads bags and trains models: not needed to count
+    from .sessions import BearTrials
+
+__all__ = ['CAUSES', 'STATISTICS', 'Trial', 'format_gesture_starts', 'gesture_starts', 'runs_gesture_starts',
+           'summarise']
 
 #: The causes a false start is counted under (module doc).
 CAUSES = ('other_gesture', 'subtype_trial', 'outside_trials')
@@ -83,6 +93,30 @@ def gesture_starts(trials: Iterable[Trial], starts: Iterable[tuple[str, float]],
         row['false_starts_by_cause'][cause] += 1
         row['false_starts_by_touch'][touch] = row['false_starts_by_touch'].get(touch, 0) + 1
     return out
+
+
+def runs_gesture_starts(runs: Iterable[BearTrials], starts: Iterable[list[tuple[str, float]]],
+                        library: GestureLibrary) -> dict[str, dict]:
+    """:func:`gesture_starts` of every detectable gesture of ``library`` over labelled runs, summed:
+    ``starts[i]`` the ``(gesture, t)`` STARTs over ``runs[i]`` (t on that run's clock); each run's subtype and
+    symbolic labels are its trials, a gesture's with its :func:`~.first_word.start_grace_s`."""
+    names = [g.name for g in library.detectable]
+    grace = {n: start_grace_s(library[n]) for n in names}
+    own = {n: perf.subtype for n, perf in PERFORMANCES.items()}
+    total = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
+                 'false_starts_by_cause': dict.fromkeys(CAUSES, 0), 'false_starts_by_touch': {}} for n in names}
+    for run, run_starts in zip(runs, starts, strict=True):
+        spans = [(lab.start_s, lab.end_s + grace.get(split_label(lab.gesture)[1], SYMBOLIC_GRACE_S),
+                  *split_label(lab.gesture)) for lab in (*run.labels, *run.gestures)]
+        for name, part in gesture_starts(spans, run_starts, names, own).items():
+            row = total[name]
+            for key in ('trials', 'detected', 'false_starts'):
+                row[key] += part[key]
+            row['latencies_s'] += part['latencies_s']
+            for key in ('false_starts_by_cause', 'false_starts_by_touch'):
+                for what, n in part[key].items():
+                    row[key][what] = row[key].get(what, 0) + n
+    return total
 
 
 def summarise(per_gesture: Mapping[str, dict]) -> dict:

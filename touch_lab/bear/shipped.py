@@ -21,10 +21,9 @@ from touch_gestures.bear.subtype import PaperRuleClassifier
 from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import GestureLibrary
 from touch_lab.bear.evaluate import percent_text, seconds_text
-from touch_sim.bear.people import PERFORMANCES, split_label
 
-from .evaluate import SYMBOLIC_GRACE_S, start_grace_s
-from .false_starts import CAUSES, gesture_starts, summarise
+from .false_starts import runs_gesture_starts as score_symbolic_starts
+from .false_starts import summarise
 from .sessions import BearTrials, pool_scores, score_trials
 from .suggest import _run_library, trial_codes
 
@@ -39,37 +38,6 @@ STATISTICS = {
     'detected': 'trials of the gesture during which it STARTed, over all trials of all people',
     'false_starts': 'STARTs of the gesture no trial of it explains, summed over all sessions',
 }
-
-
-def _own_subtype(gesture: str) -> str | None:
-    """The touch subtype people perform ``gesture`` with (None for gestures not scripted)."""
-    perf = PERFORMANCES.get(gesture)
-    return perf.subtype if perf is not None else None
-
-
-def score_symbolic_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]],
-                          library: GestureLibrary) -> dict[str, dict]:
-    """Per detectable gesture of ``library``: trials, detected, false starts (by cause and by performed
-    touch) and latencies over every run, as :func:`~.false_starts.gesture_starts` counts them in one.
-    ``starts[i]`` are the ``(gesture, t)`` STARTs over ``runs[i]``.
-    """
-    names = [g.name for g in library.detectable]
-    grace = {n: start_grace_s(library[n]) for n in names}
-    own = {n: _own_subtype(n) for n in names}
-    total = {n: {'trials': 0, 'detected': 0, 'latencies_s': [], 'false_starts': 0,
-                 'false_starts_by_cause': dict.fromkeys(CAUSES, 0), 'false_starts_by_touch': {}} for n in names}
-    for run, run_starts in zip(runs, starts, strict=True):
-        spans = [(lab.start_s, lab.end_s + grace.get(split_label(lab.gesture)[1], SYMBOLIC_GRACE_S),
-                  *split_label(lab.gesture)) for lab in (*run.labels, *run.gestures)]
-        for name, part in gesture_starts(spans, run_starts, names, own).items():
-            row = total[name]
-            for key in ('trials', 'detected', 'false_starts'):
-                row[key] += part[key]
-            row['latencies_s'] += part['latencies_s']
-            for key in ('false_starts_by_cause', 'false_starts_by_touch'):
-                for what, n in part[key].items():
-                    row[key][what] = row[key].get(what, 0) + n
-    return total
 
 
 def score_model(runs: list[BearTrials], model, library: GestureLibrary, body_map: BodyMap | None = None,

@@ -26,10 +26,8 @@ from touch_driver.bear.body_map import BodyMap
 from touch_gestures.bear.subtype_labels import SUBTYPES
 from touch_gestures.bear.symbolic import DEFAULT_DWELL_S, START, GestureFilter, GestureLibrary, SymbolicRecogniser
 from touch_graph.yamlconf import did_you_mean
-from touch_sim.bear.people import PERFORMANCES, split_label
 
-from .false_starts import gesture_starts
-from .first_word import SYMBOLIC_GRACE_S, start_grace_s
+from .false_starts import runs_gesture_starts
 from .sessions import BearTrials
 
 __all__ = ['DWELL_STEP_S', 'QUANTILE', 'REACTION_S', 'GestureStats', 'Suggestion', 'gesture_stats',
@@ -42,8 +40,6 @@ QUANTILE = 0.1
 REACTION_S = DEFAULT_DWELL_S
 #: Suggested dwells are rounded down to this step, s (a config a person reads and edits).
 DWELL_STEP_S = 0.05
-#: Seconds between two runs laid on one clock by :func:`score_starts` (longer than any START's grace).
-_RUN_SPACING_S = 1000.0
 #: Fewest trials of a gesture to suggest its settings from.
 MIN_TRIALS = 2
 
@@ -230,25 +226,6 @@ def _run_library(run: BearTrials, codes: np.ndarray | None, library: GestureLibr
     return starts
 
 
-def score_starts(runs: list[BearTrials], starts: list[list[tuple[str, float]]], library: GestureLibrary) -> dict:
-    """Per detectable gesture of ``library``: trials, detected, latencies (s) and false starts over every run,
-    as ``eval bear`` counts them (:func:`~.false_starts.gesture_starts`). ``starts[i]``: the ``(gesture, t)``
-    STARTs over ``runs[i]``. The runs are laid one after another on one clock, so one call counts them all.
-    """
-    names = [g.name for g in library.detectable]
-    own = {n: perf.subtype for n, perf in PERFORMANCES.items()}
-    trials, shifted, offset = [], [], 0.0
-    for run, run_starts in zip(runs, starts, strict=True):
-        for lab in (*run.labels, *run.gestures):
-            kind, name = split_label(lab.gesture)
-            grace = start_grace_s(library[name]) if kind == 'symbolic' and name in names else SYMBOLIC_GRACE_S
-            trials.append((lab.start_s + offset, lab.end_s + grace + offset, kind, name))
-        shifted += [(g, t + offset) for g, t in run_starts]
-        ends = [lab.end_s for lab in (*run.labels, *run.gestures)] + [t for _g, t in run_starts]
-        offset += max([float(run.times[-1]) if len(run.times) else 0.0, *ends]) + _RUN_SPACING_S
-    return gesture_starts(trials, shifted, names, own)
-
-
 def persons_trials(run: BearTrials, person: str) -> BearTrials:
     """``run`` with only ``person``'s trials (subtype and symbolic) labelled."""
     return replace(run, labels=[lab for lab in run.labels if lab.person == person],
@@ -269,7 +246,7 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
 
     Returns: ``{'people': [...], 'suggested': per gesture scores, 'configured': per gesture scores}``, or
     None for fewer than two people. The scores, pooled over the held-out people, are what ``eval bear``
-    reports (:func:`score_starts`: detected, false starts by cause and by touch) plus
+    reports (:func:`~.false_starts.runs_gesture_starts`: detected, false starts by cause and by touch) plus
     ``median_start_latency_s`` over the detected trials.
     """
     people = sorted({lab.person for run in runs for lab in run.gestures})
@@ -291,7 +268,7 @@ def leave_one_person_out(runs: list[BearTrials], library: GestureLibrary, body_m
         for which, lib in (('suggested', fold), ('configured', library)):
             held[which][0].extend(persons_trials(runs[i], person) for i in mine)
             held[which][1].extend(_run_library(runs[i], codes[i], lib, body_map) for i in mine)
-    pooled = {which: score_starts(held_runs, starts, library) for which, (held_runs, starts) in held.items()}
+    pooled = {which: runs_gesture_starts(held_runs, starts, library) for which, (held_runs, starts) in held.items()}
     for which in pooled.values():
         for s in which.values():
             s['median_start_latency_s'] = float(np.median(s['latencies_s'])) if s['latencies_s'] else None
